@@ -1,0 +1,1 @@
+//! Plane fitting for initialisation.

@@ -1,0 +1,41 @@
+use std::path::{Path, PathBuf};
+
+/// A malformed or unreadable input file: the file and what was wrong (with line or field).
+#[derive(Debug, thiserror::Error)]
+#[error("{}: {problem}", path.display())]
+pub struct FormatError {
+    pub path: PathBuf,
+    pub problem: String,
+}
+
+impl FormatError {
+    pub fn new(path: impl AsRef<Path>, problem: impl Into<String>) -> Self {
+        Self { path: path.as_ref().to_path_buf(), problem: problem.into() }
+    }
+
+    /// An I/O error on `path`, e.g. a missing file.
+    pub fn io(path: impl AsRef<Path>, err: &std::io::Error) -> Self {
+        Self::new(path, err.to_string())
+    }
+}
+
+/// Write `bytes` to `path` through a temporary file in the same folder and a rename, so that a
+/// reader never sees a half-written file and an interrupted write leaves the old file intact.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), FormatError> {
+    use std::io::Write;
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| FormatError::io(dir, &e))?;
+    }
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
+    let result = (|| {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    result.map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        FormatError::io(path, &e)
+    })
+}

@@ -1,0 +1,22 @@
+//! trgs-core: everything of TR-Gaussians that needs no GPU.
+//!
+//! - [`scene`]: Gaussians (structure of arrays), cameras, reflection planes, input validation;
+//! - [`plane_math`]: Householder reflections, ray-rectangle hits, nearest-plane selection, Schlick;
+//! - [`fit`]: plane fitting for initialisation (RANSAC, minimum-area box, rectangle sampling);
+//! - [`reference`]: the CPU reference renderer, stage by stage, forward and backward (f64);
+//! - [`metrics`]: PSNR and SSIM as 3DGS evaluates them;
+//! - [`io`]: COLMAP, transforms.json, glass masks, test split, planes.json and PLY;
+//! - [`synthetic`]: the procedural glass scene rendered by a ground-truth ray tracer.
+pub mod fit;
+pub mod image;
+pub mod io;
+pub mod metrics;
+pub mod plane_math;
+pub mod reference;
+pub mod rng;
+pub mod scene;
+pub mod sh;
+pub mod synthetic;
+
+pub use image::Image;
+pub use scene::{Camera, Gaussians, Intrinsics, Material, Population, Pose, ReflectionPlane};

@@ -1,0 +1,1 @@
+//! Reflection-plane math.

@@ -1,0 +1,176 @@
+//! Pinhole cameras in the COLMAP/OpenCV convention: x right, y down, z forward,
+//! world-to-camera pose `x_cam = R x_world + t`, pixel centres at +0.5.
+use glam::{DMat3, DVec3};
+
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum CameraError {
+    #[error("camera intrinsics: {0}")]
+    Intrinsics(String),
+    #[error("camera pose: {0}")]
+    Pose(String),
+}
+
+/// PINHOLE intrinsics in pixels for an image of `width x height`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Intrinsics {
+    pub fx: f64,
+    pub fy: f64,
+    pub cx: f64,
+    pub cy: f64,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl Intrinsics {
+    /// Intrinsics with a horizontal field of view in radians, square pixels, centred principal point.
+    pub fn from_fov_x(fov_x: f64, width: u32, height: u32) -> Self {
+        let f = 0.5 * f64::from(width) / (0.5 * fov_x).tan();
+        Self { fx: f, fy: f, cx: 0.5 * f64::from(width), cy: 0.5 * f64::from(height), width, height }
+    }
+
+    /// The same camera for an image resized to `width x height` (focal lengths and centre scale).
+    pub fn resized(&self, width: u32, height: u32) -> Self {
+        let sx = f64::from(width) / f64::from(self.width);
+        let sy = f64::from(height) / f64::from(self.height);
+        Self { fx: self.fx * sx, fy: self.fy * sy, cx: self.cx * sx, cy: self.cy * sy, width, height }
+    }
+
+    /// Direction in camera space (not normalised, z = 1) through the continuous pixel position.
+    pub fn unproject(&self, px: f64, py: f64) -> DVec3 {
+        DVec3::new((px - self.cx) / self.fx, (py - self.cy) / self.fy, 1.0)
+    }
+
+    pub fn validate(&self) -> Result<(), CameraError> {
+        let finite = [self.fx, self.fy, self.cx, self.cy].iter().all(|v| v.is_finite());
+        if !finite {
+            return Err(CameraError::Intrinsics(format!("non-finite value in {self:?}")));
+        }
+        if self.fx <= 0.0 || self.fy <= 0.0 {
+            return Err(CameraError::Intrinsics(format!(
+                "focal lengths must be positive, got fx = {}, fy = {}",
+                self.fx, self.fy
+            )));
+        }
+        if self.width == 0 || self.height == 0 {
+            return Err(CameraError::Intrinsics(format!(
+                "image size must be positive, got {}x{}",
+                self.width, self.height
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// World-to-camera rigid transform `x_cam = rotation * x_world + translation`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pose {
+    pub rotation: DMat3,
+    pub translation: DVec3,
+}
+
+impl Default for Pose {
+    fn default() -> Self {
+        Self { rotation: DMat3::IDENTITY, translation: DVec3::ZERO }
+    }
+}
+
+impl Pose {
+    /// From a COLMAP quaternion (w, x, y, z) and translation.
+    pub fn from_qvec_tvec(q: [f64; 4], t: [f64; 3]) -> Self {
+        let [w, x, y, z] = q;
+        let n = (w * w + x * x + y * y + z * z).sqrt();
+        let quat = glam::DQuat::from_xyzw(x / n, y / n, z / n, w / n);
+        Self { rotation: DMat3::from_quat(quat), translation: DVec3::from_array(t) }
+    }
+
+    /// The COLMAP quaternion (w, x, y, z) with w >= 0.
+    pub fn qvec(&self) -> [f64; 4] {
+        let q = glam::DQuat::from_mat3(&self.rotation).normalize();
+        let s = if q.w < 0.0 { -1.0 } else { 1.0 };
+        [s * q.w, s * q.x, s * q.y, s * q.z]
+    }
+
+    /// A camera at `eye` looking at `target`, with image-up roughly along `up`.
+    pub fn look_at(eye: DVec3, target: DVec3, up: DVec3) -> Self {
+        let z = (target - eye).normalize();
+        let x = z.cross(-up).normalize(); // y points down in the image
+        let y = z.cross(x);
+        let rotation = DMat3::from_cols(x, y, z).transpose();
+        Self { rotation, translation: -(rotation * eye) }
+    }
+
+    /// From a camera-to-world matrix (columns x, y, z axes and centre) in the OpenCV convention.
+    pub fn from_camera_to_world(axes: DMat3, centre: DVec3) -> Self {
+        let rotation = axes.transpose();
+        Self { rotation, translation: -(rotation * centre) }
+    }
+
+    /// From a nerfstudio/Blender (OpenGL: y up, z backward) camera-to-world rotation and centre.
+    pub fn from_opengl_camera_to_world(axes: DMat3, centre: DVec3) -> Self {
+        let flip = DMat3::from_diagonal(DVec3::new(1.0, -1.0, -1.0));
+        Self::from_camera_to_world(axes * flip, centre)
+    }
+
+    /// The camera centre in world space, `-R^T t`.
+    pub fn centre(&self) -> DVec3 {
+        -(self.rotation.transpose() * self.translation)
+    }
+
+    pub fn transform_point(&self, x: DVec3) -> DVec3 {
+        self.rotation * x + self.translation
+    }
+
+    /// World-space unit direction of a camera-space direction.
+    pub fn direction_to_world(&self, d_cam: DVec3) -> DVec3 {
+        (self.rotation.transpose() * d_cam).normalize()
+    }
+
+    pub fn validate(&self) -> Result<(), CameraError> {
+        let r = self.rotation;
+        let finite = r.to_cols_array().iter().chain(self.translation.as_ref()).all(|v| v.is_finite());
+        if !finite {
+            return Err(CameraError::Pose("non-finite value in the world-to-camera pose".into()));
+        }
+        let err = (r * r.transpose() - DMat3::IDENTITY).to_cols_array().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        if err > 1e-4 || r.determinant() < 0.0 {
+            return Err(CameraError::Pose(format!(
+                "rotation is not orthonormal with determinant +1 (|R R^T - I| = {err:.2e}, det = {:.4})",
+                r.determinant()
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// A named camera: intrinsics and pose.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Camera {
+    pub name: String,
+    pub intrinsics: Intrinsics,
+    pub pose: Pose,
+}
+
+impl Camera {
+    pub fn new(name: impl Into<String>, intrinsics: Intrinsics, pose: Pose) -> Self {
+        Self { name: name.into(), intrinsics, pose }
+    }
+
+    pub fn width(&self) -> u32 {
+        self.intrinsics.width
+    }
+
+    pub fn height(&self) -> u32 {
+        self.intrinsics.height
+    }
+
+    /// World-space unit ray direction through the centre of pixel `(x, y)`.
+    pub fn pixel_ray(&self, x: u32, y: u32) -> DVec3 {
+        let d = self.intrinsics.unproject(f64::from(x) + 0.5, f64::from(y) + 0.5);
+        self.pose.direction_to_world(d)
+    }
+
+    pub fn validate(&self) -> Result<(), CameraError> {
+        self.intrinsics.validate()?;
+        self.pose.validate()
+    }
+}

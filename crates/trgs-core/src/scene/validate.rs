@@ -1,0 +1,55 @@
+//! Input validation shared by every renderer: non-finite values and malformed sets are rejected
+//! before any work starts, with the attribute and index named.
+use super::{Camera, CameraError, Gaussians, PlaneError, ReflectionPlane, Scalar};
+
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum InvalidInput {
+    #[error("Gaussian {index}: {attribute} is not finite ({value})")]
+    NonFinite { attribute: &'static str, index: usize, value: f64 },
+    #[error("Gaussians: {0}")]
+    Layout(String),
+    #[error(transparent)]
+    Plane(#[from] PlaneError),
+    #[error(transparent)]
+    Camera(#[from] CameraError),
+}
+
+fn check<F: Scalar, const N: usize>(attribute: &'static str, values: &[[F; N]], per: usize) -> Result<(), InvalidInput> {
+    for (k, v) in values.iter().enumerate() {
+        for &x in v {
+            let x = x.to_f64();
+            if !x.is_finite() {
+                return Err(InvalidInput::NonFinite { attribute, index: k / per.max(1), value: x });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Validate Gaussians, planes and a camera together.
+pub fn validate_scene<F: Scalar>(
+    gaussians: &Gaussians<F>,
+    planes: &[ReflectionPlane],
+    camera: &Camera,
+) -> Result<(), InvalidInput> {
+    gaussians.check_lengths().map_err(InvalidInput::Layout)?;
+    check("mean", &gaussians.means, 1)?;
+    check("rotation", &gaussians.rotations, 1)?;
+    check("log_scale", &gaussians.log_scales, 1)?;
+    let wrap = |v: &[F]| v.iter().map(|&x| [x]).collect::<Vec<_>>();
+    check("opacity_logit", &wrap(&gaussians.opacity_logits), 1)?;
+    check("sh", &gaussians.sh, gaussians.sh_coeffs())?;
+    check("mask_logit", &wrap(&gaussians.mask_logits), 1)?;
+    check("log_reflection", &wrap(&gaussians.log_reflections), 1)?;
+    for (i, q) in gaussians.rotations.iter().enumerate() {
+        let n2: f64 = q.iter().map(|v| v.to_f64() * v.to_f64()).sum();
+        if n2 < 1e-24 {
+            return Err(InvalidInput::NonFinite { attribute: "rotation (zero quaternion)", index: i, value: n2 });
+        }
+    }
+    for (k, p) in planes.iter().enumerate() {
+        p.validate(k)?;
+    }
+    camera.validate()?;
+    Ok(())
+}
