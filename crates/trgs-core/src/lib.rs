@@ -8,6 +8,7 @@
 //! - [`io`]: COLMAP, transforms.json, glass masks, test split, planes.json and PLY;
 //! - [`synthetic`]: the procedural glass scene rendered by a ground-truth ray tracer.
 pub mod fit;
+pub mod fixtures;
 pub mod image;
 pub mod io;
 pub mod metrics;
@@ -19,4 +20,6 @@ pub mod sh;
 pub mod synthetic;
 
 pub use image::Image;
-pub use scene::{Camera, Gaussians, Intrinsics, Material, Population, Pose, ReflectionPlane};
+pub use scene::{
+    Camera, Gaussians, Intrinsics, Material, Population, Pose, ReflectionPlane, ViewTransform,
+};

@@ -1,1 +1,53 @@
-//! The CPU reference renderer.
+//! The CPU reference renderer: one module per GPU stage, named as the WGSL stage it mirrors
+//! (`project`, `tile_counts`, `prefix_sum`, `emit_keys`, `sort`, `tile_ranges`, `footprint`,
+//! `rasterize`, `rasterize_reflection`, `compose`) and its adjoint (`*_bwd`). It runs in f64 so
+//! that its gradients can be checked against central finite differences, and it is the oracle of
+//! every GPU stage.
+//!
+//! [`render`] runs the forward pipeline of DESIGN.md and keeps what the backward needs;
+//! [`backward`] takes dL/d(each output layer) and returns dL/d(every Gaussian attribute and every
+//! plane's centre, normal and R0 logit).
+mod backward;
+mod compose;
+mod compose_bwd;
+mod emit_keys;
+mod footprint;
+mod frame;
+mod prefix_sum;
+mod project;
+mod project_bwd;
+mod rasterize;
+mod rasterize_bwd;
+mod rasterize_reflection;
+mod rasterize_reflection_bwd;
+mod render;
+mod sort;
+mod tile_counts;
+mod tile_ranges;
+
+pub use backward::{BackwardOptions, PlaneGrad, SceneGrads, backward};
+pub use emit_keys::emit_keys;
+pub use footprint::{TileRect, footprint};
+pub use frame::{Frame, FrameGrads, PlaneLayers, PlaneLayerGrads};
+pub use prefix_sum::prefix_sum;
+pub use project::{Projected, ProjectionFilter, project};
+pub use rasterize::{PixelState, rasterize};
+pub use rasterize_reflection::{ReflectionPixelState, rasterize_reflection};
+pub use render::{RenderSettings, ViewPass, render, render_view};
+pub use sort::sort_keys;
+pub use tile_counts::{TileGrid, tile_counts, tile_rect};
+pub use tile_ranges::tile_ranges;
+
+/// Side of a square screen tile in pixels.
+pub const TILE_SIZE: u32 = 16;
+/// Added to the diagonal of every 2D covariance (px^2): EWA's low-pass filter as in 3DGS.
+pub const COV2D_BLUR: f64 = 0.3;
+/// Upper bound on a Gaussian's alpha; keeps `1 - alpha` away from zero for the backward replay.
+pub const MAX_ALPHA: f64 = 0.99;
+/// Contributions with alpha below this are skipped (they cannot change an 8-bit pixel).
+pub const MIN_ALPHA: f64 = 1.0 / 255.0;
+/// A Gaussian that would bring a transmittance below this is not blended, and that chain stops.
+pub const MIN_TRANSMITTANCE: f64 = 1e-4;
+/// The Jacobian of the projection is evaluated with the mean clamped to this guard band around
+/// the image (as a fraction of its size on each side): 3DGS's 1.3 x tan(fov / 2).
+pub const GUARD_BAND: f64 = 0.15;

@@ -174,3 +174,26 @@ impl Camera {
         self.pose.validate()
     }
 }
+
+/// A general world-to-camera affine map `x_cam = linear * x + translation` with the world-space
+/// position of its centre. For real cameras `linear` is a rotation; for a camera mirrored about a
+/// reflection plane it is `R H` (determinant -1). The centre is kept explicitly so that gradients
+/// reach it (the SH view direction of a mirrored pass uses `Hm(c)`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ViewTransform {
+    pub linear: DMat3,
+    pub translation: DVec3,
+    pub centre: DVec3,
+}
+
+impl From<&Pose> for ViewTransform {
+    fn from(pose: &Pose) -> Self {
+        Self { linear: pose.rotation, translation: pose.translation, centre: pose.centre() }
+    }
+}
+
+impl ViewTransform {
+    pub fn transform_point(&self, x: DVec3) -> DVec3 {
+        self.linear * x + self.translation
+    }
+}

@@ -5,7 +5,7 @@ mod gaussians;
 mod plane;
 mod validate;
 
-pub use camera::{Camera, CameraError, Intrinsics, Pose};
+pub use camera::{Camera, CameraError, Intrinsics, Pose, ViewTransform};
 pub use gaussians::{Gaussians, Population, Scalar, sh_coeff_count};
 pub use plane::{Material, PlaneError, ReflectionPlane};
 pub use validate::{InvalidInput, validate_scene};

@@ -1,0 +1,125 @@
+//! The backward pipeline of one view: compose_bwd -> rasterize_bwd (pass 1) -> project_bwd of the
+//! real view; per plane: rasterize_reflection_bwd -> project_bwd of the mirrored view -> the chain
+//! from the mirrored view `W' = W Hm` to the plane's centre and normal; the normal's
+//! normalisation and R0's sigmoid last.
+use super::compose_bwd::compose_bwd;
+use super::frame::{Frame, FrameGrads};
+use super::project_bwd::{ViewGrads, project_bwd};
+use super::rasterize_bwd::{RasterizeUpstream, rasterize_bwd};
+use super::rasterize_reflection_bwd::rasterize_reflection_bwd;
+use super::{RenderSettings, TileGrid};
+use crate::plane_math::outer;
+use crate::scene::{Camera, Gaussians, InvalidInput, ReflectionPlane, validate_scene};
+use glam::{DMat3, DVec3};
+
+/// Switches of the backward pass that the training stages need.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BackwardOptions {
+    /// Stage 2: no gradient from the mirrored passes (C_r) into any Gaussian; the planes' centre
+    /// and normal still learn from them through the mirrored view.
+    pub block_reflection_to_gaussians: bool,
+}
+
+/// dL/d(plane parameters as stored).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlaneGrad {
+    pub centre: DVec3,
+    /// With respect to the unnormalised normal.
+    pub normal: DVec3,
+    pub r0_logit: f64,
+}
+
+/// Gradients of every parameter: Gaussians (same layout as the scene) and planes.
+#[derive(Clone, Debug)]
+pub struct SceneGrads {
+    pub gaussians: Gaussians<f64>,
+    pub planes: Vec<PlaneGrad>,
+}
+
+/// Chain the gradient of a mirrored view into the plane's centre and unit normal.
+/// `W' = R H`, `t' = t + 2 (u.n) R n`, `c' = c - 2 ((c - u).n) n`.
+fn mirrored_view_bwd(plane: &ReflectionPlane, real: &super::ViewPass, vg: &ViewGrads) -> (DVec3, DVec3) {
+    let n = plane.unit_normal();
+    let u = plane.centre;
+    let (r, c) = (real.view.linear, real.view.centre);
+    let rn = r * n;
+    let mut g_n = -2.0 * (r.transpose() * vg.linear * n + vg.linear.transpose() * rn);
+    let gt_rn = vg.translation.dot(rn);
+    let mut g_u = 2.0 * gt_rn * n;
+    g_n += 2.0 * gt_rn * u + 2.0 * u.dot(n) * (r.transpose() * vg.translation);
+    let cu = c - u;
+    g_u += 2.0 * n.dot(vg.centre) * n;
+    g_n -= 2.0 * (vg.centre.dot(n) * cu + cu.dot(n) * vg.centre);
+    (g_u, g_n)
+}
+
+/// Gradients of a scalar loss given dL/d(each layer of `frame`), which `render` produced from the
+/// same scene, planes, camera and settings.
+pub fn backward(
+    g: &Gaussians<f64>,
+    planes: &[ReflectionPlane],
+    camera: &Camera,
+    settings: &RenderSettings,
+    frame: &Frame,
+    grads: &FrameGrads,
+    options: &BackwardOptions,
+) -> Result<SceneGrads, InvalidInput> {
+    validate_scene(g, planes, camera)?;
+    let k = &camera.intrinsics;
+    let grid = TileGrid::new(k.width, k.height);
+    let mut out = Gaussians::<f64>::zeros(g.len(), g.sh_degree);
+    out.populations = g.populations.clone();
+    let cg = compose_bwd(camera, planes, frame, grads);
+
+    let pass = &frame.primary;
+    let up = RasterizeUpstream {
+        transmission: &cg.transmission,
+        depth: &grads.depth,
+        depth_variance: &grads.depth_variance,
+        mask: &cg.mask,
+        alpha: &grads.alpha,
+    };
+    let pg = rasterize_bwd(
+        &pass.projected,
+        &pass.values,
+        &pass.ranges,
+        &grid,
+        &frame.pixels,
+        &frame.depth,
+        settings.background,
+        up,
+    );
+    project_bwd(g, &pass.view, k, &pass.projected, &pg, Some(&mut out));
+
+    let mut plane_grads = Vec::with_capacity(planes.len());
+    for (kp, plane) in planes.iter().enumerate() {
+        let mut g_u = DVec3::ZERO;
+        let mut g_n = cg.unit_normal[kp];
+        if let Some(layers) = frame.planes[kp].as_ref() {
+            let mp = &layers.pass;
+            let (g_raw, g_int) = &cg.planes[kp];
+            let rpg = rasterize_reflection_bwd(
+                &mp.projected,
+                &mp.values,
+                &mp.ranges,
+                &grid,
+                &layers.footprint,
+                &layers.pixels,
+                g_raw,
+                g_int,
+            );
+            let target = if options.block_reflection_to_gaussians { None } else { Some(&mut out) };
+            let vg = project_bwd(g, &mp.view, k, &mp.projected, &rpg, target);
+            let (du, dn) = mirrored_view_bwd(plane, pass, &vg);
+            g_u += du;
+            g_n += dn;
+        }
+        // n = n_raw / |n_raw|.
+        let len = plane.normal.length();
+        let nu = plane.normal / len;
+        let g_raw_n = (DMat3::IDENTITY - outer(nu, nu)) * g_n / len;
+        let r0 = plane.r0();
+        plane_grads.push(PlaneGrad { centre: g_u, normal: g_raw_n, r0_logit: cg.r0[kp] * r0 * (1.0 - r0) });
+    }
+    Ok(SceneGrads { gaussians: out, planes: plane_grads })
+}
