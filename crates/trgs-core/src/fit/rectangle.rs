@@ -16,7 +16,8 @@ pub struct RectangleFit {
     pub centre: DVec3,
     /// Unit normal; the sign is RANSAC's arbitrary one (see [`super::orient_towards`]).
     pub normal: DVec3,
-    /// Unit, in-plane, along the width.
+    /// Unit, in-plane, along the width. Its sign follows an arbitrary in-plane basis: a rectangle
+    /// is symmetric under `axis -> -axis`, so nothing downstream depends on it.
     pub axis: DVec3,
     /// The longer side of the box.
     pub width: f64,
@@ -27,7 +28,8 @@ pub struct RectangleFit {
 }
 
 impl RectangleFit {
-    /// The reflection plane this fit initialises, with the material's initial reflectance.
+    /// The reflection plane this fit initialises, with the material's initial reflectance. Orient
+    /// `normal` first ([`super::orient_towards`]): the plane's front side is where it points.
     pub fn to_plane(&self, material: Material) -> ReflectionPlane {
         ReflectionPlane::new(self.centre, self.normal, self.axis, self.width, self.height, material)
     }
