@@ -1,0 +1,140 @@
+//! Device setup: pick the best adapter, enable the optional features it has (float atomics,
+//! subgroups, timestamp queries) and record which ones the stages may use, so that each stage can
+//! choose its fast path or its fallback.
+use wgpu::{Features, Limits};
+
+#[derive(Debug, thiserror::Error)]
+pub enum DeviceError {
+    #[error(
+        "no GPU adapter found (wgpu saw none on Vulkan/Metal/DX12). On Linux without a GPU install \
+         Mesa's CPU Vulkan driver lavapipe: `apt-get install mesa-vulkan-drivers` \
+         (scripts/ensure-vulkan.sh does this as root)"
+    )]
+    NoAdapter,
+    #[error("no adapter matches TRGS_ADAPTER={wanted:?}; available: {available}")]
+    NoMatchingAdapter { wanted: String, available: String },
+    #[error("the adapter {adapter} refused a device: {source}")]
+    RequestDevice { adapter: String, source: wgpu::RequestDeviceError },
+}
+
+/// Optional features the adapter granted.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Capabilities {
+    /// `atomicAdd` on f32 in storage buffers (gradient accumulation without compare-exchange).
+    pub float_atomics: bool,
+    /// Subgroup operations (reductions before atomics).
+    pub subgroups: bool,
+    /// Timestamp queries (per-stage timings in benchmarks).
+    pub timestamps: bool,
+}
+
+/// How to choose the device.
+#[derive(Clone, Debug, Default)]
+pub struct DeviceOptions {
+    /// Use the first adapter whose name contains this (case-insensitive); also read from the
+    /// environment variable `TRGS_ADAPTER` when None.
+    pub adapter_name: Option<String>,
+    /// Never enable the optional features (tests of the fallback paths).
+    pub disable_optional_features: bool,
+}
+
+/// A wgpu device and queue with what they can do.
+#[derive(Debug)]
+pub struct GpuContext {
+    pub adapter: wgpu::Adapter,
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub info: wgpu::AdapterInfo,
+    pub capabilities: Capabilities,
+}
+
+const OPTIONAL: [(Features, &str); 3] = [
+    (Features::SHADER_FLOAT32_ATOMIC, "float_atomics"),
+    (Features::SUBGROUP, "subgroups"),
+    (Features::TIMESTAMP_QUERY, "timestamps"),
+];
+
+/// Rank adapters: discrete GPU, integrated, virtual, then CPU (lavapipe).
+fn rank(info: &wgpu::AdapterInfo) -> u8 {
+    match info.device_type {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Other => 3,
+        wgpu::DeviceType::Cpu => 4,
+    }
+}
+
+impl GpuContext {
+    /// The best adapter with default options (blocking).
+    pub fn new() -> Result<Self, DeviceError> {
+        Self::with_options(&DeviceOptions::default())
+    }
+
+    pub fn with_options(options: &DeviceOptions) -> Result<Self, DeviceError> {
+        pollster::block_on(Self::create(options))
+    }
+
+    async fn create(options: &DeviceOptions) -> Result<Self, DeviceError> {
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
+            backends: wgpu::Backends::PRIMARY,
+            ..wgpu::InstanceDescriptor::new_without_display_handle()
+        });
+        let mut adapters = instance.enumerate_adapters(wgpu::Backends::PRIMARY).await;
+        if adapters.is_empty() {
+            return Err(DeviceError::NoAdapter);
+        }
+        adapters.sort_by_key(|a| rank(&a.get_info()));
+        let wanted = options.adapter_name.clone().or_else(|| std::env::var("TRGS_ADAPTER").ok());
+        let adapter = match wanted {
+            Some(w) => {
+                let names: Vec<String> = adapters.iter().map(|a| a.get_info().name).collect();
+                let pos = names.iter().position(|n| n.to_lowercase().contains(&w.to_lowercase()));
+                match pos {
+                    Some(p) => adapters.swap_remove(p),
+                    None => {
+                        return Err(DeviceError::NoMatchingAdapter { wanted: w, available: names.join(", ") });
+                    }
+                }
+            }
+            None => adapters.swap_remove(0),
+        };
+        let info = adapter.get_info();
+        let mut features = Features::empty();
+        if !options.disable_optional_features {
+            for (f, _) in OPTIONAL {
+                if adapter.features().contains(f) {
+                    features |= f;
+                }
+            }
+        }
+        // Ask for everything the adapter offers: storage bindings of 128 MiB and more matter for
+        // large scenes.
+        let limits: Limits = adapter.limits();
+        let (device, queue) = adapter
+            .request_device(&wgpu::DeviceDescriptor {
+                label: Some("trgs.device"),
+                required_features: features,
+                required_limits: limits,
+                ..Default::default()
+            })
+            .await
+            .map_err(|source| DeviceError::RequestDevice { adapter: info.name.clone(), source })?;
+        let capabilities = Capabilities {
+            float_atomics: features.contains(Features::SHADER_FLOAT32_ATOMIC),
+            subgroups: features.contains(Features::SUBGROUP),
+            timestamps: features.contains(Features::TIMESTAMP_QUERY),
+        };
+        Ok(Self { adapter, device, queue, info, capabilities })
+    }
+
+    /// One line for logs: adapter, backend and optional features.
+    pub fn describe(&self) -> String {
+        let on: Vec<&str> = OPTIONAL
+            .iter()
+            .filter(|(f, _)| self.device.features().contains(*f))
+            .map(|(_, n)| *n)
+            .collect();
+        format!("{} ({:?}, {:?}); optional features: [{}]", self.info.name, self.info.backend, self.info.device_type, on.join(", "))
+    }
+}
