@@ -1,5 +1,20 @@
 //! File formats. Every reader names the file and what was expected when input is malformed;
 //! every writer writes a temporary file and renames it into place.
+//!
+//! - [`colmap`]: COLMAP sparse models (binary and text);
+//! - [`transforms`]: nerfstudio/Blender `transforms.json`;
+//! - [`png`]: 8-bit RGB and gray PNG images;
+//! - [`masks`]: glass masks (`glass_masks/<image>.png`, label k > 0 = plane k);
+//! - [`test_split`]: `test_views.txt` and the default every-8th split;
+//! - [`planes_json`]: `planes.json` (plane annotations and trained planes);
+//! - [`ply`]: INRIA-layout 3DGS PLY with trgs's extra properties;
+//! - [`dataset`]: a scene folder that puts the above together.
+mod bytes;
+pub mod colmap;
 mod error;
+#[cfg(test)]
+mod test_util;
+
+pub use colmap::{ColmapCamera, ColmapImage, ColmapModel, ColmapPoint};
 
 pub use error::{FormatError, write_atomic};
