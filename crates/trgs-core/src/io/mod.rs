@@ -12,9 +12,13 @@
 mod bytes;
 pub mod colmap;
 mod error;
+pub mod masks;
+pub mod png;
 #[cfg(test)]
 mod test_util;
 
 pub use colmap::{ColmapCamera, ColmapImage, ColmapModel, ColmapPoint};
 
 pub use error::{FormatError, write_atomic};
+pub use masks::{mask_path, read_glass_mask, write_glass_mask};
+pub use png::{read_rgb_image, write_png_gray, write_png_rgb};
