@@ -13,7 +13,9 @@ mod bytes;
 pub mod colmap;
 mod error;
 pub mod masks;
+pub mod planes_json;
 pub mod png;
+pub mod test_split;
 #[cfg(test)]
 mod test_util;
 
@@ -21,4 +23,6 @@ pub use colmap::{ColmapCamera, ColmapImage, ColmapModel, ColmapPoint};
 
 pub use error::{FormatError, write_atomic};
 pub use masks::{mask_path, read_glass_mask, write_glass_mask};
+pub use planes_json::{PlaneSpec, read_planes_json, write_planes_json};
 pub use png::{read_rgb_image, write_png_gray, write_png_rgb};
+pub use test_split::{default_test_views, read_test_views, write_test_views};
