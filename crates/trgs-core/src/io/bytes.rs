@@ -20,11 +20,6 @@ impl<'a> ByteReader<'a> {
         Self { bytes, pos: 0 }
     }
 
-    /// Offset of the next unread byte.
-    pub(crate) fn position(&self) -> usize {
-        self.pos
-    }
-
     pub(crate) fn remaining(&self) -> usize {
         self.bytes.len() - self.pos
     }

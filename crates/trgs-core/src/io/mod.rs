@@ -14,6 +14,7 @@ pub mod colmap;
 mod error;
 pub mod masks;
 pub mod planes_json;
+pub mod ply;
 pub mod png;
 pub mod test_split;
 #[cfg(test)]
@@ -24,5 +25,6 @@ pub use colmap::{ColmapCamera, ColmapImage, ColmapModel, ColmapPoint};
 pub use error::{FormatError, write_atomic};
 pub use masks::{mask_path, read_glass_mask, write_glass_mask};
 pub use planes_json::{PlaneSpec, read_planes_json, write_planes_json};
+pub use ply::{encode_ply, parse_ply, read_ply, write_ply};
 pub use png::{read_rgb_image, write_png_gray, write_png_rgb};
 pub use test_split::{default_test_views, read_test_views, write_test_views};

@@ -271,9 +271,8 @@ mod tests {
         );
         let path = write(
             "planes-par",
-            &format!(
-                r#"{{"planes": [{{"label": 1, "centre": [0,0,0], "normal": [0,0,1], "axis": [0,0,3], "width": 1, "height": 1}}]}}"#
-            ),
+            r#"{"planes": [{"label": 1, "centre": [0,0,0], "normal": [0,0,1], "axis": [0,0,3],
+                "width": 1, "height": 1}]}"#,
         );
         assert_mentions(
             &read_planes_json(&path).expect_err("parallel"),
