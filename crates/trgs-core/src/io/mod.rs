@@ -19,6 +19,7 @@ pub mod png;
 pub mod test_split;
 #[cfg(test)]
 mod test_util;
+pub mod transforms;
 
 pub use colmap::{ColmapCamera, ColmapImage, ColmapModel, ColmapPoint};
 
@@ -28,3 +29,4 @@ pub use planes_json::{PlaneSpec, read_planes_json, write_planes_json};
 pub use ply::{encode_ply, parse_ply, read_ply, write_ply};
 pub use png::{read_rgb_image, write_png_gray, write_png_rgb};
 pub use test_split::{default_test_views, read_test_views, write_test_views};
+pub use transforms::{TransformsFrame, read_transforms, write_transforms};
