@@ -11,6 +11,7 @@
 //! - [`dataset`]: a scene folder that puts the above together.
 mod bytes;
 pub mod colmap;
+pub mod dataset;
 mod error;
 pub mod masks;
 pub mod planes_json;
@@ -22,7 +23,7 @@ mod test_util;
 pub mod transforms;
 
 pub use colmap::{ColmapCamera, ColmapImage, ColmapModel, ColmapPoint};
-
+pub use dataset::{SceneFolder, ViewSpec};
 pub use error::{FormatError, write_atomic};
 pub use masks::{mask_path, read_glass_mask, write_glass_mask};
 pub use planes_json::{PlaneSpec, read_planes_json, write_planes_json};
