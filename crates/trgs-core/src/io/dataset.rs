@@ -153,11 +153,9 @@ fn colmap_dir(root: &Path) -> Option<PathBuf> {
 }
 
 type Cameras = Vec<(Camera, PathBuf)>;
+type Points = Vec<([f64; 3], [u8; 3])>;
 
-fn open_colmap(
-    root: &Path,
-    sparse: &Path,
-) -> Result<(Cameras, Vec<([f64; 3], [u8; 3])>), FormatError> {
+fn open_colmap(root: &Path, sparse: &Path) -> Result<(Cameras, Points), FormatError> {
     let model = ColmapModel::read(sparse)?;
     let cameras_file = if sparse.join("cameras.bin").is_file() {
         sparse.join("cameras.bin")
