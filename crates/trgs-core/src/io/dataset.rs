@@ -46,12 +46,27 @@ impl SceneFolder {
             let frames = read_transforms(&root.join("transforms.json"))?;
             (frames.into_iter().map(|f| (f.camera, f.image_path)).collect(), Vec::new())
         } else {
+            // NeRF-synthetic folders split their frames over transforms_{train,val,test}.json.
+            let hint = if root.join("transforms_train.json").is_file() {
+                "; transforms_train.json is here, but Blender's split files are not read: merge \
+                 their frames into transforms.json and list the test images in test_views.txt"
+            } else {
+                ""
+            };
             return Err(FormatError::new(
                 root,
-                "not a scene folder: found neither a COLMAP model (sparse/0/cameras.bin or \
-                 sparse/0/cameras.txt, with images/) nor transforms.json",
+                format!(
+                    "not a scene folder: found neither a COLMAP model (sparse/0/cameras.bin or \
+                     sparse/0/cameras.txt, with images/) nor transforms.json{hint}"
+                ),
             ));
         };
+        if cameras.is_empty() {
+            return Err(FormatError::new(
+                root,
+                "the scene has no views (no registered images or frames)",
+            ));
+        }
 
         let masks_dir = root.join("glass_masks");
         let mut views = Vec::with_capacity(cameras.len());
@@ -264,6 +279,11 @@ mod tests {
             &err,
             &[&root.display().to_string(), "sparse/0/cameras.bin", "transforms.json"],
         );
+        std::fs::write(root.join("transforms_train.json"), "{}").expect("write");
+        let err = SceneFolder::open(&root).expect_err("blender split");
+        assert_mentions(&err, &["transforms_train.json", "merge"]);
+        std::fs::write(root.join("transforms.json"), r#"{"frames": []}"#).expect("write");
+        assert_mentions(&SceneFolder::open(&root).expect_err("no frames"), &["no views"]);
         let err = SceneFolder::open(&root.join("nope")).expect_err("missing");
         assert_mentions(&err, &["nope", "not a folder"]);
     }
