@@ -39,3 +39,18 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), FormatError> {
         FormatError::io(path, &e)
     })
 }
+
+/// The whole of `path`, or an error naming it (e.g. "No such file or directory").
+pub(crate) fn read_bytes(path: &Path) -> Result<Vec<u8>, FormatError> {
+    std::fs::read(path).map_err(|e| FormatError::io(path, &e))
+}
+
+/// The whole of `path` as UTF-8 text; invalid UTF-8 is an error naming the line it is on.
+pub(crate) fn read_text(path: &Path) -> Result<String, FormatError> {
+    let bytes = read_bytes(path)?;
+    String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        let line = 1 + e.as_bytes()[..at].iter().filter(|&&b| b == b'\n').count();
+        FormatError::new(path, format!("line {line}: not valid UTF-8 text"))
+    })
+}

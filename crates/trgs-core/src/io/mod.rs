@@ -1,5 +1,33 @@
 //! File formats. Every reader names the file and what was expected when input is malformed;
 //! every writer writes a temporary file and renames it into place.
+//!
+//! - [`colmap`]: COLMAP sparse models (binary and text);
+//! - [`transforms`]: nerfstudio/Blender `transforms.json`;
+//! - [`png`]: 8-bit RGB and gray PNG images;
+//! - [`masks`]: glass masks (`glass_masks/<image>.png`, label k > 0 = plane k);
+//! - [`test_split`]: `test_views.txt` and the default every-8th split;
+//! - [`planes_json`]: `planes.json` (plane annotations and trained planes);
+//! - [`ply`]: INRIA-layout 3DGS PLY with trgs's extra properties;
+//! - [`dataset`]: a scene folder that puts the above together.
+mod bytes;
+pub mod colmap;
+pub mod dataset;
 mod error;
+pub mod masks;
+pub mod planes_json;
+pub mod ply;
+pub mod png;
+pub mod test_split;
+#[cfg(test)]
+mod test_util;
+pub mod transforms;
 
+pub use colmap::{ColmapCamera, ColmapImage, ColmapModel, ColmapPoint};
+pub use dataset::{SceneFolder, ViewSpec};
 pub use error::{FormatError, write_atomic};
+pub use masks::{mask_path, read_glass_mask, write_glass_mask};
+pub use planes_json::{PlaneSpec, read_planes_json, write_planes_json};
+pub use ply::{encode_ply, parse_ply, read_ply, write_ply};
+pub use png::{read_rgb_image, write_png_gray, write_png_rgb};
+pub use test_split::{default_test_views, read_test_views, write_test_views};
+pub use transforms::{TransformsFrame, read_transforms, write_transforms};

@@ -1,0 +1,339 @@
+//! A scene folder (DESIGN.md, Formats): cameras and images from COLMAP (`sparse/0/` + `images/`)
+//! or `transforms.json`, plus the optional `glass_masks/`, `planes.json` and `test_views.txt`.
+//! Opening checks everything that is cheap to check (files exist, cameras are pinhole and valid,
+//! test names exist); pixels are read on demand, one view at a time.
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+
+use super::FormatError;
+use super::colmap::ColmapModel;
+use super::masks::{mask_path, read_glass_mask};
+use super::planes_json::{PlaneSpec, read_planes_json};
+use super::png::read_rgb_image;
+use super::test_split::{default_test_views, read_test_views};
+use super::transforms::read_transforms;
+use crate::image::Image;
+use crate::scene::{Camera, Material};
+
+/// One training or test view: its camera (named by the image), its image and its glass mask.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ViewSpec {
+    pub camera: Camera,
+    pub image_path: PathBuf,
+    pub mask_path: Option<PathBuf>,
+}
+
+/// An opened scene folder. Views are sorted by image name.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneFolder {
+    pub root: PathBuf,
+    pub views: Vec<ViewSpec>,
+    /// The sparse point cloud (position, colour) for initialisation; empty for transforms.json.
+    pub points: Vec<([f64; 3], [u8; 3])>,
+    pub plane_specs: Vec<PlaneSpec>,
+    /// Names of the test views: `test_views.txt`, or every 8th image.
+    pub test_views: Vec<String>,
+}
+
+impl SceneFolder {
+    pub fn open(root: &Path) -> Result<Self, FormatError> {
+        if !root.is_dir() {
+            return Err(FormatError::new(root, "not a folder (expected a scene folder)"));
+        }
+        let (cameras, points) = if let Some(sparse) = colmap_dir(root) {
+            open_colmap(root, &sparse)?
+        } else if root.join("transforms.json").is_file() {
+            let frames = read_transforms(&root.join("transforms.json"))?;
+            (frames.into_iter().map(|f| (f.camera, f.image_path)).collect(), Vec::new())
+        } else {
+            // NeRF-synthetic folders split their frames over transforms_{train,val,test}.json.
+            let hint = if root.join("transforms_train.json").is_file() {
+                "; transforms_train.json is here, but Blender's split files are not read: merge \
+                 their frames into transforms.json and list the test images in test_views.txt"
+            } else {
+                ""
+            };
+            return Err(FormatError::new(
+                root,
+                format!(
+                    "not a scene folder: found neither a COLMAP model (sparse/0/cameras.bin or \
+                     sparse/0/cameras.txt, with images/) nor transforms.json{hint}"
+                ),
+            ));
+        };
+        if cameras.is_empty() {
+            return Err(FormatError::new(
+                root,
+                "the scene has no views (no registered images or frames)",
+            ));
+        }
+
+        let masks_dir = root.join("glass_masks");
+        let mut views = Vec::with_capacity(cameras.len());
+        for (camera, image_path) in cameras {
+            if !image_path.is_file() {
+                return Err(FormatError::new(
+                    &image_path,
+                    format!("the image of view {:?} is missing", camera.name),
+                ));
+            }
+            let mask_path = mask_path(&masks_dir, &camera.name);
+            views.push(ViewSpec { camera, image_path, mask_path });
+        }
+        views.sort_by(|a, b| a.camera.name.cmp(&b.camera.name));
+        if let Some(w) = views.windows(2).find(|w| w[0].camera.name == w[1].camera.name) {
+            let problem = format!(
+                "two views are named {:?} ({} and {}); image names must be unique",
+                w[0].camera.name,
+                w[0].image_path.display(),
+                w[1].image_path.display()
+            );
+            return Err(FormatError::new(root, problem));
+        }
+
+        let planes_path = root.join("planes.json");
+        let plane_specs =
+            if planes_path.is_file() { read_planes_json(&planes_path)? } else { Vec::new() };
+        let names: Vec<String> = views.iter().map(|v| v.camera.name.clone()).collect();
+        let split_path = root.join("test_views.txt");
+        let test_views = if split_path.is_file() {
+            read_test_views(&split_path, &names)?
+        } else {
+            default_test_views(&names)
+        };
+        Ok(Self { root: root.to_path_buf(), views, points, plane_specs, test_views })
+    }
+
+    fn view(&self, i: usize) -> Result<&ViewSpec, FormatError> {
+        self.views.get(i).ok_or_else(|| {
+            FormatError::new(
+                &self.root,
+                format!("view {i} does not exist (the scene has {})", self.views.len()),
+            )
+        })
+    }
+
+    /// The RGB image of view `i`, which must have its camera's size.
+    pub fn load_image(&self, i: usize) -> Result<Image<f32>, FormatError> {
+        let view = self.view(i)?;
+        let image = read_rgb_image(&view.image_path)?;
+        let (w, h) = (view.camera.width(), view.camera.height());
+        if (image.width, image.height) != (w, h) {
+            let problem = format!(
+                "the image is {}x{} but its camera expects {w}x{h} (images must match the camera model; \
+                 resize them or use the matching model)",
+                image.width, image.height
+            );
+            return Err(FormatError::new(&view.image_path, problem));
+        }
+        Ok(image)
+    }
+
+    /// The glass mask of view `i`, if it has one.
+    pub fn load_mask(&self, i: usize) -> Result<Option<Image<u8>>, FormatError> {
+        let view = self.view(i)?;
+        match &view.mask_path {
+            Some(path) => {
+                read_glass_mask(path, view.camera.width(), view.camera.height()).map(Some)
+            }
+            None => Ok(None),
+        }
+    }
+
+    pub fn is_test(&self, name: &str) -> bool {
+        self.test_views.iter().any(|t| t == name)
+    }
+
+    /// Every plane label (k > 0) that some mask uses, ascending. Reads every mask.
+    pub fn mask_labels(&self) -> Result<Vec<u32>, FormatError> {
+        let mut labels = BTreeSet::new();
+        for i in 0..self.views.len() {
+            if let Some(mask) = self.load_mask(i)? {
+                labels.extend(mask.data.iter().filter(|&&v| v > 0).map(|&v| u32::from(v)));
+            }
+        }
+        Ok(labels.into_iter().collect())
+    }
+
+    /// The material of plane `label`: from `planes.json`, glass when it does not list the label.
+    pub fn material(&self, label: u32) -> Material {
+        self.plane_specs.iter().find(|s| s.label == label).map(|s| s.material).unwrap_or_default()
+    }
+}
+
+/// `sparse/0/` (COLMAP's layout) or `sparse/` itself, whichever holds a model.
+fn colmap_dir(root: &Path) -> Option<PathBuf> {
+    let has_model = |d: &Path| d.join("cameras.bin").is_file() || d.join("cameras.txt").is_file();
+    [root.join("sparse").join("0"), root.join("sparse")].into_iter().find(|d| has_model(d))
+}
+
+type Cameras = Vec<(Camera, PathBuf)>;
+type Points = Vec<([f64; 3], [u8; 3])>;
+
+fn open_colmap(root: &Path, sparse: &Path) -> Result<(Cameras, Points), FormatError> {
+    let model = ColmapModel::read(sparse)?;
+    let cameras_file = if sparse.join("cameras.bin").is_file() {
+        sparse.join("cameras.bin")
+    } else {
+        sparse.join("cameras.txt")
+    };
+    let images_dir = root.join("images");
+    let mut cameras = Vec::with_capacity(model.images.len());
+    for image in &model.images {
+        // `camera` cannot know the file; name the one it came from.
+        let camera = model
+            .camera(image)
+            .map_err(|e| FormatError { path: cameras_file.clone(), problem: e.problem })?;
+        cameras.push((camera, images_dir.join(&image.name)));
+    }
+    let points = model.points.iter().map(|p| (p.xyz, p.rgb)).collect();
+    Ok((cameras, points))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::colmap::{ColmapCamera, ColmapImage, ColmapPoint};
+    use crate::io::test_util::{assert_mentions, scratch_dir};
+    use crate::io::transforms::{TransformsFrame, write_transforms};
+    use crate::io::{write_glass_mask, write_png_rgb};
+    use crate::scene::{Intrinsics, Pose};
+
+    fn colmap_scene(tag: &str) -> PathBuf {
+        let root = scratch_dir(tag);
+        let image = |id, name: &str| ColmapImage {
+            id,
+            qvec: [1.0, 0.0, 0.0, 0.0],
+            tvec: [0.0, 0.0, f64::from(id)],
+            camera_id: 1,
+            name: name.into(),
+            points2d: vec![],
+        };
+        let model = ColmapModel {
+            cameras: vec![ColmapCamera {
+                id: 1,
+                model: "PINHOLE".into(),
+                width: 4,
+                height: 3,
+                params: vec![5.0, 5.0, 2.0, 1.5],
+            }],
+            images: vec![image(1, "b.png"), image(2, "a.png")],
+            points: vec![ColmapPoint {
+                id: 1,
+                xyz: [1.0, 2.0, 3.0],
+                rgb: [9, 8, 7],
+                error: 0.1,
+                track: vec![],
+            }],
+        };
+        model.write_binary(&root.join("sparse/0")).expect("model");
+        for name in ["a.png", "b.png"] {
+            write_png_rgb(&root.join("images").join(name), &Image::filled(4, 3, 3, 0.5))
+                .expect("image");
+        }
+        root
+    }
+
+    #[test]
+    fn opens_colmap_scene_with_masks_planes_and_split() {
+        let root = colmap_scene("ds-colmap");
+        let mask = Image {
+            width: 4,
+            height: 3,
+            channels: 1,
+            data: vec![0, 0, 2, 2, 0, 0, 2, 2, 0, 0, 0, 5],
+        };
+        write_glass_mask(&root.join("glass_masks/b.png"), &mask).expect("mask");
+        std::fs::write(
+            root.join("planes.json"),
+            r#"{"planes": [{"label": 2, "material": "mirror"}]}"#,
+        )
+        .expect("planes");
+        std::fs::write(root.join("test_views.txt"), "b.png\n").expect("split");
+        let scene = SceneFolder::open(&root).expect("open");
+        let names: Vec<&str> = scene.views.iter().map(|v| v.camera.name.as_str()).collect();
+        assert_eq!(names, ["a.png", "b.png"]);
+        assert_eq!(scene.views[0].mask_path, None);
+        assert_eq!(scene.views[1].mask_path, Some(root.join("glass_masks/b.png")));
+        assert_eq!(scene.points, [([1.0, 2.0, 3.0], [9, 8, 7])]);
+        assert!(scene.is_test("b.png") && !scene.is_test("a.png"));
+        assert_eq!(scene.load_image(1).expect("image").data[0], 128.0 / 255.0);
+        assert_eq!(scene.load_mask(1).expect("mask"), Some(mask));
+        assert_eq!(scene.load_mask(0).expect("no mask"), None);
+        assert_eq!(scene.mask_labels().expect("labels"), [2, 5]);
+        assert_eq!((scene.material(2), scene.material(5)), (Material::Mirror, Material::Glass));
+        assert_mentions(&scene.load_image(7).expect_err("index"), &["view 7", "has 2"]);
+    }
+
+    #[test]
+    fn default_split_without_test_views() {
+        let scene = SceneFolder::open(&colmap_scene("ds-split")).expect("open");
+        assert_eq!(scene.test_views, ["a.png"]);
+    }
+
+    #[test]
+    fn empty_folder_says_what_was_looked_for() {
+        let root = scratch_dir("ds-empty");
+        let err = SceneFolder::open(&root).expect_err("empty");
+        assert_mentions(
+            &err,
+            &[&root.display().to_string(), "sparse/0/cameras.bin", "transforms.json"],
+        );
+        std::fs::write(root.join("transforms_train.json"), "{}").expect("write");
+        let err = SceneFolder::open(&root).expect_err("blender split");
+        assert_mentions(&err, &["transforms_train.json", "merge"]);
+        std::fs::write(root.join("transforms.json"), r#"{"frames": []}"#).expect("write");
+        assert_mentions(&SceneFolder::open(&root).expect_err("no frames"), &["no views"]);
+        let err = SceneFolder::open(&root.join("nope")).expect_err("missing");
+        assert_mentions(&err, &["nope", "not a folder"]);
+    }
+
+    #[test]
+    fn missing_image_is_named_at_open() {
+        let root = colmap_scene("ds-missing");
+        std::fs::remove_file(root.join("images/b.png")).expect("rm");
+        let err = SceneFolder::open(&root).expect_err("missing image");
+        assert_mentions(&err, &["images/b.png", "missing"]);
+    }
+
+    #[test]
+    fn wrong_image_size_names_both_sizes() {
+        let root = colmap_scene("ds-size");
+        write_png_rgb(&root.join("images/a.png"), &Image::new(5, 3, 3)).expect("image");
+        let scene = SceneFolder::open(&root).expect("open");
+        assert_mentions(&scene.load_image(0).expect_err("size"), &["images/a.png", "5x3", "4x3"]);
+    }
+
+    #[test]
+    fn distorted_colmap_camera_names_the_cameras_file() {
+        let root = colmap_scene("ds-opencv");
+        let sparse = root.join("sparse/0");
+        let mut model = ColmapModel::read(&sparse).expect("read");
+        model.cameras[0].model = "OPENCV".into();
+        model.cameras[0].params = vec![5.0, 5.0, 2.0, 1.5, 0.1, 0.0, 0.0, 0.0];
+        model.write_binary(&sparse).expect("write");
+        let err = SceneFolder::open(&root).expect_err("OPENCV");
+        assert_mentions(&err, &["sparse/0/cameras.bin", "OPENCV", "undistort"]);
+    }
+
+    #[test]
+    fn opens_transforms_scene() {
+        let root = scratch_dir("ds-transforms");
+        let k = Intrinsics { fx: 5.0, fy: 5.0, cx: 2.0, cy: 1.5, width: 4, height: 3 };
+        let frames: Vec<TransformsFrame> = ["z.png", "y.png"]
+            .iter()
+            .map(|n| {
+                let image_path = root.join("rgb").join(n);
+                write_png_rgb(&image_path, &Image::new(4, 3, 3)).expect("image");
+                TransformsFrame { camera: Camera::new(*n, k, Pose::default()), image_path }
+            })
+            .collect();
+        write_transforms(&root.join("transforms.json"), &frames).expect("json");
+        write_glass_mask(&root.join("glass_masks/z.png.png"), &Image::new(4, 3, 1)).expect("mask");
+        let scene = SceneFolder::open(&root).expect("open");
+        assert_eq!(scene.views[0].camera.name, "y.png");
+        assert_eq!(scene.views[1].mask_path, Some(root.join("glass_masks/z.png.png")));
+        assert!(scene.points.is_empty());
+        assert_eq!(scene.mask_labels().expect("labels"), Vec::<u32>::new());
+    }
+}

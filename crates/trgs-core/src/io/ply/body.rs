@@ -1,0 +1,86 @@
+//! Reading scalar values from a PLY body, binary (either byte order) or ASCII.
+use super::header::ScalarType;
+use crate::io::bytes::{ByteReader, Endian};
+
+/// A cursor over the body that yields every scalar as f64 (exact for every PLY type, f32
+/// included, so a float property round-trips bit for bit through `as f32`).
+pub(super) enum Body<'a> {
+    Binary(ByteReader<'a>, Endian),
+    Ascii(Tokens<'a>),
+}
+
+/// Whitespace-separated ASCII tokens; element instances need not be one a line.
+pub(super) struct Tokens<'a> {
+    bytes: &'a [u8],
+    pos: usize,
+}
+
+impl<'a> Iterator for Tokens<'a> {
+    type Item = &'a [u8];
+
+    fn next(&mut self) -> Option<&'a [u8]> {
+        let rest = &self.bytes[self.pos..];
+        let start = rest.iter().position(|b| !b.is_ascii_whitespace())?;
+        let len =
+            rest[start..].iter().position(u8::is_ascii_whitespace).unwrap_or(rest.len() - start);
+        self.pos += start + len;
+        Some(&rest[start..start + len])
+    }
+}
+
+impl<'a> Body<'a> {
+    pub(super) fn ascii(bytes: &'a [u8]) -> Self {
+        Body::Ascii(Tokens { bytes, pos: 0 })
+    }
+
+    /// Bytes not yet read.
+    pub(super) fn remaining(&self) -> usize {
+        match self {
+            Body::Binary(r, _) => r.remaining(),
+            Body::Ascii(t) => t.bytes.len() - t.pos,
+        }
+    }
+
+    pub(super) fn scalar(&mut self, ty: ScalarType, what: &str) -> Result<f64, String> {
+        match self {
+            Body::Binary(r, e) => binary(r, *e, ty, what),
+            Body::Ascii(tokens) => {
+                let tok = tokens
+                    .next()
+                    .ok_or_else(|| format!("truncated: the data ends before {what}"))?;
+                let text = std::str::from_utf8(tok).unwrap_or("");
+                let bad =
+                    || format!("{what}: cannot read {:?} as {ty:?}", String::from_utf8_lossy(tok));
+                let v = match ty {
+                    // Parse f32 directly: going through f64 could round twice.
+                    ScalarType::F32 => text.parse::<f32>().map(f64::from).map_err(|_| bad())?,
+                    ScalarType::F64 => text.parse::<f64>().map_err(|_| bad())?,
+                    _ => text.parse::<i64>().map(|v| v as f64).map_err(|_| bad())?,
+                };
+                Ok(v)
+            }
+        }
+    }
+
+    /// The item count of a list property.
+    pub(super) fn count(&mut self, ty: ScalarType, what: &str) -> Result<u64, String> {
+        let v = self.scalar(ty, what)?;
+        if v < 0.0 || v.fract() != 0.0 {
+            return Err(format!("{what}: list count {v} is not a non-negative integer"));
+        }
+        Ok(v as u64)
+    }
+}
+
+fn binary(r: &mut ByteReader<'_>, e: Endian, ty: ScalarType, what: &str) -> Result<f64, String> {
+    Ok(match ty {
+        ScalarType::I8 => f64::from(i8::from_le_bytes(r.array(e, what)?)),
+        ScalarType::U8 => f64::from(u8::from_le_bytes(r.array(e, what)?)),
+        ScalarType::I16 => f64::from(i16::from_le_bytes(r.array(e, what)?)),
+        ScalarType::U16 => f64::from(u16::from_le_bytes(r.array(e, what)?)),
+        ScalarType::I32 => f64::from(i32::from_le_bytes(r.array(e, what)?)),
+        ScalarType::U32 => f64::from(u32::from_le_bytes(r.array(e, what)?)),
+        ScalarType::F32 => f64::from(f32::from_le_bytes(r.array(e, what)?)),
+        ScalarType::F64 => f64::from_le_bytes(r.array(e, what)?),
+    })
+}

@@ -1,0 +1,286 @@
+//! 3DGS models as INRIA-layout PLY, the format every 3DGS viewer reads, plus trgs's own
+//! per-Gaussian attributes as extra float properties that other viewers ignore.
+//!
+//! The stored values are the raw parameters, exactly as in [`Gaussians`] and INRIA's files:
+//! opacity as a logit, scales as logs, rotations as unnormalised (w, x, y, z). The one layout
+//! difference is SH: INRIA's `f_rest_*` are channel-major (`f_rest_{c (K-1) + j - 1}` is
+//! coefficient j >= 1 of channel c) while [`Gaussians::sh`] is coefficient-major.
+//!
+//! The reader accepts any property order and type, ASCII and both binary byte orders, and skips
+//! other elements, so files from INRIA's code, gsplat, Brush, SuperSplat's uncompressed export
+//! and others load. Non-finite values load as they are: this is a file format, and
+//! [`crate::scene::validate_scene`] is where non-finite input is refused, with the Gaussian named.
+mod body;
+mod header;
+#[cfg(test)]
+mod tests;
+
+use std::collections::HashMap;
+use std::fmt::Write as _;
+use std::path::Path;
+
+use body::Body;
+use header::{Element, Format, parse_header};
+
+use super::bytes::ByteReader;
+use super::error::read_bytes;
+use super::{FormatError, write_atomic};
+use crate::scene::{Gaussians, Population, sh_coeff_count};
+
+/// trgs's extra properties: mask logit, log reflection intensity, population (0 / 1).
+const EXTRAS: [&str; 3] = ["trgs_mask", "trgs_reflection", "trgs_population"];
+
+pub fn read_ply(path: &Path) -> Result<Gaussians<f32>, FormatError> {
+    parse_ply(&read_bytes(path)?, path)
+}
+
+/// Write `g` as binary little-endian PLY (see the module docs for the layout).
+pub fn write_ply(path: &Path, g: &Gaussians<f32>) -> Result<(), FormatError> {
+    let bytes = encode_ply(g).map_err(|m| FormatError::new(path, m))?;
+    write_atomic(path, &bytes)
+}
+
+/// Names of the float properties the writer emits, in order, for SH degree `degree`.
+fn property_names(degree: u32) -> Vec<String> {
+    let rest = 3 * (sh_coeff_count(degree) - 1);
+    let mut names: Vec<String> =
+        ["x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2"].map(String::from).into();
+    names.extend((0..rest).map(|k| format!("f_rest_{k}")));
+    names.extend(
+        ["opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"]
+            .map(String::from),
+    );
+    names.extend(EXTRAS.map(String::from));
+    names
+}
+
+/// The bytes of a binary little-endian PLY of `g`; an error when `g`'s arrays disagree in length.
+pub fn encode_ply(g: &Gaussians<f32>) -> Result<Vec<u8>, String> {
+    g.check_lengths()?;
+    let names = property_names(g.sh_degree);
+    let mut header = format!("ply\nformat binary_little_endian 1.0\nelement vertex {}\n", g.len());
+    for name in &names {
+        let _ = writeln!(header, "property float {name}");
+    }
+    header.push_str("end_header\n");
+    let k = g.sh_coeffs();
+    let mut out = header.into_bytes();
+    out.reserve(g.len() * names.len() * 4);
+    let mut row = Vec::with_capacity(names.len());
+    for i in 0..g.len() {
+        row.clear();
+        row.extend(g.means[i]);
+        row.extend([0.0; 3]); // normals: INRIA writes zeros; nobody reads them
+        let sh = g.sh_of(i);
+        row.extend(sh[0]);
+        for c in 0..3 {
+            row.extend(sh[1..].iter().map(|coeff| coeff[c]));
+        }
+        row.push(g.opacity_logits[i]);
+        row.extend(g.log_scales[i]);
+        row.extend(g.rotations[i]);
+        row.push(g.mask_logits[i]);
+        row.push(g.log_reflections[i]);
+        row.push(f32::from(g.populations[i] as u8));
+        debug_assert_eq!(row.len(), names.len(), "SH count {k}");
+        for v in &row {
+            out.extend(v.to_le_bytes());
+        }
+    }
+    Ok(out)
+}
+
+/// Parse a PLY held in memory; `path` is only used to name the file in errors.
+pub fn parse_ply(bytes: &[u8], path: &Path) -> Result<Gaussians<f32>, FormatError> {
+    let fail = |m: String| FormatError::new(path, m);
+    let header = parse_header(bytes).map_err(fail)?;
+    let body = &bytes[header.body_offset..];
+    let mut body = match header.format {
+        Format::Ascii => Body::ascii(body),
+        Format::Binary(e) => Body::Binary(ByteReader::new(body), e),
+    };
+    let vertex_index =
+        header.elements.iter().position(|e| e.name == "vertex").ok_or_else(|| {
+            fail("the file has no `vertex` element (expected one Gaussian per vertex)".into())
+        })?;
+    for element in &header.elements[..vertex_index] {
+        skip_element(&mut body, element).map_err(fail)?;
+    }
+    let vertex = &header.elements[vertex_index];
+    let layout = Layout::of(vertex).map_err(fail)?;
+    read_vertices(&mut body, vertex, &layout).map_err(fail)
+}
+
+/// Read past every instance of an element we do not use (list properties included).
+fn skip_element(body: &mut Body<'_>, element: &Element) -> Result<(), String> {
+    if element.properties.is_empty() {
+        return Ok(());
+    }
+    for i in 0..element.count {
+        for p in &element.properties {
+            let what = || format!("{} {i} of {}, property {}", element.name, element.count, p.name);
+            let n = match p.list_count {
+                Some(ty) => body.count(ty, &what())?,
+                None => 1,
+            };
+            for _ in 0..n {
+                body.scalar(p.ty, &what())?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Where each vertex property goes in a per-vertex row of values:
+/// `x y z | f_dc 0..3 | f_rest 0..R | opacity | scale 0..3 | rot 0..4 | mask reflection population`.
+struct Layout {
+    /// For each vertex property, its slot in the row, or None for properties we skip.
+    slots: Vec<Option<usize>>,
+    rest: usize,
+    degree: u32,
+}
+
+impl Layout {
+    fn of(vertex: &Element) -> Result<Self, String> {
+        let rest_indices: Vec<usize> = vertex
+            .properties
+            .iter()
+            .filter_map(|p| p.name.strip_prefix("f_rest_")?.parse().ok())
+            .collect();
+        let rest = rest_indices.len();
+        let degree = match rest {
+            0 => 0,
+            9 => 1,
+            24 => 2,
+            45 => 3,
+            n => {
+                return Err(format!(
+                    "found {n} f_rest_* properties; expected 0, 9, 24 or 45 (SH degree 0 to 3)"
+                ));
+            }
+        };
+        let mut slot_of: HashMap<String, usize> = HashMap::new();
+        let fixed = ["x", "y", "z", "f_dc_0", "f_dc_1", "f_dc_2"];
+        for (s, name) in fixed.iter().enumerate() {
+            slot_of.insert(name.to_string(), s);
+        }
+        for k in 0..rest {
+            slot_of.insert(format!("f_rest_{k}"), 6 + k);
+        }
+        let tail = ["opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"];
+        for (s, name) in tail.iter().chain(&EXTRAS).enumerate() {
+            slot_of.insert(name.to_string(), 6 + rest + s);
+        }
+        let mut seen = vec![false; 6 + rest + tail.len() + EXTRAS.len()];
+        let mut slots = Vec::with_capacity(vertex.properties.len());
+        for p in &vertex.properties {
+            let slot = slot_of.get(&p.name).copied();
+            if let Some(s) = slot {
+                if p.list_count.is_some() {
+                    return Err(format!(
+                        "vertex property `{}` is a list; expected a scalar",
+                        p.name
+                    ));
+                }
+                if std::mem::replace(&mut seen[s], true) {
+                    return Err(format!("vertex property `{}` appears twice", p.name));
+                }
+            }
+            slots.push(slot);
+        }
+        // Everything but the extras is required; a missing f_rest_k shows up here by name.
+        let required =
+            fixed.iter().map(|s| s.to_string()).chain((0..rest).map(|k| format!("f_rest_{k}")));
+        for name in required.chain(tail.iter().map(|s| s.to_string())) {
+            if !seen[slot_of[&name]] {
+                let hint = if vertex.properties.iter().any(|p| p.name == "packed_position") {
+                    " (this looks like a compressed PLY from SuperSplat or gsplat, which trgs does not read: \
+                     export an uncompressed PLY)"
+                } else {
+                    ""
+                };
+                return Err(format!("the vertex element has no property `{name}`{hint}"));
+            }
+        }
+        Ok(Self { slots, rest, degree })
+    }
+}
+
+fn read_vertices(
+    body: &mut Body<'_>,
+    vertex: &Element,
+    layout: &Layout,
+) -> Result<Gaussians<f32>, String> {
+    let n = vertex.count;
+    let r = layout.rest;
+    let mut g = Gaussians::empty(layout.degree);
+    let k = g.sh_coeffs();
+    // Defaults for the optional extras: mask logit 0, log reflection 0, primary.
+    let mut row = vec![0.0f32; 6 + r + 8 + EXTRAS.len()];
+    // A corrupt count must not make us allocate more than the body could hold (every property
+    // takes at least one byte, binary or ASCII).
+    let bound = body.remaining() / vertex.properties.len().max(1);
+    let cap = usize::try_from(n).map_or(bound, |n| n.min(bound));
+    g.means.reserve(cap);
+    g.rotations.reserve(cap);
+    g.log_scales.reserve(cap);
+    g.opacity_logits.reserve(cap);
+    g.sh.reserve(cap.saturating_mul(k));
+    g.mask_logits.reserve(cap);
+    g.log_reflections.reserve(cap);
+    g.populations.reserve(cap);
+    for i in 0..n {
+        row[6 + r + 8..].fill(0.0);
+        for (p, slot) in vertex.properties.iter().zip(&layout.slots) {
+            let what = || format!("property {}", p.name);
+            match (p.list_count, slot) {
+                (Some(ty), _) => {
+                    let count =
+                        body.count(ty, &what()).map_err(|m| format!("vertex {i} of {n}: {m}"))?;
+                    for _ in 0..count {
+                        body.scalar(p.ty, &what())
+                            .map_err(|m| format!("vertex {i} of {n}: {m}"))?;
+                    }
+                }
+                (None, slot) => {
+                    let v = body
+                        .scalar(p.ty, &what())
+                        .map_err(|m| format!("vertex {i} of {n}: {m}"))?;
+                    if let Some(s) = slot {
+                        row[*s] = v as f32;
+                    }
+                }
+            }
+        }
+        let t = 6 + r; // start of opacity, scales, rotation, extras
+        let population = match row[t + 10] {
+            0.0 => Population::Primary,
+            1.0 => Population::Glass,
+            v => {
+                return Err(format!(
+                    "vertex {i}: trgs_population is {v}; expected 0 (primary) or 1 (glass)"
+                ));
+            }
+        };
+        let mut sh = vec![[0.0f32; 3]; k];
+        sh[0] = [row[3], row[4], row[5]];
+        for c in 0..3 {
+            for j in 1..k {
+                sh[j][c] = row[6 + c * (k - 1) + (j - 1)];
+            }
+        }
+        g.push(
+            [row[0], row[1], row[2]],
+            [row[t + 4], row[t + 5], row[t + 6], row[t + 7]],
+            [row[t + 1], row[t + 2], row[t + 3]],
+            row[t],
+            &sh,
+            population,
+        );
+        if let (Some(m), Some(a)) = (g.mask_logits.last_mut(), g.log_reflections.last_mut()) {
+            *m = row[t + 8];
+            *a = row[t + 9];
+        }
+    }
+    Ok(g)
+}

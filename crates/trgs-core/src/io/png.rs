@@ -1,0 +1,181 @@
+//! 8-bit PNG images: reading photos as RGB in [0, 1], writing RGB renders and gray label images.
+//! Only the PNG codec is compiled into `image`; other formats are recognised by their magic bytes
+//! so the error can say what the file is and what to do.
+use std::io::Cursor;
+use std::path::Path;
+
+use image::{DynamicImage, ExtendedColorType, ImageEncoder, ImageFormat, ImageReader};
+
+use super::error::read_bytes;
+use super::{FormatError, write_atomic};
+use crate::image::Image;
+
+/// Decode a PNG file; any other format is an error naming it.
+pub(crate) fn decode_png(path: &Path) -> Result<DynamicImage, FormatError> {
+    let bytes = read_bytes(path)?;
+    let reader = ImageReader::new(Cursor::new(&bytes))
+        .with_guessed_format()
+        .map_err(|e| FormatError::io(path, &e))?;
+    check_png(path, reader.format())?;
+    reader.decode().map_err(|e| FormatError::new(path, format!("cannot decode the PNG: {e}")))
+}
+
+/// The size of an image from its header alone (PNG only).
+pub(crate) fn png_dimensions(path: &Path) -> Result<(u32, u32), FormatError> {
+    let reader = ImageReader::open(path)
+        .and_then(|r| r.with_guessed_format())
+        .map_err(|e| FormatError::io(path, &e))?;
+    check_png(path, reader.format())?;
+    reader
+        .into_dimensions()
+        .map_err(|e| FormatError::new(path, format!("cannot read the PNG header: {e}")))
+}
+
+fn check_png(path: &Path, format: Option<ImageFormat>) -> Result<(), FormatError> {
+    match format {
+        Some(ImageFormat::Png) => Ok(()),
+        Some(other) => Err(FormatError::new(
+            path,
+            format!("this is a {other:?} image, but trgs reads only PNG: convert it to PNG"),
+        )),
+        None => Err(FormatError::new(path, "not a PNG file (unrecognised image signature)")),
+    }
+}
+
+/// An RGB image in [0, 1] from a PNG: gray is repeated into three channels, alpha is dropped
+/// (not composited: trgs trains on the stored colour), 16-bit samples are divided by 65535.
+pub fn read_rgb_image(path: &Path) -> Result<Image<f32>, FormatError> {
+    let img = decode_png(path)?;
+    let (width, height) = (img.width(), img.height());
+    let u8s = |v: u8| f32::from(v) / 255.0;
+    let u16s = |v: u16| f32::from(v) / 65535.0;
+    let data = match &img {
+        DynamicImage::ImageLuma8(b) => rgb_of(b.as_raw(), 1, u8s),
+        DynamicImage::ImageLumaA8(b) => rgb_of(b.as_raw(), 2, u8s),
+        DynamicImage::ImageRgb8(b) => rgb_of(b.as_raw(), 3, u8s),
+        DynamicImage::ImageRgba8(b) => rgb_of(b.as_raw(), 4, u8s),
+        DynamicImage::ImageLuma16(b) => rgb_of(b.as_raw(), 1, u16s),
+        DynamicImage::ImageLumaA16(b) => rgb_of(b.as_raw(), 2, u16s),
+        DynamicImage::ImageRgb16(b) => rgb_of(b.as_raw(), 3, u16s),
+        DynamicImage::ImageRgba16(b) => rgb_of(b.as_raw(), 4, u16s),
+        other => {
+            let problem = format!("unsupported PNG colour type {:?}", other.color());
+            return Err(FormatError::new(path, problem));
+        }
+    };
+    Ok(Image { width, height, channels: 3, data })
+}
+
+/// Interleaved samples with `channels` per pixel to RGB: gray repeated, alpha dropped.
+fn rgb_of<T: Copy>(raw: &[T], channels: usize, scale: impl Fn(T) -> f32) -> Vec<f32> {
+    let mut out = Vec::with_capacity(raw.len() / channels * 3);
+    for px in raw.chunks_exact(channels) {
+        let rgb = if channels < 3 { [px[0]; 3] } else { [px[0], px[1], px[2]] };
+        out.extend(rgb.map(&scale));
+    }
+    out
+}
+
+/// Write an RGB image in [0, 1] as an 8-bit PNG (clamped, rounded to nearest).
+pub fn write_png_rgb(path: &Path, image: &Image<f32>) -> Result<(), FormatError> {
+    check_layout(path, image.width, image.height, image.channels, image.data.len(), 3)?;
+    encode(path, &image.to_u8(), image.width, image.height, ExtendedColorType::Rgb8)
+}
+
+/// Write a one-channel 8-bit image (e.g. a label mask) as a gray PNG.
+pub fn write_png_gray(path: &Path, image: &Image<u8>) -> Result<(), FormatError> {
+    check_layout(path, image.width, image.height, image.channels, image.data.len(), 1)?;
+    encode(path, &image.data, image.width, image.height, ExtendedColorType::L8)
+}
+
+/// The encoder panics on a buffer of the wrong length; refuse it with an error instead.
+fn check_layout(
+    path: &Path,
+    w: u32,
+    h: u32,
+    c: u32,
+    len: usize,
+    want: u32,
+) -> Result<(), FormatError> {
+    if c != want {
+        return Err(FormatError::new(
+            path,
+            format!("cannot write a {c}-channel image as {want}-channel PNG"),
+        ));
+    }
+    let expected = w as usize * h as usize * c as usize;
+    if len != expected || w == 0 || h == 0 {
+        let problem = format!(
+            "image of {w}x{h}x{c} has {len} samples (expected {expected}, and a nonzero size)"
+        );
+        return Err(FormatError::new(path, problem));
+    }
+    Ok(())
+}
+
+fn encode(
+    path: &Path,
+    data: &[u8],
+    w: u32,
+    h: u32,
+    color: ExtendedColorType,
+) -> Result<(), FormatError> {
+    let mut png = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut png)
+        .write_image(data, w, h, color)
+        .map_err(|e| FormatError::new(path, format!("cannot encode the PNG: {e}")))?;
+    write_atomic(path, &png)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::test_util::{assert_mentions, scratch_dir};
+
+    #[test]
+    fn rgb_round_trip_is_exact_at_8_bits() {
+        let dir = scratch_dir("png-rgb");
+        let data = (0..4 * 3 * 3).map(|i| (i * 7 % 256) as u8).collect::<Vec<_>>();
+        let img = Image::from_u8(4, 3, 3, &data);
+        let path = dir.join("a.png");
+        write_png_rgb(&path, &img).expect("write");
+        assert_eq!(read_rgb_image(&path).expect("read"), img);
+        assert_eq!(png_dimensions(&path).expect("dims"), (4, 3));
+    }
+
+    #[test]
+    fn gray_and_alpha_expand_to_rgb() {
+        let dir = scratch_dir("png-expand");
+        let path = dir.join("g.png");
+        write_png_gray(&path, &Image { width: 2, height: 1, channels: 1, data: vec![0, 255] })
+            .expect("write");
+        let img = read_rgb_image(&path).expect("read");
+        assert_eq!(img.data, [0.0, 0.0, 0.0, 1.0, 1.0, 1.0]);
+        let path = dir.join("rgba.png");
+        encode(&path, &[10, 20, 30, 0], 1, 1, ExtendedColorType::Rgba8).expect("write");
+        assert_eq!(read_rgb_image(&path).expect("read").to_u8(), [10, 20, 30]);
+    }
+
+    #[test]
+    fn jpeg_and_garbage_are_named() {
+        let dir = scratch_dir("png-jpeg");
+        let path = dir.join("a.jpg");
+        std::fs::write(&path, [0xff, 0xd8, 0xff, 0xe0, 0, 16, b'J', b'F', b'I', b'F', 0])
+            .expect("write");
+        assert_mentions(&read_rgb_image(&path).expect_err("jpeg"), &["a.jpg", "Jpeg", "only PNG"]);
+        std::fs::write(&path, b"hello").expect("write");
+        assert_mentions(&read_rgb_image(&path).expect_err("junk"), &["a.jpg", "not a PNG"]);
+        let missing = dir.join("missing.png");
+        assert_mentions(&read_rgb_image(&missing).expect_err("missing"), &["missing.png"]);
+    }
+
+    #[test]
+    fn bad_layout_is_refused_not_panicking() {
+        let dir = scratch_dir("png-layout");
+        let img = Image { width: 2, height: 2, channels: 3, data: vec![0.0; 5] };
+        assert_mentions(
+            &write_png_rgb(&dir.join("x.png"), &img).expect_err("short"),
+            &["x.png", "5 samples"],
+        );
+    }
+}

@@ -1,0 +1,337 @@
+//! nerfstudio / Blender `transforms.json`: intrinsics given globally or per frame (`fl_x, fl_y,
+//! cx, cy, w, h`, or Blender's `camera_angle_x`), and per frame an image path and an OpenGL
+//! camera-to-world matrix (x right, y up, z backward), converted to trgs's COLMAP convention.
+use std::path::{Path, PathBuf};
+
+use glam::{DMat3, DVec3};
+use serde_json::{Map, Value, json};
+
+use super::error::read_text;
+use super::png::png_dimensions;
+use super::{FormatError, write_atomic};
+use crate::scene::{Camera, Intrinsics, Pose};
+
+/// One frame: its camera (named by the image's file name) and the image file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TransformsFrame {
+    pub camera: Camera,
+    pub image_path: PathBuf,
+}
+
+/// Distortion coefficients nerfstudio may write; any nonzero one means the images are distorted.
+const DISTORTION: [&str; 6] = ["k1", "k2", "k3", "k4", "p1", "p2"];
+
+/// Read every frame, in file order. Image paths are relative to the JSON's folder; a path without
+/// extension (Blender's `./train/r_0`) is tried as given, then with `.png`. A path that exists in
+/// neither form is returned as given, for the caller to report, unless its size is needed.
+pub fn read_transforms(path: &Path) -> Result<Vec<TransformsFrame>, FormatError> {
+    let text = read_text(path)?;
+    let root: Value =
+        serde_json::from_str(&text).map_err(|e| FormatError::new(path, e.to_string()))?;
+    let fail = |m: String| FormatError::new(path, m);
+    let global =
+        root.as_object().ok_or_else(|| fail("expected a JSON object at the top level".into()))?;
+    let frames = global
+        .get("frames")
+        .ok_or_else(|| fail("missing field `frames`".into()))?
+        .as_array()
+        .ok_or_else(|| fail("`frames` must be an array".into()))?;
+    let dir = path.parent().unwrap_or(Path::new("."));
+    frames
+        .iter()
+        .enumerate()
+        .map(|(i, frame)| {
+            read_frame(global, frame, dir).map_err(|m| fail(format!("frames[{i}]: {m}")))
+        })
+        .collect()
+}
+
+fn read_frame(
+    global: &Map<String, Value>,
+    frame: &Value,
+    dir: &Path,
+) -> Result<TransformsFrame, String> {
+    let frame = frame.as_object().ok_or("expected a JSON object")?;
+    // A per-frame value overrides the global one (nerfstudio's rule).
+    let get = |key: &str| frame.get(key).or_else(|| global.get(key)).filter(|v| !v.is_null());
+    let num = |key: &str| -> Result<Option<f64>, String> {
+        match get(key) {
+            None => Ok(None),
+            Some(v) => match v.as_f64() {
+                Some(x) if x.is_finite() => Ok(Some(x)),
+                _ => Err(format!("`{key}` must be a finite number, found {v}")),
+            },
+        }
+    };
+    check_pinhole(get("camera_model"))?;
+    for key in DISTORTION {
+        if let Some(k) = num(key)?.filter(|&k| k != 0.0) {
+            return Err(format!(
+                "`{key}` = {k}: lens distortion is not supported; undistort the images first (e.g. with \
+                 `colmap image_undistorter`) and write a pinhole transforms.json"
+            ));
+        }
+    }
+
+    let file_path = get("file_path")
+        .ok_or("missing field `file_path`")?
+        .as_str()
+        .ok_or("`file_path` must be a string")?;
+    let image_path = resolve_image(dir, file_path);
+    let name = image_path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .ok_or_else(|| format!("`file_path` {file_path:?} does not name a file"))?;
+
+    let (width, height) = match (num("w")?, num("h")?) {
+        (Some(w), Some(h)) => (size(w, "w")?, size(h, "h")?),
+        (None, None) => png_dimensions(&image_path).map_err(|e| {
+            format!("`w` and `h` are not given, and the image size cannot be read ({e}); add \"w\" and \"h\"")
+        })?,
+        _ => return Err("give both `w` and `h`, or neither".into()),
+    };
+    let (w, h) = (f64::from(width), f64::from(height));
+    let fx = match (num("fl_x")?, num("camera_angle_x")?) {
+        (Some(f), _) => f,
+        (None, Some(angle)) => 0.5 * w / (0.5 * angle).tan(),
+        (None, None) => return Err("no focal length: expected `fl_x` or `camera_angle_x`".into()),
+    };
+    let fy = match (num("fl_y")?, num("camera_angle_y")?) {
+        (Some(f), _) => f,
+        (None, Some(angle)) => 0.5 * h / (0.5 * angle).tan(),
+        (None, None) => fx,
+    };
+    let cx = num("cx")?.unwrap_or(0.5 * w);
+    let cy = num("cy")?.unwrap_or(0.5 * h);
+    let intrinsics = Intrinsics { fx, fy, cx, cy, width, height };
+
+    let matrix = frame.get("transform_matrix").ok_or("missing field `transform_matrix`")?;
+    let (axes, centre) = read_matrix(matrix)?;
+    let camera = Camera::new(name, intrinsics, Pose::from_opengl_camera_to_world(axes, centre));
+    camera.validate().map_err(|e| e.to_string())?;
+    Ok(TransformsFrame { camera, image_path })
+}
+
+/// Only undistorted pinhole cameras: the rasteriser has no lens model.
+fn check_pinhole(model: Option<&Value>) -> Result<(), String> {
+    match model.map(|m| m.as_str().ok_or(format!("`camera_model` must be a string, found {m}"))) {
+        None => Ok(()),
+        Some(Ok("OPENCV" | "PINHOLE" | "SIMPLE_PINHOLE")) => Ok(()),
+        Some(Ok(other)) => Err(format!(
+            "camera_model {other:?} is not a pinhole camera; trgs supports PINHOLE (or OPENCV with zero \
+             distortion): undistort the images first"
+        )),
+        Some(Err(m)) => Err(m),
+    }
+}
+
+fn size(v: f64, key: &str) -> Result<u32, String> {
+    if v >= 1.0 && v.fract() == 0.0 && v <= f64::from(u32::MAX) {
+        Ok(v as u32)
+    } else {
+        Err(format!("`{key}` = {v} is not a positive whole number of pixels"))
+    }
+}
+
+fn resolve_image(dir: &Path, file_path: &str) -> PathBuf {
+    let given = dir.join(file_path);
+    if given.is_file() {
+        return given;
+    }
+    let png = dir.join(format!("{file_path}.png"));
+    if png.is_file() { png } else { given }
+}
+
+/// A 4x4 (or 3x4) row-major camera-to-world matrix: rotation columns and centre.
+fn read_matrix(v: &Value) -> Result<(DMat3, DVec3), String> {
+    let bad = || format!("`transform_matrix` must be 4 rows of 4 finite numbers, found {v}");
+    let rows = v.as_array().filter(|r| r.len() == 3 || r.len() == 4).ok_or_else(bad)?;
+    let mut m = [[0.0; 4]; 3];
+    for (r, row) in rows.iter().take(3).enumerate() {
+        let row = row.as_array().filter(|r| r.len() == 4).ok_or_else(bad)?;
+        for (c, x) in row.iter().enumerate() {
+            m[r][c] = x.as_f64().filter(|x| x.is_finite()).ok_or_else(bad)?;
+        }
+    }
+    let col = |c: usize| DVec3::new(m[0][c], m[1][c], m[2][c]);
+    Ok((DMat3::from_cols(col(0), col(1), col(2)), col(3)))
+}
+
+/// Write frames with per-frame intrinsics and OpenGL camera-to-world matrices; image paths are
+/// written relative to the JSON's folder when they lie inside it.
+pub fn write_transforms(path: &Path, frames: &[TransformsFrame]) -> Result<(), FormatError> {
+    let dir = path.parent().unwrap_or(Path::new(""));
+    let mut out = Vec::with_capacity(frames.len());
+    for (i, f) in frames.iter().enumerate() {
+        let rel = f.image_path.strip_prefix(dir).unwrap_or(&f.image_path);
+        let file_path = rel.to_str().ok_or_else(|| {
+            FormatError::new(
+                path,
+                format!("frames[{i}]: the image path {} is not UTF-8", f.image_path.display()),
+            )
+        })?;
+        let k = &f.camera.intrinsics;
+        let pose = &f.camera.pose;
+        let flip = DMat3::from_diagonal(DVec3::new(1.0, -1.0, -1.0));
+        let axes = pose.rotation.transpose() * flip;
+        let c = pose.centre();
+        let row = |r: usize| json!([axes.x_axis[r], axes.y_axis[r], axes.z_axis[r], c[r]]);
+        out.push(json!({
+            "file_path": file_path,
+            "fl_x": k.fx, "fl_y": k.fy, "cx": k.cx, "cy": k.cy, "w": k.width, "h": k.height,
+            "transform_matrix": [row(0), row(1), row(2), [0.0, 0.0, 0.0, 1.0]],
+        }));
+    }
+    let text = serde_json::to_string_pretty(&json!({ "frames": out }))
+        .map_err(|e| FormatError::new(path, e.to_string()))?;
+    write_atomic(path, format!("{text}\n").as_bytes())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::image::Image;
+    use crate::io::test_util::{assert_mentions, scratch_dir};
+
+    fn write(dir: &Path, json: &str) -> PathBuf {
+        let path = dir.join("transforms.json");
+        std::fs::write(&path, json).expect("write");
+        path
+    }
+
+    const IDENTITY: &str = "[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]";
+
+    #[test]
+    fn round_trip_through_write() {
+        let dir = scratch_dir("tf-rt");
+        let pose = Pose::look_at(DVec3::new(1.0, 2.0, 3.0), DVec3::new(0.0, 0.5, 0.0), DVec3::Y);
+        let cam = Camera::new(
+            "a.png",
+            Intrinsics { fx: 40.0, fy: 41.0, cx: 15.5, cy: 12.0, width: 32, height: 24 },
+            pose,
+        );
+        let frames =
+            vec![TransformsFrame { camera: cam.clone(), image_path: dir.join("images/a.png") }];
+        let path = dir.join("transforms.json");
+        write_transforms(&path, &frames).expect("write");
+        assert!(std::fs::read_to_string(&path).expect("read").contains("\"images/a.png\""));
+        let back = read_transforms(&path).expect("read");
+        assert_eq!(back[0].image_path, dir.join("images/a.png"));
+        assert_eq!(
+            (back[0].camera.name.as_str(), back[0].camera.intrinsics),
+            ("a.png", cam.intrinsics)
+        );
+        let (a, b) = (back[0].camera.pose, cam.pose);
+        assert!((a.rotation - b.rotation).abs().to_cols_array().iter().all(|d| *d < 1e-12));
+        assert!((a.translation - b.translation).length() < 1e-12);
+    }
+
+    #[test]
+    fn blender_angle_and_size_from_png() {
+        let dir = scratch_dir("tf-blender");
+        crate::io::write_png_rgb(&dir.join("train/r_0.png"), &Image::new(8, 6, 3)).expect("png");
+        // Blender: the camera looks down -z; identity c2w means it looks along world -z.
+        let json = format!(
+            r#"{{"camera_angle_x": 0.9, "frames": [{{"file_path": "./train/r_0", "transform_matrix": {IDENTITY}}}]}}"#
+        );
+        let frames = read_transforms(&write(&dir, &json)).expect("read");
+        let cam = &frames[0].camera;
+        assert_eq!(cam.name, "r_0.png");
+        assert_eq!((cam.width(), cam.height()), (8, 6));
+        assert!((cam.intrinsics.fx - 4.0 / 0.45f64.tan()).abs() < 1e-12);
+        assert_eq!(
+            (cam.intrinsics.fy, cam.intrinsics.cx, cam.intrinsics.cy),
+            (cam.intrinsics.fx, 4.0, 3.0)
+        );
+        let forward = cam.pose.direction_to_world(DVec3::Z);
+        assert!((forward - DVec3::NEG_Z).length() < 1e-12, "camera looks along {forward}");
+    }
+
+    #[test]
+    fn missing_fields_are_named() {
+        let dir = scratch_dir("tf-missing");
+        let path =
+            write(&dir, r#"{"fl_x": 10, "w": 4, "h": 4, "frames": [{"file_path": "a.png"}]}"#);
+        assert_mentions(
+            &read_transforms(&path).expect_err("no matrix"),
+            &["transforms.json", "frames[0]", "`transform_matrix`"],
+        );
+        let json = format!(
+            r#"{{"w": 4, "h": 4, "frames": [{{"file_path": "a.png", "transform_matrix": {IDENTITY}}}]}}"#
+        );
+        let path = write(&dir, &json);
+        assert_mentions(
+            &read_transforms(&path).expect_err("no focal"),
+            &["transforms.json", "frames[0]", "fl_x", "camera_angle_x"],
+        );
+        let path = write(&dir, r#"{"camera_angle_x": 1}"#);
+        assert_mentions(
+            &read_transforms(&path).expect_err("no frames"),
+            &["transforms.json", "`frames`"],
+        );
+        let path = write(&dir, "{\n\"frames\": [,]}");
+        assert_mentions(
+            &read_transforms(&path).expect_err("syntax"),
+            &["transforms.json", "line 2"],
+        );
+        let json = r#"{"fl_x": 10, "w": 4, "h": 4, "frames": [{"file_path": "a.png", "transform_matrix": [[1,0,0],[0,1,0]]}]}"#;
+        assert_mentions(
+            &read_transforms(&write(&dir, json)).expect_err("3x2"),
+            &["transforms.json", "4 rows of 4"],
+        );
+    }
+
+    #[test]
+    fn distortion_is_refused() {
+        let dir = scratch_dir("tf-dist");
+        let json = format!(
+            r#"{{"fl_x": 10, "w": 4, "h": 4, "k1": 0.02, "frames": [{{"file_path": "a.png", "transform_matrix": {IDENTITY}}}]}}"#
+        );
+        assert_mentions(
+            &read_transforms(&write(&dir, &json)).expect_err("k1"),
+            &["transforms.json", "`k1` = 0.02", "undistort"],
+        );
+        let json = format!(
+            r#"{{"fl_x": 10, "w": 4, "h": 4, "camera_model": "OPENCV_FISHEYE", "frames": [{{"file_path": "a.png", "transform_matrix": {IDENTITY}}}]}}"#
+        );
+        assert_mentions(
+            &read_transforms(&write(&dir, &json)).expect_err("fisheye"),
+            &["transforms.json", "OPENCV_FISHEYE", "undistort"],
+        );
+        let json = format!(
+            r#"{{"fl_x": 10, "w": 4, "h": 4, "camera_model": "OPENCV", "k1": 0, "p2": 0.0, "frames": [{{"file_path": "a.png", "transform_matrix": {IDENTITY}}}]}}"#
+        );
+        assert!(
+            read_transforms(&write(&dir, &json)).is_ok(),
+            "OPENCV with zero distortion is a pinhole"
+        );
+    }
+
+    #[test]
+    fn jpeg_without_size_asks_for_w_and_h() {
+        let dir = scratch_dir("tf-jpeg");
+        std::fs::write(
+            dir.join("a.jpg"),
+            [0xff, 0xd8, 0xff, 0xe0, 0, 16, b'J', b'F', b'I', b'F', 0],
+        )
+        .expect("jpg");
+        let json = format!(
+            r#"{{"fl_x": 10, "frames": [{{"file_path": "a.jpg", "transform_matrix": {IDENTITY}}}]}}"#
+        );
+        let err = read_transforms(&write(&dir, &json)).expect_err("jpeg");
+        assert_mentions(
+            &err,
+            &["transforms.json", "frames[0]", "a.jpg", "only PNG", "add \"w\" and \"h\""],
+        );
+    }
+
+    #[test]
+    fn scaled_matrix_is_refused() {
+        let dir = scratch_dir("tf-scale");
+        let json = r#"{"fl_x": 10, "w": 4, "h": 4, "frames": [{"file_path": "a.png", "transform_matrix": [[2,0,0,0],[0,2,0,0],[0,0,2,0],[0,0,0,1]]}]}"#;
+        assert_mentions(
+            &read_transforms(&write(&dir, json)).expect_err("scaled"),
+            &["transforms.json", "frames[0]", "orthonormal"],
+        );
+    }
+}
