@@ -1,6 +1,6 @@
-//! 8-bit PNG images: reading photos as RGB in [0, 1], writing RGB renders and gray label images.
-//! Only the PNG codec is compiled into `image`; other formats are recognised by their magic bytes
-//! so the error can say what the file is and what to do.
+//! Images: reading photos (PNG or JPEG) as RGB in [0, 1], writing RGB renders and gray label
+//! images as PNG. Label images (glass masks) must be PNG: a lossy JPEG would invent labels at
+//! edges. Other formats are recognised by their magic bytes so the error can say what to do.
 use std::io::Cursor;
 use std::path::Path;
 
@@ -10,42 +10,62 @@ use super::error::read_bytes;
 use super::{FormatError, write_atomic};
 use crate::image::Image;
 
+const PHOTO_FORMATS: &[ImageFormat] = &[ImageFormat::Png, ImageFormat::Jpeg];
+const LABEL_FORMATS: &[ImageFormat] = &[ImageFormat::Png];
+
 /// Decode a PNG file; any other format is an error naming it.
 pub(crate) fn decode_png(path: &Path) -> Result<DynamicImage, FormatError> {
+    decode(path, LABEL_FORMATS)
+}
+
+fn decode(path: &Path, allowed: &[ImageFormat]) -> Result<DynamicImage, FormatError> {
     let bytes = read_bytes(path)?;
     let reader = ImageReader::new(Cursor::new(&bytes))
         .with_guessed_format()
         .map_err(|e| FormatError::io(path, &e))?;
-    check_png(path, reader.format())?;
-    reader.decode().map_err(|e| FormatError::new(path, format!("cannot decode the PNG: {e}")))
+    let format = check_format(path, reader.format(), allowed)?;
+    reader
+        .decode()
+        .map_err(|e| FormatError::new(path, format!("cannot decode the {format:?} image: {e}")))
 }
 
-/// The size of an image from its header alone (PNG only).
-pub(crate) fn png_dimensions(path: &Path) -> Result<(u32, u32), FormatError> {
+/// The size of a photo from its header alone (PNG or JPEG).
+pub(crate) fn image_dimensions(path: &Path) -> Result<(u32, u32), FormatError> {
     let reader = ImageReader::open(path)
         .and_then(|r| r.with_guessed_format())
         .map_err(|e| FormatError::io(path, &e))?;
-    check_png(path, reader.format())?;
+    check_format(path, reader.format(), PHOTO_FORMATS)?;
     reader
         .into_dimensions()
-        .map_err(|e| FormatError::new(path, format!("cannot read the PNG header: {e}")))
+        .map_err(|e| FormatError::new(path, format!("cannot read the image header: {e}")))
 }
 
-fn check_png(path: &Path, format: Option<ImageFormat>) -> Result<(), FormatError> {
+fn check_format(
+    path: &Path,
+    format: Option<ImageFormat>,
+    allowed: &[ImageFormat],
+) -> Result<ImageFormat, FormatError> {
+    let names: Vec<String> = allowed.iter().map(|f| format!("{f:?}").to_uppercase()).collect();
     match format {
-        Some(ImageFormat::Png) => Ok(()),
+        Some(f) if allowed.contains(&f) => Ok(f),
         Some(other) => Err(FormatError::new(
             path,
-            format!("this is a {other:?} image, but trgs reads only PNG: convert it to PNG"),
+            format!(
+                "this is a {other:?} image, but trgs reads only {} here: convert it",
+                names.join(" or ")
+            ),
         )),
-        None => Err(FormatError::new(path, "not a PNG file (unrecognised image signature)")),
+        None => Err(FormatError::new(
+            path,
+            format!("not a {} file (unrecognised image signature)", names.join(" or ")),
+        )),
     }
 }
 
-/// An RGB image in [0, 1] from a PNG: gray is repeated into three channels, alpha is dropped
+/// An RGB image in [0, 1] from a PNG or JPEG: gray is repeated into three channels, alpha is dropped
 /// (not composited: trgs trains on the stored colour), 16-bit samples are divided by 65535.
 pub fn read_rgb_image(path: &Path) -> Result<Image<f32>, FormatError> {
-    let img = decode_png(path)?;
+    let img = decode(path, PHOTO_FORMATS)?;
     let (width, height) = (img.width(), img.height());
     let u8s = |v: u8| f32::from(v) / 255.0;
     let u16s = |v: u16| f32::from(v) / 65535.0;
@@ -140,7 +160,7 @@ mod tests {
         let path = dir.join("a.png");
         write_png_rgb(&path, &img).expect("write");
         assert_eq!(read_rgb_image(&path).expect("read"), img);
-        assert_eq!(png_dimensions(&path).expect("dims"), (4, 3));
+        assert_eq!(image_dimensions(&path).expect("dims"), (4, 3));
     }
 
     #[test]
@@ -157,12 +177,33 @@ mod tests {
     }
 
     #[test]
+    fn jpeg_photos_are_read() {
+        let dir = scratch_dir("png-jpeg-ok");
+        let path = dir.join("photo.jpg");
+        let pixels: Vec<u8> = (0..8 * 6).flat_map(|i| [200u8, 100, (i * 5) as u8]).collect();
+        let mut bytes = Vec::new();
+        image::codecs::jpeg::JpegEncoder::new_with_quality(&mut bytes, 100)
+            .write_image(&pixels, 8, 6, ExtendedColorType::Rgb8)
+            .expect("encode");
+        std::fs::write(&path, &bytes).expect("write");
+        let img = read_rgb_image(&path).expect("read jpeg");
+        assert_eq!((img.width, img.height, img.channels), (8, 6, 3));
+        let back = img.to_u8();
+        let worst = back.iter().zip(&pixels).map(|(a, b)| a.abs_diff(*b)).max().unwrap_or(0);
+        assert!(worst <= 8, "quality-100 JPEG differs by {worst}");
+        assert_eq!(image_dimensions(&path).expect("dims"), (8, 6));
+    }
+
+    #[test]
     fn jpeg_and_garbage_are_named() {
         let dir = scratch_dir("png-jpeg");
         let path = dir.join("a.jpg");
         std::fs::write(&path, [0xff, 0xd8, 0xff, 0xe0, 0, 16, b'J', b'F', b'I', b'F', 0])
             .expect("write");
-        assert_mentions(&read_rgb_image(&path).expect_err("jpeg"), &["a.jpg", "Jpeg", "only PNG"]);
+        // A truncated JPEG is recognised and fails to decode, naming the file.
+        assert_mentions(&read_rgb_image(&path).expect_err("jpeg"), &["a.jpg", "Jpeg"]);
+        // A JPEG is not accepted as a label image.
+        assert_mentions(&decode_png(&path).expect_err("jpeg mask"), &["a.jpg", "only PNG"]);
         std::fs::write(&path, b"hello").expect("write");
         assert_mentions(&read_rgb_image(&path).expect_err("junk"), &["a.jpg", "not a PNG"]);
         let missing = dir.join("missing.png");

@@ -7,7 +7,7 @@ use glam::{DMat3, DVec3};
 use serde_json::{Map, Value, json};
 
 use super::error::read_text;
-use super::png::png_dimensions;
+use super::png::image_dimensions;
 use super::{FormatError, write_atomic};
 use crate::scene::{Camera, Intrinsics, Pose};
 
@@ -85,7 +85,7 @@ fn read_frame(
 
     let (width, height) = match (num("w")?, num("h")?) {
         (Some(w), Some(h)) => (size(w, "w")?, size(h, "h")?),
-        (None, None) => png_dimensions(&image_path).map_err(|e| {
+        (None, None) => image_dimensions(&image_path).map_err(|e| {
             format!("`w` and `h` are not given, and the image size cannot be read ({e}); add \"w\" and \"h\"")
         })?,
         _ => return Err("give both `w` and `h`, or neither".into()),
@@ -308,7 +308,7 @@ mod tests {
     }
 
     #[test]
-    fn jpeg_without_size_asks_for_w_and_h() {
+    fn unreadable_image_without_size_asks_for_w_and_h() {
         let dir = scratch_dir("tf-jpeg");
         std::fs::write(
             dir.join("a.jpg"),
@@ -321,7 +321,7 @@ mod tests {
         let err = read_transforms(&write(&dir, &json)).expect_err("jpeg");
         assert_mentions(
             &err,
-            &["transforms.json", "frames[0]", "a.jpg", "only PNG", "add \"w\" and \"h\""],
+            &["transforms.json", "frames[0]", "a.jpg", "image header", "add \"w\" and \"h\""],
         );
     }
 
