@@ -26,8 +26,9 @@
 //! is not axis-aligned (world "up" is roughly -y, as in many COLMAP reconstructions), so that no
 //! consumer can get away with assuming axis-aligned planes.
 //!
-//! Images are rendered by an independent ray tracer ([`trace`], [`geom`]) with 2x2 supersampling;
-//! see `trace.rs` for the image model, which is trgs's compositing with the truth's planes.
+//! Images are rendered by an independent ray tracer (`trace.rs`, `geom.rs`) with 2x2
+//! supersampling; see `trace.rs` for the image model, which is trgs's compositing with the truth's
+//! planes.
 mod generate;
 mod geom;
 mod texture;
@@ -101,7 +102,8 @@ impl SyntheticConfig {
         }
     }
 
-    /// The same scene with no panes (images equal transmission; no masks, no planes).
+    /// The same room with no panes: the wall is then closed (no window openings, no frames), the
+    /// images equal the transmission, and there are no masks and no planes.
     pub fn without_glass(self) -> Self {
         Self { panes: Vec::new(), ..self }
     }

@@ -276,7 +276,7 @@ fn contact_sheet(s: &SyntheticScene, path: &std::path::Path) {
                     .abs();
                     ((4.0 * v).min(1.0) * 255.0) as u8
                 });
-                let m = s.masks[i].as_ref().map_or(0, |m| m.get(x, y, 0)) * 200;
+                let m = s.masks[i].as_ref().map_or(0, |m| m.get(x, y, 0)).saturating_mul(110);
                 sheet.put_pixel(x, oy + y, image::Rgb(c));
                 sheet.put_pixel(w + x, oy + y, image::Rgb(t));
                 sheet.put_pixel(2 * w + x, oy + y, image::Rgb(d));
