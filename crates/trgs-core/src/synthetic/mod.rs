@@ -1,1 +1,139 @@
-//! The procedural glass scene.
+//! The procedural glass scene: the built-in demo of `train` and the quality fixture of trgs.
+//!
+//! A room (6 m wide, 2.8 m high, 5 m deep) whose far wall holds one or more framed panes; behind
+//! the wall lies a second room, 4.5 m deep, seen only through the glass. In the scene's local frame
+//! (y up, metres) the pane wall is z = 0 and the panes face +z, towards the cameras:
+//!
+//! - behind the glass (transmission): a checkered floor, a brick back wall, two textured spheres,
+//!   a noise-textured crate, a striped column and a shelf of coloured panels, at 1 to 4.5 m behind
+//!   the pane, so that views through the glass have strong parallax;
+//! - on the camera side (reflection): a bookshelf of coloured spines left of the window, a
+//!   checkered ball on a striped pedestal right of it, a striped left wall, a noise-textured right
+//!   wall, a poster wall behind the cameras, a tiled floor. These are seen directly near the
+//!   window and, mirrored, in the glass; the poster wall (only ever seen in reflection) keeps the
+//!   reflection clearly textured in frontal views;
+//! - a foreground "plant" (a green ball on a pole) 0.9 m in front of the glass that covers part
+//!   of the pane in some views, so that the glass masks have holes;
+//! - an opaque frame (7 cm wide, 10 cm deep) around each glass pane and a sill below it, whose
+//!   points give the plane initialisation its plane: the frame is coplanar with the wall.
+//!
+//! Mirrors hang on the wall (no hole) inside a shallow frame: what they transmit is the wall.
+//! Panes are laid out side by side, centred; one pane is 1.6 m x 1.0 m, more are narrower.
+//!
+//! Cameras follow a closed loop 2.3 to 2.9 m from the wall, up to about 52 degrees off the pane
+//! normal, between 0.9 and 1.7 m high, all looking at a point 0.8 m behind the glass; every 8th
+//! view is a test view. The whole scene is then placed in the world by a fixed rigid motion that
+//! is not axis-aligned (world "up" is roughly -y, as in many COLMAP reconstructions), so that no
+//! consumer can get away with assuming axis-aligned planes.
+//!
+//! Images are rendered by an independent ray tracer (`trace.rs`, `geom.rs`) with 2x2
+//! supersampling; see `trace.rs` for the image model, which is trgs's compositing with the truth's
+//! planes.
+mod generate;
+mod geom;
+mod texture;
+mod trace;
+// `write.rs` (the scene folder writer) is wired in once the io module lands on main.
+
+pub use generate::generate;
+
+use crate::image::Image;
+use crate::scene::{Camera, ReflectionPlane};
+
+/// What a pane is made of; the truth's base reflectance follows from it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PaneKind {
+    /// Window glass, R0 = [`GLASS_R0`].
+    Glass,
+    /// A mirror on the wall, R0 = [`MIRROR_R0`].
+    Mirror,
+}
+
+/// Base reflectance of the truth glass. Real glass has about 0.04; 0.2 (trgs's initial value)
+/// makes the reflection clearly visible, so that separating it is both necessary for a good fit
+/// and well-posed at 256x192 with 8-bit images.
+pub const GLASS_R0: f64 = 0.2;
+
+/// Base reflectance of the truth mirror: a little below trgs's initial 0.99, so that it has to be
+/// learnt, and the wall behind still shows faintly (transmission) as with a real silvered mirror.
+pub const MIRROR_R0: f64 = 0.95;
+
+/// Settings of [`generate`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct SyntheticConfig {
+    pub width: u32,
+    pub height: u32,
+    /// Number of views along the camera loop.
+    pub views: usize,
+    /// Varies textures (noise, panel colours) and the sparse points; the geometry is fixed.
+    pub seed: u64,
+    /// The panes, left to right; empty gives a scene without glass (and no masks or planes).
+    pub panes: Vec<PaneKind>,
+    /// How many training views get a glass mask (spread over the loop).
+    pub masked_views: usize,
+    /// How many sparse "SfM" points to produce.
+    pub sparse_points: usize,
+}
+
+impl Default for SyntheticConfig {
+    fn default() -> Self {
+        Self {
+            width: 256,
+            height: 192,
+            views: 40,
+            seed: 7,
+            panes: vec![PaneKind::Glass],
+            masked_views: 6,
+            sparse_points: 4000,
+        }
+    }
+}
+
+impl SyntheticConfig {
+    /// A fast variant for tests: 64x48, 12 views, 800 points.
+    pub fn small() -> Self {
+        Self {
+            width: 64,
+            height: 48,
+            views: 12,
+            masked_views: 3,
+            sparse_points: 800,
+            ..Self::default()
+        }
+    }
+
+    /// The same room with no panes: the wall is then closed (no window openings, no frames), the
+    /// images equal the transmission, and there are no masks and no planes.
+    pub fn without_glass(self) -> Self {
+        Self { panes: Vec::new(), ..self }
+    }
+}
+
+/// A generated dataset with its ground truth.
+#[derive(Clone, Debug)]
+pub struct SyntheticScene {
+    /// PINHOLE cameras named `view_000.png`, ...
+    pub cameras: Vec<Camera>,
+    /// Final composites, RGB in [0, 1].
+    pub images: Vec<Image<f32>>,
+    /// Ground-truth transmission `C_t` (the scene with no pane at all), RGB in [0, 1].
+    pub transmission: Vec<Image<f32>>,
+    /// Glass labels for the masked training views, `None` for the others: k (1-based pane index)
+    /// where a primary ray of the pixel's 2x2 subsamples has pane k, seen from its front side, as
+    /// its nearest hit (the pane with most such subsamples, the lower index on a tie), 0
+    /// elsewhere. Counting any subsample makes the composite equal the transmission bit for bit
+    /// outside the masks; occluders in front of a pane cut its mask.
+    pub masks: Vec<Option<Image<u8>>>,
+    /// The truth planes, label k = index k - 1, with `r0_logit` set to the truth R0.
+    pub planes: Vec<ReflectionPlane>,
+    /// Sparse points on opaque surfaces (world position with a little noise, colour).
+    pub points: Vec<([f64; 3], [u8; 3])>,
+    /// For each point, the indices of the cameras that see it (at least two); it projects inside
+    /// each of their images, in front of the camera.
+    pub tracks: Vec<Vec<usize>>,
+    /// Names of the test views (every 8th view, starting with the first).
+    pub test_views: Vec<String>,
+}
+
+#[cfg(test)]
+mod tests;

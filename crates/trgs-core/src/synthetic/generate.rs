@@ -1,0 +1,606 @@
+//! Scene layout, camera loop, rendering of every view, and the sparse points.
+use std::f64::consts::{PI, TAU};
+
+use glam::{DMat3, DVec3};
+
+use super::geom::{Ray, Rect};
+use super::texture::Texture;
+use super::trace::{Object, Pane, Shape, World};
+use super::{GLASS_R0, MIRROR_R0, PaneKind, SyntheticConfig, SyntheticScene};
+use crate::image::Image;
+use crate::rng::Rng;
+use crate::scene::{Camera, Intrinsics, Material, Pose, ReflectionPlane};
+
+/// Subsamples per pixel side: 2x2 rays per pixel.
+pub(crate) const SUPERSAMPLE: u32 = 2;
+
+/// Horizontal field of view of every camera.
+const FOV_X_DEG: f64 = 62.0;
+
+/// Room size in the local frame: x in [-HALF_WIDTH, HALF_WIDTH], y in [0, HEIGHT], the camera
+/// room z in [0, FRONT_DEPTH], the room behind the glass z in [-BACK_DEPTH, 0].
+const HALF_WIDTH: f64 = 3.0;
+const HEIGHT: f64 = 2.8;
+const FRONT_DEPTH: f64 = 5.0;
+const BACK_DEPTH: f64 = 4.5;
+
+/// Pane centre height, pane height, frame bar width.
+const PANE_Y: f64 = 1.2;
+const PANE_H: f64 = 1.0;
+const FRAME_W: f64 = 0.07;
+
+/// Light level of the room behind the glass relative to the camera room.
+const BEHIND_GAIN: f64 = 0.55;
+
+/// Standard deviation of the position noise of the sparse points, in metres.
+const POINT_NOISE: f64 = 0.003;
+
+/// The local scene frame in the world: `x_world = rotation * x_local + translation`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Placement {
+    pub rotation: DMat3,
+    pub translation: DVec3,
+}
+
+impl Placement {
+    /// A fixed, deliberately not axis-aligned placement with world up roughly along -y.
+    fn fixed() -> Self {
+        let tilt = DMat3::from_axis_angle(DVec3::new(0.3, 0.2, 1.0).normalize(), 0.35);
+        Self {
+            rotation: tilt * DMat3::from_rotation_x(PI),
+            translation: DVec3::new(0.7, -0.4, 1.9),
+        }
+    }
+
+    pub fn point_to_world(&self, p: DVec3) -> DVec3 {
+        self.rotation * p + self.translation
+    }
+
+    pub fn point_to_local(&self, p: DVec3) -> DVec3 {
+        self.rotation.transpose() * (p - self.translation)
+    }
+
+    pub fn dir_to_local(&self, d: DVec3) -> DVec3 {
+        self.rotation.transpose() * d
+    }
+}
+
+/// Everything `generate` derives before rendering: the tracer's world, its placement, cameras and
+/// truth planes. Tests use it for independent checks.
+#[derive(Clone, Debug)]
+pub(crate) struct Layout {
+    pub world: World,
+    pub placement: Placement,
+    pub cameras: Vec<Camera>,
+    pub planes: Vec<ReflectionPlane>,
+    /// Frame bars and sills (local boxes), sampled preferentially for sparse points.
+    pub frame_boxes: Boxes,
+}
+
+fn rgb(r: f64, g: f64, b: f64) -> DVec3 {
+    DVec3::new(r, g, b)
+}
+
+fn cuboid(min: [f64; 3], max: [f64; 3], texture: Texture) -> Object {
+    Object { shape: Shape::Cuboid { min: min.into(), max: max.into() }, texture, gain: 1.0 }
+}
+
+fn sphere(centre: [f64; 3], radius: f64, texture: Texture) -> Object {
+    Object { shape: Shape::Sphere { centre: centre.into(), radius }, texture, gain: 1.0 }
+}
+
+/// An axis-aligned wall given by its centre, its two in-plane axes and half sizes.
+fn quad(centre: [f64; 3], u: DVec3, v: DVec3, half: [f64; 2], texture: Texture) -> Object {
+    let rect = Rect { centre: centre.into(), u, v, half_u: half[0], half_v: half[1] };
+    Object { shape: Shape::Quad { rect, holes: Vec::new() }, texture, gain: 1.0 }
+}
+
+/// Width of each pane and x of each pane centre: one pane is 1.6 m wide; several share 3.2 m
+/// with 0.45 m of wall between them (the layout is meant for up to four).
+fn pane_slots(n: usize) -> (f64, Vec<f64>) {
+    const GAP: f64 = 0.45;
+    let w = if n == 1 { 1.6 } else { ((3.2 - GAP * (n as f64 - 1.0)) / n as f64).max(0.3) };
+    let xs = (0..n).map(|k| (k as f64 - 0.5 * (n as f64 - 1.0)) * (w + GAP)).collect();
+    (w, xs)
+}
+
+/// Local boxes (min, max corners).
+type Boxes = Vec<(DVec3, DVec3)>;
+
+/// Sparse points (position, colour) and, for each, the cameras that see it.
+type Points = (Vec<([f64; 3], [u8; 3])>, Vec<Vec<usize>>);
+
+/// The rooms, objects, panes and frames in the local frame; also the frame boxes and each pane's
+/// (width, height, R0).
+fn build_world(config: &SyntheticConfig) -> (World, Boxes, Vec<(f64, f64, f64)>) {
+    let (x, y, z) = (DVec3::X, DVec3::Y, DVec3::Z);
+    let (hw, ht, fd, bd) = (HALF_WIDTH, HEIGHT, FRONT_DEPTH, BACK_DEPTH);
+    let mut objects = vec![
+        // Camera room. Floor tiles, ceiling, side walls, and the poster wall behind the cameras.
+        quad(
+            [0.0, 0.0, 0.5 * fd],
+            x,
+            z,
+            [hw, 0.5 * fd],
+            Texture::Checker { period: 0.5, a: rgb(0.62, 0.50, 0.36), b: rgb(0.36, 0.25, 0.16) },
+        ),
+        quad(
+            [0.0, ht, 0.5 * fd],
+            x,
+            z,
+            [hw, 0.5 * fd],
+            Texture::Plain { colour: rgb(0.80, 0.79, 0.75), grain: 0.08 },
+        ),
+        quad(
+            [-hw, 0.5 * ht, 0.5 * fd],
+            z,
+            y,
+            [0.5 * fd, 0.5 * ht],
+            Texture::Stripes { period: 0.3, a: rgb(0.20, 0.50, 0.52), b: rgb(0.82, 0.80, 0.66) },
+        ),
+        quad(
+            [hw, 0.5 * ht, 0.5 * fd],
+            z,
+            y,
+            [0.5 * fd, 0.5 * ht],
+            Texture::Noise { scale: 0.35, a: rgb(0.85, 0.55, 0.30), b: rgb(0.55, 0.16, 0.14) },
+        ),
+        quad(
+            [0.0, 0.5 * ht, fd],
+            x,
+            y,
+            [hw, 0.5 * ht],
+            Texture::Panels { width: 0.55, height: 0.7 },
+        ),
+        // Camera side, near the wall: a bookshelf left of the window and a ball on a pedestal
+        // right of it, both seen directly and, mirrored, in the glass from oblique views.
+        cuboid([-2.7, 0.0, 0.15], [-1.9, 1.7, 0.6], Texture::Panels { width: 0.08, height: 0.28 }),
+        cuboid(
+            [1.7, 0.0, 0.25],
+            [2.1, 0.9, 0.65],
+            Texture::Stripes { period: 0.07, a: rgb(0.90, 0.88, 0.80), b: rgb(0.30, 0.28, 0.40) },
+        ),
+        sphere(
+            [1.9, 1.2, 0.45],
+            0.3,
+            Texture::Checker { period: 0.12, a: rgb(0.95, 0.80, 0.15), b: rgb(0.15, 0.25, 0.65) },
+        ),
+        // The foreground plant that cuts the glass masks.
+        cuboid(
+            [0.29, 0.0, 0.87],
+            [0.35, 0.95, 0.93],
+            Texture::Plain { colour: rgb(0.30, 0.22, 0.15), grain: 0.1 },
+        ),
+        sphere(
+            [0.32, 1.1, 0.9],
+            0.2,
+            Texture::Noise { scale: 0.05, a: rgb(0.55, 0.80, 0.25), b: rgb(0.10, 0.35, 0.12) },
+        ),
+    ];
+    let behind = [
+        // Room behind the glass: floor, ceiling, side walls, brick back wall.
+        quad(
+            [0.0, 0.0, -0.5 * bd],
+            x,
+            z,
+            [hw, 0.5 * bd],
+            Texture::Checker { period: 0.35, a: rgb(0.85, 0.85, 0.82), b: rgb(0.18, 0.20, 0.24) },
+        ),
+        quad(
+            [0.0, ht, -0.5 * bd],
+            x,
+            z,
+            [hw, 0.5 * bd],
+            Texture::Plain { colour: rgb(0.85, 0.85, 0.88), grain: 0.1 },
+        ),
+        quad(
+            [-hw, 0.5 * ht, -0.5 * bd],
+            z,
+            y,
+            [0.5 * bd, 0.5 * ht],
+            Texture::Noise { scale: 0.25, a: rgb(0.75, 0.80, 0.45), b: rgb(0.30, 0.45, 0.25) },
+        ),
+        quad(
+            [hw, 0.5 * ht, -0.5 * bd],
+            z,
+            y,
+            [0.5 * bd, 0.5 * ht],
+            Texture::Stripes { period: 0.4, a: rgb(0.78, 0.62, 0.75), b: rgb(0.45, 0.30, 0.55) },
+        ),
+        quad(
+            [0.0, 0.5 * ht, -bd],
+            x,
+            y,
+            [hw, 0.5 * ht],
+            Texture::Bricks {
+                width: 0.3,
+                height: 0.1,
+                brick: rgb(0.70, 0.32, 0.20),
+                mortar: rgb(0.80, 0.78, 0.72),
+            },
+        ),
+        // Objects behind the glass, 1 to 4 m deep.
+        sphere(
+            [-0.45, 0.45, -1.1],
+            0.45,
+            Texture::Stripes { period: 0.16, a: rgb(0.85, 0.20, 0.18), b: rgb(0.92, 0.90, 0.85) },
+        ),
+        cuboid(
+            [0.45, 0.0, -2.1],
+            [1.05, 0.8, -1.5],
+            Texture::Noise { scale: 0.12, a: rgb(0.95, 0.70, 0.25), b: rgb(0.35, 0.15, 0.45) },
+        ),
+        sphere(
+            [1.1, 1.35, -3.0],
+            0.55,
+            Texture::Checker { period: 0.2, a: rgb(0.15, 0.30, 0.70), b: rgb(0.90, 0.85, 0.30) },
+        ),
+        cuboid(
+            [-1.45, 0.0, -2.8],
+            [-1.05, ht, -2.4],
+            Texture::Stripes { period: 0.1, a: rgb(0.90, 0.90, 0.90), b: rgb(0.25, 0.25, 0.30) },
+        ),
+        cuboid(
+            [-0.35, 0.0, -3.7],
+            [0.35, 1.5, -3.35],
+            Texture::Panels { width: 0.12, height: 0.38 },
+        ),
+    ];
+    // The room behind the glass is lit more dimly, like a shop window seen from a bright room:
+    // that is what makes real reflections stand out, and it keeps R0 = 0.2 clearly visible.
+    objects.extend(behind.into_iter().map(|o| Object { gain: BEHIND_GAIN, ..o }));
+
+    let (w, xs) = pane_slots(config.panes.len());
+    let mut panes = Vec::new();
+    let mut frame_boxes = Vec::new();
+    let mut holes = Vec::new();
+    let mut sizes = Vec::new();
+    let wall_y = 0.5 * ht;
+    for (&kind, &cx) in config.panes.iter().zip(&xs) {
+        let (x0, x1) = (cx - 0.5 * w, cx + 0.5 * w);
+        let (y0, y1) = (PANE_Y - 0.5 * PANE_H, PANE_Y + 0.5 * PANE_H);
+        let (pane_z, r0, frame_z) = match kind {
+            // Glass sits in the middle of a frame that goes through the wall.
+            PaneKind::Glass => (0.0, GLASS_R0, [-0.06, 0.04]),
+            // A mirror hangs 1.5 cm in front of the wall in a shallow frame.
+            PaneKind::Mirror => (0.015, MIRROR_R0, [0.0, 0.05]),
+        };
+        let f = FRAME_W;
+        let bars = [
+            ([x0 - f, y0 - f], [x1 + f, y0]),
+            ([x0 - f, y1], [x1 + f, y1 + f]),
+            ([x0 - f, y0], [x0, y1]),
+            ([x1, y0], [x1 + f, y1]),
+        ];
+        for (lo, hi) in bars {
+            frame_boxes
+                .push((DVec3::new(lo[0], lo[1], frame_z[0]), DVec3::new(hi[0], hi[1], frame_z[1])));
+        }
+        if kind == PaneKind::Glass {
+            holes.push([x0 - f, x1 + f, y0 - f - wall_y, y1 + f - wall_y]);
+            // A sill under the window, as in a real room; it sticks out towards the cameras.
+            frame_boxes.push((
+                DVec3::new(x0 - f - 0.06, y0 - f - 0.05, -0.06),
+                DVec3::new(x1 + f + 0.06, y0 - f, 0.14),
+            ));
+        }
+        let rect = Rect {
+            centre: DVec3::new(cx, PANE_Y, pane_z),
+            u: x,
+            v: y,
+            half_u: 0.5 * w,
+            half_v: 0.5 * PANE_H,
+        };
+        panes.push(Pane { rect, r0 });
+        sizes.push((w, PANE_H, r0));
+    }
+    for &(min, max) in &frame_boxes {
+        objects.push(Object {
+            shape: Shape::Cuboid { min, max },
+            texture: Texture::Noise {
+                scale: 0.04,
+                a: rgb(0.92, 0.92, 0.90),
+                b: rgb(0.55, 0.52, 0.48),
+            },
+            gain: 1.0,
+        });
+    }
+    // The wall with the windows cut out (its front side faces the cameras).
+    objects.push(Object {
+        shape: Shape::Quad {
+            rect: Rect {
+                centre: DVec3::new(0.0, wall_y, 0.0),
+                u: x,
+                v: y,
+                half_u: hw,
+                half_v: 0.5 * ht,
+            },
+            holes,
+        },
+        texture: Texture::Noise { scale: 0.3, a: rgb(0.82, 0.82, 0.76), b: rgb(0.64, 0.69, 0.63) },
+        gain: 1.0,
+    });
+
+    // A key light from above and a fill light from the window side, so that the surfaces facing
+    // the glass (what it reflects) are lit as well as those seen through it.
+    let lights = vec![
+        (DVec3::new(-0.3, 1.0, 0.25).normalize(), 0.45),
+        (DVec3::new(0.4, 0.3, -0.85).normalize(), 0.35),
+    ];
+    let world = World { objects, panes, lights, ambient: 0.45, seed: config.seed };
+    (world, frame_boxes, sizes)
+}
+
+/// The camera loop in the local frame: eye and target of view `i` of `n`.
+fn camera_path(i: usize, n: usize) -> (DVec3, DVec3) {
+    let s = i as f64 / n as f64;
+    // One sweep left-right per loop, three height oscillations: the loop covers a band of
+    // positions instead of retracing one curve.
+    let theta = 0.9 * (TAU * s).sin();
+    let r = 2.6 + 0.3 * (2.0 * TAU * s).cos();
+    let eye = DVec3::new(r * theta.sin(), 1.3 + 0.4 * (3.0 * TAU * s + 0.5).sin(), r * theta.cos());
+    let target = DVec3::new(0.3 * (TAU * s + 0.8).sin(), 1.1 + 0.1 * (2.0 * TAU * s).sin(), -0.8);
+    (eye, target)
+}
+
+/// A world-to-camera pose at `eye` looking at `target` with image-up along `up` (OpenCV axes:
+/// x right = down x forward, y down). Built here rather than with `Pose::look_at`, which at this
+/// commit returns the camera rolled by 180 degrees (x = forward x -up points left).
+fn look_at(eye: DVec3, target: DVec3, up: DVec3) -> Pose {
+    let z = (target - eye).normalize();
+    let x = (-up).cross(z).normalize();
+    let y = z.cross(x);
+    Pose::from_camera_to_world(DMat3::from_cols(x, y, z), eye)
+}
+
+pub(crate) fn layout(config: &SyntheticConfig) -> Layout {
+    let (world, frame_boxes, sizes) = build_world(config);
+    let placement = Placement::fixed();
+    let up = placement.rotation * DVec3::Y;
+    let intrinsics = Intrinsics::from_fov_x(FOV_X_DEG.to_radians(), config.width, config.height);
+    let cameras = (0..config.views)
+        .map(|i| {
+            let (eye, target) = camera_path(i, config.views);
+            let pose = look_at(placement.point_to_world(eye), placement.point_to_world(target), up);
+            Camera::new(format!("view_{i:03}.png"), intrinsics, pose)
+        })
+        .collect();
+    let planes = world
+        .panes
+        .iter()
+        .zip(&config.panes)
+        .zip(sizes)
+        .map(|((pane, &kind), (w, h, r0))| {
+            let material = match kind {
+                PaneKind::Glass => Material::Glass,
+                PaneKind::Mirror => Material::Mirror,
+            };
+            let mut plane = ReflectionPlane::new(
+                placement.point_to_world(pane.rect.centre),
+                placement.rotation * pane.rect.normal(),
+                placement.rotation * pane.rect.u,
+                w,
+                h,
+                material,
+            );
+            plane.r0_logit = (r0 / (1.0 - r0)).ln();
+            plane
+        })
+        .collect();
+    Layout { world, placement, cameras, planes, frame_boxes }
+}
+
+/// One rendered view: composite, transmission, and labels for every pixel.
+struct View {
+    image: Image<f32>,
+    transmission: Image<f32>,
+    labels: Image<u8>,
+}
+
+/// The local-frame ray through the continuous pixel position `(px, py)`.
+pub(crate) fn local_ray(layout: &Layout, camera: &Camera, px: f64, py: f64) -> Ray {
+    let d = camera.pose.direction_to_world(camera.intrinsics.unproject(px, py));
+    Ray::new(
+        layout.placement.point_to_local(camera.pose.centre()),
+        layout.placement.dir_to_local(d).normalize(),
+    )
+}
+
+fn render_view(layout: &Layout, camera: &Camera) -> View {
+    let (w, h) = (camera.width(), camera.height());
+    let mut image = Image::new(w, h, 3);
+    let mut transmission = Image::new(w, h, 3);
+    let mut labels = Image::new(w, h, 1);
+    let n_sub = f64::from(SUPERSAMPLE * SUPERSAMPLE);
+    let mut counts = vec![0u32; layout.world.panes.len()];
+    for y in 0..h {
+        for x in 0..w {
+            let (mut c, mut t) = (DVec3::ZERO, DVec3::ZERO);
+            counts.iter_mut().for_each(|k| *k = 0);
+            for sy in 0..SUPERSAMPLE {
+                for sx in 0..SUPERSAMPLE {
+                    let px = f64::from(x) + (f64::from(sx) + 0.5) / f64::from(SUPERSAMPLE);
+                    let py = f64::from(y) + (f64::from(sy) + 0.5) / f64::from(SUPERSAMPLE);
+                    let s = layout.world.sample(&local_ray(layout, camera, px, py));
+                    c += s.colour;
+                    t += s.transmission;
+                    if let Some(k) = s.pane {
+                        counts[k] += 1;
+                    }
+                }
+            }
+            // Any subsample on a pane marks the pixel (the pane with most subsamples, lowest
+            // index on ties), so that outside the masks the composite equals the transmission.
+            let mut label = 0u8;
+            let mut most = 0;
+            for (k, &n) in counts.iter().enumerate() {
+                if n > most {
+                    most = n;
+                    label = (k + 1).min(255) as u8;
+                }
+            }
+            labels.set(x, y, 0, label);
+            for ch in 0..3 {
+                image.set(x, y, ch as u32, (c[ch] / n_sub) as f32);
+                transmission.set(x, y, ch as u32, (t[ch] / n_sub) as f32);
+            }
+        }
+    }
+    View { image, transmission, labels }
+}
+
+/// Render every view, spread over the available cores; each view is a pure function of the
+/// layout, so the result does not depend on the number of threads.
+fn render_all(layout: &Layout) -> Vec<View> {
+    let n = layout.cameras.len();
+    let threads = std::thread::available_parallelism().map_or(1, |t| t.get()).clamp(1, 16).min(n);
+    if threads <= 1 {
+        return layout.cameras.iter().map(|c| render_view(layout, c)).collect();
+    }
+    let mut slots: Vec<Option<View>> = (0..n).map(|_| None).collect();
+    std::thread::scope(|scope| {
+        let handles: Vec<_> = (0..threads)
+            .map(|j| {
+                scope.spawn(move || {
+                    (j..n)
+                        .step_by(threads)
+                        .map(|i| (i, render_view(layout, &layout.cameras[i])))
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        for handle in handles {
+            // A panic in a worker is a bug in the tracer: surface it where it happened.
+            let done = handle.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
+            for (i, view) in done {
+                slots[i] = Some(view);
+            }
+        }
+    });
+    slots.into_iter().flatten().collect()
+}
+
+/// Project a world point into a camera: pixel position if it is in front and inside the image.
+pub(crate) fn project(camera: &Camera, p: DVec3) -> Option<[f64; 2]> {
+    let q = camera.pose.transform_point(p);
+    if q.z <= 1e-3 {
+        return None;
+    }
+    let k = &camera.intrinsics;
+    let (u, v) = (k.fx * q.x / q.z + k.cx, k.fy * q.y / q.z + k.cy);
+    let inside = u >= 0.0 && v >= 0.0 && u < f64::from(k.width) && v < f64::from(k.height);
+    inside.then_some([u, v])
+}
+
+/// A uniform random point on the surface of a box.
+fn point_on_box(rng: &mut Rng, min: DVec3, max: DVec3) -> DVec3 {
+    let e = max - min;
+    let areas = [e.y * e.z, e.x * e.z, e.x * e.y];
+    let mut pick = rng.uniform() * (areas[0] + areas[1] + areas[2]);
+    let mut axis = 2;
+    for (a, &area) in areas.iter().enumerate() {
+        if pick < area {
+            axis = a;
+            break;
+        }
+        pick -= area;
+    }
+    let mut p = min + DVec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * e;
+    p[axis] = if rng.uniform() < 0.5 { min[axis] } else { max[axis] };
+    p
+}
+
+/// Sparse points: surface points seen by at least two cameras (visibility by ray casting; panes
+/// do not block), with their shaded colour and a little position noise. A share of them is drawn
+/// on the frames so that the plane initialisation finds the pane's plane.
+fn sparse_points(layout: &Layout, target: usize, seed: u64) -> Points {
+    let mut rng = Rng::new(seed ^ 0x5EED_0F5F_u64);
+    let (mut points, mut tracks) = (Vec::new(), Vec::new());
+    let cams = &layout.cameras;
+    if cams.is_empty() {
+        return (points, tracks);
+    }
+    let eyes: Vec<DVec3> =
+        cams.iter().map(|c| layout.placement.point_to_local(c.pose.centre())).collect();
+    let max_attempts = 50 * target + 100;
+    for _ in 0..max_attempts {
+        if points.len() >= target {
+            break;
+        }
+        let p_local = if !layout.frame_boxes.is_empty() && rng.uniform() < 0.15 {
+            let (min, max) = layout.frame_boxes[rng.below(layout.frame_boxes.len())];
+            point_on_box(&mut rng, min, max)
+        } else {
+            let cam = &cams[rng.below(cams.len())];
+            let px = rng.range(0.0, f64::from(cam.width()));
+            let py = rng.range(0.0, f64::from(cam.height()));
+            let ray = local_ray(layout, cam, px, py);
+            match layout.world.hit_opaque(&ray) {
+                Some(hit) => ray.at(hit.t),
+                None => continue,
+            }
+        };
+        let p_world = layout.placement.point_to_world(p_local);
+        let seen: Vec<usize> = (0..cams.len())
+            .filter(|&i| {
+                project(&cams[i], p_world).is_some() && layout.world.visible(eyes[i], p_local)
+            })
+            .collect();
+        let Some(&first) = seen.first() else { continue };
+        if seen.len() < 2 {
+            continue;
+        }
+        // The colour is the shaded surface colour (view-independent), as triangulation would
+        // average it; trace from a camera that sees the point to get its surface and normal.
+        let to = p_local - eyes[first];
+        let ray = Ray::new(eyes[first], to.normalize());
+        let Some(hit) = layout.world.hit_opaque(&ray) else { continue };
+        let colour = layout.world.shade(&hit);
+        let noise = DVec3::new(rng.normal(), rng.normal(), rng.normal()) * POINT_NOISE;
+        let noisy = p_world + noise;
+        let track: Vec<usize> =
+            seen.into_iter().filter(|&i| project(&cams[i], noisy).is_some()).collect();
+        if track.len() < 2 {
+            continue;
+        }
+        let c = colour.clamp(DVec3::ZERO, DVec3::ONE) * 255.0 + DVec3::splat(0.5);
+        points.push((noisy.to_array(), [c.x as u8, c.y as u8, c.z as u8]));
+        tracks.push(track);
+    }
+    (points, tracks)
+}
+
+/// Indices of `count` training views (views that are not every 8th) spread over the loop.
+fn masked_view_indices(views: usize, count: usize) -> Vec<usize> {
+    let train: Vec<usize> = (0..views).filter(|i| i % 8 != 0).collect();
+    let count = count.min(train.len());
+    (0..count).map(|j| train[(2 * j + 1) * train.len() / (2 * count)]).collect()
+}
+
+/// Generate the scene: layout, cameras, ray-traced images with their truth, masks and points.
+pub fn generate(config: &SyntheticConfig) -> SyntheticScene {
+    let layout = layout(config);
+    let views = render_all(&layout);
+    let masked = if config.panes.is_empty() {
+        Vec::new()
+    } else {
+        masked_view_indices(config.views, config.masked_views)
+    };
+    let (points, tracks) = sparse_points(&layout, config.sparse_points, config.seed);
+    let mut scene = SyntheticScene {
+        cameras: layout.cameras.clone(),
+        images: Vec::with_capacity(views.len()),
+        transmission: Vec::with_capacity(views.len()),
+        masks: Vec::with_capacity(views.len()),
+        planes: layout.planes.clone(),
+        points,
+        tracks,
+        test_views: layout.cameras.iter().step_by(8).map(|c| c.name.clone()).collect(),
+    };
+    for (i, view) in views.into_iter().enumerate() {
+        scene.images.push(view.image);
+        scene.transmission.push(view.transmission);
+        scene.masks.push(masked.contains(&i).then_some(view.labels));
+    }
+    scene
+}

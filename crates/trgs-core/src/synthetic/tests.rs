@@ -1,0 +1,291 @@
+use std::time::Instant;
+
+use glam::DVec3;
+
+use super::generate::{SUPERSAMPLE, layout, project};
+use super::*;
+
+/// World rays through the 2x2 subsample positions of pixel `(x, y)`, built from the camera alone.
+fn subsample_rays(camera: &Camera, x: u32, y: u32) -> Vec<(DVec3, DVec3)> {
+    let s = f64::from(SUPERSAMPLE);
+    let mut rays = Vec::new();
+    for sy in 0..SUPERSAMPLE {
+        for sx in 0..SUPERSAMPLE {
+            let px = f64::from(x) + (f64::from(sx) + 0.5) / s;
+            let py = f64::from(y) + (f64::from(sy) + 0.5) / s;
+            let d = camera.pose.direction_to_world(camera.intrinsics.unproject(px, py));
+            rays.push((camera.pose.centre(), d));
+        }
+    }
+    rays
+}
+
+/// Whether a world ray meets the plane's rectangle in front of the camera, from the front side;
+/// written from the `ReflectionPlane` fields only.
+fn hits_rectangle(plane: &ReflectionPlane, origin: DVec3, dir: DVec3) -> bool {
+    let n = plane.unit_normal();
+    if (origin - plane.centre).dot(n) <= 0.0 || dir.dot(n) >= 0.0 {
+        return false;
+    }
+    let t = (plane.centre - origin).dot(n) / dir.dot(n);
+    let r = origin + t * dir - plane.centre;
+    t > 0.0
+        && r.dot(plane.axis).abs() <= 0.5 * plane.width + 1e-9
+        && r.dot(plane.bitangent()).abs() <= 0.5 * plane.height + 1e-9
+}
+
+fn max_abs_diff(a: &Image<f32>, b: &Image<f32>, x: u32, y: u32) -> f32 {
+    (0..3).map(|c| (a.get(x, y, c) - b.get(x, y, c)).abs()).fold(0.0, f32::max)
+}
+
+#[test]
+fn small_scene_is_bit_identical_twice() {
+    let a = generate(&SyntheticConfig::small());
+    let b = generate(&SyntheticConfig::small());
+    assert_eq!(a.cameras, b.cameras);
+    assert_eq!(a.images, b.images);
+    assert_eq!(a.transmission, b.transmission);
+    assert_eq!(a.masks, b.masks);
+    assert_eq!(a.planes, b.planes);
+    assert_eq!(a.points, b.points);
+    assert_eq!(a.tracks, b.tracks);
+    assert_eq!(a.test_views, b.test_views);
+}
+
+#[test]
+fn small_scene_shapes_and_split() {
+    let cfg = SyntheticConfig::small();
+    let s = generate(&cfg);
+    assert_eq!(s.cameras.len(), cfg.views);
+    assert_eq!(s.images.len(), cfg.views);
+    assert_eq!(s.transmission.len(), cfg.views);
+    assert_eq!(s.masks.len(), cfg.views);
+    assert_eq!(s.cameras[3].name, "view_003.png");
+    assert_eq!(s.test_views, vec!["view_000.png".to_string(), "view_008.png".to_string()]);
+    let masked: Vec<usize> = (0..cfg.views).filter(|&i| s.masks[i].is_some()).collect();
+    assert_eq!(masked.len(), cfg.masked_views);
+    assert!(masked.iter().all(|i| i % 8 != 0), "masks only on training views: {masked:?}");
+    for img in s.images.iter().chain(&s.transmission) {
+        assert_eq!((img.width, img.height, img.channels), (64, 48, 3));
+        assert!(img.data.iter().all(|v| (0.0..=1.0).contains(v)));
+    }
+    assert!(s.points.len() >= cfg.sparse_points * 9 / 10, "{} points", s.points.len());
+    for cam in &s.cameras {
+        assert!(cam.validate().is_ok());
+    }
+}
+
+#[test]
+fn truth_plane_faces_the_cameras() {
+    let s = generate(&SyntheticConfig::small());
+    assert_eq!(s.planes.len(), 1);
+    let p = &s.planes[0];
+    assert!(p.validate(0).is_ok());
+    assert!((p.r0() - GLASS_R0).abs() < 1e-12);
+    assert_eq!(p.material, crate::scene::Material::Glass);
+    let mut max_angle = 0.0f64;
+    for cam in &s.cameras {
+        let c = cam.pose.centre();
+        assert!(p.signed_distance(c) > 1.0, "{} is not in front of the pane", cam.name);
+        let angle = (c - p.centre).normalize().dot(p.unit_normal()).acos().to_degrees();
+        max_angle = max_angle.max(angle);
+    }
+    assert!(max_angle > 45.0 && max_angle < 60.0, "most oblique view at {max_angle} degrees");
+}
+
+#[test]
+fn cameras_stay_clear_of_surfaces() {
+    let cfg = SyntheticConfig::small();
+    let lay = layout(&cfg);
+    let mut nearest = f64::INFINITY;
+    for cam in &lay.cameras {
+        for y in 0..cam.height() {
+            for x in 0..cam.width() {
+                let ray =
+                    super::generate::local_ray(&lay, cam, f64::from(x) + 0.5, f64::from(y) + 0.5);
+                let s = lay.world.sample(&ray);
+                nearest = nearest.min(s.depth);
+            }
+        }
+    }
+    println!("nearest surface from any camera: {nearest:.3} m");
+    assert!(nearest > 0.5);
+}
+
+/// Masks are a subset of the pixels whose rays meet the pane rectangle, cover most of them,
+/// and the foreground plant cuts holes in some.
+fn check_masks(s: &SyntheticScene) {
+    let mut holes_somewhere = false;
+    for (i, mask) in s.masks.iter().enumerate() {
+        let Some(mask) = mask else { continue };
+        let cam = &s.cameras[i];
+        let (mut inside, mut inside_unmasked) = (0usize, 0usize);
+        for y in 0..cam.height() {
+            for x in 0..cam.width() {
+                let rays = subsample_rays(cam, x, y);
+                let hits =
+                    rays.iter().filter(|(o, d)| hits_rectangle(&s.planes[0], *o, *d)).count();
+                let label = mask.get(x, y, 0);
+                if label > 0 {
+                    assert_eq!(label, 1);
+                    assert!(hits > 0, "{}: pixel ({x}, {y}) masked off the pane", cam.name);
+                }
+                if hits == rays.len() {
+                    inside += 1;
+                    inside_unmasked += usize::from(label == 0);
+                }
+            }
+        }
+        let cut = inside_unmasked as f64 / inside.max(1) as f64;
+        println!("{}: {inside} px on the pane, {:.1} % cut by occluders", cam.name, 100.0 * cut);
+        assert!(inside > 0, "{}: pane not in view", cam.name);
+        assert!(cut < 0.35, "{}: {:.1} % of the pane occluded", cam.name, 100.0 * cut);
+        holes_somewhere |= cut > 0.02;
+    }
+    assert!(holes_somewhere, "no masked view has its mask cut by the foreground object");
+}
+
+/// Outside the masks the composite is the transmission bit for bit; inside, the reflection shows.
+fn check_reflection(s: &SyntheticScene) {
+    let (mut masked, mut differs, mut sum) = (0usize, 0usize, 0.0f64);
+    for (i, mask) in s.masks.iter().enumerate() {
+        let Some(mask) = mask else { continue };
+        let (img, tr) = (&s.images[i], &s.transmission[i]);
+        for y in 0..img.height {
+            for x in 0..img.width {
+                let d = max_abs_diff(img, tr, x, y);
+                if mask.get(x, y, 0) == 0 {
+                    assert_eq!(d, 0.0, "view {i} pixel ({x}, {y}) outside the mask differs");
+                } else {
+                    masked += 1;
+                    differs += usize::from(d > 1.0 / 255.0);
+                    sum += f64::from(d);
+                }
+            }
+        }
+    }
+    let frac = differs as f64 / masked.max(1) as f64;
+    println!(
+        "masked pixels: {masked}, reflection visible (> 1/255) in {:.1} %, mean max-channel |C - C_t| = {:.3}",
+        100.0 * frac,
+        sum / masked.max(1) as f64
+    );
+    assert!(masked > 0);
+    assert!(frac > 0.9);
+}
+
+fn check_points(s: &SyntheticScene) {
+    assert_eq!(s.points.len(), s.tracks.len());
+    for (p, track) in s.points.iter().zip(&s.tracks) {
+        assert!(track.len() >= 2);
+        let inside =
+            s.cameras.iter().filter(|c| project(c, DVec3::from_array(p.0)).is_some()).count();
+        assert!(inside >= 2, "point {p:?} projects into {inside} images");
+        for &i in track {
+            assert!(project(&s.cameras[i], DVec3::from_array(p.0)).is_some());
+        }
+    }
+    // Some points on the frame: within 6 cm of the plane and near the rectangle's border.
+    let plane = &s.planes[0];
+    let near_frame = s
+        .points
+        .iter()
+        .filter(|(p, _)| {
+            let r = DVec3::from_array(*p) - plane.centre;
+            let (a, b) = (r.dot(plane.axis).abs(), r.dot(plane.bitangent()).abs());
+            let outside_by = (a - 0.5 * plane.width).max(b - 0.5 * plane.height);
+            r.dot(plane.unit_normal()).abs() < 0.06 && outside_by > -0.01 && outside_by < 0.15
+        })
+        .count();
+    println!("{} points, {near_frame} on the frame/wall band", s.points.len());
+    assert!(near_frame > s.points.len() / 20);
+}
+
+#[test]
+fn small_scene_masks_reflection_points() {
+    let s = generate(&SyntheticConfig::small());
+    check_masks(&s);
+    check_reflection(&s);
+    check_points(&s);
+}
+
+#[test]
+fn without_glass_images_equal_transmission() {
+    let s = generate(&SyntheticConfig::small().without_glass());
+    assert!(s.planes.is_empty());
+    assert!(s.masks.iter().all(Option::is_none));
+    assert_eq!(s.images, s.transmission);
+}
+
+#[test]
+fn mirror_and_two_panes() {
+    let cfg = SyntheticConfig {
+        panes: vec![PaneKind::Glass, PaneKind::Mirror],
+        ..SyntheticConfig::small()
+    };
+    let s = generate(&cfg);
+    assert_eq!(s.planes.len(), 2);
+    assert!((s.planes[1].r0() - MIRROR_R0).abs() < 1e-12);
+    assert_eq!(s.planes[1].material, crate::scene::Material::Mirror);
+    let labels: std::collections::BTreeSet<u8> =
+        s.masks.iter().flatten().flat_map(|m| m.data.iter().copied()).collect();
+    assert!(labels.contains(&1) && labels.contains(&2), "labels seen: {labels:?}");
+    check_reflection(&s);
+}
+
+#[test]
+fn default_scene_timing_and_checks() {
+    let cfg = SyntheticConfig::default();
+    let start = Instant::now();
+    let s = generate(&cfg);
+    let secs = start.elapsed().as_secs_f64();
+    println!(
+        "default scene ({}x{}, {} views, {} points) generated in {secs:.2} s",
+        cfg.width,
+        cfg.height,
+        cfg.views,
+        s.points.len()
+    );
+    check_masks(&s);
+    check_reflection(&s);
+    check_points(&s);
+    if let Ok(path) = std::env::var("TRGS_SYNTH_SHEET") {
+        contact_sheet(&s, std::path::Path::new(&path));
+    }
+}
+
+/// A PNG with, per row, one view's composite, transmission, 4x |C - C_t|, and mask.
+fn contact_sheet(s: &SyntheticScene, path: &std::path::Path) {
+    let picks: Vec<usize> = (0..s.images.len()).filter(|&i| s.masks[i].is_some()).collect();
+    let (w, h) = (s.images[0].width, s.images[0].height);
+    let mut sheet = image::RgbImage::new(4 * w, h * picks.len() as u32);
+    for (row, &i) in picks.iter().enumerate() {
+        let oy = row as u32 * h;
+        for y in 0..h {
+            for x in 0..w {
+                let px = |img: &Image<f32>, c| (img.get(x, y, c).clamp(0.0, 1.0) * 255.0) as u8;
+                let c = [px(&s.images[i], 0), px(&s.images[i], 1), px(&s.images[i], 2)];
+                let t = [
+                    px(&s.transmission[i], 0),
+                    px(&s.transmission[i], 1),
+                    px(&s.transmission[i], 2),
+                ];
+                let d: [u8; 3] = std::array::from_fn(|k| {
+                    let v = (s.images[i].get(x, y, k as u32)
+                        - s.transmission[i].get(x, y, k as u32))
+                    .abs();
+                    ((4.0 * v).min(1.0) * 255.0) as u8
+                });
+                let m = s.masks[i].as_ref().map_or(0, |m| m.get(x, y, 0)).saturating_mul(110);
+                sheet.put_pixel(x, oy + y, image::Rgb(c));
+                sheet.put_pixel(w + x, oy + y, image::Rgb(t));
+                sheet.put_pixel(2 * w + x, oy + y, image::Rgb(d));
+                sheet.put_pixel(3 * w + x, oy + y, image::Rgb([m, m, m]));
+            }
+        }
+    }
+    if let Err(e) = sheet.save(path) {
+        panic!("cannot write {}: {e}", path.display());
+    }
+    println!("contact sheet written to {}", path.display());
+}

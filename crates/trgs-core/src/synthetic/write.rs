@@ -1,0 +1,155 @@
+//! Writing a [`SyntheticScene`] as a trgs scene folder, with its ground truth beside it:
+//!
+//! ```text
+//! images/<name>                 composites (8-bit RGB PNG)
+//! sparse/0/{cameras,images,points3D}.bin   COLMAP model (PINHOLE), tracks consistent
+//! glass_masks/<name>            8-bit labels, masked training views only
+//! planes.json                   the planes' materials per label (only when there are panes)
+//! test_views.txt                the test split
+//! gt/transmission/<name>        ground-truth transmission C_t
+//! gt/planes.json                the truth planes (centre, normal, axis, size, R0)
+//! ```
+use std::path::Path;
+
+use super::SyntheticScene;
+use crate::io::{ColmapCamera, ColmapImage, ColmapModel, ColmapPoint, FormatError};
+use crate::scene::Camera;
+
+/// Write the scene folder described in the module documentation into `dir`.
+pub fn write_dataset(scene: &SyntheticScene, dir: &Path) -> Result<(), FormatError> {
+    for (cam, img) in scene.cameras.iter().zip(&scene.images) {
+        crate::io::write_png_rgb(&dir.join("images").join(&cam.name), img)?;
+    }
+    for (cam, img) in scene.cameras.iter().zip(&scene.transmission) {
+        crate::io::write_png_rgb(&dir.join("gt").join("transmission").join(&cam.name), img)?;
+    }
+    for (cam, mask) in scene.cameras.iter().zip(&scene.masks) {
+        if let Some(mask) = mask {
+            crate::io::write_glass_mask(&dir.join("glass_masks").join(&cam.name), mask)?;
+        }
+    }
+    colmap_model(scene).write_binary(&dir.join("sparse").join("0"))?;
+    if !scene.planes.is_empty() {
+        // The input side needs only each label's material; the reader must not initialise
+        // geometry from this file (the truth is also in gt/planes.json, which it never reads).
+        crate::io::write_planes_json(&dir.join("planes.json"), &scene.planes)?;
+        crate::io::write_planes_json(&dir.join("gt").join("planes.json"), &scene.planes)?;
+    }
+    crate::io::write_test_views(&dir.join("test_views.txt"), &scene.test_views)
+}
+
+/// Pixel position of world point `p` in `camera` (COLMAP and trgs both put pixel centres at
+/// +0.5), or `None` behind the camera.
+fn pixel(camera: &Camera, p: [f64; 3]) -> Option<[f64; 2]> {
+    let q = camera.pose.transform_point(glam::DVec3::from_array(p));
+    if q.z <= 0.0 {
+        return None;
+    }
+    let k = &camera.intrinsics;
+    Some([k.fx * q.x / q.z + k.cx, k.fy * q.y / q.z + k.cy])
+}
+
+/// The scene's cameras, poses and sparse points as a COLMAP model: one PINHOLE camera per
+/// distinct intrinsics, image ids from 1 in view order, point ids from 1, and each point's track
+/// naming the images that see it with the index of its observation in their `points2d`.
+pub fn colmap_model(scene: &SyntheticScene) -> ColmapModel {
+    let mut cameras: Vec<ColmapCamera> = Vec::new();
+    let mut images = Vec::with_capacity(scene.cameras.len());
+    for (i, cam) in scene.cameras.iter().enumerate() {
+        let k = &cam.intrinsics;
+        let params = vec![k.fx, k.fy, k.cx, k.cy];
+        let same = |c: &ColmapCamera| {
+            c.width == u64::from(k.width) && c.height == u64::from(k.height) && c.params == params
+        };
+        let camera_id = match cameras.iter().find(|c| same(c)) {
+            Some(c) => c.id,
+            None => {
+                let id = cameras.len() as u32 + 1;
+                cameras.push(ColmapCamera {
+                    id,
+                    model: "PINHOLE".to_string(),
+                    width: u64::from(k.width),
+                    height: u64::from(k.height),
+                    params,
+                });
+                id
+            }
+        };
+        images.push(ColmapImage {
+            id: i as u32 + 1,
+            qvec: cam.pose.qvec(),
+            tvec: cam.pose.translation.to_array(),
+            camera_id,
+            name: cam.name.clone(),
+            points2d: Vec::new(),
+        });
+    }
+    let mut points = Vec::with_capacity(scene.points.len());
+    for (j, ((xyz, rgb), views)) in scene.points.iter().zip(&scene.tracks).enumerate() {
+        let id = j as u64 + 1;
+        let mut track = Vec::with_capacity(views.len());
+        for &v in views {
+            // The generator only lists cameras the point projects into, in front of them.
+            let Some(uv) = pixel(&scene.cameras[v], *xyz) else { continue };
+            let image = &mut images[v];
+            track.push((image.id, image.points2d.len() as u32));
+            image.points2d.push((uv, id as i64));
+        }
+        // Observations are exact projections of the stored point: zero reprojection error.
+        points.push(ColmapPoint { id, xyz: *xyz, rgb: *rgb, error: 0.0, track });
+    }
+    ColmapModel { cameras, images, points }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::synthetic::{SyntheticConfig, generate};
+
+    #[test]
+    fn colmap_tracks_match_observations() {
+        let scene = generate(&SyntheticConfig::small());
+        let model = colmap_model(&scene);
+        assert_eq!(model.cameras.len(), 1);
+        assert_eq!(model.images.len(), scene.cameras.len());
+        assert_eq!(model.points.len(), scene.points.len());
+        for p in &model.points {
+            assert!(p.track.len() >= 2);
+            for &(image_id, idx) in &p.track {
+                let image = &model.images[image_id as usize - 1];
+                assert_eq!(image.id, image_id);
+                let (uv, pid) = image.points2d[idx as usize];
+                assert_eq!(pid, p.id as i64);
+                let (w, h) = (scene.cameras[0].width(), scene.cameras[0].height());
+                assert!(
+                    uv[0] >= 0.0 && uv[1] >= 0.0 && uv[0] < f64::from(w) && uv[1] < f64::from(h)
+                );
+            }
+        }
+        let observations: usize = model.images.iter().map(|i| i.points2d.len()).sum();
+        let track_len: usize = model.points.iter().map(|p| p.track.len()).sum();
+        assert_eq!(observations, track_len);
+    }
+
+    #[test]
+    fn dataset_folder_has_every_file() {
+        let scene = generate(&SyntheticConfig::small());
+        let dir = std::env::temp_dir().join(format!("trgs_synth_write_{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        if let Err(e) = write_dataset(&scene, &dir) {
+            panic!("write_dataset: {e}");
+        }
+        for name in ["sparse/0/cameras.bin", "sparse/0/images.bin", "sparse/0/points3D.bin"] {
+            assert!(dir.join(name).is_file(), "{name} missing");
+        }
+        for name in ["planes.json", "test_views.txt", "gt/planes.json"] {
+            assert!(dir.join(name).is_file(), "{name} missing");
+        }
+        for (cam, mask) in scene.cameras.iter().zip(&scene.masks) {
+            assert!(dir.join("images").join(&cam.name).is_file());
+            assert!(dir.join("gt/transmission").join(&cam.name).is_file());
+            assert_eq!(dir.join("glass_masks").join(&cam.name).is_file(), mask.is_some());
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
