@@ -26,7 +26,7 @@ pub use colmap::{ColmapCamera, ColmapImage, ColmapModel, ColmapPoint};
 pub use dataset::{SceneFolder, ViewSpec};
 pub use error::{FormatError, write_atomic};
 pub use masks::{mask_path, read_glass_mask, write_glass_mask};
-pub use planes_json::{PlaneSpec, read_planes_json, write_planes_json};
+pub use planes_json::{PlaneSpec, read_planes_json, write_plane_materials, write_planes_json};
 pub use ply::{encode_ply, parse_ply, read_ply, write_ply};
 pub use png::{read_rgb_image, write_png_gray, write_png_rgb};
 pub use test_split::{default_test_views, read_test_views, write_test_views};

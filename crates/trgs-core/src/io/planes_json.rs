@@ -160,10 +160,41 @@ pub fn write_planes_json(path: &Path, planes: &[ReflectionPlane]) -> Result<(), 
     write_atomic(path, format!("{json}\n").as_bytes())
 }
 
+/// Write the annotation form: each label's material and nothing else (the input of a scene folder,
+/// where the geometry is estimated from the glass masks).
+pub fn write_plane_materials(path: &Path, materials: &[Material]) -> Result<(), FormatError> {
+    let entries: Vec<PlaneEntry> = materials
+        .iter()
+        .enumerate()
+        .map(|(i, &material)| PlaneEntry {
+            label: i as u32 + 1,
+            material,
+            centre: None,
+            normal: None,
+            axis: None,
+            width: None,
+            height: None,
+            r0: None,
+        })
+        .collect();
+    let json = serde_json::to_string_pretty(&PlanesFile { planes: entries })
+        .map_err(|e| FormatError::new(path, e.to_string()))?;
+    write_atomic(path, format!("{json}\n").as_bytes())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::io::test_util::{assert_mentions, scratch_dir};
+
+    #[test]
+    fn materials_only_round_trip() {
+        let path = scratch_dir("planes-materials").join("planes.json");
+        write_plane_materials(&path, &[Material::Glass, Material::Mirror]).expect("write");
+        let specs = read_planes_json(&path).expect("read");
+        assert_eq!(specs.len(), 2);
+        assert_eq!((specs[1].label, specs[1].material, specs[1].plane), (2, Material::Mirror, None));
+    }
 
     fn write(tag: &str, json: &str) -> std::path::PathBuf {
         let path = scratch_dir(tag).join("planes.json");

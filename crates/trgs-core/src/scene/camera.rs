@@ -93,7 +93,8 @@ impl Pose {
     /// A camera at `eye` looking at `target`, with image-up roughly along `up`.
     pub fn look_at(eye: DVec3, target: DVec3, up: DVec3) -> Self {
         let z = (target - eye).normalize();
-        let x = z.cross(-up).normalize(); // y points down in the image
+        // Image y points down (-up); x = y x z points right.
+        let x = (-up).cross(z).normalize();
         let y = z.cross(x);
         let rotation = DMat3::from_cols(x, y, z).transpose();
         Self { rotation, translation: -(rotation * eye) }
@@ -195,5 +196,28 @@ impl From<&Pose> for ViewTransform {
 impl ViewTransform {
     pub fn transform_point(&self, x: DVec3) -> DVec3 {
         self.linear * x + self.translation
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn look_at_keeps_up_up_and_right_right() {
+        // World up is +y; a camera at z = -5 looking at the origin.
+        let pose = Pose::look_at(DVec3::new(0.0, 0.0, -5.0), DVec3::ZERO, DVec3::Y);
+        let k = Intrinsics::from_fov_x(1.0, 64, 48);
+        let project = |x: DVec3| {
+            let p = pose.transform_point(x);
+            (k.fx * p.x / p.z + k.cx, k.fy * p.y / p.z + k.cy)
+        };
+        let (_, v_up) = project(DVec3::new(0.0, 1.0, 0.0));
+        assert!(v_up < k.cy, "a point above the target is in the upper half of the image");
+        // Looking along +z with +y up, world +x is on the camera's left (right-handed world).
+        let (u_left, _) = project(DVec3::new(1.0, 0.0, 0.0));
+        assert!(u_left < k.cx);
+        assert!((pose.centre() - DVec3::new(0.0, 0.0, -5.0)).length() < 1e-12);
+        assert!((pose.rotation.determinant() - 1.0).abs() < 1e-12);
     }
 }

@@ -33,9 +33,10 @@ mod generate;
 mod geom;
 mod texture;
 mod trace;
-// `write.rs` (the scene folder writer) is wired in once the io module lands on main.
+mod write;
 
 pub use generate::generate;
+pub use write::{colmap_model, write_dataset};
 
 use crate::image::Image;
 use crate::scene::{Camera, ReflectionPlane};

@@ -32,7 +32,9 @@ pub fn write_dataset(scene: &SyntheticScene, dir: &Path) -> Result<(), FormatErr
     if !scene.planes.is_empty() {
         // The input side needs only each label's material; the reader must not initialise
         // geometry from this file (the truth is also in gt/planes.json, which it never reads).
-        crate::io::write_planes_json(&dir.join("planes.json"), &scene.planes)?;
+        // The input carries materials only: the geometry must be estimated from the masks.
+        let materials: Vec<_> = scene.planes.iter().map(|p| p.material).collect();
+        crate::io::write_plane_materials(&dir.join("planes.json"), &materials)?;
         crate::io::write_planes_json(&dir.join("gt").join("planes.json"), &scene.planes)?;
     }
     crate::io::write_test_views(&dir.join("test_views.txt"), &scene.test_views)
