@@ -83,7 +83,8 @@ pub fn random_scene(spec: &SceneSpec) -> Scene {
                 + p.bitangent() * rng.range(-0.45, 0.45) * p.height
         } else {
             // A random pixel and depth, unprojected: visible by construction.
-            let (px, py) = (rng.range(0.0, f64::from(spec.width)), rng.range(0.0, f64::from(spec.height)));
+            let (px, py) =
+                (rng.range(0.0, f64::from(spec.width)), rng.range(0.0, f64::from(spec.height)));
             let depth = rng.range(1.5, 7.0);
             let d_cam = intr.unproject(px, py) * depth;
             pose.rotation.transpose() * (d_cam - pose.translation)
@@ -91,7 +92,8 @@ pub fn random_scene(spec: &SceneSpec) -> Scene {
         let q = random_unit(&mut rng);
         let rot = [rng.range(0.3, 1.0), q.x, q.y, q.z];
         let base = rng.range(-2.8, -1.2);
-        let log_scale = [base + rng.range(-0.5, 0.5), base + rng.range(-0.5, 0.5), base + rng.range(-0.5, 0.5)];
+        let log_scale =
+            [base + rng.range(-0.5, 0.5), base + rng.range(-0.5, 0.5), base + rng.range(-0.5, 0.5)];
         let sh: Vec<[f64; 3]> = (0..k)
             .map(|j| {
                 let s = if j == 0 { 1.0 } else { 0.25 };

@@ -55,7 +55,12 @@ impl<F: Copy + Default> Image<F> {
 impl Image<f32> {
     /// 8-bit samples (sRGB-encoded as stored; no transfer function is applied) to [0, 1].
     pub fn from_u8(width: u32, height: u32, channels: u32, bytes: &[u8]) -> Self {
-        Self { width, height, channels, data: bytes.iter().map(|&b| f32::from(b) / 255.0).collect() }
+        Self {
+            width,
+            height,
+            channels,
+            data: bytes.iter().map(|&b| f32::from(b) / 255.0).collect(),
+        }
     }
 
     /// Quantise [0, 1] samples to 8 bits with rounding; out-of-range values are clamped.

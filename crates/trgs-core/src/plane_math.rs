@@ -64,13 +64,17 @@ pub fn ray_rectangle_hit(plane: &ReflectionPlane, origin: DVec3, dir: DVec3) -> 
 }
 
 /// The nearest plane hit by a ray among several: its index and distance. Ties keep the lower index.
-pub fn nearest_plane_hit(planes: &[ReflectionPlane], origin: DVec3, dir: DVec3) -> Option<(usize, f64)> {
+pub fn nearest_plane_hit(
+    planes: &[ReflectionPlane],
+    origin: DVec3,
+    dir: DVec3,
+) -> Option<(usize, f64)> {
     let mut best: Option<(usize, f64)> = None;
     for (k, p) in planes.iter().enumerate() {
-        if let Some(s) = ray_rectangle_hit(p, origin, dir) {
-            if best.is_none_or(|(_, b)| s < b) {
-                best = Some((k, s));
-            }
+        if let Some(s) = ray_rectangle_hit(p, origin, dir)
+            && best.is_none_or(|(_, b)| s < b)
+        {
+            best = Some((k, s));
         }
     }
     best

@@ -70,21 +70,13 @@ pub fn basis_grad(degree: u32, d: [f64; 3]) -> [[f64; 3]; 16] {
             let (xx, yy, zz) = (x * x, y * y, z * z);
             g[9] = [C3[0] * 6.0 * x * y, C3[0] * (3.0 * xx - 3.0 * yy), 0.0];
             g[10] = [C3[1] * y * z, C3[1] * x * z, C3[1] * x * y];
-            g[11] = [
-                -2.0 * C3[2] * x * y,
-                C3[2] * (4.0 * zz - xx - 3.0 * yy),
-                8.0 * C3[2] * y * z,
-            ];
+            g[11] = [-2.0 * C3[2] * x * y, C3[2] * (4.0 * zz - xx - 3.0 * yy), 8.0 * C3[2] * y * z];
             g[12] = [
                 -6.0 * C3[3] * x * z,
                 -6.0 * C3[3] * y * z,
                 C3[3] * (6.0 * zz - 3.0 * xx - 3.0 * yy),
             ];
-            g[13] = [
-                C3[4] * (4.0 * zz - 3.0 * xx - yy),
-                -2.0 * C3[4] * x * y,
-                8.0 * C3[4] * x * z,
-            ];
+            g[13] = [C3[4] * (4.0 * zz - 3.0 * xx - yy), -2.0 * C3[4] * x * y, 8.0 * C3[4] * x * z];
             g[14] = [2.0 * C3[5] * x * z, -2.0 * C3[5] * y * z, C3[5] * (xx - yy)];
             g[15] = [C3[6] * (3.0 * xx - 3.0 * yy), -6.0 * C3[6] * x * y, 0.0];
         }
@@ -120,7 +112,11 @@ mod tests {
             let (bp, bm) = (basis(3, p), basis(3, m));
             for k in 0..16 {
                 let fd = (bp[k] - bm[k]) / 2e-6;
-                assert!((fd - g[k][axis]).abs() < 1e-8, "basis {k} axis {axis}: {fd} vs {}", g[k][axis]);
+                assert!(
+                    (fd - g[k][axis]).abs() < 1e-8,
+                    "basis {k} axis {axis}: {fd} vs {}",
+                    g[k][axis]
+                );
             }
         }
     }

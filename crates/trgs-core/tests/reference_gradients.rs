@@ -162,11 +162,20 @@ struct Report {
 fn check_scene(spec: &SceneSpec, options: BackwardOptions) -> Report {
     let scene = random_scene(spec);
     let settings = RenderSettings::default();
-    let render_of = |s: &Scene| render(&s.gaussians, &s.planes, &s.camera, &settings).expect("valid scene");
+    let render_of =
+        |s: &Scene| render(&s.gaussians, &s.planes, &s.camera, &settings).expect("valid scene");
     let frame = render_of(&scene);
     let weights = random_weights(&frame, spec.seed ^ 0xABCD);
-    let grads = backward(&scene.gaussians, &scene.planes, &scene.camera, &settings, &frame, &weights, &options)
-        .expect("valid scene");
+    let grads = backward(
+        &scene.gaussians,
+        &scene.planes,
+        &scene.camera,
+        &settings,
+        &frame,
+        &weights,
+        &options,
+    )
+    .expect("valid scene");
     let base_fp = frame.fingerprint();
 
     let params = all_params(&scene);
@@ -229,28 +238,47 @@ fn assert_gradients(spec: SceneSpec, options: BackwardOptions) {
         r.checked, r.skipped, r.worst, r.worst_param
     );
     assert!(r.worst <= 1e-4, "worst relative error {:.3e} at {}", r.worst, r.worst_param);
-    assert!(r.skipped * 100 <= r.checked + r.skipped, "too many discontinuous parameters: {}", r.skipped);
+    assert!(
+        r.skipped * 100 <= r.checked + r.skipped,
+        "too many discontinuous parameters: {}",
+        r.skipped
+    );
 }
 
 #[test]
 fn gradients_no_plane() {
-    assert_gradients(SceneSpec { seed: 11, gaussians: 20, planes: 0, ..Default::default() }, BackwardOptions::default());
+    assert_gradients(
+        SceneSpec { seed: 11, gaussians: 20, planes: 0, ..Default::default() },
+        BackwardOptions::default(),
+    );
 }
 
 #[test]
 fn gradients_one_plane() {
-    assert_gradients(SceneSpec { seed: 12, gaussians: 24, planes: 1, ..Default::default() }, BackwardOptions::default());
+    assert_gradients(
+        SceneSpec { seed: 12, gaussians: 24, planes: 1, ..Default::default() },
+        BackwardOptions::default(),
+    );
 }
 
 #[test]
 fn gradients_two_planes() {
-    assert_gradients(SceneSpec { seed: 13, gaussians: 24, planes: 2, ..Default::default() }, BackwardOptions::default());
+    assert_gradients(
+        SceneSpec { seed: 13, gaussians: 24, planes: 2, ..Default::default() },
+        BackwardOptions::default(),
+    );
 }
 
 #[test]
 fn gradients_grazing_view_80_degrees() {
     assert_gradients(
-        SceneSpec { seed: 14, gaussians: 24, planes: 1, view_angle_deg: 80.0, ..Default::default() },
+        SceneSpec {
+            seed: 14,
+            gaussians: 24,
+            planes: 1,
+            view_angle_deg: 80.0,
+            ..Default::default()
+        },
         BackwardOptions::default(),
     );
 }

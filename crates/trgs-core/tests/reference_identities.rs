@@ -71,7 +71,14 @@ fn mirror_gaussians(g: &Gaussians<f64>, plane: &ReflectionPlane) -> Gaussians<f6
 #[test]
 fn mirrored_gaussians_with_camera_equal_gaussians_with_mirrored_camera() {
     for (seed, angle) in [(21, 20.0), (22, 60.0), (23, 80.0)] {
-        let spec = SceneSpec { seed, gaussians: 40, sh_degree: 1, glass_fraction: 0.0, view_angle_deg: angle, ..Default::default() };
+        let spec = SceneSpec {
+            seed,
+            gaussians: 40,
+            sh_degree: 1,
+            glass_fraction: 0.0,
+            view_angle_deg: angle,
+            ..Default::default()
+        };
         let scene = random_scene(&spec);
         let plane = scene.planes[0];
         let k = scene.camera.intrinsics;
@@ -80,7 +87,14 @@ fn mirrored_gaussians_with_camera_equal_gaussians_with_mirrored_camera() {
         let near = RenderSettings::default().near;
         let mirrored = mirror_gaussians(&scene.gaussians, &plane);
         let a = render_view(&mirrored, &view, &k, ProjectionFilter::All, &grid.full(), near);
-        let b = render_view(&scene.gaussians, &mirrored_view(&plane, &view), &k, ProjectionFilter::All, &grid.full(), near);
+        let b = render_view(
+            &scene.gaussians,
+            &mirrored_view(&plane, &view),
+            &k,
+            ProjectionFilter::All,
+            &grid.full(),
+            near,
+        );
         assert_eq!(a.values, b.values, "same Gaussians in the same order per tile");
         let ra = rasterize(&a.projected, &a.values, &a.ranges, &grid, [0.0; 3]);
         let rb = rasterize(&b.projected, &b.values, &b.ranges, &grid, [0.0; 3]);
@@ -93,7 +107,13 @@ fn mirrored_gaussians_with_camera_equal_gaussians_with_mirrored_camera() {
 
 #[test]
 fn mirrored_pass_of_the_renderer_equals_rendering_mirrored_front_gaussians() {
-    let spec = SceneSpec { seed: 31, gaussians: 40, sh_degree: 1, glass_fraction: 0.0, ..Default::default() };
+    let spec = SceneSpec {
+        seed: 31,
+        gaussians: 40,
+        sh_degree: 1,
+        glass_fraction: 0.0,
+        ..Default::default()
+    };
     let scene = random_scene(&spec);
     let plane = scene.planes[0];
     let settings = RenderSettings::default();
@@ -112,7 +132,8 @@ fn mirrored_pass_of_the_renderer_equals_rendering_mirrored_front_gaussians() {
     let k = scene.camera.intrinsics;
     let grid = TileGrid::new(k.width, k.height);
     let view = ViewTransform::from(&scene.camera.pose);
-    let a = render_view(&mirrored, &view, &k, ProjectionFilter::All, &layers.footprint, settings.near);
+    let a =
+        render_view(&mirrored, &view, &k, ProjectionFilter::All, &layers.footprint, settings.near);
     let ra = rasterize(&a.projected, &a.values, &a.ranges, &grid, [0.0; 3]);
     let d = max_diff(&ra.transmission, &layers.raw_color);
     println!("renderer's mirrored pass vs explicit mirrored Gaussians: max difference {d:.2e}");
@@ -130,14 +151,18 @@ fn tile_binning_drops_no_contribution() {
         let k = scene.camera.intrinsics;
         let grid = TileGrid::new(k.width, k.height);
         let view = ViewTransform::from(&scene.camera.pose);
-        let pass = render_view(&scene.gaussians, &view, &k, ProjectionFilter::All, &grid.full(), 0.2);
+        let pass =
+            render_view(&scene.gaussians, &view, &k, ProjectionFilter::All, &grid.full(), 0.2);
         let tiled = rasterize(&pass.projected, &pass.values, &pass.ranges, &grid, [0.0; 3]);
         let p = &pass.projected;
         let mut all: Vec<u32> = (0..p.len() as u32).filter(|&i| p.visible[i as usize]).collect();
-        all.sort_by(|&a, &b| (p.depth[a as usize] as f32).total_cmp(&(p.depth[b as usize] as f32)).then(a.cmp(&b)));
+        all.sort_by(|&a, &b| {
+            (p.depth[a as usize] as f32).total_cmp(&(p.depth[b as usize] as f32)).then(a.cmp(&b))
+        });
         let n = all.len() as u32;
         let values: Vec<u32> = (0..grid.tile_count()).flat_map(|_| all.iter().copied()).collect();
-        let ranges: Vec<(u32, u32)> = (0..grid.tile_count()).map(|t| (t * n, (t + 1) * n)).collect();
+        let ranges: Vec<(u32, u32)> =
+            (0..grid.tile_count()).map(|t| (t * n, (t + 1) * n)).collect();
         let brute = rasterize(p, &values, &ranges, &grid, [0.0; 3]);
         assert_eq!(tiled.transmission, brute.transmission, "seed {seed}");
         assert_eq!(tiled.mask, brute.mask, "seed {seed}");

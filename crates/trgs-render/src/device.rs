@@ -93,7 +93,10 @@ impl GpuContext {
                 match pos {
                     Some(p) => adapters.swap_remove(p),
                     None => {
-                        return Err(DeviceError::NoMatchingAdapter { wanted: w, available: names.join(", ") });
+                        return Err(DeviceError::NoMatchingAdapter {
+                            wanted: w,
+                            available: names.join(", "),
+                        });
                     }
                 }
             }
@@ -135,6 +138,12 @@ impl GpuContext {
             .filter(|(f, _)| self.device.features().contains(*f))
             .map(|(_, n)| *n)
             .collect();
-        format!("{} ({:?}, {:?}); optional features: [{}]", self.info.name, self.info.backend, self.info.device_type, on.join(", "))
+        format!(
+            "{} ({:?}, {:?}); optional features: [{}]",
+            self.info.name,
+            self.info.backend,
+            self.info.device_type,
+            on.join(", ")
+        )
     }
 }

@@ -44,9 +44,14 @@ fn run_kernel(ctx: &GpuContext, n: u32) -> Vec<f32> {
         layout: &pipeline.get_bind_group_layout(0),
         entries: &[wgpu::BindGroupEntry { binding: 0, resource: buf.as_entire_binding() }],
     });
-    let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("trgs.test.encoder") });
+    let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+        label: Some("trgs.test.encoder"),
+    });
     {
-        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("trgs.test.pass"), timestamp_writes: None });
+        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("trgs.test.pass"),
+            timestamp_writes: None,
+        });
         pass.set_pipeline(&pipeline);
         pass.set_bind_group(0, &bind, &[]);
         pass.dispatch_workgroups(n.div_ceil(64), 1, 1);

@@ -193,7 +193,10 @@ mod tests {
         write_plane_materials(&path, &[Material::Glass, Material::Mirror]).expect("write");
         let specs = read_planes_json(&path).expect("read");
         assert_eq!(specs.len(), 2);
-        assert_eq!((specs[1].label, specs[1].material, specs[1].plane), (2, Material::Mirror, None));
+        assert_eq!(
+            (specs[1].label, specs[1].material, specs[1].plane),
+            (2, Material::Mirror, None)
+        );
     }
 
     fn write(tag: &str, json: &str) -> std::path::PathBuf {

@@ -38,7 +38,11 @@ pub struct SceneGrads {
 
 /// Chain the gradient of a mirrored view into the plane's centre and unit normal.
 /// `W' = R H`, `t' = t + 2 (u.n) R n`, `c' = c - 2 ((c - u).n) n`.
-fn mirrored_view_bwd(plane: &ReflectionPlane, real: &super::ViewPass, vg: &ViewGrads) -> (DVec3, DVec3) {
+fn mirrored_view_bwd(
+    plane: &ReflectionPlane,
+    real: &super::ViewPass,
+    vg: &ViewGrads,
+) -> (DVec3, DVec3) {
     let n = plane.unit_normal();
     let u = plane.centre;
     let (r, c) = (real.view.linear, real.view.centre);
@@ -119,7 +123,11 @@ pub fn backward(
         let nu = plane.normal / len;
         let g_raw_n = (DMat3::IDENTITY - outer(nu, nu)) * g_n / len;
         let r0 = plane.r0();
-        plane_grads.push(PlaneGrad { centre: g_u, normal: g_raw_n, r0_logit: cg.r0[kp] * r0 * (1.0 - r0) });
+        plane_grads.push(PlaneGrad {
+            centre: g_u,
+            normal: g_raw_n,
+            r0_logit: cg.r0[kp] * r0 * (1.0 - r0),
+        });
     }
     Ok(SceneGrads { gaussians: out, planes: plane_grads })
 }

@@ -3,7 +3,7 @@
 //! (through Schlick's cosine). H is discrete and passes no gradient.
 use super::frame::{Frame, FrameGrads};
 use crate::image::Image;
-use crate::plane_math::{schlick_grad, incidence_cos};
+use crate::plane_math::{incidence_cos, schlick_grad};
 use crate::scene::{Camera, ReflectionPlane};
 use glam::DVec3;
 
@@ -19,7 +19,12 @@ pub(crate) struct ComposeGrads {
     pub unit_normal: Vec<DVec3>,
 }
 
-pub(crate) fn compose_bwd(camera: &Camera, planes: &[ReflectionPlane], f: &Frame, g: &FrameGrads) -> ComposeGrads {
+pub(crate) fn compose_bwd(
+    camera: &Camera,
+    planes: &[ReflectionPlane],
+    f: &Frame,
+    g: &FrameGrads,
+) -> ComposeGrads {
     let (w, h) = (f.width(), f.height());
     let mut out = ComposeGrads {
         transmission: g.transmission.clone(),
@@ -41,7 +46,8 @@ pub(crate) fn compose_bwd(camera: &Camera, planes: &[ReflectionPlane], f: &Frame
             let k = hit as usize - 1;
             let Some(layers) = f.planes[k].as_ref() else { continue };
             let plane = &planes[k];
-            let (r, r_raw, m) = (f.strength.get(x, y, 0), f.strength_raw.get(x, y, 0), f.mask.get(x, y, 0));
+            let (r, r_raw, m) =
+                (f.strength.get(x, y, 0), f.strength_raw.get(x, y, 0), f.mask.get(x, y, 0));
             let a = layers.intensity.get(x, y, 0);
             let mut g_r = g.strength.get(x, y, 0);
             let mut g_a = 0.0;

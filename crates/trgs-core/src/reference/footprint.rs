@@ -47,7 +47,12 @@ const CLIP_Z: f64 = 1e-9;
 
 /// Tiles covered by the plane's rectangle seen from `pose`, or None when the camera is not on the
 /// plane's front side or the rectangle is entirely behind the camera or off screen.
-pub fn footprint(plane: &ReflectionPlane, pose: &Pose, k: &Intrinsics, grid: &TileGrid) -> Option<TileRect> {
+pub fn footprint(
+    plane: &ReflectionPlane,
+    pose: &Pose,
+    k: &Intrinsics,
+    grid: &TileGrid,
+) -> Option<TileRect> {
     if !(plane.signed_distance(pose.centre()) > 0.0) {
         return None;
     }
@@ -88,5 +93,10 @@ pub fn footprint(plane: &ReflectionPlane, pose: &Pose, k: &Intrinsics, grid: &Ti
     };
     let (x0, x1) = span(umin, umax, grid.width)?;
     let (y0, y1) = span(vmin, vmax, grid.height)?;
-    Some(TileRect { x0: x0 / TILE_SIZE, y0: y0 / TILE_SIZE, x1: x1 / TILE_SIZE + 1, y1: y1 / TILE_SIZE + 1 })
+    Some(TileRect {
+        x0: x0 / TILE_SIZE,
+        y0: y0 / TILE_SIZE,
+        x1: x1 / TILE_SIZE + 1,
+        y1: y1 / TILE_SIZE + 1,
+    })
 }

@@ -1,8 +1,8 @@
 //! The output layers of one render and their gradients.
-use super::render::ViewPass;
+use super::TileRect;
 use super::rasterize::PixelState;
 use super::rasterize_reflection::ReflectionPixelState;
-use super::TileRect;
+use super::render::ViewPass;
 use crate::image::Image;
 
 /// Every layer of one view (DESIGN.md data flow), plus what the backward replays.
@@ -107,7 +107,10 @@ impl FrameGrads {
             planes: frame
                 .planes
                 .iter()
-                .map(|_| PlaneLayerGrads { raw_color: Image::new(w, h, 3), intensity: Image::new(w, h, 1) })
+                .map(|_| PlaneLayerGrads {
+                    raw_color: Image::new(w, h, 3),
+                    intensity: Image::new(w, h, 1),
+                })
                 .collect(),
         }
     }
@@ -123,7 +126,10 @@ impl Frame {
         use std::hash::{Hash, Hasher};
         let mut h = std::collections::hash_map::DefaultHasher::new();
         let grid = super::TileGrid::new(self.width(), self.height());
-        let hash_pass = |h: &mut std::collections::hash_map::DefaultHasher, pass: &ViewPass, lasts: &[u32], tiles: TileRect| {
+        let hash_pass = |h: &mut std::collections::hash_map::DefaultHasher,
+                         pass: &ViewPass,
+                         lasts: &[u32],
+                         tiles: TileRect| {
             let p = &pass.projected;
             p.visible.hash(h);
             p.color_clamped.hash(h);
@@ -137,7 +143,12 @@ impl Frame {
                     for (x, y) in super::rasterize::tile_pixels(&grid, tx, ty) {
                         let last = lasts[(y * grid.width + x) as usize] as usize;
                         for &gi in &list[..last.min(list.len())] {
-                            let d = super::rasterize::alpha_at(p, gi as usize, f64::from(x) + 0.5, f64::from(y) + 0.5);
+                            let d = super::rasterize::alpha_at(
+                                p,
+                                gi as usize,
+                                f64::from(x) + 0.5,
+                                f64::from(y) + 0.5,
+                            );
                             d.map(|v| v.4).hash(h);
                         }
                     }

@@ -28,7 +28,7 @@ mod tile_ranges;
 pub use backward::{BackwardOptions, PlaneGrad, SceneGrads, backward};
 pub use emit_keys::emit_keys;
 pub use footprint::{TileRect, footprint};
-pub use frame::{Frame, FrameGrads, PlaneLayers, PlaneLayerGrads};
+pub use frame::{Frame, FrameGrads, PlaneLayerGrads, PlaneLayers};
 pub use prefix_sum::prefix_sum;
 pub use project::{Projected, ProjectionFilter, project};
 pub use rasterize::{PixelState, rasterize};

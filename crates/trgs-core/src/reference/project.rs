@@ -131,10 +131,10 @@ pub fn project(
     for i in 0..n {
         let mu = DVec3::from_array(g.means[i]);
         let glass = g.populations[i] == Population::Glass;
-        if let ProjectionFilter::FrontOf(plane) = filter {
-            if glass || !(plane.signed_distance(mu) > 0.0) {
-                continue;
-            }
+        if let ProjectionFilter::FrontOf(plane) = filter
+            && (glass || !(plane.signed_distance(mu) > 0.0))
+        {
+            continue;
         }
         let p = view.transform_point(mu);
         if !(p.z >= near) {

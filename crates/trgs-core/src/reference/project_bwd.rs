@@ -2,8 +2,8 @@
 //! colour, opacity, mask, reflection intensity) to every Gaussian attribute, and to the view
 //! itself (its linear map, translation and centre), through which the plane parameters of a
 //! mirrored view learn.
-use super::project::{covariance2d, covariance3d, jacobian, quat_to_mat, tan_limits};
 use super::Projected;
+use super::project::{covariance2d, covariance3d, jacobian, quat_to_mat, tan_limits};
 use crate::plane_math::outer;
 use crate::scene::{Gaussians, Intrinsics, ViewTransform};
 use crate::sh;
@@ -164,7 +164,8 @@ pub fn project_bwd(
         let dir = if len > 0.0 { v / len } else { DVec3::ZERO };
         let basis = sh::basis(g.sh_degree, dir.to_array());
         let dbasis = sh::basis_grad(g.sh_degree, dir.to_array());
-        let gcol: [f64; 3] = [0, 1, 2].map(|ch| if p.color_clamped[i][ch] { 0.0 } else { pg.color[i][ch] });
+        let gcol: [f64; 3] =
+            [0, 1, 2].map(|ch| if p.color_clamped[i][ch] { 0.0 } else { pg.color[i][ch] });
         let coeffs = g.sh_of(i);
         for kk in 0..ncoef {
             let s = coeffs[kk][0] * gcol[0] + coeffs[kk][1] * gcol[1] + coeffs[kk][2] * gcol[2];
@@ -191,7 +192,11 @@ pub fn project_bwd(
         let l = DMat3::from_cols(r.x_axis * s.x, r.y_axis * s.y, r.z_axis * s.z);
         let g_l = 2.0 * g_cov3 * l;
         let g_r = DMat3::from_cols(g_l.x_axis * s.x, g_l.y_axis * s.y, g_l.z_axis * s.z);
-        let g_s = DVec3::new(r.x_axis.dot(g_l.x_axis), r.y_axis.dot(g_l.y_axis), r.z_axis.dot(g_l.z_axis));
+        let g_s = DVec3::new(
+            r.x_axis.dot(g_l.x_axis),
+            r.y_axis.dot(g_l.y_axis),
+            r.z_axis.dot(g_l.z_axis),
+        );
         for ax in 0..3 {
             out.log_scales[i][ax] += g_s[ax] * s[ax];
         }

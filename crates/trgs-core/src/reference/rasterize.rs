@@ -44,7 +44,12 @@ pub struct RasterizeOutput {
 /// `(dx, dy) = pixel - mean`, or None when it is skipped (alpha < 1/255 or a non-decaying
 /// exponent from a numerically bad conic).
 #[inline]
-pub(crate) fn alpha_at(p: &Projected, i: usize, px: f64, py: f64) -> Option<(f64, f64, f64, f64, bool)> {
+pub(crate) fn alpha_at(
+    p: &Projected,
+    i: usize,
+    px: f64,
+    py: f64,
+) -> Option<(f64, f64, f64, f64, bool)> {
     let [a, b, c] = p.conic[i];
     let (dx, dy) = (px - p.mean2d[i].x, py - p.mean2d[i].y);
     let power = -0.5 * (a * dx * dx + c * dy * dy) - b * dx * dy;
@@ -96,7 +101,14 @@ pub fn rasterize(
     out
 }
 
-fn shade_pixel(p: &Projected, list: &[u32], x: u32, y: u32, background: [f64; 3], out: &mut RasterizeOutput) {
+fn shade_pixel(
+    p: &Projected,
+    list: &[u32],
+    x: u32,
+    y: u32,
+    background: [f64; 3],
+    out: &mut RasterizeOutput,
+) {
     let (px, py) = (f64::from(x) + 0.5, f64::from(y) + 0.5);
     let (mut t, mut tm) = (1.0f64, 1.0f64);
     let mut m_active = true;

@@ -62,7 +62,8 @@ pub(crate) fn rasterize_bwd(
                 let st = pixels[(y * grid.width + x) as usize];
                 let (px, py) = (f64::from(x) + 0.5, f64::from(y) + 0.5);
                 let gc = [0, 1, 2].map(|c| up.transmission.get(x, y, c));
-                let (g_d, g_v, g_m) = (up.depth.get(x, y, 0), up.depth_variance.get(x, y, 0), up.mask.get(x, y, 0));
+                let (g_d, g_v, g_m) =
+                    (up.depth.get(x, y, 0), up.depth_variance.get(x, y, 0), up.mask.get(x, y, 0));
                 let d = depth.get(x, y, 0);
                 // V depends on D_t too: dV/dD = -sum w sign(z - D).
                 let g_d_total = g_d - g_v * st.depth_sign_sum;
@@ -72,19 +73,24 @@ pub(crate) fn rasterize_bwd(
                     (0.0, 0.0)
                 };
                 // T_final appears in alpha = 1 - T and in the background term of C_t.
-                let g_tfinal = -up.alpha.get(x, y, 0) + (0..3).map(|c| gc[c] * background[c]).sum::<f64>();
+                let g_tfinal =
+                    -up.alpha.get(x, y, 0) + (0..3).map(|c| gc[c] * background[c]).sum::<f64>();
                 let (mut t, mut acc_t) = (st.t_final, g_tfinal * st.t_final);
                 let (mut tm, mut acc_m) = (st.tm_final, 0.0);
                 for j in (0..st.last_t as usize).rev() {
                     let i = list[j] as usize;
-                    let Some((alpha, gauss, dx, dy, unclamped)) = alpha_at(p, i, px, py) else { continue };
+                    let Some((alpha, gauss, dx, dy, unclamped)) = alpha_at(p, i, px, py) else {
+                        continue;
+                    };
                     let mut g_alpha = 0.0;
                     if !p.glass[i] {
                         let tj = t / (1.0 - alpha);
                         let wgt = alpha * tj;
                         let dz = p.depth[i] - d;
                         let col = p.color[i];
-                        let phi = gc[0] * col[0] + gc[1] * col[1] + gc[2] * col[2]
+                        let phi = gc[0] * col[0]
+                            + gc[1] * col[1]
+                            + gc[2] * col[2]
                             + g_zsum * p.depth[i]
                             + g_wsum
                             + g_v * dz.abs();

@@ -30,11 +30,14 @@ pub(crate) fn rasterize_reflection_bwd(
                 let (mut t, mut acc) = (st.t_final, 0.0);
                 for j in (0..st.last as usize).rev() {
                     let i = list[j] as usize;
-                    let Some((alpha, gauss, dx, dy, unclamped)) = alpha_at(p, i, px, py) else { continue };
+                    let Some((alpha, gauss, dx, dy, unclamped)) = alpha_at(p, i, px, py) else {
+                        continue;
+                    };
                     let tj = t / (1.0 - alpha);
                     let wgt = alpha * tj;
                     let col = p.color[i];
-                    let phi = gc[0] * col[0] + gc[1] * col[1] + gc[2] * col[2] + ga * p.reflection[i];
+                    let phi =
+                        gc[0] * col[0] + gc[1] * col[1] + gc[2] * col[2] + ga * p.reflection[i];
                     for c in 0..3 {
                         pg.color[i][c] += gc[c] * wgt;
                     }

@@ -69,13 +69,15 @@ pub fn render(
     let grid = TileGrid::new(k.width, k.height);
     let view = ViewTransform::from(&camera.pose);
     let primary = render_view(g, &view, k, ProjectionFilter::All, &grid.full(), settings.near);
-    let pass1 = rasterize(&primary.projected, &primary.values, &primary.ranges, &grid, settings.background);
+    let pass1 =
+        rasterize(&primary.projected, &primary.values, &primary.ranges, &grid, settings.background);
 
     let mut plane_layers = Vec::with_capacity(planes.len());
     for plane in planes {
         let layers = footprint(plane, &camera.pose, k, &grid).map(|fp| {
             let mview = mirrored_view(plane, &view);
-            let pass = render_view(g, &mview, k, ProjectionFilter::FrontOf(plane), &fp, settings.near);
+            let pass =
+                render_view(g, &mview, k, ProjectionFilter::FrontOf(plane), &fp, settings.near);
             let out = rasterize_reflection(&pass.projected, &pass.values, &pass.ranges, &grid, &fp);
             PlaneLayers {
                 raw_color: out.raw_color,

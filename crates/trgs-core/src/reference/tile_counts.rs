@@ -15,7 +15,12 @@ pub struct TileGrid {
 
 impl TileGrid {
     pub fn new(width: u32, height: u32) -> Self {
-        Self { width, height, tiles_x: width.div_ceil(TILE_SIZE), tiles_y: height.div_ceil(TILE_SIZE) }
+        Self {
+            width,
+            height,
+            tiles_x: width.div_ceil(TILE_SIZE),
+            tiles_y: height.div_ceil(TILE_SIZE),
+        }
     }
 
     pub fn tile_count(&self) -> u32 {
@@ -62,6 +67,8 @@ pub fn tile_rect(mean2d: DVec2, extent: DVec2, grid: &TileGrid, limit: &TileRect
 /// Number of tiles each Gaussian touches (zero when culled).
 pub fn tile_counts(p: &Projected, grid: &TileGrid, limit: &TileRect) -> Vec<u32> {
     (0..p.len())
-        .map(|i| if p.visible[i] { tile_rect(p.mean2d[i], p.extent[i], grid, limit).count() } else { 0 })
+        .map(|i| {
+            if p.visible[i] { tile_rect(p.mean2d[i], p.extent[i], grid, limit).count() } else { 0 }
+        })
         .collect()
 }

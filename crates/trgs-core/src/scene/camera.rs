@@ -25,14 +25,28 @@ impl Intrinsics {
     /// Intrinsics with a horizontal field of view in radians, square pixels, centred principal point.
     pub fn from_fov_x(fov_x: f64, width: u32, height: u32) -> Self {
         let f = 0.5 * f64::from(width) / (0.5 * fov_x).tan();
-        Self { fx: f, fy: f, cx: 0.5 * f64::from(width), cy: 0.5 * f64::from(height), width, height }
+        Self {
+            fx: f,
+            fy: f,
+            cx: 0.5 * f64::from(width),
+            cy: 0.5 * f64::from(height),
+            width,
+            height,
+        }
     }
 
     /// The same camera for an image resized to `width x height` (focal lengths and centre scale).
     pub fn resized(&self, width: u32, height: u32) -> Self {
         let sx = f64::from(width) / f64::from(self.width);
         let sy = f64::from(height) / f64::from(self.height);
-        Self { fx: self.fx * sx, fy: self.fy * sy, cx: self.cx * sx, cy: self.cy * sy, width, height }
+        Self {
+            fx: self.fx * sx,
+            fy: self.fy * sy,
+            cx: self.cx * sx,
+            cy: self.cy * sy,
+            width,
+            height,
+        }
     }
 
     /// Direction in camera space (not normalised, z = 1) through the continuous pixel position.
@@ -128,11 +142,15 @@ impl Pose {
 
     pub fn validate(&self) -> Result<(), CameraError> {
         let r = self.rotation;
-        let finite = r.to_cols_array().iter().chain(self.translation.as_ref()).all(|v| v.is_finite());
+        let finite =
+            r.to_cols_array().iter().chain(self.translation.as_ref()).all(|v| v.is_finite());
         if !finite {
             return Err(CameraError::Pose("non-finite value in the world-to-camera pose".into()));
         }
-        let err = (r * r.transpose() - DMat3::IDENTITY).to_cols_array().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let err = (r * r.transpose() - DMat3::IDENTITY)
+            .to_cols_array()
+            .iter()
+            .fold(0.0f64, |m, v| m.max(v.abs()));
         if err > 1e-4 || r.determinant() < 0.0 {
             return Err(CameraError::Pose(format!(
                 "rotation is not orthonormal with determinant +1 (|R R^T - I| = {err:.2e}, det = {:.4})",

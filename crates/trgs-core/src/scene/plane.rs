@@ -1,7 +1,9 @@
 //! Rectangular reflection planes (glass panes and mirrors).
 use glam::DVec3;
 
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum Material {
     #[default]
@@ -42,9 +44,24 @@ pub struct ReflectionPlane {
 
 impl ReflectionPlane {
     /// A plane with R0 from its material; `axis` is re-orthogonalised against `normal`.
-    pub fn new(centre: DVec3, normal: DVec3, axis: DVec3, width: f64, height: f64, material: Material) -> Self {
+    pub fn new(
+        centre: DVec3,
+        normal: DVec3,
+        axis: DVec3,
+        width: f64,
+        height: f64,
+        material: Material,
+    ) -> Self {
         let r0 = material.initial_r0();
-        let mut p = Self { centre, normal, axis, width, height, r0_logit: (r0 / (1.0 - r0)).ln(), material };
+        let mut p = Self {
+            centre,
+            normal,
+            axis,
+            width,
+            height,
+            r0_logit: (r0 / (1.0 - r0)).ln(),
+            material,
+        };
         p.orthogonalise_axis();
         p
     }
@@ -105,7 +122,8 @@ impl ReflectionPlane {
         if self.normal.length_squared() < 1e-24 {
             return Err(bad("normal has zero length".into()));
         }
-        if (self.axis.length() - 1.0).abs() > 1e-6 || self.axis.dot(self.unit_normal()).abs() > 1e-6 {
+        if (self.axis.length() - 1.0).abs() > 1e-6 || self.axis.dot(self.unit_normal()).abs() > 1e-6
+        {
             return Err(bad("axis must be a unit vector orthogonal to the normal".into()));
         }
         if !(self.width > 0.0 && self.height > 0.0) {

@@ -14,7 +14,11 @@ pub enum InvalidInput {
     Camera(#[from] CameraError),
 }
 
-fn check<F: Scalar, const N: usize>(attribute: &'static str, values: &[[F; N]], per: usize) -> Result<(), InvalidInput> {
+fn check<F: Scalar, const N: usize>(
+    attribute: &'static str,
+    values: &[[F; N]],
+    per: usize,
+) -> Result<(), InvalidInput> {
     for (k, v) in values.iter().enumerate() {
         for &x in v {
             let x = x.to_f64();
@@ -44,7 +48,11 @@ pub fn validate_scene<F: Scalar>(
     for (i, q) in gaussians.rotations.iter().enumerate() {
         let n2: f64 = q.iter().map(|v| v.to_f64() * v.to_f64()).sum();
         if n2 < 1e-24 {
-            return Err(InvalidInput::NonFinite { attribute: "rotation (zero quaternion)", index: i, value: n2 });
+            return Err(InvalidInput::NonFinite {
+                attribute: "rotation (zero quaternion)",
+                index: i,
+                value: n2,
+            });
         }
     }
     for (k, p) in planes.iter().enumerate() {
