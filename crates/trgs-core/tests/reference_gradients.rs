@@ -157,6 +157,8 @@ struct Report {
     worst_param: String,
     checked: usize,
     skipped: usize,
+    /// Per attribute kind: (worst relative error, largest |gradient|).
+    per_kind: std::collections::BTreeMap<&'static str, (f64, f64)>,
 }
 
 fn check_scene(spec: &SceneSpec, options: BackwardOptions) -> Report {
@@ -213,7 +215,13 @@ fn check_scene(spec: &SceneSpec, options: BackwardOptions) -> Report {
             e.1 += 1;
         }
     }
-    let mut report = Report { worst: 0.0, worst_param: String::new(), checked: 0, skipped };
+    let mut report = Report {
+        worst: 0.0,
+        worst_param: String::new(),
+        checked: 0,
+        skipped,
+        per_kind: Default::default(),
+    };
     for (p, &f) in params.iter().zip(&fd) {
         if !f.is_finite() {
             continue;
@@ -223,6 +231,9 @@ fn check_scene(spec: &SceneSpec, options: BackwardOptions) -> Report {
         let a = p.analytic(&grads);
         let err = (a - f).abs() / f.abs().max(a.abs()).max(floor);
         report.checked += 1;
+        let kind = report.per_kind.entry(p.kind()).or_default();
+        kind.0 = kind.0.max(err);
+        kind.1 = kind.1.max(f.abs());
         if err > report.worst {
             report.worst = err;
             report.worst_param = format!("{p:?}: analytic {a:.9e}, finite difference {f:.9e}");
@@ -237,7 +248,16 @@ fn assert_gradients(spec: SceneSpec, options: BackwardOptions) {
         "{spec:?}: {} parameters checked, {} skipped at a discontinuity, worst relative error {:.2e} ({})",
         r.checked, r.skipped, r.worst, r.worst_param
     );
+    for (kind, (err, size)) in &r.per_kind {
+        println!("  {kind:>13}: worst relative error {err:.2e}, largest |gradient| {size:.3e}");
+    }
     assert!(r.worst <= 1e-4, "worst relative error {:.3e} at {}", r.worst, r.worst_param);
+    // The plane parameters must really be exercised, not compared as zero against zero.
+    if spec.planes > 0 {
+        for kind in ["plane_centre", "plane_normal", "plane_r0", "mask", "reflection"] {
+            assert!(r.per_kind[kind].1 > 1e-3, "{kind} gradients are all (near) zero");
+        }
+    }
     assert!(
         r.skipped * 100 <= r.checked + r.skipped,
         "too many discontinuous parameters: {}",
