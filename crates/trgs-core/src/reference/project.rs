@@ -153,8 +153,7 @@ pub fn project(
             continue;
         }
         let dir = (mu - view.centre).normalize_or_zero();
-        let coeffs: Vec<[f64; 3]> = g.sh_of(i).to_vec();
-        let raw = sh::eval(g.sh_degree, &coeffs, dir.to_array());
+        let raw = sh::eval(g.sh_degree, g.sh_of(i), dir.to_array());
         out.visible[i] = true;
         out.mean2d[i] = DVec2::new(k.fx * p.x / p.z + k.cx, k.fy * p.y / p.z + k.cy);
         out.conic[i] = [c / det, -b / det, a / det];

@@ -4,11 +4,11 @@ use std::f64::consts::{PI, TAU};
 use glam::{DMat3, DVec3};
 
 use super::geom::{Ray, Rect};
+use super::points::sparse_points;
 use super::texture::Texture;
 use super::trace::{Object, Pane, Shape, World};
 use super::{GLASS_R0, MIRROR_R0, PaneKind, SyntheticConfig, SyntheticScene};
 use crate::image::Image;
-use crate::rng::Rng;
 use crate::scene::{Camera, Intrinsics, Material, Pose, ReflectionPlane};
 
 /// Subsamples per pixel side: 2x2 rays per pixel.
@@ -31,9 +31,6 @@ const FRAME_W: f64 = 0.07;
 
 /// Light level of the room behind the glass relative to the camera room.
 const BEHIND_GAIN: f64 = 0.55;
-
-/// Standard deviation of the position noise of the sparse points, in metres.
-const POINT_NOISE: f64 = 0.003;
 
 /// The local scene frame in the world: `x_world = rotation * x_local + translation`.
 #[derive(Clone, Copy, Debug)]
@@ -106,9 +103,6 @@ fn pane_slots(n: usize) -> (f64, Vec<f64>) {
 
 /// Local boxes (min, max corners).
 type Boxes = Vec<(DVec3, DVec3)>;
-
-/// Sparse points (position, colour) and, for each, the cameras that see it.
-type Points = (Vec<([f64; 3], [u8; 3])>, Vec<Vec<usize>>);
 
 /// The rooms, objects, panes and frames in the local frame; also the frame boxes and each pane's
 /// (width, height, R0).
@@ -343,16 +337,6 @@ fn camera_path(i: usize, n: usize) -> (DVec3, DVec3) {
     (eye, target)
 }
 
-/// A world-to-camera pose at `eye` looking at `target` with image-up along `up` (OpenCV axes:
-/// x right = down x forward, y down). Built here rather than with `Pose::look_at`, which at this
-/// commit returns the camera rolled by 180 degrees (x = forward x -up points left).
-fn look_at(eye: DVec3, target: DVec3, up: DVec3) -> Pose {
-    let z = (target - eye).normalize();
-    let x = (-up).cross(z).normalize();
-    let y = z.cross(x);
-    Pose::from_camera_to_world(DMat3::from_cols(x, y, z), eye)
-}
-
 pub(crate) fn layout(config: &SyntheticConfig) -> Layout {
     let (world, frame_boxes, sizes) = build_world(config);
     let placement = Placement::fixed();
@@ -361,7 +345,8 @@ pub(crate) fn layout(config: &SyntheticConfig) -> Layout {
     let cameras = (0..config.views)
         .map(|i| {
             let (eye, target) = camera_path(i, config.views);
-            let pose = look_at(placement.point_to_world(eye), placement.point_to_world(target), up);
+            let pose =
+                Pose::look_at(placement.point_to_world(eye), placement.point_to_world(target), up);
             Camera::new(format!("view_{i:03}.png"), intrinsics, pose)
         })
         .collect();
@@ -490,84 +475,6 @@ pub(crate) fn project(camera: &Camera, p: DVec3) -> Option<[f64; 2]> {
     let (u, v) = (k.fx * q.x / q.z + k.cx, k.fy * q.y / q.z + k.cy);
     let inside = u >= 0.0 && v >= 0.0 && u < f64::from(k.width) && v < f64::from(k.height);
     inside.then_some([u, v])
-}
-
-/// A uniform random point on the surface of a box.
-fn point_on_box(rng: &mut Rng, min: DVec3, max: DVec3) -> DVec3 {
-    let e = max - min;
-    let areas = [e.y * e.z, e.x * e.z, e.x * e.y];
-    let mut pick = rng.uniform() * (areas[0] + areas[1] + areas[2]);
-    let mut axis = 2;
-    for (a, &area) in areas.iter().enumerate() {
-        if pick < area {
-            axis = a;
-            break;
-        }
-        pick -= area;
-    }
-    let mut p = min + DVec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * e;
-    p[axis] = if rng.uniform() < 0.5 { min[axis] } else { max[axis] };
-    p
-}
-
-/// Sparse points: surface points seen by at least two cameras (visibility by ray casting; panes
-/// do not block), with their shaded colour and a little position noise. A share of them is drawn
-/// on the frames so that the plane initialisation finds the pane's plane.
-fn sparse_points(layout: &Layout, target: usize, seed: u64) -> Points {
-    let mut rng = Rng::new(seed ^ 0x5EED_0F5F_u64);
-    let (mut points, mut tracks) = (Vec::new(), Vec::new());
-    let cams = &layout.cameras;
-    if cams.is_empty() {
-        return (points, tracks);
-    }
-    let eyes: Vec<DVec3> =
-        cams.iter().map(|c| layout.placement.point_to_local(c.pose.centre())).collect();
-    let max_attempts = 50 * target + 100;
-    for _ in 0..max_attempts {
-        if points.len() >= target {
-            break;
-        }
-        let p_local = if !layout.frame_boxes.is_empty() && rng.uniform() < 0.15 {
-            let (min, max) = layout.frame_boxes[rng.below(layout.frame_boxes.len())];
-            point_on_box(&mut rng, min, max)
-        } else {
-            let cam = &cams[rng.below(cams.len())];
-            let px = rng.range(0.0, f64::from(cam.width()));
-            let py = rng.range(0.0, f64::from(cam.height()));
-            let ray = local_ray(layout, cam, px, py);
-            match layout.world.hit_opaque(&ray) {
-                Some(hit) => ray.at(hit.t),
-                None => continue,
-            }
-        };
-        let p_world = layout.placement.point_to_world(p_local);
-        let seen: Vec<usize> = (0..cams.len())
-            .filter(|&i| {
-                project(&cams[i], p_world).is_some() && layout.world.visible(eyes[i], p_local)
-            })
-            .collect();
-        let Some(&first) = seen.first() else { continue };
-        if seen.len() < 2 {
-            continue;
-        }
-        // The colour is the shaded surface colour (view-independent), as triangulation would
-        // average it; trace from a camera that sees the point to get its surface and normal.
-        let to = p_local - eyes[first];
-        let ray = Ray::new(eyes[first], to.normalize());
-        let Some(hit) = layout.world.hit_opaque(&ray) else { continue };
-        let colour = layout.world.shade(&hit);
-        let noise = DVec3::new(rng.normal(), rng.normal(), rng.normal()) * POINT_NOISE;
-        let noisy = p_world + noise;
-        let track: Vec<usize> =
-            seen.into_iter().filter(|&i| project(&cams[i], noisy).is_some()).collect();
-        if track.len() < 2 {
-            continue;
-        }
-        let c = colour.clamp(DVec3::ZERO, DVec3::ONE) * 255.0 + DVec3::splat(0.5);
-        points.push((noisy.to_array(), [c.x as u8, c.y as u8, c.z as u8]));
-        tracks.push(track);
-    }
-    (points, tracks)
 }
 
 /// Indices of `count` training views (views that are not every 8th) spread over the loop.

@@ -31,6 +31,7 @@
 //! planes.
 mod generate;
 mod geom;
+mod points;
 mod texture;
 mod trace;
 mod write;
