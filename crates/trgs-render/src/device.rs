@@ -36,16 +36,21 @@ pub struct DeviceOptions {
     pub adapter_name: Option<String>,
     /// Never enable the optional features (tests of the fallback paths).
     pub disable_optional_features: bool,
+    /// Fill every buffer the renderer allocates with 0xff bytes (NaN as f32), so that code that
+    /// relies on zeroed memory fails; also on when the environment sets `TRGS_POISON_BUFFERS=1`.
+    pub poison_fresh_buffers: bool,
 }
 
-/// A wgpu device and queue with what they can do.
-#[derive(Debug)]
+/// A wgpu device and queue with what they can do. Cloning shares the device.
+#[derive(Clone, Debug)]
 pub struct GpuContext {
     pub adapter: wgpu::Adapter,
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
     pub info: wgpu::AdapterInfo,
     pub capabilities: Capabilities,
+    /// See [`DeviceOptions::poison_fresh_buffers`].
+    pub poison_fresh_buffers: bool,
 }
 
 const OPTIONAL: [(Features, &str); 3] = [
@@ -128,7 +133,9 @@ impl GpuContext {
             subgroups: features.contains(Features::SUBGROUP),
             timestamps: features.contains(Features::TIMESTAMP_QUERY),
         };
-        Ok(Self { adapter, device, queue, info, capabilities })
+        let poison_fresh_buffers = options.poison_fresh_buffers
+            || std::env::var("TRGS_POISON_BUFFERS").is_ok_and(|v| v == "1");
+        Ok(Self { adapter, device, queue, info, capabilities, poison_fresh_buffers })
     }
 
     /// One line for logs: adapter, backend and optional features.

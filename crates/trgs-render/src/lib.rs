@@ -1,7 +1,33 @@
-//! trgs GPU renderer (wgpu). This crate holds the device layer; the WGSL stages and their Rust
-//! drivers arrive with the GPU forward renderer, and every stage's CPU twin already lives in
-//! `trgs_core::reference`.
-pub mod device;
+//! trgs-render: the TR-Gaussians renderer on wgpu. Device setup with optional features and their
+//! fallbacks ([`GpuContext`]), the scene in GPU buffers ([`GpuScene`]), one module per WGSL stage
+//! ([`stages`]) and the forward [`Renderer`] that produces a [`Frame`] with every layer.
+//!
+//! ```no_run
+//! use trgs_core::fixtures::{SceneSpec, random_scene};
+//! use trgs_render::{GpuContext, GpuScene, Layer, RenderOptions, Renderer};
+//!
+//! let ctx = GpuContext::new()?;
+//! let scene = random_scene(&SceneSpec { planes: 1, ..SceneSpec::default() });
+//! let gpu_scene = GpuScene::upload(&ctx, &scene.gaussians.cast::<f32>(), &scene.planes)?;
+//! let renderer = Renderer::new(&ctx);
+//! let frame = renderer.render(&gpu_scene, &scene.camera, &RenderOptions::default())?;
+//! let color = frame.read_layer(&ctx, Layer::Color); // trgs_core::Image<f32>, RGB
+//! let layers = frame.read_images(&ctx); // every layer, and each plane's C_raw and A
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+mod device;
+mod frame;
+pub mod gpu;
+mod kernels;
+pub mod layout;
+mod renderer;
+mod scene;
+pub mod shader;
+pub mod stages;
 
 pub use device::{Capabilities, DeviceError, DeviceOptions, GpuContext};
-pub use trgs_core as core;
+pub use frame::{
+    Frame, FrameImages, Layer, LayerBuffers, PlaneImages, ViewBuffers, ViewIntermediates,
+};
+pub use renderer::{RenderError, RenderOptions, Renderer};
+pub use scene::GpuScene;

@@ -26,6 +26,7 @@ mod tile_counts;
 mod tile_ranges;
 
 pub use backward::{BackwardOptions, PlaneGrad, SceneGrads, backward};
+pub use compose::{ComposeOutput, compose};
 pub use emit_keys::emit_keys;
 pub use footprint::{TileRect, footprint};
 pub use frame::{Frame, FrameGrads, PlaneLayerGrads, PlaneLayers};

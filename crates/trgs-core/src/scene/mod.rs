@@ -8,4 +8,4 @@ mod validate;
 pub use camera::{Camera, CameraError, Intrinsics, Pose, ViewTransform};
 pub use gaussians::{Gaussians, Population, Scalar, sh_coeff_count};
 pub use plane::{Material, PlaneError, ReflectionPlane};
-pub use validate::{InvalidInput, validate_scene};
+pub use validate::{InvalidInput, validate_gaussians, validate_planes, validate_scene};

@@ -36,6 +36,14 @@ pub fn validate_scene<F: Scalar>(
     planes: &[ReflectionPlane],
     camera: &Camera,
 ) -> Result<(), InvalidInput> {
+    validate_gaussians(gaussians)?;
+    validate_planes(planes)?;
+    camera.validate()?;
+    Ok(())
+}
+
+/// Lengths consistent, every attribute finite, no zero quaternion.
+pub fn validate_gaussians<F: Scalar>(gaussians: &Gaussians<F>) -> Result<(), InvalidInput> {
     gaussians.check_lengths().map_err(InvalidInput::Layout)?;
     check("mean", &gaussians.means, 1)?;
     check("rotation", &gaussians.rotations, 1)?;
@@ -55,9 +63,13 @@ pub fn validate_scene<F: Scalar>(
             });
         }
     }
+    Ok(())
+}
+
+/// Every plane finite, with a non-zero normal and area.
+pub fn validate_planes(planes: &[ReflectionPlane]) -> Result<(), InvalidInput> {
     for (k, p) in planes.iter().enumerate() {
         p.validate(k)?;
     }
-    camera.validate()?;
     Ok(())
 }

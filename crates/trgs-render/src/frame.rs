@@ -1,0 +1,374 @@
+//! A rendered view on the GPU: every layer, what the backward pass will need (projected
+//! Gaussians, sorted lists, per-pixel states), and readback to images.
+use crate::GpuContext;
+use crate::gpu::{self, BufferPool};
+use crate::layout::{ProjectedGaussian, RasterState, ReflectionState, TileParams};
+use crate::stages::emit_keys::Keys;
+use trgs_core::Image;
+use trgs_core::reference::{TileGrid, TileRect};
+use trgs_core::scene::ViewTransform;
+
+/// The geometry stages of one view (the real camera is view 0, then one per mirrored pass).
+#[derive(Debug)]
+pub struct ViewBuffers {
+    pub view: ViewTransform,
+    /// The plane this view is mirrored about.
+    pub plane: Option<usize>,
+    /// The tiles binned (a plane's footprint, or the whole grid).
+    pub limit: TileRect,
+    pub(crate) tile_params: TileParams,
+    pub projected: wgpu::Buffer,
+    /// The exclusive scan of the tile counts (each Gaussian's first key slot).
+    pub offsets: wgpu::Buffer,
+    /// The sorted keys and values.
+    pub keys: Option<Keys>,
+    /// (start, end) per tile.
+    pub ranges: Option<wgpu::Buffer>,
+    pub num_keys: u32,
+    pub(crate) captured_counts: Option<wgpu::Buffer>,
+    pub(crate) captured_keys: Option<Keys>,
+}
+
+/// Per-pixel layer buffers.
+#[derive(Clone, Debug)]
+pub struct LayerBuffers {
+    /// (C_t, 1 - T_t)
+    pub transmission: wgpu::Buffer,
+    /// (D_t, V, M, 0)
+    pub geometry: wgpu::Buffer,
+    pub states: wgpu::Buffer,
+    /// (C_raw^k, A^k) per plane slot.
+    pub reflection_raw: wgpu::Buffer,
+    pub reflection_states: wgpu::Buffer,
+    /// (C, 0)
+    pub color: wgpu::Buffer,
+    /// (C_r, 0)
+    pub reflection: wgpu::Buffer,
+    /// (R_raw, R, 0, 0)
+    pub strength: wgpu::Buffer,
+    pub hit: wgpu::Buffer,
+}
+
+/// One rendered view. Buffers are reused when the frame is rendered into again.
+#[derive(Debug, Default)]
+pub struct Frame {
+    pub(crate) pool: BufferPool,
+    grid: Option<TileGrid>,
+    plane_count: usize,
+    depth_variance: bool,
+    layers: Option<LayerBuffers>,
+    views: Vec<ViewBuffers>,
+    has_pass: Vec<bool>,
+    stage_times: Option<Vec<(&'static str, f64)>>,
+}
+
+/// A layer of a frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Layer {
+    /// C, RGB.
+    Color,
+    /// C_t, RGB.
+    Transmission,
+    /// C_r = C_raw A of the hit plane, RGB.
+    Reflection,
+    /// R = H R_raw M.
+    Strength,
+    /// R_raw (Schlick; zero without a hit).
+    StrengthRaw,
+    /// M.
+    Mask,
+    /// D_t.
+    Depth,
+    /// V (zero unless rendered with `depth_variance`).
+    DepthVariance,
+    /// 1 - T_t.
+    Alpha,
+}
+
+impl Layer {
+    pub const ALL: [Layer; 9] = [
+        Layer::Color,
+        Layer::Transmission,
+        Layer::Reflection,
+        Layer::Strength,
+        Layer::StrengthRaw,
+        Layer::Mask,
+        Layer::Depth,
+        Layer::DepthVariance,
+        Layer::Alpha,
+    ];
+
+    /// Lower-case name used in file names.
+    pub fn name(self) -> &'static str {
+        match self {
+            Layer::Color => "color",
+            Layer::Transmission => "transmission",
+            Layer::Reflection => "reflection",
+            Layer::Strength => "strength",
+            Layer::StrengthRaw => "strength_raw",
+            Layer::Mask => "mask",
+            Layer::Depth => "depth",
+            Layer::DepthVariance => "depth_variance",
+            Layer::Alpha => "alpha",
+        }
+    }
+
+    pub fn channels(self) -> u32 {
+        match self {
+            Layer::Color | Layer::Transmission | Layer::Reflection => 3,
+            _ => 1,
+        }
+    }
+}
+
+/// Every layer read back, as the CPU twin's `Frame` holds them.
+#[derive(Clone, Debug)]
+pub struct FrameImages {
+    pub color: Image<f32>,
+    pub transmission: Image<f32>,
+    pub depth: Image<f32>,
+    pub depth_variance: Image<f32>,
+    pub mask: Image<f32>,
+    pub alpha: Image<f32>,
+    pub hit: Image<u32>,
+    pub strength_raw: Image<f32>,
+    pub strength: Image<f32>,
+    pub reflection: Image<f32>,
+    /// Per plane: (C_raw, A, footprint), None where the mirrored pass did not run.
+    pub planes: Vec<Option<PlaneImages>>,
+}
+
+#[derive(Clone, Debug)]
+pub struct PlaneImages {
+    pub raw_color: Image<f32>,
+    pub intensity: Image<f32>,
+    pub footprint: TileRect,
+}
+
+/// Intermediate results of one view's geometry stages (for stage-by-stage tests).
+#[derive(Clone, Debug)]
+pub struct ViewIntermediates {
+    pub projected: Vec<ProjectedGaussian>,
+    /// Tile counts (with `capture_intermediates`).
+    pub counts: Option<Vec<u32>>,
+    pub offsets: Vec<u32>,
+    /// 64-bit keys and values as emitted (with `capture_intermediates`).
+    pub emitted: Option<(Vec<u64>, Vec<u32>)>,
+    pub sorted_keys: Vec<u64>,
+    pub sorted_values: Vec<u32>,
+    pub ranges: Vec<(u32, u32)>,
+}
+
+fn join_keys(hi: &[u32], lo: &[u32]) -> Vec<u64> {
+    hi.iter().zip(lo).map(|(&h, &l)| u64::from(h) << 32 | u64::from(l)).collect()
+}
+
+impl Frame {
+    pub(crate) fn reset(&mut self, grid: TileGrid, plane_count: usize, depth_variance: bool) {
+        self.grid = Some(grid);
+        self.plane_count = plane_count;
+        self.depth_variance = depth_variance;
+        self.views.clear();
+        self.stage_times = None;
+    }
+
+    pub(crate) fn layers(&mut self, ctx: &GpuContext, pixels: u64) -> LayerBuffers {
+        let slots = self.plane_count.max(1) as u64;
+        let p = &mut self.pool;
+        let state = std::mem::size_of::<RasterState>() as u64;
+        let rstate = std::mem::size_of::<ReflectionState>() as u64;
+        let l = LayerBuffers {
+            transmission: p.get(ctx, "trgs.rasterize.transmission", pixels * 16),
+            geometry: p.get(ctx, "trgs.rasterize.geometry", pixels * 16),
+            states: p.get(ctx, "trgs.rasterize.states", pixels * state),
+            reflection_raw: p.get(ctx, "trgs.rasterize_reflection.raw", slots * pixels * 16),
+            reflection_states: p.get(
+                ctx,
+                "trgs.rasterize_reflection.states",
+                slots * pixels * rstate,
+            ),
+            color: p.get(ctx, "trgs.compose.color", pixels * 16),
+            reflection: p.get(ctx, "trgs.compose.reflection", pixels * 16),
+            strength: p.get(ctx, "trgs.compose.strength", pixels * 16),
+            hit: p.get(ctx, "trgs.compose.hit", pixels * 4),
+        };
+        self.layers = Some(l.clone());
+        l
+    }
+
+    pub(crate) fn finish(
+        &mut self,
+        views: Vec<ViewBuffers>,
+        has_pass: Vec<bool>,
+        stage_times: Option<Vec<(&'static str, f64)>>,
+    ) {
+        self.views = views;
+        self.has_pass = has_pass;
+        self.stage_times = stage_times;
+    }
+
+    pub fn width(&self) -> u32 {
+        self.grid.map_or(0, |g| g.width)
+    }
+
+    pub fn height(&self) -> u32 {
+        self.grid.map_or(0, |g| g.height)
+    }
+
+    /// Whether any mirrored pass ran (otherwise C = C_t and the reflection layers are zero).
+    pub fn composed(&self) -> bool {
+        self.has_pass.iter().any(|&p| p)
+    }
+
+    /// Whether plane k's mirrored pass ran.
+    pub fn plane_rendered(&self, k: usize) -> bool {
+        self.has_pass.get(k).copied().unwrap_or(false)
+    }
+
+    /// The views: 0 is the camera, then one per mirrored pass.
+    pub fn views(&self) -> &[ViewBuffers] {
+        &self.views
+    }
+
+    /// The layer buffers (for the backward pass and embedding apps that keep data on the GPU).
+    pub fn layer_buffers(&self) -> Option<&LayerBuffers> {
+        self.layers.as_ref()
+    }
+
+    /// Milliseconds per stage, when rendered with `profile` on an adapter with timestamps.
+    pub fn stage_times(&self) -> Option<&[(&'static str, f64)]> {
+        self.stage_times.as_deref()
+    }
+
+    /// Total keys sorted over all views.
+    pub fn key_count(&self) -> u64 {
+        self.views.iter().map(|v| u64::from(v.num_keys)).sum()
+    }
+
+    /// GPU memory held by this frame's buffers, in bytes.
+    pub fn memory_bytes(&self) -> u64 {
+        self.pool.bytes()
+    }
+
+    fn pixels(&self) -> usize {
+        (self.width() * self.height()) as usize
+    }
+
+    fn read_vec4(
+        &self,
+        ctx: &GpuContext,
+        buffer: &wgpu::Buffer,
+        offset_pixels: usize,
+    ) -> Vec<[f32; 4]> {
+        gpu::read_buffer(ctx, buffer, offset_pixels as u64 * 16, self.pixels())
+    }
+
+    fn channel_image(&self, data: &[[f32; 4]], channels: std::ops::Range<usize>) -> Image<f32> {
+        let mut img = Image::new(self.width(), self.height(), channels.len() as u32);
+        for (p, v) in data.iter().enumerate() {
+            for (c, ch) in channels.clone().enumerate() {
+                img.data[p * channels.len() + c] = v[ch];
+            }
+        }
+        img
+    }
+
+    /// Read one layer back.
+    pub fn read_layer(&self, ctx: &GpuContext, layer: Layer) -> Image<f32> {
+        let Some(l) = &self.layers else {
+            return Image::new(0, 0, layer.channels());
+        };
+        let composed = self.composed();
+        let zeros = || Image::new(self.width(), self.height(), layer.channels());
+        match layer {
+            Layer::Color if composed => self.channel_image(&self.read_vec4(ctx, &l.color, 0), 0..3),
+            Layer::Color | Layer::Transmission => {
+                self.channel_image(&self.read_vec4(ctx, &l.transmission, 0), 0..3)
+            }
+            Layer::Alpha => self.channel_image(&self.read_vec4(ctx, &l.transmission, 0), 3..4),
+            Layer::Depth => self.channel_image(&self.read_vec4(ctx, &l.geometry, 0), 0..1),
+            Layer::DepthVariance => self.channel_image(&self.read_vec4(ctx, &l.geometry, 0), 1..2),
+            Layer::Mask => self.channel_image(&self.read_vec4(ctx, &l.geometry, 0), 2..3),
+            _ if !composed => zeros(),
+            Layer::Reflection => self.channel_image(&self.read_vec4(ctx, &l.reflection, 0), 0..3),
+            Layer::StrengthRaw => self.channel_image(&self.read_vec4(ctx, &l.strength, 0), 0..1),
+            Layer::Strength => self.channel_image(&self.read_vec4(ctx, &l.strength, 0), 1..2),
+        }
+    }
+
+    /// Read every layer back.
+    pub fn read_images(&self, ctx: &GpuContext) -> FrameImages {
+        let (w, h) = (self.width(), self.height());
+        let hit = match (&self.layers, self.composed()) {
+            (Some(l), true) => Image {
+                width: w,
+                height: h,
+                channels: 1,
+                data: gpu::read_buffer(ctx, &l.hit, 0, self.pixels()),
+            },
+            _ => Image::new(w, h, 1),
+        };
+        let planes = (0..self.plane_count)
+            .map(|k| {
+                let l = self.layers.as_ref()?;
+                let v = self.views.iter().find(|v| v.plane == Some(k))?;
+                let raw = self.read_vec4(ctx, &l.reflection_raw, k * self.pixels());
+                Some(PlaneImages {
+                    raw_color: self.channel_image(&raw, 0..3),
+                    intensity: self.channel_image(&raw, 3..4),
+                    footprint: v.limit,
+                })
+            })
+            .collect();
+        FrameImages {
+            color: self.read_layer(ctx, Layer::Color),
+            transmission: self.read_layer(ctx, Layer::Transmission),
+            depth: self.read_layer(ctx, Layer::Depth),
+            depth_variance: self.read_layer(ctx, Layer::DepthVariance),
+            mask: self.read_layer(ctx, Layer::Mask),
+            alpha: self.read_layer(ctx, Layer::Alpha),
+            hit,
+            strength_raw: self.read_layer(ctx, Layer::StrengthRaw),
+            strength: self.read_layer(ctx, Layer::Strength),
+            reflection: self.read_layer(ctx, Layer::Reflection),
+            planes,
+        }
+    }
+
+    /// Pass 1's per-pixel states.
+    pub fn read_states(&self, ctx: &GpuContext) -> Vec<RasterState> {
+        self.layers
+            .as_ref()
+            .map_or_else(Vec::new, |l| gpu::read_buffer(ctx, &l.states, 0, self.pixels()))
+    }
+
+    /// The geometry stages' results of view `vi` (0 = camera, then mirrored passes).
+    pub fn read_intermediates(
+        &self,
+        ctx: &GpuContext,
+        vi: usize,
+        gaussians: usize,
+    ) -> Option<ViewIntermediates> {
+        let v = self.views.get(vi)?;
+        let keys = v.keys.as_ref()?;
+        let n = v.num_keys as usize;
+        let tiles = self.grid?.tile_count() as usize;
+        let ranges: Vec<[u32; 2]> = gpu::read_buffer(ctx, v.ranges.as_ref()?, 0, tiles);
+        let emitted = v.captured_keys.as_ref().map(|k| {
+            let hi: Vec<u32> = gpu::read_buffer(ctx, &k.hi, 0, n);
+            let lo: Vec<u32> = gpu::read_buffer(ctx, &k.lo, 0, n);
+            (join_keys(&hi, &lo), gpu::read_buffer(ctx, &k.values, 0, n))
+        });
+        let hi: Vec<u32> = gpu::read_buffer(ctx, &keys.hi, 0, n);
+        let lo: Vec<u32> = gpu::read_buffer(ctx, &keys.lo, 0, n);
+        Some(ViewIntermediates {
+            projected: gpu::read_buffer(ctx, &v.projected, 0, gaussians),
+            counts: v.captured_counts.as_ref().map(|c| gpu::read_buffer(ctx, c, 0, gaussians)),
+            offsets: gpu::read_buffer(ctx, &v.offsets, 0, gaussians),
+            emitted,
+            sorted_keys: join_keys(&hi, &lo),
+            sorted_values: gpu::read_buffer(ctx, &keys.values, 0, n),
+            ranges: ranges.into_iter().map(|[a, b]| (a, b)).collect(),
+        })
+    }
+}

@@ -1,0 +1,325 @@
+//! Small wgpu helpers the stages share: labelled buffers (poison-filled when the context asks for
+//! it, so that code relying on zeroed memory fails in tests), readback, compute kernels with their
+//! bind groups, and a recorder that puts every dispatch in its own labelled pass with optional
+//! timestamp queries.
+use crate::GpuContext;
+use std::collections::HashMap;
+use wgpu::util::DeviceExt;
+
+/// The byte pattern fresh buffers get in poison mode: NaN as f32, 0xffffffff as u32.
+pub const POISON_BYTE: u8 = 0xff;
+
+/// Usage of every storage buffer: bound in kernels, copied to readback, cleared.
+pub const STORAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
+    .union(wgpu::BufferUsages::COPY_SRC)
+    .union(wgpu::BufferUsages::COPY_DST);
+
+/// Bindings may not be empty: every size is at least this and a multiple of it.
+const MIN_SIZE: u64 = 16;
+
+fn padded(size: u64) -> u64 {
+    size.max(MIN_SIZE).div_ceil(MIN_SIZE) * MIN_SIZE
+}
+
+/// A new storage buffer of at least `size` bytes, poison-filled in poison mode.
+pub fn storage(ctx: &GpuContext, label: &str, size: u64) -> wgpu::Buffer {
+    let size = padded(size);
+    if ctx.poison_fresh_buffers {
+        let bytes = vec![POISON_BYTE; size as usize];
+        return ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: &bytes,
+            usage: STORAGE,
+        });
+    }
+    ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size,
+        usage: STORAGE,
+        mapped_at_creation: false,
+    })
+}
+
+/// A storage buffer holding `data` (padded to the minimum size).
+pub fn storage_init<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, data: &[T]) -> wgpu::Buffer {
+    let mut bytes = bytemuck::cast_slice::<T, u8>(data).to_vec();
+    bytes.resize(padded(bytes.len() as u64) as usize, 0);
+    ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents: &bytes,
+        usage: STORAGE,
+    })
+}
+
+/// A uniform buffer holding `value`.
+pub fn uniform<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, value: &T) -> wgpu::Buffer {
+    ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents: bytemuck::bytes_of(value),
+        usage: wgpu::BufferUsages::UNIFORM,
+    })
+}
+
+/// Read `count` values of `T` from `buffer` at byte `offset` (blocking).
+pub fn read_buffer<T: bytemuck::Pod>(
+    ctx: &GpuContext,
+    buffer: &wgpu::Buffer,
+    offset: u64,
+    count: usize,
+) -> Vec<T> {
+    let bytes = (count * std::mem::size_of::<T>()) as u64;
+    if bytes == 0 {
+        return Vec::new();
+    }
+    let size = bytes.div_ceil(4) * 4;
+    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("trgs.readback.staging"),
+        size,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut enc = ctx
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("trgs.readback") });
+    enc.copy_buffer_to_buffer(buffer, offset, &staging, 0, size);
+    ctx.queue.submit([enc.finish()]);
+    map_and_read(ctx, &staging, bytes as usize)
+}
+
+/// Map a MAP_READ buffer whose copy has been submitted, and read its first `bytes` bytes.
+pub fn map_and_read<T: bytemuck::Pod>(
+    ctx: &GpuContext,
+    staging: &wgpu::Buffer,
+    bytes: usize,
+) -> Vec<T> {
+    let slice = staging.slice(..);
+    slice.map_async(wgpu::MapMode::Read, |_| {});
+    // A lost device surfaces here; there is nothing better to do than to stop loudly.
+    #[allow(clippy::expect_used)]
+    ctx.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .expect("GPU device lost while reading back");
+    let out = {
+        #[allow(clippy::expect_used)]
+        let view = slice.get_mapped_range().expect("readback buffer is mapped");
+        bytemuck::pod_collect_to_vec(&view[..bytes])
+    };
+    staging.unmap();
+    out
+}
+
+/// A compute pipeline with the layout derived from its WGSL.
+#[derive(Debug)]
+pub struct Kernel {
+    pub name: &'static str,
+    pub pipeline: wgpu::ComputePipeline,
+    pub layout: wgpu::BindGroupLayout,
+}
+
+impl Kernel {
+    pub fn new(ctx: &GpuContext, name: &'static str, file: &str, defines: &[&str]) -> Self {
+        // The sources are compiled in and validated by a naga test, so a failure here is a bug.
+        #[allow(clippy::expect_used)]
+        let text = crate::shader::compose(file, defines).expect("shader sources are well formed");
+        let module = ctx.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(&format!("trgs.{name}.module")),
+            source: wgpu::ShaderSource::Wgsl(text.into()),
+        });
+        let pipeline = ctx.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(&format!("trgs.{name}.pipeline")),
+            layout: None,
+            module: &module,
+            entry_point: Some("main"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        let layout = pipeline.get_bind_group_layout(0);
+        Self { name, pipeline, layout }
+    }
+
+    /// A bind group of `resources` at bindings 0, 1, ...
+    pub fn bind(
+        &self,
+        ctx: &GpuContext,
+        resources: &[wgpu::BindingResource<'_>],
+    ) -> wgpu::BindGroup {
+        let entries: Vec<wgpu::BindGroupEntry<'_>> = resources
+            .iter()
+            .enumerate()
+            .map(|(i, r)| wgpu::BindGroupEntry { binding: i as u32, resource: r.clone() })
+            .collect();
+        ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(&format!("trgs.{}.bind", self.name)),
+            layout: &self.layout,
+            entries: &entries,
+        })
+    }
+}
+
+/// A byte range of a buffer as a binding.
+pub fn range(buffer: &wgpu::Buffer, offset: u64, size: u64) -> wgpu::BindingResource<'_> {
+    wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+        buffer,
+        offset,
+        size: wgpu::BufferSize::new(padded(size).min(buffer.size() - offset)),
+    })
+}
+
+/// Workgroup counts for `groups` workgroups of a 1D dispatch, split into 2D past the 65,535 limit
+/// (the kernels rebuild the linear index with `linear_index`).
+pub fn grid_1d(groups: u32) -> [u32; 3] {
+    const MAX: u32 = 65_535;
+    if groups <= MAX { [groups, 1, 1] } else { [MAX, groups.div_ceil(MAX), 1] }
+}
+
+/// Timestamp queries around every pass, resolved per submission.
+#[derive(Debug)]
+struct Profiler {
+    queries: wgpu::QuerySet,
+    capacity: u32,
+    /// Stage name of every recorded (begin, end) pair, in query order.
+    labels: Vec<&'static str>,
+    /// Durations per stage name in milliseconds, accumulated over resolved submissions.
+    totals: Vec<(&'static str, f64)>,
+}
+
+const PROFILER_CAPACITY: u32 = 512;
+
+/// Records dispatches into one command encoder.
+#[derive(Debug)]
+pub struct Recorder {
+    pub encoder: wgpu::CommandEncoder,
+    profiler: Option<Profiler>,
+}
+
+impl Recorder {
+    /// A new encoder; `profile` adds timestamp queries when the adapter has them.
+    pub fn new(ctx: &GpuContext, label: &str, profile: bool) -> Self {
+        let encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) });
+        let profiler = (profile && ctx.capabilities.timestamps).then(|| Profiler {
+            queries: ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("trgs.profiler.queries"),
+                ty: wgpu::QueryType::Timestamp,
+                count: PROFILER_CAPACITY,
+            }),
+            capacity: PROFILER_CAPACITY,
+            labels: Vec::new(),
+            totals: Vec::new(),
+        });
+        Self { encoder, profiler }
+    }
+
+    /// Record one dispatch of `kernel` in its own pass, labelled and timed as `stage`.
+    pub fn dispatch(
+        &mut self,
+        stage: &'static str,
+        kernel: &Kernel,
+        bind: &wgpu::BindGroup,
+        groups: [u32; 3],
+    ) {
+        if groups.contains(&0) {
+            return;
+        }
+        let timestamp_writes = match &mut self.profiler {
+            Some(p) if (p.labels.len() as u32 + 1) * 2 <= p.capacity => {
+                let i = p.labels.len() as u32;
+                p.labels.push(stage);
+                Some(wgpu::ComputePassTimestampWrites {
+                    query_set: &p.queries,
+                    beginning_of_pass_write_index: Some(2 * i),
+                    end_of_pass_write_index: Some(2 * i + 1),
+                })
+            }
+            _ => None,
+        };
+        let mut pass = self.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(stage),
+            timestamp_writes,
+        });
+        pass.set_pipeline(&kernel.pipeline);
+        pass.set_bind_group(0, bind, &[]);
+        pass.dispatch_workgroups(groups[0], groups[1], groups[2]);
+    }
+
+    /// Submit the recorded work and wait for it; with profiling, add this submission's stage
+    /// times. Returns a fresh encoder for what follows.
+    pub fn submit_and_wait(&mut self, ctx: &GpuContext) {
+        let resolve = self.profiler.as_ref().and_then(|p| {
+            let n = p.labels.len() as u32 * 2;
+            (n > 0).then(|| {
+                let resolved = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("trgs.profiler.resolved"),
+                    size: u64::from(n) * 8,
+                    usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                });
+                let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("trgs.profiler.staging"),
+                    size: u64::from(n) * 8,
+                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                });
+                (n, resolved, staging)
+            })
+        });
+        if let (Some(p), Some((n, resolved, staging))) = (&self.profiler, &resolve) {
+            self.encoder.resolve_query_set(&p.queries, 0..*n, resolved, 0);
+            self.encoder.copy_buffer_to_buffer(resolved, 0, staging, 0, u64::from(*n) * 8);
+        }
+        let encoder = std::mem::replace(
+            &mut self.encoder,
+            ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("trgs.recorder"),
+            }),
+        );
+        ctx.queue.submit([encoder.finish()]);
+        if let (Some(p), Some((n, _, staging))) = (&mut self.profiler, resolve) {
+            let stamps: Vec<u64> = map_and_read(ctx, &staging, n as usize * 8);
+            let period = f64::from(ctx.queue.get_timestamp_period());
+            for (i, stage) in p.labels.drain(..).enumerate() {
+                let ms = stamps[2 * i + 1].saturating_sub(stamps[2 * i]) as f64 * period * 1e-6;
+                match p.totals.iter_mut().find(|(s, _)| *s == stage) {
+                    Some((_, t)) => *t += ms,
+                    None => p.totals.push((stage, ms)),
+                }
+            }
+        } else {
+            #[allow(clippy::expect_used)]
+            ctx.device.poll(wgpu::PollType::wait_indefinitely()).expect("GPU device lost");
+        }
+    }
+
+    /// Milliseconds per stage (in first-recorded order), when profiling.
+    pub fn stage_times(&self) -> Option<Vec<(&'static str, f64)>> {
+        self.profiler.as_ref().map(|p| p.totals.clone())
+    }
+}
+
+/// Grow-only named buffers, so that rendering the next frame into the same [`crate::Frame`]
+/// reuses its allocations.
+#[derive(Debug, Default)]
+pub struct BufferPool {
+    buffers: HashMap<String, wgpu::Buffer>,
+}
+
+impl BufferPool {
+    /// The buffer `label` with at least `size` bytes (new and, in poison mode, poisoned when it
+    /// had to grow).
+    pub fn get(&mut self, ctx: &GpuContext, label: &str, size: u64) -> wgpu::Buffer {
+        if let Some(b) = self.buffers.get(label)
+            && b.size() >= padded(size)
+        {
+            return b.clone();
+        }
+        let b = storage(ctx, label, size);
+        self.buffers.insert(label.to_string(), b.clone());
+        b
+    }
+
+    /// Total bytes held.
+    pub fn bytes(&self) -> u64 {
+        self.buffers.values().map(wgpu::Buffer::size).sum()
+    }
+}

@@ -1,0 +1,48 @@
+//! Every compute pipeline of the renderer, compiled once per [`crate::Renderer`].
+use crate::GpuContext;
+use crate::gpu::Kernel;
+
+#[derive(Debug)]
+pub struct Kernels {
+    pub project: Kernel,
+    pub tile_counts: Kernel,
+    pub prefix_sum: Kernel,
+    pub prefix_sum_add: Kernel,
+    pub emit_keys: Kernel,
+    pub sort_count: Kernel,
+    pub sort_scatter: Kernel,
+    pub tile_ranges: Kernel,
+    pub rasterize: Kernel,
+    pub rasterize_depth_variance: Kernel,
+    pub rasterize_reflection: Kernel,
+    pub compose: Kernel,
+}
+
+impl Kernels {
+    pub fn new(ctx: &GpuContext) -> Self {
+        Self {
+            project: Kernel::new(ctx, "project", "project.wgsl", &[]),
+            tile_counts: Kernel::new(ctx, "tile_counts", "tile_counts.wgsl", &[]),
+            prefix_sum: Kernel::new(ctx, "prefix_sum", "prefix_sum.wgsl", &[]),
+            prefix_sum_add: Kernel::new(ctx, "prefix_sum_add", "prefix_sum_add.wgsl", &[]),
+            emit_keys: Kernel::new(ctx, "emit_keys", "emit_keys.wgsl", &[]),
+            sort_count: Kernel::new(ctx, "sort_count", "sort_count.wgsl", &[]),
+            sort_scatter: Kernel::new(ctx, "sort_scatter", "sort_scatter.wgsl", &[]),
+            tile_ranges: Kernel::new(ctx, "tile_ranges", "tile_ranges.wgsl", &[]),
+            rasterize: Kernel::new(ctx, "rasterize", "rasterize.wgsl", &[]),
+            rasterize_depth_variance: Kernel::new(
+                ctx,
+                "rasterize",
+                "rasterize.wgsl",
+                &["DEPTH_VARIANCE"],
+            ),
+            rasterize_reflection: Kernel::new(
+                ctx,
+                "rasterize_reflection",
+                "rasterize_reflection.wgsl",
+                &[],
+            ),
+            compose: Kernel::new(ctx, "compose", "compose.wgsl", &[]),
+        }
+    }
+}

@@ -1,0 +1,289 @@
+//! GPU struct layouts, with one source of truth: each struct is declared once here, and the WGSL
+//! declaration every shader sees is generated from the Rust one (see [`prelude`]). The constants
+//! the kernels share with the CPU twin (tile size, alpha and transmittance thresholds, the EWA
+//! blur, SH constants) come from `trgs_core` the same way. A test compares every struct's field
+//! offsets and size with naga's layout of the generated WGSL, so a field whose WGSL alignment
+//! differs from its Rust position fails instead of drifting.
+use trgs_core::reference::{COV2D_BLUR, MAX_ALPHA, MIN_ALPHA, MIN_TRANSMITTANCE, TILE_SIZE};
+use trgs_core::sh;
+
+/// A Rust type with a WGSL spelling.
+pub trait WgslType {
+    const WGSL: &'static str;
+}
+
+macro_rules! wgsl_type {
+    ($($t:ty => $w:literal),* $(,)?) => { $(impl WgslType for $t { const WGSL: &'static str = $w; })* };
+}
+wgsl_type!(
+    f32 => "f32", u32 => "u32", [f32; 2] => "vec2<f32>", [f32; 4] => "vec4<f32>",
+    [u32; 2] => "vec2<u32>", [u32; 4] => "vec4<u32>",
+);
+
+/// A `#[repr(C)]` Pod struct shared with WGSL.
+pub trait GpuStruct: bytemuck::Pod {
+    const NAME: &'static str;
+    /// The WGSL declaration.
+    fn wgsl() -> String;
+    /// (field, byte offset) in declaration order.
+    fn field_offsets() -> Vec<(&'static str, usize)>;
+}
+
+macro_rules! gpu_struct {
+    ($(#[$meta:meta])* pub struct $name:ident { $($(#[$fmeta:meta])* pub $field:ident : $ty:ty),* $(,)? }) => {
+        $(#[$meta])*
+        #[repr(C)]
+        #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+        pub struct $name { $($(#[$fmeta])* pub $field: $ty),* }
+
+        impl GpuStruct for $name {
+            const NAME: &'static str = stringify!($name);
+            fn wgsl() -> String {
+                let mut s = format!("struct {} {{\n", stringify!($name));
+                $(s.push_str(&format!("    {}: {},\n", stringify!($field), <$ty as WgslType>::WGSL));)*
+                s.push_str("}\n");
+                s
+            }
+            fn field_offsets() -> Vec<(&'static str, usize)> {
+                vec![$((stringify!($field), std::mem::offset_of!($name, $field))),*]
+            }
+        }
+    };
+}
+
+gpu_struct! {
+    /// Uniform of `project`: one view (real or mirrored camera) and its culling rules.
+    pub struct ProjectParams {
+        /// Rows of the view's 3x3 linear map (a rotation, or R H for a mirrored camera).
+        pub row0: [f32; 4],
+        pub row1: [f32; 4],
+        pub row2: [f32; 4],
+        pub translation: [f32; 4],
+        /// The view's own centre (H(c) for a mirrored camera): the SH view direction's origin.
+        pub centre: [f32; 4],
+        /// Front-side filter of a mirrored view: plane centre and unit normal.
+        pub plane_centre: [f32; 4],
+        pub plane_normal: [f32; 4],
+        /// (fx, fy, cx, cy)
+        pub focal: [f32; 4],
+        /// Guard band of the Jacobian: (x/z min, x/z max, y/z min, y/z max).
+        pub tan_limits: [f32; 4],
+        /// Gaussians in this dispatch (the bindings are ranges of the scene's buffers).
+        pub count: u32,
+        pub sh_degree: u32,
+        /// SH coefficients per colour channel stored per Gaussian.
+        pub sh_coeffs: u32,
+        /// 1 for a mirrored view: only primary Gaussians strictly in front of the plane.
+        pub front_only: u32,
+        pub near: f32,
+        pub pad0: u32,
+        pub pad1: u32,
+        pub pad2: u32,
+    }
+}
+
+gpu_struct! {
+    /// One projected Gaussian (twin: `reference::Projected`, one entry of each array).
+    pub struct ProjectedGaussian {
+        /// Pixel coordinates of the mean (pixel centres at +0.5).
+        pub mean2d: [f32; 2],
+        /// Half-extents of the box where alpha can reach 1/255.
+        pub extent: [f32; 2],
+        /// Inverse 2D covariance (a, b, c) and the opacity.
+        pub conic: [f32; 4],
+        /// Colour after the clamp at zero, and the camera-space depth.
+        pub color: [f32; 4],
+        /// Glass mask value m (zero for primary Gaussians).
+        pub mask: f32,
+        /// Reflection intensity a.
+        pub reflection: f32,
+        /// FLAG_* bits.
+        pub flags: u32,
+        pub pad: u32,
+    }
+}
+
+gpu_struct! {
+    /// Uniform of `tile_counts` and `emit_keys`.
+    pub struct TileParams {
+        pub width: u32,
+        pub height: u32,
+        pub tiles_x: u32,
+        pub tiles_y: u32,
+        /// Tiles outside (x0, y0, x1, y1) are not binned (a plane's footprint).
+        pub limit: [u32; 4],
+        /// Gaussians in this dispatch and the index of the first one.
+        pub count: u32,
+        pub first: u32,
+        pub pad: [u32; 2],
+    }
+}
+
+gpu_struct! {
+    /// Uniform of `prefix_sum`, `prefix_sum_add` and `tile_ranges`.
+    pub struct ScanParams {
+        pub count: u32,
+        pub pad0: u32,
+        pub pad1: u32,
+        pub pad2: u32,
+    }
+}
+
+gpu_struct! {
+    /// Uniform of one radix pass of `sort`.
+    pub struct SortParams {
+        pub count: u32,
+        /// Bit offset of the 4-bit digit in the key word.
+        pub shift: u32,
+        /// 1: the digit is in the high word (tile), 0: in the low word (depth bits).
+        pub use_hi: u32,
+        pub num_blocks: u32,
+    }
+}
+
+gpu_struct! {
+    /// Uniform of `rasterize` and `rasterize_reflection`.
+    pub struct RasterParams {
+        pub width: u32,
+        pub height: u32,
+        pub tiles_x: u32,
+        pub tiles_y: u32,
+        /// First tile of the dispatch (a plane's footprint corner; 0 for pass 1).
+        pub tile_x0: u32,
+        pub tile_y0: u32,
+        /// Plane slot of pass 2's outputs.
+        pub slot: u32,
+        pub pad: u32,
+        /// Colour behind the last transmittance of C_t.
+        pub background: [f32; 4],
+    }
+}
+
+gpu_struct! {
+    /// What the backward replay needs of one pixel of pass 1 (twin: `reference::PixelState`).
+    pub struct RasterState {
+        pub t_final: f32,
+        pub tm_final: f32,
+        pub last_t: u32,
+        pub last_m: u32,
+        pub weight_sum: f32,
+        pub depth_sign_sum: f32,
+    }
+}
+
+gpu_struct! {
+    /// What the backward replay needs of one pixel of pass 2.
+    pub struct ReflectionState {
+        pub t_final: f32,
+        pub last: u32,
+    }
+}
+
+gpu_struct! {
+    /// Uniform of `compose`: the real camera's rays.
+    pub struct ComposeParams {
+        pub width: u32,
+        pub height: u32,
+        pub num_planes: u32,
+        pub pad: u32,
+        /// (fx, fy, cx, cy)
+        pub focal: [f32; 4],
+        /// Camera centre in world space.
+        pub origin: [f32; 4],
+        /// Columns of the camera-to-world rotation.
+        pub cam_col0: [f32; 4],
+        pub cam_col1: [f32; 4],
+        pub cam_col2: [f32; 4],
+    }
+}
+
+gpu_struct! {
+    /// A reflection plane as `compose` sees it.
+    pub struct PlaneGpu {
+        /// Centre, and R0 in w.
+        pub centre: [f32; 4],
+        /// Unit normal, and in w 1 when the plane's mirrored pass ran (camera in front).
+        pub normal: [f32; 4],
+        /// Unit width direction t, and half the width in w.
+        pub axis: [f32; 4],
+        /// b = n x t, and half the height in w.
+        pub bitangent: [f32; 4],
+    }
+}
+
+/// `ProjectedGaussian::flags` bits.
+pub const FLAG_VISIBLE: u32 = 1;
+pub const FLAG_GLASS: u32 = 2;
+pub const FLAG_CLAMPED_R: u32 = 4;
+pub const FLAG_CLAMPED_G: u32 = 8;
+pub const FLAG_CLAMPED_B: u32 = 16;
+/// `Population::Glass` as stored in the population buffer.
+pub const POPULATION_GLASS: u32 = 1;
+/// Values per thread and per workgroup of the prefix sum.
+pub const SCAN_ITEMS: u32 = 4;
+pub const SCAN_BLOCK: u32 = 256 * SCAN_ITEMS;
+/// Keys per thread and per workgroup of a radix pass.
+pub const SORT_ITEMS: u32 = 16;
+pub const SORT_BLOCK: u32 = 256 * SORT_ITEMS;
+
+/// Every GPU struct: (name, WGSL declaration, Rust field offsets, Rust size).
+pub fn all_structs() -> Vec<(&'static str, String, Vec<(&'static str, usize)>, usize)> {
+    fn entry<T: GpuStruct>() -> (&'static str, String, Vec<(&'static str, usize)>, usize) {
+        (T::NAME, T::wgsl(), T::field_offsets(), std::mem::size_of::<T>())
+    }
+    vec![
+        entry::<ProjectParams>(),
+        entry::<ProjectedGaussian>(),
+        entry::<TileParams>(),
+        entry::<ScanParams>(),
+        entry::<SortParams>(),
+        entry::<RasterParams>(),
+        entry::<RasterState>(),
+        entry::<ReflectionState>(),
+        entry::<ComposeParams>(),
+        entry::<PlaneGpu>(),
+    ]
+}
+
+fn float(v: f64) -> String {
+    format!("{:?}", v as f32)
+}
+
+/// The text every shader starts with: shared constants and struct declarations.
+pub fn prelude() -> String {
+    let mut s =
+        String::from("// Generated by trgs-render (layout.rs): do not edit in the .wgsl files.\n");
+    let consts_u32 = [
+        ("TILE_SIZE", TILE_SIZE),
+        ("FLAG_VISIBLE", FLAG_VISIBLE),
+        ("FLAG_GLASS", FLAG_GLASS),
+        ("FLAG_CLAMPED_R", FLAG_CLAMPED_R),
+        ("FLAG_CLAMPED_G", FLAG_CLAMPED_G),
+        ("FLAG_CLAMPED_B", FLAG_CLAMPED_B),
+        ("POPULATION_GLASS", POPULATION_GLASS),
+        ("SCAN_ITEMS", SCAN_ITEMS),
+        ("SCAN_BLOCK", SCAN_BLOCK),
+        ("SORT_ITEMS", SORT_ITEMS),
+        ("SORT_BLOCK", SORT_BLOCK),
+    ];
+    for (name, v) in consts_u32 {
+        s.push_str(&format!("const {name}: u32 = {v}u;\n"));
+    }
+    let mut consts_f32 = vec![
+        ("MAX_ALPHA".to_string(), MAX_ALPHA),
+        ("MIN_ALPHA".to_string(), MIN_ALPHA),
+        ("MIN_TRANSMITTANCE".to_string(), MIN_TRANSMITTANCE),
+        ("COV2D_BLUR".to_string(), COV2D_BLUR),
+        ("SH_C0".to_string(), sh::C0),
+        ("SH_C1".to_string(), sh::C1),
+    ];
+    consts_f32.extend(sh::C2.iter().enumerate().map(|(i, &v)| (format!("SH_C2_{i}"), v)));
+    consts_f32.extend(sh::C3.iter().enumerate().map(|(i, &v)| (format!("SH_C3_{i}"), v)));
+    for (name, v) in consts_f32 {
+        s.push_str(&format!("const {name}: f32 = {};\n", float(v)));
+    }
+    for (_, decl, _, _) in all_structs() {
+        s.push_str(&decl);
+    }
+    s
+}

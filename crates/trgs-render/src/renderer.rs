@@ -1,0 +1,277 @@
+//! The forward renderer: the stages of DESIGN.md's data flow for one camera, into a [`Frame`].
+use crate::GpuContext;
+use crate::frame::{Frame, ViewBuffers};
+use crate::gpu::{self, Recorder};
+use crate::kernels::Kernels;
+use crate::scene::GpuScene;
+use crate::stages::emit_keys::Keys;
+use crate::stages::rasterize::Pass1Outputs;
+use crate::stages::{
+    Stage, compose, emit_keys, prefix_sum, project, rasterize, rasterize_reflection, sort,
+    tile_counts, tile_ranges,
+};
+use trgs_core::plane_math::mirrored_view;
+use trgs_core::reference::{TileGrid, footprint};
+use trgs_core::scene::{Camera, CameraError, InvalidInput, ViewTransform};
+
+/// How to render.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderOptions {
+    /// Colour behind the last transmittance of C_t.
+    pub background: [f32; 3],
+    /// Gaussians with a camera-space depth below this are culled (0.2 as in 3DGS).
+    pub near: f64,
+    /// Compute the depth-variance layer V (a second walk over each pixel's Gaussians; only the
+    /// depth-variance loss needs it).
+    pub depth_variance: bool,
+    /// Per-plane switch (missing entries are on): a disabled plane gets no mirrored pass and no
+    /// hit, as if it were not in the scene.
+    pub enabled_planes: Vec<bool>,
+    /// Time every stage with timestamp queries when the adapter has them ([`Frame::stage_times`]).
+    pub profile: bool,
+    /// Keep copies of the tile counts and the unsorted keys (stage-by-stage tests).
+    pub capture_intermediates: bool,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        Self {
+            background: [0.0; 3],
+            near: 0.2,
+            depth_variance: false,
+            enabled_planes: Vec::new(),
+            profile: false,
+            capture_intermediates: false,
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    #[error(transparent)]
+    Input(#[from] InvalidInput),
+    #[error("camera {name:?}: {source}")]
+    Camera { name: String, source: CameraError },
+    #[error("camera {name:?}: image size {width}x{height} must be at least 1x1")]
+    EmptyImage { name: String, width: u32, height: u32 },
+}
+
+/// Renders [`GpuScene`]s on one device. Compiles its pipelines once.
+#[derive(Debug)]
+pub struct Renderer {
+    ctx: GpuContext,
+    kernels: Kernels,
+}
+
+/// One view to project and bin: the real camera, or the camera mirrored about plane `plane`.
+struct ViewSpec {
+    view: ViewTransform,
+    plane: Option<usize>,
+    limit: trgs_core::reference::TileRect,
+}
+
+impl Renderer {
+    pub fn new(ctx: &GpuContext) -> Self {
+        Self { ctx: ctx.clone(), kernels: Kernels::new(ctx) }
+    }
+
+    pub fn context(&self) -> &GpuContext {
+        &self.ctx
+    }
+
+    /// Render every layer of `camera`'s view into a new frame.
+    pub fn render(
+        &self,
+        scene: &GpuScene,
+        camera: &Camera,
+        options: &RenderOptions,
+    ) -> Result<Frame, RenderError> {
+        let mut frame = Frame::default();
+        self.render_into(scene, camera, options, &mut frame)?;
+        Ok(frame)
+    }
+
+    /// Render into `frame`, reusing its buffers where they are large enough.
+    pub fn render_into(
+        &self,
+        scene: &GpuScene,
+        camera: &Camera,
+        options: &RenderOptions,
+        frame: &mut Frame,
+    ) -> Result<(), RenderError> {
+        let ctx = &self.ctx;
+        let k = &camera.intrinsics;
+        if k.width == 0 || k.height == 0 {
+            return Err(RenderError::EmptyImage {
+                name: camera.name.clone(),
+                width: k.width,
+                height: k.height,
+            });
+        }
+        camera
+            .validate()
+            .map_err(|source| RenderError::Camera { name: camera.name.clone(), source })?;
+        let s = Stage { ctx, kernels: &self.kernels };
+        let grid = TileGrid::new(k.width, k.height);
+        let pixels = u64::from(k.width) * u64::from(k.height);
+        let view = ViewTransform::from(&camera.pose);
+        let planes = scene.planes();
+        let mut specs = vec![ViewSpec { view, plane: None, limit: grid.full() }];
+        for (i, plane) in planes.iter().enumerate() {
+            if !options.enabled_planes.get(i).copied().unwrap_or(true) {
+                continue;
+            }
+            if let Some(fp) = footprint(plane, &camera.pose, k, &grid) {
+                specs.push(ViewSpec {
+                    view: mirrored_view(plane, &view),
+                    plane: Some(i),
+                    limit: fp,
+                });
+            }
+        }
+        frame.reset(grid, planes.len(), options.depth_variance);
+        let pool = &mut frame.pool;
+        let n = u64::from(scene.len());
+        let mut rec = Recorder::new(ctx, "trgs.render", options.profile);
+
+        // Phase 1: project, count tiles and scan, for every view; then one readback of the totals.
+        let totals_staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("trgs.prefix_sum.totals"),
+            size: 4 * specs.len() as u64,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut views = Vec::with_capacity(specs.len());
+        for (vi, spec) in specs.iter().enumerate() {
+            let plane = spec.plane.map(|p| &planes[p]);
+            let projected = pool.get(ctx, &format!("trgs.project.projected.v{vi}"), n * 64);
+            let counts = pool.get(ctx, &format!("trgs.tile_counts.counts.v{vi}"), n * 4);
+            let pparams = project::params(&spec.view, k, plane, options.near, scene.sh_degree());
+            project::record(s, &mut rec, scene, &pparams, &projected);
+            let tparams = tile_counts::params(&grid, &spec.limit);
+            tile_counts::record(s, &mut rec, scene, &tparams, &projected, &counts);
+            let captured_counts = options.capture_intermediates.then(|| {
+                let c = pool.get(ctx, &format!("trgs.capture.counts.v{vi}"), n * 4);
+                rec.encoder.copy_buffer_to_buffer(&counts, 0, &c, 0, counts.size());
+                c
+            });
+            let label = format!("trgs.prefix_sum.v{vi}");
+            let total = prefix_sum::record(s, &mut rec, pool, &label, &counts, scene.len());
+            rec.encoder.copy_buffer_to_buffer(&total, 0, &totals_staging, 4 * vi as u64, 4);
+            views.push(ViewBuffers {
+                view: spec.view,
+                plane: spec.plane,
+                limit: spec.limit,
+                tile_params: tparams,
+                projected,
+                offsets: counts,
+                keys: None,
+                ranges: None,
+                num_keys: 0,
+                captured_counts,
+                captured_keys: None,
+            });
+        }
+        rec.submit_and_wait(ctx);
+        let totals: Vec<u32> = gpu::map_and_read(ctx, &totals_staging, 4 * specs.len());
+
+        // Phase 2: keys, sort, ranges per view; both rasterize passes; compose.
+        let tiles = grid.tile_count();
+        for (vi, v) in views.iter_mut().enumerate() {
+            let total = totals[vi];
+            let bytes = u64::from(total) * 4;
+            let keys = Keys {
+                hi: pool.get(ctx, &format!("trgs.emit_keys.hi.v{vi}"), bytes),
+                lo: pool.get(ctx, &format!("trgs.emit_keys.lo.v{vi}"), bytes),
+                values: pool.get(ctx, &format!("trgs.emit_keys.values.v{vi}"), bytes),
+            };
+            emit_keys::record(s, &mut rec, scene, &v.tile_params, &v.projected, &v.offsets, &keys);
+            if options.capture_intermediates {
+                let mut copy = |name: &str, src: &wgpu::Buffer, pool: &mut gpu::BufferPool| {
+                    let c = pool.get(ctx, &format!("trgs.capture.{name}.v{vi}"), bytes);
+                    rec.encoder.copy_buffer_to_buffer(src, 0, &c, 0, bytes.max(16).min(src.size()));
+                    c
+                };
+                v.captured_keys = Some(Keys {
+                    hi: copy("keys_hi", &keys.hi, pool),
+                    lo: copy("keys_lo", &keys.lo, pool),
+                    values: copy("values", &keys.values, pool),
+                });
+            }
+            let label = format!("trgs.sort.v{vi}");
+            let sorted =
+                sort::record(s, &mut rec, pool, &label, &keys, total, sort::tile_bits(tiles));
+            let ranges =
+                pool.get(ctx, &format!("trgs.tile_ranges.ranges.v{vi}"), u64::from(tiles) * 8);
+            tile_ranges::record(s, &mut rec, &sorted.hi, total, &ranges);
+            v.keys = Some(sorted);
+            v.ranges = Some(ranges);
+            v.num_keys = total;
+        }
+        let layers = frame.layers(ctx, pixels);
+        let primary = &views[0];
+        #[allow(clippy::expect_used)]
+        let (p_values, p_ranges) = (
+            &primary.keys.as_ref().expect("sorted above").values,
+            primary.ranges.as_ref().expect("set above"),
+        );
+        rasterize::record(
+            s,
+            &mut rec,
+            &grid,
+            options.background,
+            options.depth_variance,
+            &primary.projected,
+            p_values,
+            p_ranges,
+            &Pass1Outputs {
+                transmission: &layers.transmission,
+                geometry: &layers.geometry,
+                states: &layers.states,
+            },
+        );
+        let mut has_pass = vec![false; planes.len()];
+        if views.len() > 1 {
+            rec.encoder.clear_buffer(&layers.reflection_raw, 0, None);
+            rec.encoder.clear_buffer(&layers.reflection_states, 0, None);
+            for v in &views[1..] {
+                #[allow(clippy::expect_used)]
+                let (keys, ranges) =
+                    (v.keys.as_ref().expect("sorted above"), v.ranges.as_ref().expect("set above"));
+                let slot = v.plane.unwrap_or(0) as u32;
+                has_pass[slot as usize] = true;
+                rasterize_reflection::record(
+                    s,
+                    &mut rec,
+                    &grid,
+                    slot,
+                    &v.limit,
+                    &v.projected,
+                    &keys.values,
+                    ranges,
+                    &layers.reflection_raw,
+                    &layers.reflection_states,
+                );
+            }
+            let planes_gpu = compose::planes_gpu(planes, &has_pass);
+            compose::record(
+                s,
+                &mut rec,
+                camera,
+                &planes_gpu,
+                &layers.transmission,
+                &layers.geometry,
+                &layers.reflection_raw,
+                &compose::ComposeOutputs {
+                    color: &layers.color,
+                    reflection: &layers.reflection,
+                    strength: &layers.strength,
+                    hit: &layers.hit,
+                },
+            );
+        }
+        rec.submit_and_wait(ctx);
+        frame.finish(views, has_pass, rec.stage_times());
+        Ok(())
+    }
+}

@@ -1,0 +1,120 @@
+//! The scene on the GPU: Gaussians in structure-of-arrays buffers (one buffer per attribute, as
+//! `trgs_core::Gaussians` holds them) and the reflection planes. A storage binding may not exceed
+//! the adapter's limit (128 MiB on lavapipe), so the per-Gaussian stages bind ranges of these
+//! buffers, [`GpuScene::chunks`] Gaussians at a time.
+use crate::GpuContext;
+use crate::gpu;
+use trgs_core::scene::{
+    Gaussians, InvalidInput, ReflectionPlane, validate_gaussians, validate_planes,
+};
+
+/// Gaussians and planes uploaded to a device.
+#[derive(Debug)]
+pub struct GpuScene {
+    len: u32,
+    sh_degree: u32,
+    sh_coeffs: u32,
+    pub(crate) means: wgpu::Buffer,
+    pub(crate) rotations: wgpu::Buffer,
+    pub(crate) log_scales: wgpu::Buffer,
+    pub(crate) opacity_logits: wgpu::Buffer,
+    pub(crate) sh: wgpu::Buffer,
+    pub(crate) mask_logits: wgpu::Buffer,
+    pub(crate) log_reflections: wgpu::Buffer,
+    pub(crate) populations: wgpu::Buffer,
+    planes: Vec<ReflectionPlane>,
+    chunk: u32,
+}
+
+/// Bytes per Gaussian of the widest per-Gaussian binding other than SH (the projected record).
+const PROJECTED_STRIDE: u64 = std::mem::size_of::<crate::layout::ProjectedGaussian>() as u64;
+
+impl GpuScene {
+    /// Validate (every attribute finite, no zero quaternion, planes well formed) and upload.
+    pub fn upload(
+        ctx: &GpuContext,
+        gaussians: &Gaussians<f32>,
+        planes: &[ReflectionPlane],
+    ) -> Result<Self, InvalidInput> {
+        validate_gaussians(gaussians)?;
+        validate_planes(planes)?;
+        let len = gaussians.len() as u32;
+        let flat3 = |v: &[[f32; 3]]| v.iter().flatten().copied().collect::<Vec<f32>>();
+        let pops: Vec<u32> = gaussians.populations.iter().map(|&p| p as u32).collect();
+        let sh_coeffs = gaussians.sh_coeffs() as u32;
+        let limit = ctx.device.limits().max_storage_buffer_binding_size as u64;
+        let widest = (u64::from(sh_coeffs) * 12).max(PROJECTED_STRIDE);
+        // Multiples of 256 Gaussians keep every range offset aligned for any stride.
+        let chunk = ((limit / widest) / 256 * 256).clamp(256, u64::from(u32::MAX / 2)) as u32;
+        Ok(Self {
+            len,
+            sh_degree: gaussians.sh_degree,
+            sh_coeffs,
+            means: gpu::storage_init(ctx, "trgs.scene.means", &flat3(&gaussians.means)),
+            rotations: gpu::storage_init(ctx, "trgs.scene.rotations", &gaussians.rotations),
+            log_scales: gpu::storage_init(
+                ctx,
+                "trgs.scene.log_scales",
+                &flat3(&gaussians.log_scales),
+            ),
+            opacity_logits: gpu::storage_init(
+                ctx,
+                "trgs.scene.opacity_logits",
+                &gaussians.opacity_logits,
+            ),
+            sh: gpu::storage_init(ctx, "trgs.scene.sh", &flat3(&gaussians.sh)),
+            mask_logits: gpu::storage_init(ctx, "trgs.scene.mask_logits", &gaussians.mask_logits),
+            log_reflections: gpu::storage_init(
+                ctx,
+                "trgs.scene.log_reflections",
+                &gaussians.log_reflections,
+            ),
+            populations: gpu::storage_init(ctx, "trgs.scene.populations", &pops),
+            planes: planes.to_vec(),
+            chunk,
+        })
+    }
+
+    pub fn len(&self) -> u32 {
+        self.len
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    pub fn sh_degree(&self) -> u32 {
+        self.sh_degree
+    }
+
+    pub(crate) fn sh_coeffs(&self) -> u32 {
+        self.sh_coeffs
+    }
+
+    pub fn planes(&self) -> &[ReflectionPlane] {
+        &self.planes
+    }
+
+    /// Replace the planes (they are a few numbers each and live on the CPU until a render).
+    pub fn set_planes(&mut self, planes: &[ReflectionPlane]) -> Result<(), InvalidInput> {
+        validate_planes(planes)?;
+        self.planes = planes.to_vec();
+        Ok(())
+    }
+
+    /// Use at most `gaussians` Gaussians per binding (rounded down to a multiple of 256, at
+    /// least 256): tests exercise the split that very large scenes need.
+    pub fn set_chunk_size(&mut self, gaussians: u32) {
+        self.chunk = self.chunk.min((gaussians / 256 * 256).max(256));
+    }
+
+    /// (first, count) of each range of Gaussians bound at once.
+    pub fn chunks(&self) -> Vec<(u32, u32)> {
+        (0..self.len.div_ceil(self.chunk))
+            .map(|c| {
+                let first = c * self.chunk;
+                (first, self.chunk.min(self.len - first))
+            })
+            .collect()
+    }
+}

@@ -1,0 +1,73 @@
+//! Stage `compose` (shaders/compose.wgsl; twin `trgs_core::reference::compose`).
+use super::Stage;
+use crate::gpu::{self, Recorder};
+use crate::layout::{ComposeParams, PlaneGpu};
+use trgs_core::scene::{Camera, ReflectionPlane};
+
+/// Compose's output buffers.
+#[derive(Clone, Debug)]
+pub struct ComposeOutputs<'a> {
+    pub color: &'a wgpu::Buffer,
+    pub reflection: &'a wgpu::Buffer,
+    pub strength: &'a wgpu::Buffer,
+    pub hit: &'a wgpu::Buffer,
+}
+
+/// The planes as compose sees them; `has_pass[k]` says whether plane k's mirrored pass ran.
+pub fn planes_gpu(planes: &[ReflectionPlane], has_pass: &[bool]) -> Vec<PlaneGpu> {
+    let v4 = |v: glam::DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
+    planes
+        .iter()
+        .zip(has_pass)
+        .map(|(p, &ran)| PlaneGpu {
+            centre: v4(p.centre, p.r0()),
+            normal: v4(p.unit_normal(), if ran { 1.0 } else { 0.0 }),
+            axis: v4(p.axis, 0.5 * p.width),
+            bitangent: v4(p.bitangent(), 0.5 * p.height),
+        })
+        .collect()
+}
+
+pub fn record(
+    s: Stage<'_>,
+    rec: &mut Recorder,
+    camera: &Camera,
+    planes: &[PlaneGpu],
+    transmission: &wgpu::Buffer,
+    geometry: &wgpu::Buffer,
+    reflection_raw: &wgpu::Buffer,
+    out: &ComposeOutputs<'_>,
+) {
+    let k = &camera.intrinsics;
+    let to_world = camera.pose.rotation.transpose();
+    let v4 = |v: glam::DVec3| [v.x as f32, v.y as f32, v.z as f32, 0.0];
+    let params = ComposeParams {
+        width: k.width,
+        height: k.height,
+        num_planes: planes.len() as u32,
+        focal: [k.fx as f32, k.fy as f32, k.cx as f32, k.cy as f32],
+        origin: v4(camera.pose.centre()),
+        cam_col0: v4(to_world.x_axis),
+        cam_col1: v4(to_world.y_axis),
+        cam_col2: v4(to_world.z_axis),
+        ..Default::default()
+    };
+    let uniform = gpu::uniform(s.ctx, "trgs.compose.params", &params);
+    let planes_buf = gpu::storage_init(s.ctx, "trgs.compose.planes", planes);
+    let kern = &s.kernels.compose;
+    let bind = kern.bind(
+        s.ctx,
+        &[
+            uniform.as_entire_binding(),
+            planes_buf.as_entire_binding(),
+            transmission.as_entire_binding(),
+            geometry.as_entire_binding(),
+            reflection_raw.as_entire_binding(),
+            out.color.as_entire_binding(),
+            out.reflection.as_entire_binding(),
+            out.strength.as_entire_binding(),
+            out.hit.as_entire_binding(),
+        ],
+    );
+    rec.dispatch("compose", kern, &bind, [k.width.div_ceil(16), k.height.div_ceil(16), 1]);
+}

@@ -1,0 +1,44 @@
+//! Stage `emit_keys` (shaders/emit_keys.wgsl; twin `trgs_core::reference::emit_keys`).
+use super::Stage;
+use crate::gpu::{self, Recorder, grid_1d, range};
+use crate::layout::{ProjectedGaussian, TileParams};
+use crate::scene::GpuScene;
+
+const PROJECTED: u64 = std::mem::size_of::<ProjectedGaussian>() as u64;
+
+/// The split 64-bit keys (tile, depth bits) and their values (Gaussian indices).
+#[derive(Clone, Debug)]
+pub struct Keys {
+    pub hi: wgpu::Buffer,
+    pub lo: wgpu::Buffer,
+    pub values: wgpu::Buffer,
+}
+
+pub fn record(
+    s: Stage<'_>,
+    rec: &mut Recorder,
+    scene: &GpuScene,
+    base: &TileParams,
+    projected: &wgpu::Buffer,
+    offsets: &wgpu::Buffer,
+    keys: &Keys,
+) {
+    let k = &s.kernels.emit_keys;
+    for (first, count) in scene.chunks() {
+        let p = TileParams { count, first, ..*base };
+        let uniform = gpu::uniform(s.ctx, "trgs.emit_keys.params", &p);
+        let (f, c) = (u64::from(first), u64::from(count));
+        let bind = k.bind(
+            s.ctx,
+            &[
+                uniform.as_entire_binding(),
+                range(projected, f * PROJECTED, c * PROJECTED),
+                range(offsets, f * 4, c * 4),
+                keys.hi.as_entire_binding(),
+                keys.lo.as_entire_binding(),
+                keys.values.as_entire_binding(),
+            ],
+        );
+        rec.dispatch("emit_keys", k, &bind, grid_1d(count.div_ceil(256)));
+    }
+}

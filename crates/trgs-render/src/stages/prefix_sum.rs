@@ -1,0 +1,55 @@
+//! Stage `prefix_sum` (shaders/prefix_sum.wgsl and prefix_sum_add.wgsl; twin
+//! `trgs_core::reference::prefix_sum`): an in-place exclusive scan of u32 values, block by block,
+//! with the block totals scanned recursively and added back.
+use super::Stage;
+use crate::gpu::{self, BufferPool, Recorder, grid_1d};
+use crate::layout::{SCAN_BLOCK, ScanParams};
+
+/// Scan `count` values of `data` in place; returns the buffer whose first u32 is the total.
+/// `label` names the temporaries in `pool`.
+pub fn record(
+    s: Stage<'_>,
+    rec: &mut Recorder,
+    pool: &mut BufferPool,
+    label: &str,
+    data: &wgpu::Buffer,
+    count: u32,
+) -> wgpu::Buffer {
+    scan_level(s, rec, pool, label, data, count, 0)
+}
+
+fn scan_level(
+    s: Stage<'_>,
+    rec: &mut Recorder,
+    pool: &mut BufferPool,
+    label: &str,
+    data: &wgpu::Buffer,
+    count: u32,
+    level: u32,
+) -> wgpu::Buffer {
+    let blocks = count.div_ceil(SCAN_BLOCK);
+    let sums = pool.get(s.ctx, &format!("{label}.block_sums{level}"), u64::from(blocks.max(1)) * 4);
+    if count == 0 {
+        rec.encoder.clear_buffer(&sums, 0, None);
+        return sums;
+    }
+    let uniform =
+        gpu::uniform(s.ctx, "trgs.prefix_sum.params", &ScanParams { count, ..Default::default() });
+    let scan = &s.kernels.prefix_sum;
+    let bind = scan.bind(
+        s.ctx,
+        &[uniform.as_entire_binding(), data.as_entire_binding(), sums.as_entire_binding()],
+    );
+    rec.dispatch("prefix_sum", scan, &bind, grid_1d(blocks));
+    if blocks == 1 {
+        return sums;
+    }
+    let total = scan_level(s, rec, pool, label, &sums, blocks, level + 1);
+    let add = &s.kernels.prefix_sum_add;
+    let bind = add.bind(
+        s.ctx,
+        &[uniform.as_entire_binding(), data.as_entire_binding(), sums.as_entire_binding()],
+    );
+    rec.dispatch("prefix_sum", add, &bind, grid_1d(count.div_ceil(256)));
+    total
+}

@@ -1,0 +1,80 @@
+//! Stage `project` (shaders/project.wgsl; twin `trgs_core::reference::project`).
+use super::Stage;
+use crate::gpu::{self, Recorder, grid_1d, range};
+use crate::layout::{ProjectParams, ProjectedGaussian};
+use crate::scene::GpuScene;
+use trgs_core::reference::GUARD_BAND;
+use trgs_core::scene::{Intrinsics, ReflectionPlane, ViewTransform};
+
+const PROJECTED: u64 = std::mem::size_of::<ProjectedGaussian>() as u64;
+
+/// The uniform of one view: `plane` is Some for a mirrored view (front-side filter).
+pub fn params(
+    view: &ViewTransform,
+    k: &Intrinsics,
+    plane: Option<&ReflectionPlane>,
+    near: f64,
+    sh_degree: u32,
+) -> ProjectParams {
+    let v4 = |v: glam::DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
+    let rows = view.linear.transpose();
+    let (w, h) = (f64::from(k.width), f64::from(k.height));
+    let tan_limits = [
+        (-GUARD_BAND * w - k.cx) / k.fx,
+        ((1.0 + GUARD_BAND) * w - k.cx) / k.fx,
+        (-GUARD_BAND * h - k.cy) / k.fy,
+        ((1.0 + GUARD_BAND) * h - k.cy) / k.fy,
+    ];
+    let (pc, pn) =
+        plane.map_or((glam::DVec3::ZERO, glam::DVec3::ZERO), |p| (p.centre, p.unit_normal()));
+    ProjectParams {
+        row0: v4(rows.x_axis, 0.0),
+        row1: v4(rows.y_axis, 0.0),
+        row2: v4(rows.z_axis, 0.0),
+        translation: v4(view.translation, 0.0),
+        centre: v4(view.centre, 0.0),
+        plane_centre: v4(pc, 0.0),
+        plane_normal: v4(pn, 0.0),
+        focal: [k.fx as f32, k.fy as f32, k.cx as f32, k.cy as f32],
+        tan_limits: tan_limits.map(|v| v as f32),
+        count: 0,
+        sh_degree,
+        sh_coeffs: 0,
+        front_only: u32::from(plane.is_some()),
+        near: near as f32,
+        ..Default::default()
+    }
+}
+
+/// Project every Gaussian of `scene` into `projected` (one record per Gaussian).
+pub fn record(
+    s: Stage<'_>,
+    rec: &mut Recorder,
+    scene: &GpuScene,
+    base: &ProjectParams,
+    projected: &wgpu::Buffer,
+) {
+    let k = &s.kernels.project;
+    let coeffs = u64::from(scene.sh_coeffs());
+    for (first, count) in scene.chunks() {
+        let p = ProjectParams { count, sh_coeffs: scene.sh_coeffs(), ..*base };
+        let uniform = gpu::uniform(s.ctx, "trgs.project.params", &p);
+        let (f, c) = (u64::from(first), u64::from(count));
+        let bind = k.bind(
+            s.ctx,
+            &[
+                uniform.as_entire_binding(),
+                range(&scene.means, f * 12, c * 12),
+                range(&scene.rotations, f * 16, c * 16),
+                range(&scene.log_scales, f * 12, c * 12),
+                range(&scene.opacity_logits, f * 4, c * 4),
+                range(&scene.sh, f * coeffs * 12, c * coeffs * 12),
+                range(&scene.mask_logits, f * 4, c * 4),
+                range(&scene.log_reflections, f * 4, c * 4),
+                range(&scene.populations, f * 4, c * 4),
+                range(projected, f * PROJECTED, c * PROJECTED),
+            ],
+        );
+        rec.dispatch("project", k, &bind, grid_1d(count.div_ceil(256)));
+    }
+}

@@ -1,0 +1,52 @@
+//! Stage `rasterize`, pass 1 (shaders/rasterize.wgsl; twin `trgs_core::reference::rasterize`).
+use super::Stage;
+use crate::gpu::{self, Recorder};
+use crate::layout::RasterParams;
+use trgs_core::reference::TileGrid;
+
+/// Pass 1's output buffers.
+#[derive(Clone, Debug)]
+pub struct Pass1Outputs<'a> {
+    /// (C_t, 1 - T_t) per pixel.
+    pub transmission: &'a wgpu::Buffer,
+    /// (D_t, V, M, 0) per pixel.
+    pub geometry: &'a wgpu::Buffer,
+    /// `RasterState` per pixel.
+    pub states: &'a wgpu::Buffer,
+}
+
+pub fn record(
+    s: Stage<'_>,
+    rec: &mut Recorder,
+    grid: &TileGrid,
+    background: [f32; 3],
+    depth_variance: bool,
+    projected: &wgpu::Buffer,
+    values: &wgpu::Buffer,
+    ranges: &wgpu::Buffer,
+    out: &Pass1Outputs<'_>,
+) {
+    let params = RasterParams {
+        width: grid.width,
+        height: grid.height,
+        tiles_x: grid.tiles_x,
+        tiles_y: grid.tiles_y,
+        background: [background[0], background[1], background[2], 0.0],
+        ..Default::default()
+    };
+    let uniform = gpu::uniform(s.ctx, "trgs.rasterize.params", &params);
+    let k = if depth_variance { &s.kernels.rasterize_depth_variance } else { &s.kernels.rasterize };
+    let bind = k.bind(
+        s.ctx,
+        &[
+            uniform.as_entire_binding(),
+            projected.as_entire_binding(),
+            values.as_entire_binding(),
+            ranges.as_entire_binding(),
+            out.transmission.as_entire_binding(),
+            out.geometry.as_entire_binding(),
+            out.states.as_entire_binding(),
+        ],
+    );
+    rec.dispatch("rasterize", k, &bind, [grid.tiles_x, grid.tiles_y, 1]);
+}

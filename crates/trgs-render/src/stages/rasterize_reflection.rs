@@ -1,0 +1,48 @@
+//! Stage `rasterize_reflection`, pass 2 (shaders/rasterize_reflection.wgsl; twin
+//! `trgs_core::reference::rasterize_reflection`): only the tiles of the plane's footprint run.
+use super::Stage;
+use crate::gpu::{self, Recorder};
+use crate::layout::RasterParams;
+use trgs_core::reference::{TileGrid, TileRect};
+
+pub fn record(
+    s: Stage<'_>,
+    rec: &mut Recorder,
+    grid: &TileGrid,
+    slot: u32,
+    footprint: &TileRect,
+    projected: &wgpu::Buffer,
+    values: &wgpu::Buffer,
+    ranges: &wgpu::Buffer,
+    reflection_raw: &wgpu::Buffer,
+    states: &wgpu::Buffer,
+) {
+    if footprint.is_empty() {
+        return;
+    }
+    let params = RasterParams {
+        width: grid.width,
+        height: grid.height,
+        tiles_x: grid.tiles_x,
+        tiles_y: grid.tiles_y,
+        tile_x0: footprint.x0,
+        tile_y0: footprint.y0,
+        slot,
+        ..Default::default()
+    };
+    let uniform = gpu::uniform(s.ctx, "trgs.rasterize_reflection.params", &params);
+    let k = &s.kernels.rasterize_reflection;
+    let bind = k.bind(
+        s.ctx,
+        &[
+            uniform.as_entire_binding(),
+            projected.as_entire_binding(),
+            values.as_entire_binding(),
+            ranges.as_entire_binding(),
+            reflection_raw.as_entire_binding(),
+            states.as_entire_binding(),
+        ],
+    );
+    let groups = [footprint.x1 - footprint.x0, footprint.y1 - footprint.y0, 1];
+    rec.dispatch("rasterize_reflection", k, &bind, groups);
+}

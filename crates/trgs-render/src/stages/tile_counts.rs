@@ -1,0 +1,45 @@
+//! Stage `tile_counts` (shaders/tile_counts.wgsl; twin `trgs_core::reference::tile_counts`).
+use super::Stage;
+use crate::gpu::{self, Recorder, grid_1d, range};
+use crate::layout::{ProjectedGaussian, TileParams};
+use crate::scene::GpuScene;
+use trgs_core::reference::{TileGrid, TileRect};
+
+const PROJECTED: u64 = std::mem::size_of::<ProjectedGaussian>() as u64;
+
+/// The uniform of a view's binning, limited to `limit` (a footprint, or the whole grid).
+pub fn params(grid: &TileGrid, limit: &TileRect) -> TileParams {
+    TileParams {
+        width: grid.width,
+        height: grid.height,
+        tiles_x: grid.tiles_x,
+        tiles_y: grid.tiles_y,
+        limit: [limit.x0, limit.y0, limit.x1, limit.y1],
+        ..Default::default()
+    }
+}
+
+pub fn record(
+    s: Stage<'_>,
+    rec: &mut Recorder,
+    scene: &GpuScene,
+    base: &TileParams,
+    projected: &wgpu::Buffer,
+    counts: &wgpu::Buffer,
+) {
+    let k = &s.kernels.tile_counts;
+    for (first, count) in scene.chunks() {
+        let p = TileParams { count, first, ..*base };
+        let uniform = gpu::uniform(s.ctx, "trgs.tile_counts.params", &p);
+        let (f, c) = (u64::from(first), u64::from(count));
+        let bind = k.bind(
+            s.ctx,
+            &[
+                uniform.as_entire_binding(),
+                range(projected, f * PROJECTED, c * PROJECTED),
+                range(counts, f * 4, c * 4),
+            ],
+        );
+        rec.dispatch("tile_counts", k, &bind, grid_1d(count.div_ceil(256)));
+    }
+}

@@ -1,0 +1,90 @@
+// Stage `compose` (twin: trgs_core::reference::compose): per pixel, the nearest plane whose
+// rectangle the camera ray hits from the front side (hit mask H = k + 1), Schlick's
+// R_raw = R0 + (1 - R0) (1 - cos)^5, R = R_raw M, C_r = C_raw^k A^k and
+// C = (1 - R) C_t + R C_r. Pixels without a hit show C_t.
+#include "shared/common.wgsl"
+
+@group(0) @binding(0) var<uniform> params: ComposeParams;
+@group(0) @binding(1) var<storage, read> planes: array<PlaneGpu>;
+@group(0) @binding(2) var<storage, read> transmission: array<vec4<f32>>;
+@group(0) @binding(3) var<storage, read> geometry: array<vec4<f32>>;
+@group(0) @binding(4) var<storage, read> reflection_raw: array<vec4<f32>>;
+// (C, 0)
+@group(0) @binding(5) var<storage, read_write> color: array<vec4<f32>>;
+// (C_r, 0)
+@group(0) @binding(6) var<storage, read_write> reflection: array<vec4<f32>>;
+// (R_raw, R, 0, 0)
+@group(0) @binding(7) var<storage, read_write> strength: array<vec4<f32>>;
+@group(0) @binding(8) var<storage, read_write> hit: array<u32>;
+
+// Ray parameter of the hit on plane k's rectangle from the front side, or -1.
+fn rectangle_hit(plane: PlaneGpu, origin: vec3<f32>, dir: vec3<f32>) -> f32 {
+    let n = plane.normal.xyz;
+    let side = dot(origin - plane.centre.xyz, n);
+    let toward = dot(dir, n);
+    if !(side > 0.0) || !(toward < 0.0) {
+        return -1.0;
+    }
+    let s = -side / toward;
+    if !(s < 3.0e38) {
+        return -1.0;
+    }
+    let local = origin + s * dir - plane.centre.xyz;
+    let u = dot(local, plane.axis.xyz);
+    let v = dot(local, plane.bitangent.xyz);
+    if abs(u) <= plane.axis.w && abs(v) <= plane.bitangent.w {
+        return s;
+    }
+    return -1.0;
+}
+
+@compute @workgroup_size(16, 16)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let x = gid.x;
+    let y = gid.y;
+    if x >= params.width || y >= params.height {
+        return;
+    }
+    let p = y * params.width + x;
+    let ct = transmission[p].xyz;
+    let cam = vec3<f32>(
+        (f32(x) + 0.5 - params.focal.z) / params.focal.x,
+        (f32(y) + 0.5 - params.focal.w) / params.focal.y,
+        1.0,
+    );
+    let to_world = mat3x3<f32>(params.cam_col0.xyz, params.cam_col1.xyz, params.cam_col2.xyz);
+    let dir = normalize(to_world * cam);
+    let origin = params.origin.xyz;
+    var best = -1;
+    var best_s = 0.0;
+    for (var k = 0u; k < params.num_planes; k++) {
+        let s = rectangle_hit(planes[k], origin, dir);
+        if s >= 0.0 && (best < 0 || s < best_s) {
+            best = i32(k);
+            best_s = s;
+        }
+    }
+    var out_color = ct;
+    var out_reflection = vec3<f32>(0.0);
+    var out_strength = vec4<f32>(0.0);
+    var out_hit = 0u;
+    // A hit implies the camera is in front, so pass 2 ran; guard anyway.
+    if best >= 0 && planes[best].normal.w != 0.0 {
+        let plane = planes[best];
+        let r0 = plane.centre.w;
+        let cos_i = clamp(-dot(plane.normal.xyz, dir), 0.0, 1.0);
+        let f = 1.0 - cos_i;
+        let r_raw = r0 + (1.0 - r0) * (f * f * f * f * f);
+        let r = r_raw * geometry[p].z;
+        let raw = reflection_raw[u32(best) * params.width * params.height + p];
+        let cr = raw.xyz * raw.w;
+        out_color = (1.0 - r) * ct + r * cr;
+        out_reflection = cr;
+        out_strength = vec4<f32>(r_raw, r, 0.0, 0.0);
+        out_hit = u32(best) + 1u;
+    }
+    color[p] = vec4<f32>(out_color, 0.0);
+    reflection[p] = vec4<f32>(out_reflection, 0.0);
+    strength[p] = vec4<f32>(out_strength);
+    hit[p] = out_hit;
+}

@@ -1,0 +1,36 @@
+// Stage `emit_keys` (twin: trgs_core::reference::emit_keys): one (tile, depth) key per Gaussian
+// and touched tile, written from the Gaussian's offset (the exclusive prefix sum of the counts).
+// The 64-bit key is split in two words: `keys_hi` the tile index, `keys_lo` the f32 bits of the
+// (positive) depth, which sort like the numbers.
+#include "shared/common.wgsl"
+#include "shared/tiles.wgsl"
+
+@group(0) @binding(0) var<uniform> tiles: TileParams;
+@group(0) @binding(1) var<storage, read> projected: array<ProjectedGaussian>;
+@group(0) @binding(2) var<storage, read> offsets: array<u32>;
+@group(0) @binding(3) var<storage, read_write> keys_hi: array<u32>;
+@group(0) @binding(4) var<storage, read_write> keys_lo: array<u32>;
+@group(0) @binding(5) var<storage, read_write> values: array<u32>;
+
+@compute @workgroup_size(256)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let i = linear_index(gid, nwg, 256u);
+    if i >= tiles.count {
+        return;
+    }
+    let g = projected[i];
+    if !is_visible(g) {
+        return;
+    }
+    let r = tile_rect(g, tiles);
+    let depth_bits = bitcast<u32>(g.color.w);
+    var slot = offsets[i];
+    for (var ty = r.y; ty < r.w; ty++) {
+        for (var tx = r.x; tx < r.z; tx++) {
+            keys_hi[slot] = ty * tiles.tiles_x + tx;
+            keys_lo[slot] = depth_bits;
+            values[slot] = tiles.first + i;
+            slot++;
+        }
+    }
+}

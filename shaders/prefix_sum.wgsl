@@ -1,0 +1,53 @@
+// Stage `prefix_sum` (twin: trgs_core::reference::prefix_sum), level scan: an in-place exclusive
+// scan of each block of SCAN_BLOCK values (SCAN_ITEMS per thread, then a workgroup scan of the
+// thread totals), writing each block's total to `block_sums`. Blocks are joined by scanning
+// `block_sums` the same way and adding it back (prefix_sum_add.wgsl).
+#include "shared/common.wgsl"
+
+@group(0) @binding(0) var<uniform> params: ScanParams;
+@group(0) @binding(1) var<storage, read_write> data: array<u32>;
+@group(0) @binding(2) var<storage, read_write> block_sums: array<u32>;
+
+var<workgroup> sums: array<u32, 256>;
+
+@compute @workgroup_size(256)
+fn main(
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+) {
+    let block = wid.x + wid.y * nwg.x;
+    let base = block * SCAN_BLOCK + lid * SCAN_ITEMS;
+    var local: array<u32, SCAN_ITEMS>;
+    var total = 0u;
+    for (var k = 0u; k < SCAN_ITEMS; k++) {
+        local[k] = total;
+        if base + k < params.count {
+            total += data[base + k];
+        }
+    }
+    sums[lid] = total;
+    workgroupBarrier();
+    // Hillis-Steele inclusive scan of the thread totals.
+    for (var offset = 1u; offset < 256u; offset <<= 1u) {
+        var v = sums[lid];
+        if lid >= offset {
+            v += sums[lid - offset];
+        }
+        workgroupBarrier();
+        sums[lid] = v;
+        workgroupBarrier();
+    }
+    var before = 0u;
+    if lid > 0u {
+        before = sums[lid - 1u];
+    }
+    for (var k = 0u; k < SCAN_ITEMS; k++) {
+        if base + k < params.count {
+            data[base + k] = before + local[k];
+        }
+    }
+    if lid == 255u {
+        block_sums[block] = sums[255];
+    }
+}

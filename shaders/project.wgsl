@@ -1,0 +1,149 @@
+// Stage `project` (twin: trgs_core::reference::project): EWA projection of every Gaussian for one
+// view, which is the real camera or the camera mirrored about a plane (a general 3x3 linear map
+// with determinant -1). Culls by depth, opacity, 2D determinant and, for a mirrored view, the
+// plane's front side; writes the screen-space mean, conic, extent, colour from SH and flags.
+#include "shared/common.wgsl"
+
+@group(0) @binding(0) var<uniform> view: ProjectParams;
+@group(0) @binding(1) var<storage, read> means: array<f32>;
+@group(0) @binding(2) var<storage, read> rotations: array<vec4<f32>>;
+@group(0) @binding(3) var<storage, read> log_scales: array<f32>;
+@group(0) @binding(4) var<storage, read> opacity_logits: array<f32>;
+@group(0) @binding(5) var<storage, read> sh: array<f32>;
+@group(0) @binding(6) var<storage, read> mask_logits: array<f32>;
+@group(0) @binding(7) var<storage, read> log_reflections: array<f32>;
+@group(0) @binding(8) var<storage, read> populations: array<u32>;
+@group(0) @binding(9) var<storage, read_write> projected: array<ProjectedGaussian>;
+
+// Rotation matrix of the normalised quaternion (w, x, y, z), by columns.
+fn quat_to_mat(q: vec4<f32>) -> mat3x3<f32> {
+    let qn = q / sqrt(dot(q, q));
+    let w = qn.x;
+    let x = qn.y;
+    let y = qn.z;
+    let z = qn.w;
+    return mat3x3<f32>(
+        vec3<f32>(1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z), 2.0 * (x * z - w * y)),
+        vec3<f32>(2.0 * (x * y - w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z + w * x)),
+        vec3<f32>(2.0 * (x * z + w * y), 2.0 * (y * z - w * x), 1.0 - 2.0 * (x * x + y * y)),
+    );
+}
+
+fn sh_coeff(i: u32, k: u32) -> vec3<f32> {
+    let base = (i * view.sh_coeffs + k) * 3u;
+    return vec3<f32>(sh[base], sh[base + 1u], sh[base + 2u]);
+}
+
+// 3DGS's SH evaluation (+0.5 offset), before the clamp at zero.
+fn eval_sh(i: u32, d: vec3<f32>) -> vec3<f32> {
+    var rgb = vec3<f32>(0.5) + SH_C0 * sh_coeff(i, 0u);
+    let degree = view.sh_degree;
+    if degree >= 1u {
+        let x = d.x;
+        let y = d.y;
+        let z = d.z;
+        rgb += -SH_C1 * y * sh_coeff(i, 1u) + SH_C1 * z * sh_coeff(i, 2u) - SH_C1 * x * sh_coeff(i, 3u);
+        if degree >= 2u {
+            let xx = x * x;
+            let yy = y * y;
+            let zz = z * z;
+            rgb += SH_C2_0 * x * y * sh_coeff(i, 4u)
+                + SH_C2_1 * y * z * sh_coeff(i, 5u)
+                + SH_C2_2 * (2.0 * zz - xx - yy) * sh_coeff(i, 6u)
+                + SH_C2_3 * x * z * sh_coeff(i, 7u)
+                + SH_C2_4 * (xx - yy) * sh_coeff(i, 8u);
+            if degree >= 3u {
+                rgb += SH_C3_0 * y * (3.0 * xx - yy) * sh_coeff(i, 9u)
+                    + SH_C3_1 * x * y * z * sh_coeff(i, 10u)
+                    + SH_C3_2 * y * (4.0 * zz - xx - yy) * sh_coeff(i, 11u)
+                    + SH_C3_3 * z * (2.0 * zz - 3.0 * xx - 3.0 * yy) * sh_coeff(i, 12u)
+                    + SH_C3_4 * x * (4.0 * zz - xx - yy) * sh_coeff(i, 13u)
+                    + SH_C3_5 * z * (xx - yy) * sh_coeff(i, 14u)
+                    + SH_C3_6 * x * (xx - 3.0 * yy) * sh_coeff(i, 15u);
+            }
+        }
+    }
+    return rgb;
+}
+
+@compute @workgroup_size(256)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let i = linear_index(gid, nwg, 256u);
+    if i >= view.count {
+        return;
+    }
+    // Zero-initialised: the entry of a culled Gaussian is all zeros (not visible).
+    var out: ProjectedGaussian;
+    let mu = vec3<f32>(means[3u * i], means[3u * i + 1u], means[3u * i + 2u]);
+    let glass = populations[i] == POPULATION_GLASS;
+    if view.front_only != 0u {
+        if glass || !(dot(mu - view.plane_centre.xyz, view.plane_normal.xyz) > 0.0) {
+            projected[i] = out;
+            return;
+        }
+    }
+    let w = transpose(mat3x3<f32>(view.row0.xyz, view.row1.xyz, view.row2.xyz));
+    let p = w * mu + view.translation.xyz;
+    if !(p.z >= view.near) {
+        projected[i] = out;
+        return;
+    }
+    let opacity = sigmoid(opacity_logits[i]);
+    // alpha = o G >= 1/255  <=>  the quadratic form is at most 2 ln(255 o).
+    let reach = 2.0 * log(opacity / MIN_ALPHA);
+    if !(reach > 0.0) {
+        projected[i] = out;
+        return;
+    }
+    let r = quat_to_mat(rotations[i]);
+    let s = exp(vec3<f32>(log_scales[3u * i], log_scales[3u * i + 1u], log_scales[3u * i + 2u]));
+    let l = mat3x3<f32>(r[0] * s.x, r[1] * s.y, r[2] * s.z);
+    let sc = w * (l * transpose(l)) * transpose(w);
+    // Jacobian with the mean clamped to the guard band.
+    let iz = 1.0 / p.z;
+    let xc = clamp(p.x / p.z, view.tan_limits.x, view.tan_limits.y) * p.z;
+    let yc = clamp(p.y / p.z, view.tan_limits.z, view.tan_limits.w) * p.z;
+    let r0 = vec3<f32>(view.focal.x * iz, 0.0, -view.focal.x * xc * iz * iz);
+    let r1 = vec3<f32>(0.0, view.focal.y * iz, -view.focal.y * yc * iz * iz);
+    let s0 = sc * r0;
+    let s1 = sc * r1;
+    let a = dot(r0, s0) + COV2D_BLUR;
+    let b = dot(r0, s1);
+    let c = dot(r1, s1) + COV2D_BLUR;
+    let det = a * c - b * b;
+    // det > 0 and finite (the second test rejects +Inf and NaN).
+    if !(det > 0.0) || !(det < 3.0e38) {
+        projected[i] = out;
+        return;
+    }
+    let offset = mu - view.centre.xyz;
+    let len = length(offset);
+    var dir = vec3<f32>(0.0);
+    if len > 0.0 {
+        dir = offset / len;
+    }
+    let raw = eval_sh(i, dir);
+    var flags = FLAG_VISIBLE;
+    if glass {
+        flags |= FLAG_GLASS;
+    }
+    if raw.x < 0.0 {
+        flags |= FLAG_CLAMPED_R;
+    }
+    if raw.y < 0.0 {
+        flags |= FLAG_CLAMPED_G;
+    }
+    if raw.z < 0.0 {
+        flags |= FLAG_CLAMPED_B;
+    }
+    out.mean2d = vec2<f32>(view.focal.x * p.x / p.z + view.focal.z, view.focal.y * p.y / p.z + view.focal.w);
+    out.extent = vec2<f32>(sqrt(reach * a), sqrt(reach * c));
+    out.conic = vec4<f32>(c / det, -b / det, a / det, opacity);
+    out.color = vec4<f32>(max(raw, vec3<f32>(0.0)), p.z);
+    if glass {
+        out.mask = sigmoid(mask_logits[i]);
+    }
+    out.reflection = exp(log_reflections[i]);
+    out.flags = flags;
+    projected[i] = out;
+}

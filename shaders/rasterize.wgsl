@@ -1,0 +1,168 @@
+// Stage `rasterize`, pass 1 (twin: trgs_core::reference::rasterize): one workgroup per 16x16
+// tile, one thread per pixel, the tile's depth-sorted Gaussians streamed through workgroup memory
+// in batches of 256. Two transmittances: primary Gaussians advance T_t (C_t, D_t, alpha) and T_m
+// (the glass mask M, which they occlude but never paint); glass Gaussians advance only T_m and
+// paint M. A primary Gaussian that would bring T_t below 1e-4 ends the pixel; one that would bring
+// T_m below it ends M only. With DEPTH_VARIANCE, a second walk over the blended Gaussians gives
+// V = sum w |z - D_t| (it needs the final D_t); without, V is written as zero.
+#include "shared/common.wgsl"
+#include "shared/splat.wgsl"
+
+@group(0) @binding(0) var<uniform> params: RasterParams;
+@group(0) @binding(1) var<storage, read> projected: array<ProjectedGaussian>;
+@group(0) @binding(2) var<storage, read> values: array<u32>;
+@group(0) @binding(3) var<storage, read> ranges: array<u32>;
+// (C_t, 1 - T_t) per pixel.
+@group(0) @binding(4) var<storage, read_write> transmission: array<vec4<f32>>;
+// (D_t, V, M, 0) per pixel.
+@group(0) @binding(5) var<storage, read_write> geometry: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read_write> states: array<RasterState>;
+
+var<workgroup> s_mean: array<vec2<f32>, 256>;
+var<workgroup> s_conic: array<vec4<f32>, 256>;
+// (colour, depth)
+var<workgroup> s_color: array<vec4<f32>, 256>;
+// (m, 1 for glass)
+var<workgroup> s_mask: array<vec2<f32>, 256>;
+var<workgroup> num_done: atomic<u32>;
+var<workgroup> max_last: atomic<u32>;
+
+fn load_batch(start: u32, end: u32, round: u32, lid: u32) {
+    let idx = start + round * 256u + lid;
+    if idx < end {
+        let g = projected[values[idx]];
+        s_mean[lid] = g.mean2d;
+        s_conic[lid] = g.conic;
+        s_color[lid] = g.color;
+        s_mask[lid] = vec2<f32>(g.mask, f32((g.flags & FLAG_GLASS) != 0u));
+    }
+}
+
+@compute @workgroup_size(16, 16)
+fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let tx = wid.x + params.tile_x0;
+    let ty = wid.y + params.tile_y0;
+    let x = tx * TILE_SIZE + lid % TILE_SIZE;
+    let y = ty * TILE_SIZE + lid / TILE_SIZE;
+    let inside = x < params.width && y < params.height;
+    let tile = ty * params.tiles_x + tx;
+    let start = ranges[2u * tile];
+    let end = max(ranges[2u * tile + 1u], start);
+    let n = end - start;
+    let rounds = (n + 255u) / 256u;
+    if lid == 0u {
+        atomicStore(&num_done, 0u);
+        atomicStore(&max_last, 0u);
+    }
+    workgroupBarrier();
+    var done = !inside;
+    if done {
+        atomicAdd(&num_done, 1u);
+    }
+    let pixel = vec2<f32>(f32(x) + 0.5, f32(y) + 0.5);
+    var t = 1.0;
+    var tm = 1.0;
+    var m_active = true;
+    var color = vec3<f32>(0.0);
+    var wsum = 0.0;
+    var zsum = 0.0;
+    var mask = 0.0;
+    var last_t = n;
+    var last_m = n;
+    for (var r = 0u; r < rounds; r++) {
+        if workgroupUniformLoad(&num_done) == 256u {
+            break;
+        }
+        load_batch(start, end, r, lid);
+        workgroupBarrier();
+        let batch = min(256u, n - r * 256u);
+        for (var j = 0u; j < batch; j++) {
+            if done {
+                break;
+            }
+            let alpha = alpha_at(s_conic[j], pixel - s_mean[j]);
+            if alpha < 0.0 {
+                continue;
+            }
+            let li = r * 256u + j;
+            if s_mask[j].y == 0.0 {
+                let next_t = t * (1.0 - alpha);
+                if next_t < MIN_TRANSMITTANCE {
+                    last_t = li;
+                    if m_active {
+                        last_m = li;
+                    }
+                    done = true;
+                    atomicAdd(&num_done, 1u);
+                    break;
+                }
+                let wgt = alpha * t;
+                color += s_color[j].xyz * wgt;
+                wsum += wgt;
+                zsum += s_color[j].w * wgt;
+                t = next_t;
+            }
+            if m_active {
+                let next_m = tm * (1.0 - alpha);
+                if next_m < MIN_TRANSMITTANCE {
+                    m_active = false;
+                    last_m = li;
+                } else {
+                    mask += s_mask[j].x * alpha * tm;
+                    tm = next_m;
+                }
+            }
+        }
+    }
+    var depth = 0.0;
+    if wsum > 0.0 {
+        depth = zsum / wsum;
+    }
+    var variance = 0.0;
+    var sign_sum = 0.0;
+#ifdef DEPTH_VARIANCE
+    // Second walk: the spread of the blended depths around D_t, over entries [0, last_t).
+    if inside {
+        atomicMax(&max_last, last_t);
+    }
+    let walk = workgroupUniformLoad(&max_last);
+    let walk_rounds = (walk + 255u) / 256u;
+    var tv = 1.0;
+    for (var r = 0u; r < walk_rounds; r++) {
+        workgroupBarrier();
+        load_batch(start, end, r, lid);
+        workgroupBarrier();
+        let batch = min(256u, n - r * 256u);
+        for (var j = 0u; j < batch; j++) {
+            if !inside || r * 256u + j >= last_t {
+                break;
+            }
+            if s_mask[j].y != 0.0 {
+                continue;
+            }
+            let alpha = alpha_at(s_conic[j], pixel - s_mean[j]);
+            if alpha < 0.0 {
+                continue;
+            }
+            let wgt = alpha * tv;
+            let dz = s_color[j].w - depth;
+            variance += wgt * abs(dz);
+            sign_sum += wgt * sign(dz);
+            tv *= 1.0 - alpha;
+        }
+    }
+#endif
+    if inside {
+        let p = y * params.width + x;
+        transmission[p] = vec4<f32>(color + t * params.background.xyz, 1.0 - t);
+        geometry[p] = vec4<f32>(depth, variance, mask, 0.0);
+        var s: RasterState;
+        s.t_final = t;
+        s.tm_final = tm;
+        s.last_t = last_t;
+        s.last_m = last_m;
+        s.weight_sum = wsum;
+        s.depth_sign_sum = sign_sum;
+        states[p] = s;
+    }
+}

@@ -1,0 +1,44 @@
+// Stage `sort` (twin: trgs_core::reference::sort_keys), digit histogram of one LSD radix pass:
+// for each block of SORT_BLOCK keys, how many have each 4-bit digit. The histogram is stored
+// digit-major (`hist[digit * num_blocks + block]`) so that its exclusive scan is every block's
+// first output slot per digit.
+#include "shared/common.wgsl"
+
+@group(0) @binding(0) var<uniform> params: SortParams;
+@group(0) @binding(1) var<storage, read> keys_hi: array<u32>;
+@group(0) @binding(2) var<storage, read> keys_lo: array<u32>;
+@group(0) @binding(3) var<storage, read_write> hist: array<u32>;
+
+var<workgroup> counts: array<atomic<u32>, 16>;
+
+fn digit_of(slot: u32) -> u32 {
+    var word = keys_lo[slot];
+    if params.use_hi != 0u {
+        word = keys_hi[slot];
+    }
+    return (word >> params.shift) & 15u;
+}
+
+@compute @workgroup_size(256)
+fn main(
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+) {
+    let block = wid.x + wid.y * nwg.x;
+    if lid < 16u {
+        atomicStore(&counts[lid], 0u);
+    }
+    workgroupBarrier();
+    let base = block * SORT_BLOCK + lid * SORT_ITEMS;
+    for (var k = 0u; k < SORT_ITEMS; k++) {
+        let slot = base + k;
+        if slot < params.count {
+            atomicAdd(&counts[digit_of(slot)], 1u);
+        }
+    }
+    workgroupBarrier();
+    if lid < 16u && block < params.num_blocks {
+        hist[lid * params.num_blocks + block] = atomicLoad(&counts[lid]);
+    }
+}
