@@ -1,8 +1,10 @@
 // Stage `project` (twin: trgs_core::reference::project): EWA projection of every Gaussian for one
 // view, which is the real camera or the camera mirrored about a plane (a general 3x3 linear map
-// with determinant -1). Culls by depth, opacity, 2D determinant and, for a mirrored view, the
-// plane's front side; writes the screen-space mean, conic, extent, colour from SH and flags.
+// with determinant -1). Culls by depth, opacity, 2D determinant, for a mirrored view the plane's
+// front side, and the view's tile limit (before the SH evaluation, which is where a mirrored
+// view's work goes otherwise); writes the screen-space mean, conic, extent, SH colour and flags.
 #include "shared/common.wgsl"
+#include "shared/tiles.wgsl"
 
 @group(0) @binding(0) var<uniform> view: ProjectParams;
 @group(0) @binding(1) var<storage, read> means: array<f32>;
@@ -116,6 +118,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         projected[i] = out;
         return;
     }
+    let mean2d = vec2<f32>(view.focal.x * p.x / p.z + view.focal.z, view.focal.y * p.y / p.z + view.focal.w);
+    let extent = vec2<f32>(sqrt(reach * a), sqrt(reach * c));
+    let rect = tile_rect_of(mean2d, extent, view.width, view.height, view.limit);
+    if rect.x >= rect.z {
+        projected[i] = out;
+        return;
+    }
     let offset = mu - view.centre.xyz;
     let len = length(offset);
     var dir = vec3<f32>(0.0);
@@ -136,8 +145,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     if raw.z < 0.0 {
         flags |= FLAG_CLAMPED_B;
     }
-    out.mean2d = vec2<f32>(view.focal.x * p.x / p.z + view.focal.z, view.focal.y * p.y / p.z + view.focal.w);
-    out.extent = vec2<f32>(sqrt(reach * a), sqrt(reach * c));
+    out.mean2d = mean2d;
+    out.extent = extent;
     out.conic = vec4<f32>(c / det, -b / det, a / det, opacity);
     out.color = vec4<f32>(max(raw, vec3<f32>(0.0)), p.z);
     if glass {

@@ -18,12 +18,11 @@
 @group(0) @binding(5) var<storage, read_write> geometry: array<vec4<f32>>;
 @group(0) @binding(6) var<storage, read_write> states: array<RasterState>;
 
-var<workgroup> s_mean: array<vec2<f32>, 256>;
+// (mean, m, 1 for glass): the mask rides with the mean so that a step loads three vectors.
+var<workgroup> s_mean: array<vec4<f32>, 256>;
 var<workgroup> s_conic: array<vec4<f32>, 256>;
 // (colour, depth)
 var<workgroup> s_color: array<vec4<f32>, 256>;
-// (m, 1 for glass)
-var<workgroup> s_mask: array<vec2<f32>, 256>;
 var<workgroup> num_done: atomic<u32>;
 var<workgroup> max_last: atomic<u32>;
 
@@ -31,10 +30,9 @@ fn load_batch(start: u32, end: u32, round: u32, lid: u32) {
     let idx = start + round * 256u + lid;
     if idx < end {
         let g = projected[values[idx]];
-        s_mean[lid] = g.mean2d;
+        s_mean[lid] = vec4<f32>(g.mean2d, g.mask, f32((g.flags & FLAG_GLASS) != 0u));
         s_conic[lid] = g.conic;
         s_color[lid] = g.color;
-        s_mask[lid] = vec2<f32>(g.mask, f32((g.flags & FLAG_GLASS) != 0u));
     }
 }
 
@@ -76,16 +74,14 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         load_batch(start, end, r, lid);
         workgroupBarrier();
         let batch = min(256u, n - r * 256u);
-        for (var j = 0u; j < batch; j++) {
-            if done {
-                break;
-            }
-            let alpha = alpha_at(s_conic[j], pixel - s_mean[j]);
+        for (var j = 0u; j < batch && !done; j++) {
+            let mean = s_mean[j];
+            let alpha = alpha_at(s_conic[j], pixel - mean.xy);
             if alpha < 0.0 {
                 continue;
             }
             let li = r * 256u + j;
-            if s_mask[j].y == 0.0 {
+            if mean.w == 0.0 {
                 let next_t = t * (1.0 - alpha);
                 if next_t < MIN_TRANSMITTANCE {
                     last_t = li;
@@ -108,7 +104,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
                     m_active = false;
                     last_m = li;
                 } else {
-                    mask += s_mask[j].x * alpha * tm;
+                    mask += mean.z * alpha * tm;
                     tm = next_m;
                 }
             }
@@ -137,10 +133,11 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
             if !inside || r * 256u + j >= last_t {
                 break;
             }
-            if s_mask[j].y != 0.0 {
+            let mean = s_mean[j];
+            if mean.w != 0.0 {
                 continue;
             }
-            let alpha = alpha_at(s_conic[j], pixel - s_mean[j]);
+            let alpha = alpha_at(s_conic[j], pixel - mean.xy);
             if alpha < 0.0 {
                 continue;
             }

@@ -58,10 +58,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         }
         workgroupBarrier();
         let batch = min(256u, n - r * 256u);
-        for (var j = 0u; j < batch; j++) {
-            if done {
-                break;
-            }
+        for (var j = 0u; j < batch && !done; j++) {
             let alpha = alpha_at(s_conic[j], pixel - s_mean[j]);
             if alpha < 0.0 {
                 continue;

@@ -17,15 +17,19 @@ fn pixel_span(centre: f32, half: f32, size: u32) -> vec3<u32> {
 // Half-open tile rectangle (x0, y0, x1, y1) of a Gaussian, intersected with `limit`;
 // (0, 0, 0, 0) when empty.
 fn tile_rect(g: ProjectedGaussian, t: TileParams) -> vec4<u32> {
-    let sx = pixel_span(g.mean2d.x, g.extent.x, t.width);
-    let sy = pixel_span(g.mean2d.y, g.extent.y, t.height);
+    return tile_rect_of(g.mean2d, g.extent, t.width, t.height, t.limit);
+}
+
+fn tile_rect_of(mean2d: vec2<f32>, extent: vec2<f32>, width: u32, height: u32, limit: vec4<u32>) -> vec4<u32> {
+    let sx = pixel_span(mean2d.x, extent.x, width);
+    let sy = pixel_span(mean2d.y, extent.y, height);
     if sx.z == 0u || sy.z == 0u {
         return vec4<u32>(0u);
     }
-    let x0 = max(sx.x / TILE_SIZE, t.limit.x);
-    let y0 = max(sy.x / TILE_SIZE, t.limit.y);
-    let x1 = min(sx.y / TILE_SIZE + 1u, t.limit.z);
-    let y1 = min(sy.y / TILE_SIZE + 1u, t.limit.w);
+    let x0 = max(sx.x / TILE_SIZE, limit.x);
+    let y0 = max(sy.x / TILE_SIZE, limit.y);
+    let x1 = min(sx.y / TILE_SIZE + 1u, limit.z);
+    let y1 = min(sy.y / TILE_SIZE + 1u, limit.w);
     if x0 >= x1 || y0 >= y1 {
         return vec4<u32>(0u);
     }

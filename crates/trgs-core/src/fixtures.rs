@@ -108,3 +108,106 @@ pub fn random_scene(spec: &SceneSpec) -> Scene {
     }
     Scene { gaussians: g, planes, camera }
 }
+
+/// How to build a benchmark room.
+#[derive(Clone, Debug)]
+pub struct RoomSpec {
+    pub seed: u64,
+    pub gaussians: usize,
+    /// 0, 1 (a glass pane) or 2 (and a mirror).
+    pub planes: usize,
+    pub width: u32,
+    pub height: u32,
+    pub sh_degree: u32,
+}
+
+/// A room for benchmarks, shaped like a real capture: Gaussians on the six walls of a box around
+/// the camera (90%) and floating inside it (10%), sized to the wall area per Gaussian so that the
+/// depth complexity stays realistic at any count. The camera looks at the far wall; plane 0 is a
+/// glass pane in front of it whose screen footprint is at most a quarter of the image (upper
+/// left), plane 1 a mirror of the same size (lower right). Their mirrored views see the room
+/// behind the camera.
+pub fn room_scene(spec: &RoomSpec) -> Scene {
+    let mut rng = Rng::new(spec.seed);
+    let (lo, hi) = (DVec3::new(-4.0, -3.0, -4.0), DVec3::new(4.0, 3.0, 6.0));
+    let size = hi - lo;
+    let areas = [size.y * size.z, size.x * size.z, size.x * size.y];
+    let total_area = 2.0 * (areas[0] + areas[1] + areas[2]);
+    let spacing = (total_area / spec.gaussians.max(1) as f64).sqrt();
+    let intr = Intrinsics::from_fov_x(70f64.to_radians(), spec.width, spec.height);
+    let camera = Camera::new("room", intr, Pose::default());
+    // A rectangle facing the camera at depth z covering the pixel box [u0, u1] x [v0, v1].
+    let pane = |u0: f64, u1: f64, v0: f64, v1: f64, z: f64, material: Material| {
+        let (w, h) = (f64::from(spec.width), f64::from(spec.height));
+        let a = intr.unproject(u0 * w, v0 * h) * z;
+        let b = intr.unproject(u1 * w, v1 * h) * z;
+        ReflectionPlane::new(
+            0.5 * (a + b),
+            DVec3::new(0.0, 0.0, -1.0),
+            DVec3::X,
+            (b.x - a.x).abs(),
+            (b.y - a.y).abs(),
+            material,
+        )
+    };
+    let mut planes = Vec::new();
+    if spec.planes >= 1 {
+        planes.push(pane(0.04, 0.46, 0.04, 0.46, 5.5, Material::Glass));
+    }
+    if spec.planes >= 2 {
+        planes.push(pane(0.54, 0.96, 0.54, 0.96, 5.0, Material::Mirror));
+    }
+    let mut g = Gaussians::<f64>::empty(spec.sh_degree);
+    let k = g.sh_coeffs();
+    for i in 0..spec.gaussians {
+        let (mean, flat_axis) = if i % 10 == 9 {
+            let p = DVec3::new(rng.uniform(), rng.uniform(), rng.uniform());
+            (lo + p * size, None)
+        } else {
+            // A wall chosen by area, a uniform point on it.
+            let mut pick = rng.uniform() * total_area;
+            let mut axis = 0;
+            while axis < 2 && pick >= 2.0 * areas[axis] {
+                pick -= 2.0 * areas[axis];
+                axis += 1;
+            }
+            let mut p = lo + DVec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * size;
+            p[axis] = if rng.uniform() < 0.5 { lo[axis] } else { hi[axis] };
+            (p, Some(axis))
+        };
+        // Discs in the wall (thin along its normal), random blobs inside.
+        let mut log_scale = [0.0; 3];
+        for (a, s) in log_scale.iter_mut().enumerate() {
+            let thin = flat_axis == Some(a);
+            *s = (spacing * if thin { 0.1 } else { 0.9 }).ln() + 0.3 * rng.normal();
+        }
+        let sh: Vec<[f64; 3]> = (0..k)
+            .map(|j| {
+                let s = if j == 0 { 1.0 } else { 0.15 };
+                [s * rng.normal(), s * rng.normal(), s * rng.normal()]
+            })
+            .collect();
+        let q = random_unit(&mut rng) * 0.1;
+        let rot = [1.0, q.x, q.y, q.z];
+        g.push(mean.to_array(), rot, log_scale, rng.range(-0.5, 3.0), &sh, Population::Primary);
+        let last = g.len() - 1;
+        g.log_reflections[last] = rng.range(-0.2, 0.2);
+    }
+    // Glass Gaussians on each plane (about 1% of the count): the mask M is about 1 on the panes,
+    // as after training.
+    let per_plane = (spec.gaussians / 100).max(16);
+    for p in &planes {
+        let step = (p.width * p.height / per_plane as f64).sqrt();
+        for _ in 0..per_plane {
+            let mean = p.centre
+                + p.axis * rng.range(-0.5, 0.5) * p.width
+                + p.bitangent() * rng.range(-0.5, 0.5) * p.height;
+            let sh = vec![[0.0; 3]; k];
+            let log_scale = [step.ln(), step.ln(), (0.05 * step).ln()];
+            g.push(mean.to_array(), [1.0, 0.0, 0.0, 0.0], log_scale, 0.0, &sh, Population::Glass);
+            let last = g.len() - 1;
+            g.mask_logits[last] = 3.0;
+        }
+    }
+    Scene { gaussians: g, planes, camera }
+}

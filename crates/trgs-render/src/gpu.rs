@@ -14,8 +14,9 @@ pub const STORAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
     .union(wgpu::BufferUsages::COPY_SRC)
     .union(wgpu::BufferUsages::COPY_DST);
 
-/// Bindings may not be empty: every size is at least this and a multiple of it.
-const MIN_SIZE: u64 = 16;
+/// Bindings may not be empty nor smaller than one element of the largest struct (64 bytes):
+/// every size is at least this and a multiple of it.
+const MIN_SIZE: u64 = 64;
 
 fn padded(size: u64) -> u64 {
     size.max(MIN_SIZE).div_ceil(MIN_SIZE) * MIN_SIZE

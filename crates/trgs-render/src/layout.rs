@@ -68,6 +68,8 @@ gpu_struct! {
         pub focal: [f32; 4],
         /// Guard band of the Jacobian: (x/z min, x/z max, y/z min, y/z max).
         pub tan_limits: [f32; 4],
+        /// Gaussians touching no tile of (x0, y0, x1, y1) are culled before their SH.
+        pub limit: [u32; 4],
         /// Gaussians in this dispatch (the bindings are ranges of the scene's buffers).
         pub count: u32,
         pub sh_degree: u32,
@@ -76,9 +78,9 @@ gpu_struct! {
         /// 1 for a mirrored view: only primary Gaussians strictly in front of the plane.
         pub front_only: u32,
         pub near: f32,
-        pub pad0: u32,
-        pub pad1: u32,
-        pub pad2: u32,
+        pub width: u32,
+        pub height: u32,
+        pub pad: u32,
     }
 }
 

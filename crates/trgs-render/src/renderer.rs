@@ -146,7 +146,8 @@ impl Renderer {
             let plane = spec.plane.map(|p| &planes[p]);
             let projected = pool.get(ctx, &format!("trgs.project.projected.v{vi}"), n * 64);
             let counts = pool.get(ctx, &format!("trgs.tile_counts.counts.v{vi}"), n * 4);
-            let pparams = project::params(&spec.view, k, plane, options.near, scene.sh_degree());
+            let pparams =
+                project::params(&spec.view, k, plane, &spec.limit, options.near, scene.sh_degree());
             project::record(s, &mut rec, scene, &pparams, &projected);
             let tparams = tile_counts::params(&grid, &spec.limit);
             tile_counts::record(s, &mut rec, scene, &tparams, &projected, &counts);

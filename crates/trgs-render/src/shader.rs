@@ -26,6 +26,7 @@ pub const SOURCES: &[(&str, &str)] = sources!(
     "rasterize.wgsl",
     "rasterize_reflection.wgsl",
     "compose.wgsl",
+    "splat_loop.wgsl",
 );
 
 /// Every (stage file, defines) combination the renderer compiles; a test validates each with naga.
@@ -42,6 +43,7 @@ pub const VARIANTS: &[(&str, &[&str])] = &[
     ("rasterize.wgsl", &["DEPTH_VARIANCE"]),
     ("rasterize_reflection.wgsl", &[]),
     ("compose.wgsl", &[]),
+    ("splat_loop.wgsl", &[]),
 ];
 
 #[derive(Debug, thiserror::Error)]

@@ -109,7 +109,7 @@ fn check_scene(name: &str, spec: SceneSpec, chunk: Option<u32>) {
             Some(p) => ProjectionFilter::FrontOf(&scene.planes[p]),
             None => ProjectionFilter::All,
         };
-        let cpu = reference::project(&g, &view.view, k, filter, 0.2);
+        let cpu = reference::project(&g, &view.view, k, filter, &view.limit, 0.2);
         let gpu = to_reference(&inter.projected);
         let mut proj_bad = 0;
         for i in 0..n {

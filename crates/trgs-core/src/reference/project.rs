@@ -1,7 +1,7 @@
 //! Stage `project`: EWA projection of every Gaussian for one view (the real camera, or the camera
 //! mirrored about a plane), with culling, the screen-space extent used for tile binning, and the
 //! SH colour for the view direction.
-use super::{COV2D_BLUR, GUARD_BAND, MIN_ALPHA};
+use super::{COV2D_BLUR, GUARD_BAND, MIN_ALPHA, TileGrid, TileRect, tile_rect};
 use crate::scene::{Gaussians, Intrinsics, Population, ReflectionPlane, ViewTransform};
 use crate::sh;
 use glam::{DMat3, DVec2, DVec3};
@@ -118,14 +118,18 @@ pub(crate) fn covariance2d(j: [f64; 4], sc: DMat3) -> [f64; 3] {
 }
 
 /// Project every Gaussian for `view`. A Gaussian is culled when its depth is below `near`, its 2D
-/// covariance is not positive definite, its opacity cannot reach 1/255, or the filter excludes it.
+/// covariance is not positive definite, its opacity cannot reach 1/255, the filter excludes it, or
+/// it touches no tile of `limit` (the whole grid, or a plane's footprint: culled before its SH is
+/// evaluated, which is most of a mirrored view's Gaussians).
 pub fn project(
     g: &Gaussians<f64>,
     view: &ViewTransform,
     k: &Intrinsics,
     filter: ProjectionFilter<'_>,
+    limit: &TileRect,
     near: f64,
 ) -> Projected {
+    let grid = TileGrid::new(k.width, k.height);
     let n = g.len();
     let mut out = Projected::with_len(n);
     for i in 0..n {
@@ -152,13 +156,18 @@ pub fn project(
         if !(det > 0.0) || !det.is_finite() {
             continue;
         }
+        let mean2d = DVec2::new(k.fx * p.x / p.z + k.cx, k.fy * p.y / p.z + k.cy);
+        let extent = DVec2::new((reach * a).sqrt(), (reach * c).sqrt());
+        if tile_rect(mean2d, extent, &grid, limit).is_empty() {
+            continue;
+        }
         let dir = (mu - view.centre).normalize_or_zero();
         let raw = sh::eval(g.sh_degree, g.sh_of(i), dir.to_array());
         out.visible[i] = true;
-        out.mean2d[i] = DVec2::new(k.fx * p.x / p.z + k.cx, k.fy * p.y / p.z + k.cy);
+        out.mean2d[i] = mean2d;
         out.conic[i] = [c / det, -b / det, a / det];
         out.depth[i] = p.z;
-        out.extent[i] = DVec2::new((reach * a).sqrt(), (reach * c).sqrt());
+        out.extent[i] = extent;
         out.color[i] = raw.map(|v| v.max(0.0));
         out.color_clamped[i] = raw.map(|v| v < 0.0);
         out.opacity[i] = opacity;

@@ -47,7 +47,7 @@ pub fn render_view(
     near: f64,
 ) -> ViewPass {
     let grid = TileGrid::new(k.width, k.height);
-    let projected = project(g, view, k, filter, near);
+    let projected = project(g, view, k, filter, limit, near);
     let counts = tile_counts(&projected, &grid, limit);
     let (offsets, total) = prefix_sum(&counts);
     let (mut keys, mut values) = emit_keys(&projected, &grid, limit, &offsets, total);

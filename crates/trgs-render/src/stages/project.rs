@@ -3,7 +3,7 @@ use super::Stage;
 use crate::gpu::{self, Recorder, grid_1d, range};
 use crate::layout::{ProjectParams, ProjectedGaussian};
 use crate::scene::GpuScene;
-use trgs_core::reference::GUARD_BAND;
+use trgs_core::reference::{GUARD_BAND, TileRect};
 use trgs_core::scene::{Intrinsics, ReflectionPlane, ViewTransform};
 
 const PROJECTED: u64 = std::mem::size_of::<ProjectedGaussian>() as u64;
@@ -13,6 +13,7 @@ pub fn params(
     view: &ViewTransform,
     k: &Intrinsics,
     plane: Option<&ReflectionPlane>,
+    limit: &TileRect,
     near: f64,
     sh_degree: u32,
 ) -> ProjectParams {
@@ -42,6 +43,9 @@ pub fn params(
         sh_coeffs: 0,
         front_only: u32::from(plane.is_some()),
         near: near as f32,
+        width: k.width,
+        height: k.height,
+        limit: [limit.x0, limit.y0, limit.x1, limit.y1],
         ..Default::default()
     }
 }

@@ -1,0 +1,137 @@
+//! Hard cases on the GPU path: outputs stay finite and bad input is refused before any kernel.
+use glam::DVec3;
+use trgs_core::fixtures::{RoomSpec, SceneSpec, random_scene, room_scene};
+use trgs_core::scene::{Camera, Gaussians, Intrinsics, Material, Pose, ReflectionPlane};
+use trgs_render::{DeviceOptions, FrameImages, GpuContext, GpuScene, RenderOptions, Renderer};
+
+fn ctx() -> GpuContext {
+    let opts = DeviceOptions { poison_fresh_buffers: true, ..Default::default() };
+    GpuContext::with_options(&opts).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn all_finite(f: &FrameImages) -> bool {
+    [&f.color, &f.transmission, &f.depth, &f.mask, &f.alpha, &f.strength, &f.reflection]
+        .iter()
+        .all(|i| i.data.iter().all(|v| v.is_finite()))
+}
+
+#[test]
+fn empty_scene_shows_the_background() {
+    let ctx = ctx();
+    let camera = Camera::new("c", Intrinsics::from_fov_x(1.0, 40, 30), Pose::default());
+    let scene = GpuScene::upload(&ctx, &Gaussians::<f32>::empty(0), &[]).expect("empty is valid");
+    let opts = RenderOptions { background: [0.25, 0.5, 0.75], ..Default::default() };
+    let f = Renderer::new(&ctx).render(&scene, &camera, &opts).expect("render").read_images(&ctx);
+    assert!(f.color.data.chunks(3).all(|p| p == [0.25, 0.5, 0.75]));
+    assert!(f.alpha.data.iter().all(|&a| a == 0.0));
+}
+
+#[test]
+fn one_pixel_image_and_gaussians_behind_the_camera() {
+    let ctx = ctx();
+    let s = random_scene(&SceneSpec {
+        width: 1,
+        height: 1,
+        planes: 1,
+        gaussians: 50,
+        ..SceneSpec::default()
+    });
+    let scene = GpuScene::upload(&ctx, &s.gaussians.cast(), &s.planes).expect("valid");
+    let renderer = Renderer::new(&ctx);
+    let f = renderer.render(&scene, &s.camera, &RenderOptions::default()).expect("render");
+    assert!(all_finite(&f.read_images(&ctx)));
+    // Turn the camera around: everything is behind it.
+    let mut back = s.camera.clone();
+    back.pose = Pose::look_at(s.camera.pose.centre(), 2.0 * s.camera.pose.centre(), DVec3::Y);
+    let f = renderer.render(&scene, &back, &RenderOptions::default()).expect("render");
+    assert_eq!(f.key_count(), 0);
+}
+
+#[test]
+fn camera_behind_or_on_the_plane_skips_the_mirrored_pass() {
+    let ctx = ctx();
+    let s = random_scene(&SceneSpec { planes: 1, gaussians: 200, ..SceneSpec::default() });
+    // An axis-aligned plane z = 0 facing +z, so that "on the plane" is exact.
+    let p = ReflectionPlane::new(DVec3::ZERO, DVec3::Z, DVec3::X, 2.4, 1.8, Material::Glass);
+    let scene =
+        GpuScene::upload(&ctx, &s.gaussians.cast(), std::slice::from_ref(&p)).expect("valid");
+    let renderer = Renderer::new(&ctx);
+    for (name, eye) in [("behind", DVec3::new(0.2, 0.1, -3.0)), ("on", DVec3::new(0.3, 0.2, 0.0))] {
+        let mut cam = s.camera.clone();
+        cam.pose = Pose::look_at(eye, DVec3::new(0.0, 0.5, 1.0), DVec3::Y);
+        let f = renderer.render(&scene, &cam, &RenderOptions::default()).expect("render");
+        assert!(!f.plane_rendered(0), "{name}: the mirrored pass must not run");
+        let img = f.read_images(&ctx);
+        assert!(all_finite(&img), "{name}");
+        assert_eq!(img.color.data, img.transmission.data, "{name}: C = C_t");
+    }
+}
+
+#[test]
+fn extreme_scales_stay_finite() {
+    let ctx = ctx();
+    let mut s = random_scene(&SceneSpec { planes: 1, gaussians: 60, ..SceneSpec::default() });
+    for (i, ls) in s.gaussians.log_scales.iter_mut().enumerate() {
+        *ls = match i % 4 {
+            0 => [-18.0; 3],          // 1.5e-8: a point
+            1 => [7.0, 7.0, 7.0],     // 1e3: larger than the scene
+            2 => [3.0, -18.0, -18.0], // a needle
+            _ => [2.0, 2.0, -18.0],   // a disc
+        };
+    }
+    let scene = GpuScene::upload(&ctx, &s.gaussians.cast(), &s.planes).expect("valid");
+    let f =
+        Renderer::new(&ctx).render(&scene, &s.camera, &RenderOptions::default()).expect("render");
+    assert!(all_finite(&f.read_images(&ctx)));
+}
+
+#[test]
+fn non_finite_input_is_refused_with_its_name() {
+    let ctx = ctx();
+    let s = random_scene(&SceneSpec::default());
+    let mut g: Gaussians<f32> = s.gaussians.cast();
+    g.log_scales[7][1] = f32::NAN;
+    let err = GpuScene::upload(&ctx, &g, &s.planes).expect_err("NaN must be refused");
+    assert_eq!(err.to_string(), "Gaussian 7: log_scale is not finite (NaN)");
+    let mut g: Gaussians<f32> = s.gaussians.cast();
+    g.means[3][0] = f32::INFINITY;
+    let err = GpuScene::upload(&ctx, &g, &s.planes).expect_err("Inf must be refused");
+    assert!(err.to_string().starts_with("Gaussian 3: mean"), "{err}");
+    let scene = GpuScene::upload(&ctx, &s.gaussians.cast(), &s.planes).expect("valid");
+    let mut cam = s.camera.clone();
+    cam.intrinsics.fx = f64::NAN;
+    let err = Renderer::new(&ctx)
+        .render(&scene, &cam, &RenderOptions::default())
+        .expect_err("bad camera");
+    assert!(err.to_string().contains("random"), "{err}");
+    cam.intrinsics = Intrinsics { width: 0, ..s.camera.intrinsics };
+    assert!(Renderer::new(&ctx).render(&scene, &cam, &RenderOptions::default()).is_err());
+}
+
+#[test]
+fn half_a_million_gaussians_render() {
+    // Plain context (no poison fill: 500k Gaussians make large buffers).
+    let ctx = GpuContext::new().unwrap_or_else(|e| panic!("{e}"));
+    let s = room_scene(&RoomSpec {
+        seed: 3,
+        gaussians: 500_000,
+        planes: 2,
+        width: 128,
+        height: 96,
+        sh_degree: 3,
+    });
+    let scene = GpuScene::upload(&ctx, &s.gaussians.cast(), &s.planes).expect("valid");
+    let f =
+        Renderer::new(&ctx).render(&scene, &s.camera, &RenderOptions::default()).expect("render");
+    let img = f.read_images(&ctx);
+    assert!(all_finite(&img));
+    let limit = ctx.device.limits().max_storage_buffer_binding_size as u64;
+    eprintln!(
+        "500k Gaussians: {} keys, frame memory {:.1} MiB, binding limit {} MiB, SH buffer {:.1} MiB",
+        f.key_count(),
+        f.memory_bytes() as f64 / 1048576.0,
+        limit / 1048576,
+        (s.gaussians.sh.len() * 12) as f64 / 1048576.0
+    );
+    assert!(img.alpha.data.iter().filter(|&&a| a > 0.9).count() > 128 * 96 / 2);
+}

@@ -1,0 +1,171 @@
+//! `render`: render a model from the cameras of a dataset folder or a camera path, writing a PNG
+//! of the final image per view and an OpenEXR of its linear layers (depth, strength,
+//! transmission, reflection, mask), with a progress bar.
+use anyhow::{Context, Result, bail};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+use trgs_core::io::{SceneFolder, read_transforms, write_png_rgb};
+use trgs_core::scene::Camera;
+use trgs_render::{GpuContext, GpuScene, Layer, RenderOptions, Renderer};
+use trgs_train::exr_layers::write_exr;
+use trgs_train::model::load_model;
+
+const HELP: &str = "\
+trgs render: render a model from a dataset's cameras or a camera path
+
+USAGE:
+    render --model PATH --cameras PATH [OPTIONS]
+
+OPTIONS:
+    --model PATH        a .ply (trgs or any INRIA-layout 3DGS PLY), or a run folder holding
+                        model.ply or point_cloud/iteration_*/point_cloud.ply
+    --planes FILE       trained planes.json (default: planes.json beside the PLY or in the run
+                        folder; none means no planes)
+    --cameras PATH      a scene folder (COLMAP or transforms.json) or a transforms.json camera path
+    --split SPLIT       with a scene folder: test (default), train or all
+    --out DIR           output folder (default: renders)
+    --background R,G,B  background colour in [0, 1] (default 0,0,0)
+    --no-exr            only the PNGs
+    -h, --help          this text
+";
+
+struct Args {
+    model: PathBuf,
+    planes: Option<PathBuf>,
+    cameras: PathBuf,
+    split: String,
+    out: PathBuf,
+    background: [f32; 3],
+    exr: bool,
+}
+
+fn parse_args() -> Result<Option<Args>> {
+    let (mut model, mut cameras) = (None, None);
+    let mut args = Args {
+        model: PathBuf::new(),
+        planes: None,
+        cameras: PathBuf::new(),
+        split: "test".into(),
+        out: PathBuf::from("renders"),
+        background: [0.0; 3],
+        exr: true,
+    };
+    let mut it = std::env::args().skip(1);
+    while let Some(a) = it.next() {
+        let mut value = |name: &str| it.next().with_context(|| format!("{name} needs a value"));
+        match a.as_str() {
+            "-h" | "--help" => return Ok(None),
+            "--model" => model = Some(PathBuf::from(value("--model")?)),
+            "--planes" => args.planes = Some(PathBuf::from(value("--planes")?)),
+            "--cameras" => cameras = Some(PathBuf::from(value("--cameras")?)),
+            "--split" => args.split = value("--split")?,
+            "--out" => args.out = PathBuf::from(value("--out")?),
+            "--background" => {
+                let v = value("--background")?;
+                let parts: Vec<f32> = v.split(',').filter_map(|p| p.trim().parse().ok()).collect();
+                let [r, g, b] = parts[..] else {
+                    bail!("--background {v:?}: expected three numbers, e.g. 1,1,1");
+                };
+                args.background = [r, g, b];
+            }
+            "--no-exr" => args.exr = false,
+            other => bail!("unknown argument {other:?}\n\n{HELP}"),
+        }
+    }
+    args.model = model.with_context(|| format!("--model is required\n\n{HELP}"))?;
+    args.cameras = cameras.with_context(|| format!("--cameras is required\n\n{HELP}"))?;
+    if !["test", "train", "all"].contains(&args.split.as_str()) {
+        bail!("--split {:?}: expected test, train or all", args.split);
+    }
+    Ok(Some(args))
+}
+
+/// The cameras to render and their output names.
+fn cameras(path: &Path, split: &str) -> Result<Vec<Camera>> {
+    if path.is_file() {
+        return Ok(read_transforms(path)?.into_iter().map(|f| f.camera).collect());
+    }
+    let folder = SceneFolder::open(path)?;
+    let views = folder.views.iter().filter(|v| match split {
+        "test" => folder.is_test(&v.camera.name),
+        "train" => !folder.is_test(&v.camera.name),
+        _ => true,
+    });
+    Ok(views.map(|v| v.camera.clone()).collect())
+}
+
+/// A file-name stem for a camera name (image names may carry folders and extensions).
+fn stem(name: &str, index: usize) -> String {
+    let base = Path::new(name).file_stem().map(|s| s.to_string_lossy().into_owned());
+    base.filter(|s| !s.is_empty()).unwrap_or_else(|| format!("view_{index:04}"))
+}
+
+fn main() -> Result<()> {
+    let Some(args) = parse_args()? else {
+        print!("{HELP}");
+        return Ok(());
+    };
+    let model = load_model(&args.model, args.planes.as_deref())?;
+    let cams = cameras(&args.cameras, &args.split)?;
+    if cams.is_empty() {
+        bail!("{}: no cameras in the {} split", args.cameras.display(), args.split);
+    }
+    let ctx = GpuContext::new()?;
+    println!(
+        "{}: {} Gaussians (SH degree {}), {} planes; {} views on {}",
+        model.ply.display(),
+        model.gaussians.len(),
+        model.gaussians.sh_degree,
+        model.planes.len(),
+        cams.len(),
+        ctx.describe()
+    );
+    let scene = GpuScene::upload(&ctx, &model.gaussians, &model.planes)
+        .with_context(|| format!("{}: invalid model", model.ply.display()))?;
+    let renderer = Renderer::new(&ctx);
+    let options = RenderOptions { background: args.background, ..Default::default() };
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating the output folder {}", args.out.display()))?;
+    let bar = ProgressBar::new(cams.len() as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} views  {per_sec}  eta {eta}  {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let t = Instant::now();
+    let mut frame = trgs_render::Frame::default();
+    for (i, cam) in cams.iter().enumerate() {
+        renderer
+            .render_into(&scene, cam, &options, &mut frame)
+            .with_context(|| format!("rendering view {:?}", cam.name))?;
+        let name = stem(&cam.name, i);
+        let color = frame.read_layer(&ctx, Layer::Color);
+        write_png_rgb(&args.out.join(format!("{name}.png")), &color)?;
+        if args.exr {
+            let layers: Vec<(Layer, trgs_core::Image<f32>)> = [
+                Layer::Transmission,
+                Layer::Reflection,
+                Layer::Strength,
+                Layer::Mask,
+                Layer::Depth,
+            ]
+            .into_iter()
+            .map(|l| (l, frame.read_layer(&ctx, l)))
+            .collect();
+            let named: Vec<(&str, &trgs_core::Image<f32>)> =
+                layers.iter().map(|(l, img)| (l.name(), img)).collect();
+            write_exr(&args.out.join(format!("{name}.exr")), &named)?;
+        }
+        bar.set_message(name);
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    println!(
+        "rendered {} views in {:.1} s ({:.1} views/s) to {}",
+        cams.len(),
+        t.elapsed().as_secs_f64(),
+        cams.len() as f64 / t.elapsed().as_secs_f64(),
+        args.out.display()
+    );
+    Ok(())
+}

@@ -1,0 +1,77 @@
+//! Loading a trained model: a Gaussian PLY (trgs or any INRIA-layout file) and its planes.
+use anyhow::{Context, Result, bail};
+use std::path::{Path, PathBuf};
+use trgs_core::io::{read_planes_json, read_ply};
+use trgs_core::scene::{Gaussians, ReflectionPlane};
+
+/// A model to render.
+#[derive(Debug)]
+pub struct Model {
+    pub gaussians: Gaussians<f32>,
+    pub planes: Vec<ReflectionPlane>,
+    pub ply: PathBuf,
+}
+
+/// The PLY of `path`: the file itself, or in a folder `model.ply`, else the INRIA layout's
+/// `point_cloud/iteration_<largest>/point_cloud.ply`.
+pub fn find_ply(path: &Path) -> Result<PathBuf> {
+    if path.is_file() {
+        return Ok(path.to_path_buf());
+    }
+    if !path.is_dir() {
+        bail!("{}: no such file or folder (expected a .ply or a run folder)", path.display());
+    }
+    let direct = path.join("model.ply");
+    if direct.is_file() {
+        return Ok(direct);
+    }
+    let iterations = path.join("point_cloud");
+    let mut best: Option<(u64, PathBuf)> = None;
+    if let Ok(entries) = std::fs::read_dir(&iterations) {
+        for e in entries.flatten() {
+            let name = e.file_name().to_string_lossy().into_owned();
+            let Some(n) = name.strip_prefix("iteration_").and_then(|n| n.parse::<u64>().ok())
+            else {
+                continue;
+            };
+            let ply = e.path().join("point_cloud.ply");
+            if ply.is_file() && best.as_ref().is_none_or(|(b, _)| n > *b) {
+                best = Some((n, ply));
+            }
+        }
+    }
+    best.map(|(_, p)| p).with_context(|| {
+        format!(
+            "{}: no model.ply and no point_cloud/iteration_*/point_cloud.ply in this folder",
+            path.display()
+        )
+    })
+}
+
+/// Load the Gaussians of `path` and the planes of `planes` (or, when None, of a `planes.json`
+/// beside the PLY or in the run folder; none found means no planes: plain 3DGS).
+pub fn load_model(path: &Path, planes: Option<&Path>) -> Result<Model> {
+    let ply = find_ply(path)?;
+    let gaussians = read_ply(&ply)?;
+    let planes_path = match planes {
+        Some(p) => Some(p.to_path_buf()),
+        None => [ply.with_file_name("planes.json"), path.join("planes.json")]
+            .into_iter()
+            .find(|p| p.is_file()),
+    };
+    let mut out = Vec::new();
+    if let Some(pp) = planes_path {
+        for (i, spec) in read_planes_json(&pp)?.into_iter().enumerate() {
+            match spec.plane {
+                Some(p) => out.push(p),
+                None => bail!(
+                    "{}: plane {i} (label {}) has a material but no geometry; rendering needs \
+                     trained planes (centre, normal, axis, width, height)",
+                    pp.display(),
+                    spec.label
+                ),
+            }
+        }
+    }
+    Ok(Model { gaussians, planes: out, ply })
+}
