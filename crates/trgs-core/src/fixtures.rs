@@ -1,7 +1,9 @@
 //! Deterministic random scenes for tests and benchmarks, shared by the CPU reference's checks and
 //! the GPU stages' comparisons so that both see the same inputs.
 use crate::rng::Rng;
-use crate::scene::{Camera, Gaussians, Intrinsics, Material, Population, Pose, ReflectionPlane};
+use crate::scene::{
+    Camera, Gaussians, Intrinsics, Material, Population, Pose, ReflectionPlane, ViewTransform,
+};
 use glam::DVec3;
 
 /// A scene to render: Gaussians, planes and one camera.
@@ -119,6 +121,20 @@ pub struct RoomSpec {
     pub width: u32,
     pub height: u32,
     pub sh_degree: u32,
+    pub density: RoomDensity,
+}
+
+/// Where a benchmark room's Gaussians are.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RoomDensity {
+    /// The same world-space density on every wall, as if every wall had been captured from up
+    /// close. The mirrored views then see the room behind the camera, farther away and so denser
+    /// on screen than the transmitted view.
+    Uniform,
+    /// As 3DGS densification leaves a capture: surfaces get Gaussians of about constant screen
+    /// size in the view that sees them best, the camera's or (through a plane) a mirrored one;
+    /// walls that no view sees keep a sparse coarse cover.
+    AsCaptured,
 }
 
 /// A room for benchmarks, shaped like a real capture: Gaussians on the six walls of a box around
@@ -126,7 +142,7 @@ pub struct RoomSpec {
 /// depth complexity stays realistic at any count. The camera looks at the far wall; plane 0 is a
 /// glass pane in front of it whose screen footprint is at most a quarter of the image (upper
 /// left), plane 1 a mirror of the same size (lower right). Their mirrored views see the room
-/// behind the camera.
+/// behind the camera. `spec.density` says how the Gaussians are spread over the walls.
 pub fn room_scene(spec: &RoomSpec) -> Scene {
     let mut rng = Rng::new(spec.seed);
     let (lo, hi) = (DVec3::new(-4.0, -3.0, -4.0), DVec3::new(4.0, 3.0, 6.0));
@@ -157,29 +173,85 @@ pub fn room_scene(spec: &RoomSpec) -> Scene {
     if spec.planes >= 2 {
         planes.push(pane(0.54, 0.96, 0.54, 0.96, 5.0, Material::Mirror));
     }
+    // The views that see the room: the camera, and the camera mirrored about each plane (which
+    // sees through its rectangle only). Distance from the nearest view that sees a point.
+    let view = ViewTransform::from(&camera.pose);
+    let mirrors: Vec<(ViewTransform, &ReflectionPlane)> =
+        planes.iter().map(|p| (crate::plane_math::mirrored_view(p, &view), p)).collect();
+    let (w, h) = (f64::from(spec.width), f64::from(spec.height));
+    let on_screen = |v: &ViewTransform, x: DVec3| -> Option<(f64, f64, f64)> {
+        let c = v.transform_point(x);
+        (c.z > 0.2).then(|| {
+            (intr.fx * c.x / c.z + intr.cx, intr.fy * c.y / c.z + intr.cy, (x - v.centre).length())
+        })
+    };
+    let view_distance = |x: DVec3| -> f64 {
+        let mut best = f64::INFINITY;
+        if let Some((u, v, d)) = on_screen(&view, x)
+            && (0.0..w).contains(&u)
+            && (0.0..h).contains(&v)
+        {
+            best = d;
+        }
+        for (mv, plane) in &mirrors {
+            if plane.signed_distance(x) > 0.0
+                && let Some(hit) = crate::plane_math::ray_rectangle_hit(
+                    plane,
+                    camera.pose.centre(),
+                    (crate::plane_math::reflect_point(plane, x) - camera.pose.centre()).normalize(),
+                )
+                && hit > 0.0
+                && let Some((_, _, d)) = on_screen(mv, x)
+            {
+                best = best.min(d);
+            }
+        }
+        best
+    };
     let mut g = Gaussians::<f64>::empty(spec.sh_degree);
     let k = g.sh_coeffs();
+    // AsCaptured: rejection-sample wall points with density (d_ref / d)^2 (constant screen
+    // density); points no view sees get the density of a view 3x farther than the room's size.
+    let d_ref = 2.0;
+    let unseen = 3.0 * size.length();
+    let mut tried = 0usize;
+    let mut accepted = 0usize;
+    let spacing_of = |d: f64| {
+        spacing * if spec.density == RoomDensity::Uniform { 1.0 } else { d.max(d_ref) / d_ref }
+    };
     for i in 0..spec.gaussians {
         let (mean, flat_axis) = if i % 10 == 9 {
             let p = DVec3::new(rng.uniform(), rng.uniform(), rng.uniform());
             (lo + p * size, None)
         } else {
-            // A wall chosen by area, a uniform point on it.
-            let mut pick = rng.uniform() * total_area;
-            let mut axis = 0;
-            while axis < 2 && pick >= 2.0 * areas[axis] {
-                pick -= 2.0 * areas[axis];
-                axis += 1;
+            loop {
+                // A wall chosen by area, a uniform point on it.
+                let mut pick = rng.uniform() * total_area;
+                let mut axis = 0;
+                while axis < 2 && pick >= 2.0 * areas[axis] {
+                    pick -= 2.0 * areas[axis];
+                    axis += 1;
+                }
+                let mut p = lo + DVec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * size;
+                p[axis] = if rng.uniform() < 0.5 { lo[axis] } else { hi[axis] };
+                if spec.density == RoomDensity::Uniform {
+                    break (p, Some(axis));
+                }
+                tried += 1;
+                let d = view_distance(p).min(unseen).max(d_ref);
+                if rng.uniform() < (d_ref / d).powi(2) {
+                    accepted += 1;
+                    break (p, Some(axis));
+                }
             }
-            let mut p = lo + DVec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * size;
-            p[axis] = if rng.uniform() < 0.5 { lo[axis] } else { hi[axis] };
-            (p, Some(axis))
         };
-        // Discs in the wall (thin along its normal), random blobs inside.
+        // Discs in the wall (thin along its normal), random blobs inside. AsCaptured: the spacing
+        // grows with the viewing distance (the mean spacing is rescaled below).
+        let local = spacing_of(view_distance(mean).min(unseen));
         let mut log_scale = [0.0; 3];
         for (a, s) in log_scale.iter_mut().enumerate() {
             let thin = flat_axis == Some(a);
-            *s = (spacing * if thin { 0.1 } else { 0.9 }).ln() + 0.3 * rng.normal();
+            *s = (local * if thin { 0.1 } else { 0.9 }).ln() + 0.3 * rng.normal();
         }
         let sh: Vec<[f64; 3]> = (0..k)
             .map(|j| {
@@ -192,6 +264,17 @@ pub fn room_scene(spec: &RoomSpec) -> Scene {
         g.push(mean.to_array(), rot, log_scale, rng.range(-0.5, 3.0), &sh, Population::Primary);
         let last = g.len() - 1;
         g.log_reflections[last] = rng.range(-0.2, 0.2);
+    }
+    if spec.density == RoomDensity::AsCaptured && tried > 0 {
+        // Density (d_ref/d)^2 over the walls integrates to total_area * acceptance; the spacing
+        // at d_ref that gives the requested count on that area is sqrt(area * rate / n).
+        let rate = accepted as f64 / tried as f64;
+        let correction = (rate).sqrt().ln();
+        for ls in &mut g.log_scales {
+            for v in ls.iter_mut() {
+                *v += correction;
+            }
+        }
     }
     // Glass Gaussians on each plane (about 1% of the count): the mask M is about 1 on the panes,
     // as after training.

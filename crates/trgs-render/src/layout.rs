@@ -228,9 +228,12 @@ pub const SCAN_BLOCK: u32 = 256 * SCAN_ITEMS;
 pub const SORT_ITEMS: u32 = 16;
 pub const SORT_BLOCK: u32 = 256 * SORT_ITEMS;
 
-/// Every GPU struct: (name, WGSL declaration, Rust field offsets, Rust size).
-pub fn all_structs() -> Vec<(&'static str, String, Vec<(&'static str, usize)>, usize)> {
-    fn entry<T: GpuStruct>() -> (&'static str, String, Vec<(&'static str, usize)>, usize) {
+/// One GPU struct: (name, WGSL declaration, Rust field offsets, Rust size).
+pub type StructInfo = (&'static str, String, Vec<(&'static str, usize)>, usize);
+
+/// Every GPU struct.
+pub fn all_structs() -> Vec<StructInfo> {
+    fn entry<T: GpuStruct>() -> StructInfo {
         (T::NAME, T::wgsl(), T::field_offsets(), std::mem::size_of::<T>())
     }
     vec![

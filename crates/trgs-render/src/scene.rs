@@ -42,7 +42,7 @@ impl GpuScene {
         let flat3 = |v: &[[f32; 3]]| v.iter().flatten().copied().collect::<Vec<f32>>();
         let pops: Vec<u32> = gaussians.populations.iter().map(|&p| p as u32).collect();
         let sh_coeffs = gaussians.sh_coeffs() as u32;
-        let limit = ctx.device.limits().max_storage_buffer_binding_size as u64;
+        let limit = ctx.device.limits().max_storage_buffer_binding_size;
         let widest = (u64::from(sh_coeffs) * 12).max(PROJECTED_STRIDE);
         // Multiples of 256 Gaussians keep every range offset aligned for any stride.
         let chunk = ((limit / widest) / 256 * 256).clamp(256, u64::from(u32::MAX / 2)) as u32;

@@ -1,6 +1,6 @@
 //! Hard cases on the GPU path: outputs stay finite and bad input is refused before any kernel.
 use glam::DVec3;
-use trgs_core::fixtures::{RoomSpec, SceneSpec, random_scene, room_scene};
+use trgs_core::fixtures::{RoomDensity, RoomSpec, SceneSpec, random_scene, room_scene};
 use trgs_core::scene::{Camera, Gaussians, Intrinsics, Material, Pose, ReflectionPlane};
 use trgs_render::{DeviceOptions, FrameImages, GpuContext, GpuScene, RenderOptions, Renderer};
 
@@ -119,13 +119,14 @@ fn half_a_million_gaussians_render() {
         width: 128,
         height: 96,
         sh_degree: 3,
+        density: RoomDensity::Uniform,
     });
     let scene = GpuScene::upload(&ctx, &s.gaussians.cast(), &s.planes).expect("valid");
     let f =
         Renderer::new(&ctx).render(&scene, &s.camera, &RenderOptions::default()).expect("render");
     let img = f.read_images(&ctx);
     assert!(all_finite(&img));
-    let limit = ctx.device.limits().max_storage_buffer_binding_size as u64;
+    let limit = ctx.device.limits().max_storage_buffer_binding_size;
     eprintln!(
         "500k Gaussians: {} keys, frame memory {:.1} MiB, binding limit {} MiB, SH buffer {:.1} MiB",
         f.key_count(),

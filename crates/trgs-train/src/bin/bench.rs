@@ -8,7 +8,7 @@ use anyhow::{Context, Result, bail};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::time::Instant;
-use trgs_core::fixtures::{RoomSpec, room_scene};
+use trgs_core::fixtures::{RoomDensity, RoomSpec, room_scene};
 use trgs_core::reference::TILE_SIZE;
 use trgs_render::gpu::{self, Kernel, Recorder};
 use trgs_render::layout::{ProjectedGaussian, RasterParams};
@@ -53,6 +53,7 @@ fn parse_args() -> Result<Option<Args>> {
 }
 
 struct Row {
+    density: RoomDensity,
     width: u32,
     height: u32,
     gaussians: usize,
@@ -107,6 +108,7 @@ fn bench_config(
     let stages: Vec<(&'static str, f64)> =
         samples.into_iter().map(|(n, v)| (n, median(v))).collect();
     let row = Row {
+        density: spec.density,
         width: spec.width,
         height: spec.height,
         gaussians: spec.gaussians,
@@ -189,16 +191,28 @@ fn main() -> Result<()> {
         if args.quick { &[10_000, 100_000] } else { &[10_000, 100_000, 500_000] };
     let mut rows = Vec::new();
     let mut throughput = None;
+    // The grid on the capture-like room; the uniform room (the worst case for mirrored passes)
+    // at 256x192 with 100k Gaussians.
+    let mut configs = Vec::new();
     for &(width, height) in sizes {
         for &gaussians in counts {
+            configs.push((RoomDensity::AsCaptured, width, height, gaussians));
+        }
+    }
+    configs.push((RoomDensity::Uniform, 256, 192, 100_000));
+    for (density, width, height, gaussians) in configs {
+        {
             for planes in 0..=2 {
-                let spec = RoomSpec { seed: 7, gaussians, planes, width, height, sh_degree: 3 };
+                let spec =
+                    RoomSpec { seed: 7, gaussians, planes, width, height, sh_degree: 3, density };
                 let (row, frame) = bench_config(&ctx, &renderer, &spec, args.reps.max(1))?;
                 println!(
-                    "{width}x{height} {gaussians:>6} Gaussians {planes} planes: {:8.2} ms wall, {:8.2} ms GPU, {} keys",
+                    "{density:?} {width}x{height} {gaussians:>6} Gaussians {planes} planes: {:8.2} ms wall, {:8.2} ms GPU, {} keys",
                     row.wall_ms, row.gpu_ms, row.keys
                 );
-                if (width, height, gaussians, planes) == (256, 192, 100_000, 0) {
+                if (density, width, height, gaussians, planes)
+                    == (RoomDensity::AsCaptured, 256, 192, 100_000, 0)
+                {
                     let evals = rasterize_evaluations(&ctx, &frame, gaussians);
                     let raster_ms =
                         row.stages.iter().find(|s| s.0 == "rasterize").map_or(f64::NAN, |s| s.1);
@@ -230,6 +244,13 @@ fn main() -> Result<()> {
     Ok(())
 }
 
+fn density_name(d: RoomDensity) -> &'static str {
+    match d {
+        RoomDensity::AsCaptured => "as captured",
+        RoomDensity::Uniform => "uniform",
+    }
+}
+
 struct Throughput {
     evals: u64,
     raster_ms: f64,
@@ -250,25 +271,35 @@ fn report(ctx: &GpuContext, rows: &[Row], throughput: Option<Throughput>, args: 
     let _ = writeln!(s, "Made by `{cmd}` on {}.", ctx.describe());
     let _ = writeln!(
         s,
-        "Scene: `trgs_core::fixtures::room_scene` (Gaussians on the walls of a room around the camera, SH degree 3; \
-         plane 0 a glass pane, plane 1 a mirror, each covering at most a quarter of the image). \
+        "Scene: `trgs_core::fixtures::room_scene`: Gaussians on the walls of a room around the camera, SH degree 3; \
+         plane 0 a glass pane, plane 1 a mirror, each covering at most a quarter of the image (1% of the Gaussians are \
+         glass Gaussians on them). *As captured*: every surface has Gaussians of about constant screen size in the view \
+         that sees it best (the camera's, or a mirrored view through a plane), as 3DGS densification leaves a capture. \
+         *Uniform*: the same world-space density on every wall; a mirror then sees the room behind the camera from \
+         farther away, about 3.5x denser on screen than the transmitted view: the worst case for mirrored passes. \
          Wall: median of {} frames, CPU encoding and the one readback of key totals included. \
          GPU: sum over stages of the median of each stage's timestamp-query time over as many profiled frames.\n",
         args.reps
     );
     let _ = writeln!(
         s,
-        "| image | Gaussians | planes | wall ms | GPU ms | vs no plane | keys | frame memory MiB |"
+        "| room | image | Gaussians | planes | wall ms | GPU ms | vs no plane | keys | frame memory MiB |"
     );
-    let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|");
+    let _ = writeln!(s, "|---|---|---:|---:|---:|---:|---:|---:|---:|");
     for r in rows {
         let base = rows
             .iter()
-            .find(|b| b.width == r.width && b.gaussians == r.gaussians && b.planes == 0)
+            .find(|b| {
+                b.density == r.density
+                    && b.width == r.width
+                    && b.gaussians == r.gaussians
+                    && b.planes == 0
+            })
             .map_or(f64::NAN, |b| b.wall_ms);
         let _ = writeln!(
             s,
-            "| {}x{} | {} | {} | {:.1} | {:.1} | {:.2}x | {} | {:.1} |",
+            "| {} | {}x{} | {} | {} | {:.1} | {:.1} | {:.2}x | {} | {:.1} |",
+            density_name(r.density),
             r.width,
             r.height,
             r.gaussians,
@@ -289,8 +320,8 @@ fn report(ctx: &GpuContext, rows: &[Row], throughput: Option<Throughput>, args: 
             }
         }
     }
-    let _ = writeln!(s, "| image | Gaussians | planes | {} |", names.join(" | "));
-    let _ = writeln!(s, "|---|---:|---:|{}", "---:|".repeat(names.len()));
+    let _ = writeln!(s, "| room | image | Gaussians | planes | {} |", names.join(" | "));
+    let _ = writeln!(s, "|---|---|---:|---:|{}", "---:|".repeat(names.len()));
     for r in rows {
         let cells: Vec<String> = names
             .iter()

@@ -1,0 +1,72 @@
+//! The `render` command end to end: a model (PLY + planes.json) and a camera path
+//! (transforms.json) give one PNG and one EXR per view; bad input names the file.
+use std::path::PathBuf;
+use std::process::Command;
+use trgs_core::fixtures::{SceneSpec, random_scene};
+use trgs_core::io::{TransformsFrame, write_planes_json, write_ply, write_transforms};
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("trgs-render-cli-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).expect("temp dir");
+    d
+}
+
+#[test]
+fn renders_pngs_and_exrs_from_a_camera_path() {
+    let dir = tmp("ok");
+    let s = random_scene(&SceneSpec {
+        planes: 1,
+        gaussians: 300,
+        width: 64,
+        height: 48,
+        ..SceneSpec::default()
+    });
+    write_ply(&dir.join("model.ply"), &s.gaussians.cast()).expect("ply");
+    write_planes_json(&dir.join("planes.json"), &s.planes).expect("planes");
+    let mut second = s.camera.clone();
+    second.name = "second.png".into();
+    let frames: Vec<TransformsFrame> = [s.camera.clone(), second]
+        .into_iter()
+        .map(|camera| TransformsFrame { image_path: PathBuf::from(&camera.name), camera })
+        .collect();
+    write_transforms(&dir.join("path.json"), &frames).expect("transforms");
+    let out = dir.join("out");
+    let status = Command::new(env!("CARGO_BIN_EXE_render"))
+        .args(["--model", dir.to_str().expect("utf-8"), "--cameras"])
+        .arg(dir.join("path.json"))
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .expect("run render");
+    let stdout = String::from_utf8_lossy(&status.stdout);
+    assert!(status.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&status.stderr));
+    assert!(stdout.contains("1 planes"), "{stdout}");
+    for name in ["second"] {
+        let png = image::open(out.join(format!("{name}.png"))).expect("png").to_rgb8();
+        assert_eq!(png.dimensions(), (64, 48));
+        let exr = std::fs::read(out.join(format!("{name}.exr"))).expect("exr");
+        assert_eq!(&exr[..4], &[0x76, 0x2f, 0x31, 0x01], "EXR magic");
+        let text = String::from_utf8_lossy(&exr);
+        for ch in ["transmission.R", "reflection.B", "depth.Z", "strength.Y", "mask.Y"] {
+            assert!(text.contains(ch), "EXR lacks channel {ch}");
+        }
+    }
+    let pngs = std::fs::read_dir(&out)
+        .expect("out")
+        .filter(|e| e.as_ref().is_ok_and(|e| e.path().extension().is_some_and(|x| x == "png")));
+    assert_eq!(pngs.count(), 2);
+}
+
+#[test]
+fn missing_model_names_the_path() {
+    let dir = tmp("missing");
+    let out = Command::new(env!("CARGO_BIN_EXE_render"))
+        .args(["--model", "/nonexistent/model.ply", "--cameras"])
+        .arg(&dir)
+        .output()
+        .expect("run render");
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("/nonexistent/model.ply"), "{err}");
+}
