@@ -3,6 +3,7 @@
 // digit-major (`hist[digit * num_blocks + block]`) so that its exclusive scan is every block's
 // first output slot per digit.
 #include "shared/common.wgsl"
+#include "shared/sort_digit.wgsl"
 
 @group(0) @binding(0) var<uniform> params: SortParams;
 @group(0) @binding(1) var<storage, read> keys_hi: array<u32>;
@@ -10,14 +11,6 @@
 @group(0) @binding(3) var<storage, read_write> hist: array<u32>;
 
 var<workgroup> counts: array<atomic<u32>, 16>;
-
-fn digit_of(slot: u32) -> u32 {
-    var word = keys_lo[slot];
-    if params.use_hi != 0u {
-        word = keys_hi[slot];
-    }
-    return (word >> params.shift) & 15u;
-}
 
 @compute @workgroup_size(256)
 fn main(

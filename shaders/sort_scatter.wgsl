@@ -4,6 +4,7 @@
 // slot per digit comes from the scanned histogram. Keys keep their order within a digit: the sort
 // is stable, as the twin's.
 #include "shared/common.wgsl"
+#include "shared/sort_digit.wgsl"
 
 @group(0) @binding(0) var<uniform> params: SortParams;
 @group(0) @binding(1) var<storage, read> keys_hi: array<u32>;
@@ -18,14 +19,6 @@
 var<workgroup> scan_lo: array<vec4<u32>, 256>;
 var<workgroup> scan_hi: array<vec4<u32>, 256>;
 var<workgroup> block_base: array<u32, 16>;
-
-fn digit_of(slot: u32) -> u32 {
-    var word = keys_lo[slot];
-    if params.use_hi != 0u {
-        word = keys_hi[slot];
-    }
-    return (word >> params.shift) & 15u;
-}
 
 @compute @workgroup_size(256)
 fn main(

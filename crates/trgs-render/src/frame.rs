@@ -296,21 +296,50 @@ impl Frame {
         }
     }
 
-    /// Read every layer back.
+    /// Read every layer back (each layer buffer once).
     pub fn read_images(&self, ctx: &GpuContext) -> FrameImages {
         let (w, h) = (self.width(), self.height());
-        let hit = match (&self.layers, self.composed()) {
-            (Some(l), true) => Image {
-                width: w,
-                height: h,
-                channels: 1,
-                data: gpu::read_buffer(ctx, &l.hit, 0, self.pixels()),
-            },
-            _ => Image::new(w, h, 1),
+        let Some(l) = &self.layers else {
+            let z = |c| Image::new(w, h, c);
+            return FrameImages {
+                color: z(3),
+                transmission: z(3),
+                depth: z(1),
+                depth_variance: z(1),
+                mask: z(1),
+                alpha: z(1),
+                hit: Image::new(w, h, 1),
+                strength_raw: z(1),
+                strength: z(1),
+                reflection: z(3),
+                planes: Vec::new(),
+            };
+        };
+        let transmission = self.read_vec4(ctx, &l.transmission, 0);
+        let geometry = self.read_vec4(ctx, &l.geometry, 0);
+        let composed = self.composed();
+        let (color, reflection, strength, hit) = if composed {
+            (
+                self.channel_image(&self.read_vec4(ctx, &l.color, 0), 0..3),
+                self.channel_image(&self.read_vec4(ctx, &l.reflection, 0), 0..3),
+                self.read_vec4(ctx, &l.strength, 0),
+                Image {
+                    width: w,
+                    height: h,
+                    channels: 1,
+                    data: gpu::read_buffer(ctx, &l.hit, 0, self.pixels()),
+                },
+            )
+        } else {
+            (
+                self.channel_image(&transmission, 0..3),
+                Image::new(w, h, 3),
+                vec![[0.0; 4]; self.pixels()],
+                Image::new(w, h, 1),
+            )
         };
         let planes = (0..self.plane_count)
             .map(|k| {
-                let l = self.layers.as_ref()?;
                 let v = self.views.iter().find(|v| v.plane == Some(k))?;
                 let raw = self.read_vec4(ctx, &l.reflection_raw, k * self.pixels());
                 Some(PlaneImages {
@@ -321,16 +350,16 @@ impl Frame {
             })
             .collect();
         FrameImages {
-            color: self.read_layer(ctx, Layer::Color),
-            transmission: self.read_layer(ctx, Layer::Transmission),
-            depth: self.read_layer(ctx, Layer::Depth),
-            depth_variance: self.read_layer(ctx, Layer::DepthVariance),
-            mask: self.read_layer(ctx, Layer::Mask),
-            alpha: self.read_layer(ctx, Layer::Alpha),
+            color,
+            transmission: self.channel_image(&transmission, 0..3),
+            depth: self.channel_image(&geometry, 0..1),
+            depth_variance: self.channel_image(&geometry, 1..2),
+            mask: self.channel_image(&geometry, 2..3),
+            alpha: self.channel_image(&transmission, 3..4),
             hit,
-            strength_raw: self.read_layer(ctx, Layer::StrengthRaw),
-            strength: self.read_layer(ctx, Layer::Strength),
-            reflection: self.read_layer(ctx, Layer::Reflection),
+            strength_raw: self.channel_image(&strength, 0..1),
+            strength: self.channel_image(&strength, 1..2),
+            reflection,
             planes,
         }
     }

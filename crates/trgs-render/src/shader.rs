@@ -15,6 +15,7 @@ pub const SOURCES: &[(&str, &str)] = sources!(
     "shared/common.wgsl",
     "shared/tiles.wgsl",
     "shared/splat.wgsl",
+    "shared/sort_digit.wgsl",
     "project.wgsl",
     "tile_counts.wgsl",
     "prefix_sum.wgsl",
