@@ -3,6 +3,7 @@
 // R_raw = R0 + (1 - R0) (1 - cos)^5, R = R_raw M, C_r = C_raw^k A^k and
 // C = (1 - R) C_t + R C_r. Pixels without a hit show C_t.
 #include "shared/common.wgsl"
+#include "shared/plane_hit.wgsl"
 
 @group(0) @binding(0) var<uniform> params: ComposeParams;
 @group(0) @binding(1) var<storage, read> planes: array<PlaneGpu>;
@@ -17,27 +18,6 @@
 @group(0) @binding(7) var<storage, read_write> strength: array<vec4<f32>>;
 @group(0) @binding(8) var<storage, read_write> hit: array<u32>;
 
-// Ray parameter of the hit on plane k's rectangle from the front side, or -1.
-fn rectangle_hit(plane: PlaneGpu, origin: vec3<f32>, dir: vec3<f32>) -> f32 {
-    let n = plane.normal.xyz;
-    let side = dot(origin - plane.centre.xyz, n);
-    let toward = dot(dir, n);
-    if !(side > 0.0) || !(toward < 0.0) {
-        return -1.0;
-    }
-    let s = -side / toward;
-    if !(s < 3.0e38) {
-        return -1.0;
-    }
-    let local = origin + s * dir - plane.centre.xyz;
-    let u = dot(local, plane.axis.xyz);
-    let v = dot(local, plane.bitangent.xyz);
-    if abs(u) <= plane.axis.w && abs(v) <= plane.bitangent.w {
-        return s;
-    }
-    return -1.0;
-}
-
 @compute @workgroup_size(16, 16)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let x = gid.x;
@@ -47,13 +27,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let p = y * params.width + x;
     let ct = transmission[p].xyz;
-    let cam = vec3<f32>(
-        (f32(x) + 0.5 - params.focal.z) / params.focal.x,
-        (f32(y) + 0.5 - params.focal.w) / params.focal.y,
-        1.0,
-    );
-    let to_world = mat3x3<f32>(params.cam_col0.xyz, params.cam_col1.xyz, params.cam_col2.xyz);
-    let dir = normalize(to_world * cam);
+    let dir = camera_ray(params, x, y);
     let origin = params.origin.xyz;
     var best = -1;
     var best_s = 0.0;

@@ -8,9 +8,9 @@
 @group(0) @binding(1) var<storage, read_write> data: array<u32>;
 @group(0) @binding(2) var<storage, read_write> block_sums: array<u32>;
 
-var<workgroup> sums: array<u32, 256>;
+var<workgroup> sums: array<u32, SCAN_THREADS>;
 
-@compute @workgroup_size(256)
+@compute @workgroup_size(SCAN_THREADS)
 fn main(
     @builtin(workgroup_id) wid: vec3<u32>,
     @builtin(local_invocation_index) lid: u32,
@@ -29,7 +29,7 @@ fn main(
     sums[lid] = total;
     workgroupBarrier();
     // Hillis-Steele inclusive scan of the thread totals.
-    for (var offset = 1u; offset < 256u; offset <<= 1u) {
+    for (var offset = 1u; offset < SCAN_THREADS; offset <<= 1u) {
         var v = sums[lid];
         if lid >= offset {
             v += sums[lid - offset];
@@ -47,7 +47,7 @@ fn main(
             data[base + k] = before + local[k];
         }
     }
-    if lid == 255u {
-        block_sums[block] = sums[255];
+    if lid == SCAN_THREADS - 1u {
+        block_sums[block] = sums[SCAN_THREADS - 1u];
     }
 }

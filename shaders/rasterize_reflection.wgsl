@@ -1,10 +1,12 @@
 // Stage `rasterize_reflection`, pass 2 (twin: trgs_core::reference::rasterize_reflection): the
 // mirrored view of one plane, dispatched over the tiles of the plane's footprint only
-// (tile_x0, tile_y0 is the footprint's corner). One transmittance; writes (C_raw, A) with
-// C_raw = sum c w and A = sum a w into the plane's slot. Pixels outside the footprint keep the
-// zeros the buffer was cleared to.
+// (tile_x0, tile_y0 is the footprint's corner), and within them only the pixels whose camera ray
+// hits the plane's rectangle from the front: nothing else ever shows the reflection. One
+// transmittance; writes (C_raw, A) with C_raw = sum c w and A = sum a w into the plane's slot.
+// Other pixels keep the zeros the buffers were cleared to.
 #include "shared/common.wgsl"
 #include "shared/splat.wgsl"
+#include "shared/plane_hit.wgsl"
 
 @group(0) @binding(0) var<uniform> params: RasterParams;
 @group(0) @binding(1) var<storage, read> projected: array<ProjectedGaussian>;
@@ -13,6 +15,9 @@
 // (C_raw, A) per pixel of every plane, plane k at [k * pixels, (k + 1) * pixels).
 @group(0) @binding(4) var<storage, read_write> reflection_raw: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read_write> states: array<ReflectionState>;
+// The camera's rays, and the planes (this pass's plane is planes[params.slot]).
+@group(0) @binding(6) var<uniform> camera: ComposeParams;
+@group(0) @binding(7) var<storage, read> planes: array<PlaneGpu>;
 
 var<workgroup> s_mean: array<vec2<f32>, 256>;
 var<workgroup> s_conic: array<vec4<f32>, 256>;
@@ -26,7 +31,8 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
     let ty = wid.y + params.tile_y0;
     let x = tx * TILE_SIZE + lid % TILE_SIZE;
     let y = ty * TILE_SIZE + lid / TILE_SIZE;
-    let inside = x < params.width && y < params.height;
+    let inside = x < params.width && y < params.height
+        && rectangle_hit(planes[params.slot], camera.origin.xyz, camera_ray(camera, x, y)) >= 0.0;
     let tile = ty * params.tiles_x + tx;
     let start = ranges[2u * tile];
     let end = max(ranges[2u * tile + 1u], start);

@@ -12,7 +12,7 @@
 
 var<workgroup> counts: array<atomic<u32>, 16>;
 
-@compute @workgroup_size(256)
+@compute @workgroup_size(SORT_THREADS)
 fn main(
     @builtin(workgroup_id) wid: vec3<u32>,
     @builtin(local_invocation_index) lid: u32,

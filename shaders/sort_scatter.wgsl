@@ -16,11 +16,11 @@
 @group(0) @binding(7) var<storage, read_write> out_values: array<u32>;
 
 // Packed per-digit counts of each thread: digits 0-7 in `lo` (two per component), 8-15 in `hi`.
-var<workgroup> scan_lo: array<vec4<u32>, 256>;
-var<workgroup> scan_hi: array<vec4<u32>, 256>;
+var<workgroup> scan_lo: array<vec4<u32>, SORT_THREADS>;
+var<workgroup> scan_hi: array<vec4<u32>, SORT_THREADS>;
 var<workgroup> block_base: array<u32, 16>;
 
-@compute @workgroup_size(256)
+@compute @workgroup_size(SORT_THREADS)
 fn main(
     @builtin(workgroup_id) wid: vec3<u32>,
     @builtin(local_invocation_index) lid: u32,
@@ -44,7 +44,7 @@ fn main(
     workgroupBarrier();
     // Hillis-Steele inclusive scan over threads (16-bit fields cannot overflow: a block holds
     // at most SORT_BLOCK < 65536 keys).
-    for (var offset = 1u; offset < 256u; offset <<= 1u) {
+    for (var offset = 1u; offset < SORT_THREADS; offset <<= 1u) {
         var lo = scan_lo[lid];
         var hi = scan_hi[lid];
         if lid >= offset {

@@ -221,12 +221,19 @@ pub const FLAG_CLAMPED_G: u32 = 8;
 pub const FLAG_CLAMPED_B: u32 = 16;
 /// `Population::Glass` as stored in the population buffer.
 pub const POPULATION_GLASS: u32 = 1;
-/// Values per thread and per workgroup of the prefix sum.
-pub const SCAN_ITEMS: u32 = 4;
-pub const SCAN_BLOCK: u32 = 256 * SCAN_ITEMS;
-/// Keys per thread and per workgroup of a radix pass.
-pub const SORT_ITEMS: u32 = 16;
-pub const SORT_BLOCK: u32 = 256 * SORT_ITEMS;
+/// Threads, values per thread and values per workgroup of the prefix sum (few threads, many
+/// values each, for the reason given at SORT_THREADS).
+pub const SCAN_THREADS: u32 = 64;
+pub const SCAN_ITEMS: u32 = 16;
+pub const SCAN_BLOCK: u32 = SCAN_THREADS * SCAN_ITEMS;
+/// Threads, keys per thread and keys per workgroup of a radix pass. Few threads with many keys
+/// each: the scatter's in-workgroup scan costs log2(threads) barrier rounds, and a barrier is
+/// expensive on CPU adapters (lavapipe switches every invocation's context at each one), while
+/// the per-thread serial part is cheap everywhere. 16-bit packed counters need SORT_ITEMS and
+/// SORT_BLOCK below 65536.
+pub const SORT_THREADS: u32 = 64;
+pub const SORT_ITEMS: u32 = 64;
+pub const SORT_BLOCK: u32 = SORT_THREADS * SORT_ITEMS;
 
 /// One GPU struct: (name, WGSL declaration, Rust field offsets, Rust size).
 pub type StructInfo = (&'static str, String, Vec<(&'static str, usize)>, usize);
@@ -269,6 +276,8 @@ pub fn prelude() -> String {
         ("SCAN_ITEMS", SCAN_ITEMS),
         ("SCAN_BLOCK", SCAN_BLOCK),
         ("SORT_ITEMS", SORT_ITEMS),
+        ("SORT_THREADS", SORT_THREADS),
+        ("SCAN_THREADS", SCAN_THREADS),
         ("SORT_BLOCK", SORT_BLOCK),
     ];
     for (name, v) in consts_u32 {

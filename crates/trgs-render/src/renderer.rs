@@ -232,7 +232,11 @@ impl Renderer {
             },
         );
         let mut has_pass = vec![false; planes.len()];
+        for v in &views[1..] {
+            has_pass[v.plane.unwrap_or(0)] = true;
+        }
         if views.len() > 1 {
+            let rays = compose::RayBuffers::new(s, camera, &compose::planes_gpu(planes, &has_pass));
             rec.encoder.clear_buffer(&layers.reflection_raw, 0, None);
             rec.encoder.clear_buffer(&layers.reflection_states, 0, None);
             for v in &views[1..] {
@@ -240,7 +244,6 @@ impl Renderer {
                 let (keys, ranges) =
                     (v.keys.as_ref().expect("sorted above"), v.ranges.as_ref().expect("set above"));
                 let slot = v.plane.unwrap_or(0) as u32;
-                has_pass[slot as usize] = true;
                 rasterize_reflection::record(
                     s,
                     &mut rec,
@@ -252,14 +255,14 @@ impl Renderer {
                     ranges,
                     &layers.reflection_raw,
                     &layers.reflection_states,
+                    &rays,
                 );
             }
-            let planes_gpu = compose::planes_gpu(planes, &has_pass);
             compose::record(
                 s,
                 &mut rec,
-                camera,
-                &planes_gpu,
+                &grid,
+                &rays,
                 &layers.transmission,
                 &layers.geometry,
                 &layers.reflection_raw,

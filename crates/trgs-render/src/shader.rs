@@ -16,6 +16,7 @@ pub const SOURCES: &[(&str, &str)] = sources!(
     "shared/tiles.wgsl",
     "shared/splat.wgsl",
     "shared/sort_digit.wgsl",
+    "shared/plane_hit.wgsl",
     "project.wgsl",
     "tile_counts.wgsl",
     "prefix_sum.wgsl",

@@ -180,7 +180,15 @@ fn check_scene(name: &str, spec: SceneSpec, chunk: Option<u32>) {
                 assert_eq!(stops, 0, "{what}: stop points");
             }
             Some(p) => {
-                let out = rasterize_reflection(&gpu, &values, &ranges, &grid, &view.limit);
+                let out = rasterize_reflection(
+                    &gpu,
+                    &values,
+                    &ranges,
+                    &grid,
+                    &view.limit,
+                    &scene.camera,
+                    &scene.planes[p],
+                );
                 let pi = images.planes[p].as_ref().expect("plane pass ran");
                 assert_eq!(pi.footprint, view.limit);
                 bad += compare(&format!("{what} C_raw"), &pi.raw_color, &out.raw_color);

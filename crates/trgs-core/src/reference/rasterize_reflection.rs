@@ -1,9 +1,13 @@
 //! Stage `rasterize_reflection` (pass 2): blending of one mirrored view, restricted to the tiles
-//! of the plane's footprint. It produces the raw reflection colour C_raw = sum c_i w_i and the
-//! intensity A = sum a_i w_i with a single transmittance; both are zero outside the footprint.
+//! of the plane's footprint and, within them, to the pixels whose camera ray hits the plane's
+//! rectangle from the front (no other pixel can show this reflection). It produces the raw
+//! reflection colour C_raw = sum c_i w_i and the intensity A = sum a_i w_i with a single
+//! transmittance; both are zero, and the pixel state default, everywhere else.
 use super::rasterize::{alpha_at, tile_pixels};
 use super::{MIN_TRANSMITTANCE, Projected, TileGrid, TileRect};
 use crate::image::Image;
+use crate::plane_math::ray_rectangle_hit;
+use crate::scene::{Camera, ReflectionPlane};
 
 /// What the backward replay needs of one pixel of pass 2.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -28,7 +32,10 @@ pub fn rasterize_reflection(
     ranges: &[(u32, u32)],
     grid: &TileGrid,
     footprint: &TileRect,
+    camera: &Camera,
+    plane: &ReflectionPlane,
 ) -> ReflectionOutput {
+    let origin = camera.pose.centre();
     let (w, h) = (grid.width, grid.height);
     let mut out = ReflectionOutput {
         raw_color: Image::new(w, h, 3),
@@ -40,6 +47,9 @@ pub fn rasterize_reflection(
             let (start, end) = ranges[(ty * grid.tiles_x + tx) as usize];
             let list = &values[start as usize..end as usize];
             for (x, y) in tile_pixels(grid, tx, ty) {
+                if ray_rectangle_hit(plane, origin, camera.pixel_ray(x, y)).is_none() {
+                    continue;
+                }
                 let (px, py) = (f64::from(x) + 0.5, f64::from(y) + 0.5);
                 let mut t = 1.0f64;
                 let (mut color, mut intensity) = ([0.0f64; 3], 0.0);

@@ -78,7 +78,15 @@ pub fn render(
             let mview = mirrored_view(plane, &view);
             let pass =
                 render_view(g, &mview, k, ProjectionFilter::FrontOf(plane), &fp, settings.near);
-            let out = rasterize_reflection(&pass.projected, &pass.values, &pass.ranges, &grid, &fp);
+            let out = rasterize_reflection(
+                &pass.projected,
+                &pass.values,
+                &pass.ranges,
+                &grid,
+                &fp,
+                camera,
+                plane,
+            );
             PlaneLayers {
                 raw_color: out.raw_color,
                 intensity: out.intensity,

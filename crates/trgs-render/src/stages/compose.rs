@@ -28,38 +28,52 @@ pub fn planes_gpu(planes: &[ReflectionPlane], has_pass: &[bool]) -> Vec<PlaneGpu
         .collect()
 }
 
+/// The camera's pixel rays and the planes, as `compose` and `rasterize_reflection` read them.
+#[derive(Debug)]
+pub struct RayBuffers {
+    pub camera: wgpu::Buffer,
+    pub planes: wgpu::Buffer,
+}
+
+impl RayBuffers {
+    pub fn new(s: Stage<'_>, camera: &Camera, planes: &[PlaneGpu]) -> Self {
+        let k = &camera.intrinsics;
+        let to_world = camera.pose.rotation.transpose();
+        let v4 = |v: glam::DVec3| [v.x as f32, v.y as f32, v.z as f32, 0.0];
+        let params = ComposeParams {
+            width: k.width,
+            height: k.height,
+            num_planes: planes.len() as u32,
+            focal: [k.fx as f32, k.fy as f32, k.cx as f32, k.cy as f32],
+            origin: v4(camera.pose.centre()),
+            cam_col0: v4(to_world.x_axis),
+            cam_col1: v4(to_world.y_axis),
+            cam_col2: v4(to_world.z_axis),
+            ..Default::default()
+        };
+        Self {
+            camera: gpu::uniform(s.ctx, "trgs.compose.params", &params),
+            planes: gpu::storage_init(s.ctx, "trgs.compose.planes", planes),
+        }
+    }
+}
+
 pub fn record(
     s: Stage<'_>,
     rec: &mut Recorder,
-    camera: &Camera,
-    planes: &[PlaneGpu],
+    grid: &trgs_core::reference::TileGrid,
+    rays: &RayBuffers,
     transmission: &wgpu::Buffer,
     geometry: &wgpu::Buffer,
     reflection_raw: &wgpu::Buffer,
     out: &ComposeOutputs<'_>,
 ) {
-    let k = &camera.intrinsics;
-    let to_world = camera.pose.rotation.transpose();
-    let v4 = |v: glam::DVec3| [v.x as f32, v.y as f32, v.z as f32, 0.0];
-    let params = ComposeParams {
-        width: k.width,
-        height: k.height,
-        num_planes: planes.len() as u32,
-        focal: [k.fx as f32, k.fy as f32, k.cx as f32, k.cy as f32],
-        origin: v4(camera.pose.centre()),
-        cam_col0: v4(to_world.x_axis),
-        cam_col1: v4(to_world.y_axis),
-        cam_col2: v4(to_world.z_axis),
-        ..Default::default()
-    };
-    let uniform = gpu::uniform(s.ctx, "trgs.compose.params", &params);
-    let planes_buf = gpu::storage_init(s.ctx, "trgs.compose.planes", planes);
     let kern = &s.kernels.compose;
     let bind = kern.bind(
         s.ctx,
         &[
-            uniform.as_entire_binding(),
-            planes_buf.as_entire_binding(),
+            rays.camera.as_entire_binding(),
+            rays.planes.as_entire_binding(),
             transmission.as_entire_binding(),
             geometry.as_entire_binding(),
             reflection_raw.as_entire_binding(),
@@ -69,5 +83,5 @@ pub fn record(
             out.hit.as_entire_binding(),
         ],
     );
-    rec.dispatch("compose", kern, &bind, [k.width.div_ceil(16), k.height.div_ceil(16), 1]);
+    rec.dispatch("compose", kern, &bind, [grid.width.div_ceil(16), grid.height.div_ceil(16), 1]);
 }

@@ -1,6 +1,8 @@
 //! Stage `rasterize_reflection`, pass 2 (shaders/rasterize_reflection.wgsl; twin
-//! `trgs_core::reference::rasterize_reflection`): only the tiles of the plane's footprint run.
+//! `trgs_core::reference::rasterize_reflection`): only the tiles of the plane's footprint run, and
+//! in them only the pixels whose ray hits the plane's rectangle.
 use super::Stage;
+use super::compose::RayBuffers;
 use crate::gpu::{self, Recorder};
 use crate::layout::RasterParams;
 use trgs_core::reference::{TileGrid, TileRect};
@@ -16,6 +18,7 @@ pub fn record(
     ranges: &wgpu::Buffer,
     reflection_raw: &wgpu::Buffer,
     states: &wgpu::Buffer,
+    rays: &RayBuffers,
 ) {
     if footprint.is_empty() {
         return;
@@ -41,6 +44,8 @@ pub fn record(
             ranges.as_entire_binding(),
             reflection_raw.as_entire_binding(),
             states.as_entire_binding(),
+            rays.camera.as_entire_binding(),
+            rays.planes.as_entire_binding(),
         ],
     );
     let groups = [footprint.x1 - footprint.x0, footprint.y1 - footprint.y0, 1];

@@ -18,27 +18,30 @@ const HELP: &str = "\
 trgs bench: forward renderer benchmarks
 
 USAGE:
-    bench [--quick] [--reps N] [--write FILE]
+    bench [--quick] [--plane-cost] [--reps N] [--write FILE]
 
 OPTIONS:
     --quick       only 256x192 and at most 100k Gaussians
+    --plane-cost  only the plane-cost measurement (no grid, no throughput)
     --reps N      timed frames per configuration (default 5; the median is reported)
     --write FILE  also write the report as Markdown (e.g. docs/BENCHMARKS.md)
 ";
 
 struct Args {
     quick: bool,
+    plane_cost_only: bool,
     reps: usize,
     write: Option<PathBuf>,
 }
 
 fn parse_args() -> Result<Option<Args>> {
-    let mut args = Args { quick: false, reps: 5, write: None };
+    let mut args = Args { quick: false, plane_cost_only: false, reps: 5, write: None };
     let mut it = std::env::args().skip(1);
     while let Some(a) = it.next() {
         match a.as_str() {
             "-h" | "--help" => return Ok(None),
             "--quick" => args.quick = true,
+            "--plane-cost" => args.plane_cost_only = true,
             "--reps" => {
                 let v = it.next().context("--reps needs a value")?;
                 args.reps = v.parse().with_context(|| format!("--reps {v:?} is not a count"))?;
@@ -94,19 +97,7 @@ fn bench_config(
         times.push(t.elapsed().as_secs_f64() * 1e3);
     }
     // Per-stage GPU times: the median of each stage over as many profiled frames.
-    let profiled = RenderOptions { profile: true, ..options };
-    let mut samples: Vec<(&'static str, Vec<f64>)> = Vec::new();
-    for _ in 0..reps {
-        renderer.render_into(&scene, &camera, &profiled, &mut frame)?;
-        for &(name, ms) in frame.stage_times().unwrap_or_default() {
-            match samples.iter_mut().find(|s| s.0 == name) {
-                Some(s) => s.1.push(ms),
-                None => samples.push((name, vec![ms])),
-            }
-        }
-    }
-    let stages: Vec<(&'static str, f64)> =
-        samples.into_iter().map(|(n, v)| (n, median(v))).collect();
+    let stages = stage_medians(renderer, &scene, &camera, &options, reps, &mut frame)?;
     let row = Row {
         density: spec.density,
         width: spec.width,
@@ -120,6 +111,95 @@ fn bench_config(
         memory_mb: (frame.memory_bytes() as f64) / 1048576.0,
     };
     Ok((row, frame))
+}
+
+/// What one plane costs, measured on one scene: frames with the plane enabled and disabled
+/// (`RenderOptions::enabled_planes`) alternate, so that the machine's drift hits both alike; the
+/// reported ratio is the median over pairs of (with plane) / (without).
+struct PlaneCost {
+    density: RoomDensity,
+    without_ms: f64,
+    with_ms: f64,
+    ratio: f64,
+    pairs: usize,
+    /// Median GPU ms per stage, without and with the plane.
+    stages: Vec<(&'static str, f64, f64)>,
+}
+
+/// Median GPU time of each stage over `reps` profiled frames.
+fn stage_medians(
+    renderer: &Renderer,
+    scene: &GpuScene,
+    camera: &trgs_core::scene::Camera,
+    options: &RenderOptions,
+    reps: usize,
+    frame: &mut Frame,
+) -> Result<Vec<(&'static str, f64)>> {
+    let profiled = RenderOptions { profile: true, ..options.clone() };
+    let mut samples: Vec<(&'static str, Vec<f64>)> = Vec::new();
+    for _ in 0..reps {
+        renderer.render_into(scene, camera, &profiled, frame)?;
+        for &(name, ms) in frame.stage_times().unwrap_or_default() {
+            match samples.iter_mut().find(|s| s.0 == name) {
+                Some(s) => s.1.push(ms),
+                None => samples.push((name, vec![ms])),
+            }
+        }
+    }
+    Ok(samples.into_iter().map(|(n, v)| (n, median(v))).collect())
+}
+
+fn plane_cost(
+    ctx: &GpuContext,
+    renderer: &Renderer,
+    density: RoomDensity,
+    pairs: usize,
+) -> Result<PlaneCost> {
+    let spec = RoomSpec {
+        seed: 7,
+        gaussians: 100_000,
+        planes: 1,
+        width: 256,
+        height: 192,
+        sh_degree: 3,
+        density,
+    };
+    let (scene, camera) = upload(ctx, &spec)?;
+    let off = RenderOptions { enabled_planes: vec![false], ..RenderOptions::default() };
+    let on = RenderOptions::default();
+    let mut frame = Frame::default();
+    // Warm-up of both paths (JIT, buffer pool).
+    renderer.render_into(&scene, &camera, &on, &mut frame)?;
+    renderer.render_into(&scene, &camera, &off, &mut frame)?;
+    let (mut without, mut with, mut ratios) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..pairs {
+        // Alternate which comes first so that neither always follows the other.
+        let order = if i % 2 == 0 { [&off, &on] } else { [&on, &off] };
+        let mut t = [0.0; 2];
+        for options in order {
+            let start = Instant::now();
+            renderer.render_into(&scene, &camera, options, &mut frame)?;
+            let ms = start.elapsed().as_secs_f64() * 1e3;
+            t[usize::from(options.enabled_planes.is_empty())] = ms;
+        }
+        without.push(t[0]);
+        with.push(t[1]);
+        ratios.push(t[1] / t[0]);
+    }
+    let base = stage_medians(renderer, &scene, &camera, &off, pairs, &mut frame)?;
+    let plane = stage_medians(renderer, &scene, &camera, &on, pairs, &mut frame)?;
+    let stages = plane
+        .iter()
+        .map(|&(n, w)| (n, base.iter().find(|b| b.0 == n).map_or(0.0, |b| b.1), w))
+        .collect();
+    Ok(PlaneCost {
+        density,
+        stages,
+        without_ms: median(without),
+        with_ms: median(with),
+        ratio: median(ratios),
+        pairs,
+    })
 }
 
 /// Pixel-Gaussian evaluations of pass 1: per pixel, the list entries visited before it stopped.
@@ -200,6 +280,9 @@ fn main() -> Result<()> {
         }
     }
     configs.push((RoomDensity::Uniform, 256, 192, 100_000));
+    if args.plane_cost_only {
+        configs.clear();
+    }
     for (density, width, height, gaussians) in configs {
         {
             for planes in 0..=2 {
@@ -235,7 +318,20 @@ fn main() -> Result<()> {
             }
         }
     }
-    let report = report(&ctx, &rows, throughput, &args);
+    let pairs = (3 * args.reps).max(9);
+    let mut costs = Vec::new();
+    for density in [RoomDensity::AsCaptured, RoomDensity::Uniform] {
+        let c = plane_cost(&ctx, &renderer, density, pairs)?;
+        println!(
+            "plane cost, {density:?} 256x192 100k: {:.1} ms without, {:.1} ms with, median pair ratio {:.3}x over {pairs} pairs",
+            c.without_ms, c.with_ms, c.ratio
+        );
+        for (n, a, b) in &c.stages {
+            println!("    {n:22} {a:8.2} -> {b:8.2} ms GPU");
+        }
+        costs.push(c);
+    }
+    let report = report(&ctx, &rows, &costs, throughput, &args);
     println!("\n{report}");
     if let Some(path) = &args.write {
         trgs_core::io::write_atomic(path, report.as_bytes())?;
@@ -260,7 +356,13 @@ struct Throughput {
     long: f64,
 }
 
-fn report(ctx: &GpuContext, rows: &[Row], throughput: Option<Throughput>, args: &Args) -> String {
+fn report(
+    ctx: &GpuContext,
+    rows: &[Row],
+    costs: &[PlaneCost],
+    throughput: Option<Throughput>,
+    args: &Args,
+) -> String {
     let mut s = String::new();
     let cmd = format!(
         "cargo run --release --bin bench --{}{}",
@@ -309,6 +411,28 @@ fn report(ctx: &GpuContext, rows: &[Row], throughput: Option<Throughput>, args: 
             r.wall_ms / base,
             r.keys,
             r.memory_mb
+        );
+    }
+    let _ = writeln!(s, "\n### What one plane costs (256x192, 100k Gaussians)\n");
+    let _ = writeln!(
+        s,
+        "One scene with one plane whose footprint is a quarter of the image, rendered with the plane \
+         disabled and enabled (`RenderOptions::enabled_planes`) in alternating frames, so the Gaussians \
+         and the transmitted pass are identical and the machine's drift hits both alike. Ratio: the \
+         median over pairs of (with plane) / (without). The issue's bound is 1.25x; the paper's \
+         implementation, which renders the mirrored view over the whole image, costs 1.5x.\n"
+    );
+    let _ = writeln!(s, "| room | pairs | without plane ms | with plane ms | ratio |");
+    let _ = writeln!(s, "|---|---:|---:|---:|---:|");
+    for c in costs {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {:.1} | {:.1} | {:.2}x |",
+            density_name(c.density),
+            c.pairs,
+            c.without_ms,
+            c.with_ms,
+            c.ratio
         );
     }
     let _ = writeln!(s, "\n### Stage breakdown (GPU ms, median per stage)\n");
