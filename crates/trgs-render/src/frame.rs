@@ -57,6 +57,8 @@ pub struct Frame {
     plane_count: usize,
     depth_variance: bool,
     layers: Option<LayerBuffers>,
+    /// The camera rays and planes compose read (kept for compose_bwd).
+    rays: Option<crate::stages::compose::RayBuffers>,
     views: Vec<ViewBuffers>,
     has_pass: Vec<bool>,
     stage_times: Option<Vec<(&'static str, f64)>>,
@@ -200,11 +202,31 @@ impl Frame {
         &mut self,
         views: Vec<ViewBuffers>,
         has_pass: Vec<bool>,
+        rays: Option<crate::stages::compose::RayBuffers>,
         stage_times: Option<Vec<(&'static str, f64)>>,
     ) {
         self.views = views;
+        self.rays = rays;
         self.has_pass = has_pass;
         self.stage_times = stage_times;
+    }
+
+    pub(crate) fn rays(&self) -> Option<&crate::stages::compose::RayBuffers> {
+        self.rays.as_ref()
+    }
+
+    pub(crate) fn grid(&self) -> Option<TileGrid> {
+        self.grid
+    }
+
+    /// Number of planes of the scene this frame was rendered from.
+    pub fn plane_count(&self) -> usize {
+        self.plane_count
+    }
+
+    /// Number of plane slots in the per-plane layers (at least 1).
+    pub fn plane_slots(&self) -> usize {
+        self.plane_count.max(1)
     }
 
     pub fn width(&self) -> u32 {

@@ -16,10 +16,25 @@ pub struct Kernels {
     pub rasterize_depth_variance: Kernel,
     pub rasterize_reflection: Kernel,
     pub compose: Kernel,
+    pub compose_bwd: Kernel,
+}
+
+/// Defines of the accumulating (adjoint) kernels for the device's features: float atomics or the
+/// compare-exchange fallback, with or without a subgroup reduction first.
+pub fn accumulation_defines(caps: &crate::Capabilities) -> Vec<&'static str> {
+    let mut d = Vec::new();
+    if caps.float_atomics {
+        d.push("FLOAT_ATOMICS");
+    }
+    if caps.subgroups {
+        d.push("SUBGROUPS");
+    }
+    d
 }
 
 impl Kernels {
     pub fn new(ctx: &GpuContext) -> Self {
+        let acc = accumulation_defines(&ctx.capabilities);
         Self {
             project: Kernel::new(ctx, "project", "project.wgsl", &[]),
             tile_counts: Kernel::new(ctx, "tile_counts", "tile_counts.wgsl", &[]),
@@ -43,6 +58,7 @@ impl Kernels {
                 &[],
             ),
             compose: Kernel::new(ctx, "compose", "compose.wgsl", &[]),
+            compose_bwd: Kernel::new(ctx, "compose_bwd", "compose_bwd.wgsl", &acc),
         }
     }
 }

@@ -4,6 +4,7 @@ use crate::frame::{Frame, ViewBuffers};
 use crate::gpu::{self, Recorder};
 use crate::kernels::Kernels;
 use crate::scene::GpuScene;
+use crate::stages::compose_bwd::{self, LayerGrads};
 use crate::stages::emit_keys::Keys;
 use crate::stages::rasterize::Pass1Outputs;
 use crate::stages::{
@@ -235,8 +236,12 @@ impl Renderer {
         for v in &views[1..] {
             has_pass[v.plane.unwrap_or(0)] = true;
         }
-        if views.len() > 1 {
-            let rays = compose::RayBuffers::new(s, camera, &compose::planes_gpu(planes, &has_pass));
+        let rays = compose::RayBuffers::new(s, camera, &compose::planes_gpu(planes, &has_pass));
+        if views.len() == 1 {
+            // No plane hit anywhere: H = 0, which compose_bwd reads.
+            rec.encoder.clear_buffer(&layers.hit, 0, None);
+        } else {
+            let r = &rays;
             rec.encoder.clear_buffer(&layers.reflection_raw, 0, None);
             rec.encoder.clear_buffer(&layers.reflection_states, 0, None);
             for v in &views[1..] {
@@ -255,14 +260,14 @@ impl Renderer {
                     ranges,
                     &layers.reflection_raw,
                     &layers.reflection_states,
-                    &rays,
+                    r,
                 );
             }
             compose::record(
                 s,
                 &mut rec,
                 &grid,
-                &rays,
+                r,
                 &layers.transmission,
                 &layers.geometry,
                 &layers.reflection_raw,
@@ -275,7 +280,33 @@ impl Renderer {
             );
         }
         rec.submit_and_wait(ctx);
-        frame.finish(views, has_pass, rec.stage_times());
+        frame.finish(views, has_pass, Some(rays), rec.stage_times());
         Ok(())
+    }
+
+    /// The adjoint of `compose` alone, for `frame` as this renderer rendered it: adds compose's
+    /// gradients into the pass-layer buffers of `grads` (direct gradients in, totals out) and
+    /// returns each plane's (dL/dR0, dL/d(unit normal)). A stage-level entry point, used by the
+    /// stage-by-stage tests against the CPU twin; the full backward builds on it.
+    pub fn compose_bwd(&self, frame: &Frame, grads: &LayerGrads) -> Vec<[f32; 4]> {
+        let ctx = &self.ctx;
+        let s = Stage { ctx, kernels: &self.kernels };
+        let (Some(grid), Some(layers), Some(rays)) =
+            (frame.grid(), frame.layer_buffers(), frame.rays())
+        else {
+            return Vec::new();
+        };
+        let planes = frame.plane_count();
+        let acc = gpu::storage(
+            ctx,
+            "trgs.compose_bwd.plane_grads",
+            (planes.max(1) as u64) * compose_bwd::PLANE_GRAD_FLOATS * 4,
+        );
+        let mut rec = Recorder::new(ctx, "trgs.compose_bwd", false);
+        rec.encoder.clear_buffer(&acc, 0, None);
+        compose_bwd::record(s, &mut rec, &grid, rays, layers, grads, &acc);
+        rec.submit_and_wait(ctx);
+        let flat: Vec<f32> = gpu::read_buffer(ctx, &acc, 0, planes * 4);
+        flat.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]).collect()
     }
 }

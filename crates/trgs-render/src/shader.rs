@@ -17,6 +17,7 @@ pub const SOURCES: &[(&str, &str)] = sources!(
     "shared/splat.wgsl",
     "shared/sort_digit.wgsl",
     "shared/plane_hit.wgsl",
+    "shared/accumulate.wgsl",
     "project.wgsl",
     "tile_counts.wgsl",
     "prefix_sum.wgsl",
@@ -28,6 +29,7 @@ pub const SOURCES: &[(&str, &str)] = sources!(
     "rasterize.wgsl",
     "rasterize_reflection.wgsl",
     "compose.wgsl",
+    "compose_bwd.wgsl",
     "splat_loop.wgsl",
 );
 
@@ -45,6 +47,10 @@ pub const VARIANTS: &[(&str, &[&str])] = &[
     ("rasterize.wgsl", &["DEPTH_VARIANCE"]),
     ("rasterize_reflection.wgsl", &[]),
     ("compose.wgsl", &[]),
+    ("compose_bwd.wgsl", &[]),
+    ("compose_bwd.wgsl", &["FLOAT_ATOMICS"]),
+    ("compose_bwd.wgsl", &["SUBGROUPS"]),
+    ("compose_bwd.wgsl", &["FLOAT_ATOMICS", "SUBGROUPS"]),
     ("splat_loop.wgsl", &[]),
 ];
 

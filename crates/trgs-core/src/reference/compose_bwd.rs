@@ -8,7 +8,7 @@ use crate::scene::{Camera, ReflectionPlane};
 use glam::DVec3;
 
 #[derive(Clone, Debug)]
-pub(crate) struct ComposeGrads {
+pub struct ComposeGrads {
     pub transmission: Image<f64>,
     pub mask: Image<f64>,
     /// Per plane (dL/dC_raw, dL/dA).
@@ -19,7 +19,7 @@ pub(crate) struct ComposeGrads {
     pub unit_normal: Vec<DVec3>,
 }
 
-pub(crate) fn compose_bwd(
+pub fn compose_bwd(
     camera: &Camera,
     planes: &[ReflectionPlane],
     f: &Frame,

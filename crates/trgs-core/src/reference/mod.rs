@@ -27,6 +27,7 @@ mod tile_ranges;
 
 pub use backward::{BackwardOptions, PlaneGrad, SceneGrads, backward};
 pub use compose::{ComposeOutput, compose};
+pub use compose_bwd::{ComposeGrads, compose_bwd};
 pub use emit_keys::emit_keys;
 pub use footprint::{TileRect, footprint};
 pub use frame::{Frame, FrameGrads, PlaneLayerGrads, PlaneLayers};

@@ -1,6 +1,7 @@
 //! One module per WGSL stage, named as the shader and as the CPU twin in
 //! `trgs_core::reference`. Each records its dispatches into a [`crate::gpu::Recorder`].
 pub mod compose;
+pub mod compose_bwd;
 pub mod emit_keys;
 pub mod prefix_sum;
 pub mod project;

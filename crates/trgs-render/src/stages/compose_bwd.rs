@@ -1,0 +1,60 @@
+//! Stage `compose_bwd` (shaders/compose_bwd.wgsl; twin `trgs_core::reference::compose_bwd`): the
+//! adjoint of `compose`. Adds the composition's gradients into the pass-layer gradient buffers
+//! in place and sums each plane's dL/dR0 and dL/d(unit normal) into `plane_grads`.
+use super::Stage;
+use super::compose::RayBuffers;
+use crate::frame::LayerBuffers;
+use crate::gpu::Recorder;
+use trgs_core::reference::TileGrid;
+
+/// Gradient buffers shaped like the forward layers they belong to ([`LayerBuffers`]).
+#[derive(Clone, Debug)]
+pub struct LayerGrads {
+    /// dL/d(C, -), read.
+    pub color: wgpu::Buffer,
+    /// dL/d(C_r, -), read.
+    pub reflection: wgpu::Buffer,
+    /// dL/d(R_raw, R, -, -), read.
+    pub strength: wgpu::Buffer,
+    /// dL/d(C_t, alpha): direct in, total out.
+    pub transmission: wgpu::Buffer,
+    /// dL/d(D_t, V, M, -): direct in, total out.
+    pub geometry: wgpu::Buffer,
+    /// dL/d(C_raw^k, A^k) per plane slot: direct in, total out.
+    pub reflection_raw: wgpu::Buffer,
+}
+
+/// Floats per plane in the plane accumulator: dL/dR0 and dL/d(unit normal).
+pub const PLANE_GRAD_FLOATS: u64 = 4;
+
+pub fn record(
+    s: Stage<'_>,
+    rec: &mut Recorder,
+    grid: &TileGrid,
+    rays: &RayBuffers,
+    layers: &LayerBuffers,
+    grads: &LayerGrads,
+    plane_grads: &wgpu::Buffer,
+) {
+    let k = &s.kernels.compose_bwd;
+    let bind = k.bind(
+        s.ctx,
+        &[
+            rays.camera.as_entire_binding(),
+            rays.planes.as_entire_binding(),
+            layers.transmission.as_entire_binding(),
+            layers.geometry.as_entire_binding(),
+            layers.reflection_raw.as_entire_binding(),
+            layers.strength.as_entire_binding(),
+            layers.hit.as_entire_binding(),
+            grads.color.as_entire_binding(),
+            grads.reflection.as_entire_binding(),
+            grads.strength.as_entire_binding(),
+            grads.transmission.as_entire_binding(),
+            grads.geometry.as_entire_binding(),
+            grads.reflection_raw.as_entire_binding(),
+            plane_grads.as_entire_binding(),
+        ],
+    );
+    rec.dispatch("compose_bwd", k, &bind, [grid.width.div_ceil(16), grid.height.div_ceil(16), 1]);
+}
