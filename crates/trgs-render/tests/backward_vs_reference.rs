@@ -12,8 +12,8 @@ use trgs_render::gpu;
 use trgs_render::stages::compose_bwd::LayerGrads;
 use trgs_render::{DeviceOptions, GpuContext, GpuScene, RenderOptions, Renderer};
 
-const ATOL: f64 = 1e-5;
-const RTOL: f64 = 1e-3;
+mod common;
+use common::{compare_values, spec};
 
 fn contexts() -> Vec<(&'static str, GpuContext)> {
     let fast = DeviceOptions { poison_fresh_buffers: true, ..Default::default() };
@@ -48,22 +48,8 @@ fn pack(parts: &[(&Image<f64>, usize)]) -> Vec<[f32; 4]> {
     out
 }
 
-/// Count values outside atol + rtol |cpu|; prints the worst difference.
 fn compare(what: &str, gpu: &[f32], cpu: &[f64]) -> usize {
-    assert_eq!(gpu.len(), cpu.len(), "{what}");
-    let (mut bad, mut worst) = (0, 0.0f64);
-    for (i, (&g, &c)) in gpu.iter().zip(cpu).enumerate() {
-        let g = f64::from(g);
-        worst = worst.max((g - c).abs());
-        if !((g - c).abs() <= ATOL + RTOL * c.abs()) {
-            if bad < 5 {
-                eprintln!("{what}: value {i}: gpu {g} cpu {c}");
-            }
-            bad += 1;
-        }
-    }
-    eprintln!("{what}: max |gpu - cpu| = {worst:.3e}, {bad} outside tolerance");
-    bad
+    compare_values(what, gpu, cpu, 1)
 }
 
 fn channel(v: &[[f32; 4]], channels: std::ops::Range<usize>) -> Vec<f32> {
@@ -183,35 +169,22 @@ fn check_compose_bwd(name: &str, spec: SceneSpec) {
     }
 }
 
-fn spec(seed: u64, planes: usize, angle: f64) -> SceneSpec {
-    SceneSpec {
-        seed,
-        gaussians: 600,
-        planes,
-        width: 96,
-        height: 72,
-        view_angle_deg: angle,
-        sh_degree: 3,
-        glass_fraction: 0.2,
-    }
-}
-
 #[test]
 fn compose_bwd_no_plane() {
-    check_compose_bwd("no plane", spec(41, 0, 20.0));
+    check_compose_bwd("no plane", spec(41, 600, 0, 20.0));
 }
 
 #[test]
 fn compose_bwd_one_plane() {
-    check_compose_bwd("1 plane", spec(42, 1, 25.0));
+    check_compose_bwd("1 plane", spec(42, 600, 1, 25.0));
 }
 
 #[test]
 fn compose_bwd_two_planes() {
-    check_compose_bwd("2 planes", spec(43, 2, 30.0));
+    check_compose_bwd("2 planes", spec(43, 600, 2, 30.0));
 }
 
 #[test]
 fn compose_bwd_grazing() {
-    check_compose_bwd("80 deg", spec(44, 1, 80.0));
+    check_compose_bwd("80 deg", spec(44, 600, 1, 80.0));
 }

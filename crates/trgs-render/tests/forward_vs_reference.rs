@@ -16,16 +16,12 @@ use trgs_render::layout::{
 };
 use trgs_render::{DeviceOptions, GpuContext, GpuScene, RenderOptions, Renderer};
 
-const ATOL: f64 = 1e-5;
-const RTOL: f64 = 1e-3;
+mod common;
+use common::{ATOL, RTOL, close, compare_values, spec};
 
 fn ctx() -> GpuContext {
     let opts = DeviceOptions { poison_fresh_buffers: true, ..Default::default() };
     GpuContext::with_options(&opts).unwrap_or_else(|e| panic!("{e}"))
-}
-
-fn close(a: f64, b: f64) -> bool {
-    (a - b).abs() <= ATOL + RTOL * b.abs()
 }
 
 /// The twin's Projected holding exactly the GPU's values.
@@ -52,30 +48,14 @@ fn to_reference(p: &[ProjectedGaussian]) -> Projected {
     out
 }
 
-/// Compare images; returns (worst excess over the tolerance, count of failing values).
+/// Compare images; returns the count of failing values.
 fn compare(what: &str, gpu: &Image<f32>, cpu: &Image<f64>) -> usize {
     assert_eq!(
         (gpu.width, gpu.height, gpu.channels),
         (cpu.width, cpu.height, cpu.channels),
         "{what}"
     );
-    let mut bad = 0;
-    let mut worst = 0.0f64;
-    for (i, (&g, &c)) in gpu.data.iter().zip(&cpu.data).enumerate() {
-        let g = f64::from(g);
-        worst = worst.max((g - c).abs());
-        if !close(g, c) {
-            if bad < 5 {
-                eprintln!(
-                    "{what}: value {i} (pixel {}): gpu {g} cpu {c}",
-                    i / cpu.channels as usize
-                );
-            }
-            bad += 1;
-        }
-    }
-    eprintln!("{what}: max |gpu - cpu| = {worst:.3e}, {bad} outside tolerance");
-    bad
+    compare_values(what, &gpu.data, &cpu.data, cpu.channels as usize)
 }
 
 fn check_scene(name: &str, spec: SceneSpec, chunk: Option<u32>) {
@@ -232,19 +212,6 @@ fn check_scene(name: &str, spec: SceneSpec, chunk: Option<u32>) {
         total as f64 <= 1e-3 * cpu.color.data.len() as f64,
         "{name}: end-to-end C differs beyond tolerance at {total} values"
     );
-}
-
-fn spec(seed: u64, gaussians: usize, planes: usize, angle: f64) -> SceneSpec {
-    SceneSpec {
-        seed,
-        gaussians,
-        planes,
-        width: 96,
-        height: 72,
-        view_angle_deg: angle,
-        sh_degree: 3,
-        glass_fraction: 0.2,
-    }
 }
 
 #[test]
