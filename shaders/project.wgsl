@@ -8,6 +8,7 @@
 // Gaussians fall outside its footprint, and most of any view's outside the image.
 #include "shared/common.wgsl"
 #include "shared/tiles.wgsl"
+#include "shared/sh.wgsl"
 
 @group(0) @binding(0) var<uniform> view: ProjectParams;
 @group(0) @binding(1) var<storage, read> means: array<f32>;
@@ -20,20 +21,6 @@
 @group(0) @binding(8) var<storage, read> populations: array<u32>;
 @group(0) @binding(9) var<storage, read_write> projected: array<ProjectedGaussian>;
 
-// Rotation matrix of the normalised quaternion (w, x, y, z), by columns.
-fn quat_to_mat(q: vec4<f32>) -> mat3x3<f32> {
-    let qn = q / sqrt(dot(q, q));
-    let w = qn.x;
-    let x = qn.y;
-    let y = qn.z;
-    let z = qn.w;
-    return mat3x3<f32>(
-        vec3<f32>(1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z), 2.0 * (x * z - w * y)),
-        vec3<f32>(2.0 * (x * y - w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z + w * x)),
-        vec3<f32>(2.0 * (x * z + w * y), 2.0 * (y * z - w * x), 1.0 - 2.0 * (x * x + y * y)),
-    );
-}
-
 fn sh_coeff(i: u32, k: u32) -> vec3<f32> {
     let base = (i * view.sh_coeffs + k) * 3u;
     return vec3<f32>(sh[base], sh[base + 1u], sh[base + 2u]);
@@ -41,32 +28,10 @@ fn sh_coeff(i: u32, k: u32) -> vec3<f32> {
 
 // 3DGS's SH evaluation (+0.5 offset), before the clamp at zero.
 fn eval_sh(i: u32, d: vec3<f32>) -> vec3<f32> {
-    var rgb = vec3<f32>(0.5) + SH_C0 * sh_coeff(i, 0u);
-    let degree = view.sh_degree;
-    if degree >= 1u {
-        let x = d.x;
-        let y = d.y;
-        let z = d.z;
-        rgb += -SH_C1 * y * sh_coeff(i, 1u) + SH_C1 * z * sh_coeff(i, 2u) - SH_C1 * x * sh_coeff(i, 3u);
-        if degree >= 2u {
-            let xx = x * x;
-            let yy = y * y;
-            let zz = z * z;
-            rgb += SH_C2_0 * x * y * sh_coeff(i, 4u)
-                + SH_C2_1 * y * z * sh_coeff(i, 5u)
-                + SH_C2_2 * (2.0 * zz - xx - yy) * sh_coeff(i, 6u)
-                + SH_C2_3 * x * z * sh_coeff(i, 7u)
-                + SH_C2_4 * (xx - yy) * sh_coeff(i, 8u);
-            if degree >= 3u {
-                rgb += SH_C3_0 * y * (3.0 * xx - yy) * sh_coeff(i, 9u)
-                    + SH_C3_1 * x * y * z * sh_coeff(i, 10u)
-                    + SH_C3_2 * y * (4.0 * zz - xx - yy) * sh_coeff(i, 11u)
-                    + SH_C3_3 * z * (2.0 * zz - 3.0 * xx - 3.0 * yy) * sh_coeff(i, 12u)
-                    + SH_C3_4 * x * (4.0 * zz - xx - yy) * sh_coeff(i, 13u)
-                    + SH_C3_5 * z * (xx - yy) * sh_coeff(i, 14u)
-                    + SH_C3_6 * x * (xx - 3.0 * yy) * sh_coeff(i, 15u);
-            }
-        }
+    let basis = sh_basis(view.sh_degree, d);
+    var rgb = vec3<f32>(0.5);
+    for (var k = 0u; k < view.sh_coeffs; k++) {
+        rgb += basis[k] * sh_coeff(i, k);
     }
     return rgb;
 }

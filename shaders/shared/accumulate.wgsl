@@ -4,7 +4,8 @@
 // With float atomics, an atomic add; without, a compare-exchange loop on the bits (slower under
 // contention, same sum up to the order of additions). `accumulate_subgroup` first sums the value
 // over the subgroup and lets one lane add it: it must be called in uniform control flow, with
-// zero from lanes that have nothing to add.
+// zero from lanes that have nothing to add. `subgroup_any` guards a group of them: its result is
+// the same on every lane of a subgroup, so every lane still takes part in each reduction.
 
 fn accumulate(i: u32, v: f32) {
 #ifdef FLOAT_ATOMICS
@@ -23,6 +24,24 @@ fn accumulate(i: u32, v: f32) {
 }
 
 #ifdef SUBGROUPS
+// Whether any lane of the subgroup has `b` (lets a whole subgroup skip its reductions).
+fn subgroup_any(b: bool) -> bool {
+    return subgroupAny(b);
+}
+
+// Four values at once into grads[base + c] (one reduction of a vector instead of four).
+fn accumulate_subgroup4(base: u32, v: vec4<f32>) {
+    let total = subgroupAdd(v);
+    let first = subgroupExclusiveAdd(1u) == 0u;
+    if first {
+        for (var c = 0u; c < 4u; c++) {
+            if total[c] != 0.0 {
+                accumulate(base + c, total[c]);
+            }
+        }
+    }
+}
+
 fn accumulate_subgroup(i: u32, v: f32) {
     let total = subgroupAdd(v);
     // The first active lane adds (naga has no subgroupElect).
@@ -32,6 +51,18 @@ fn accumulate_subgroup(i: u32, v: f32) {
     }
 }
 #else
+fn subgroup_any(b: bool) -> bool {
+    return b;
+}
+
+fn accumulate_subgroup4(base: u32, v: vec4<f32>) {
+    for (var c = 0u; c < 4u; c++) {
+        if v[c] != 0.0 {
+            accumulate(base + c, v[c]);
+        }
+    }
+}
+
 fn accumulate_subgroup(i: u32, v: f32) {
     if v != 0.0 {
         accumulate(i, v);

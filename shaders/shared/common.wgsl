@@ -11,3 +11,17 @@ fn linear_index(gid: vec3<u32>, nwg: vec3<u32>, workgroup_size: u32) -> u32 {
 fn sigmoid(x: f32) -> f32 {
     return 1.0 / (1.0 + exp(-x));
 }
+
+// Rotation matrix of the normalised quaternion (w, x, y, z), by columns.
+fn quat_to_mat(q: vec4<f32>) -> mat3x3<f32> {
+    let qn = q / sqrt(dot(q, q));
+    let w = qn.x;
+    let x = qn.y;
+    let y = qn.z;
+    let z = qn.w;
+    return mat3x3<f32>(
+        vec3<f32>(1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z), 2.0 * (x * z - w * y)),
+        vec3<f32>(2.0 * (x * y - w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z + w * x)),
+        vec3<f32>(2.0 * (x * z + w * y), 2.0 * (y * z - w * x), 1.0 - 2.0 * (x * x + y * y)),
+    );
+}

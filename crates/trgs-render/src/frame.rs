@@ -2,7 +2,7 @@
 //! Gaussians, sorted lists, per-pixel states), and readback to images.
 use crate::GpuContext;
 use crate::gpu::{self, BufferPool};
-use crate::layout::{ProjectedGaussian, RasterState, ReflectionState, TileParams};
+use crate::layout::{ProjectParams, ProjectedGaussian, RasterState, ReflectionState, TileParams};
 use crate::stages::emit_keys::Keys;
 use trgs_core::Image;
 use trgs_core::reference::{TileGrid, TileRect};
@@ -17,6 +17,8 @@ pub struct ViewBuffers {
     /// The tiles binned (a plane's footprint, or the whole grid).
     pub limit: TileRect,
     pub(crate) tile_params: TileParams,
+    /// The uniform `project` ran with (its adjoint recomputes from the same view).
+    pub(crate) project_params: ProjectParams,
     pub projected: wgpu::Buffer,
     /// The exclusive scan of the tile counts (each Gaussian's first key slot).
     pub offsets: wgpu::Buffer,
@@ -55,7 +57,9 @@ pub struct Frame {
     pub(crate) pool: BufferPool,
     grid: Option<TileGrid>,
     plane_count: usize,
+    gaussian_count: u32,
     depth_variance: bool,
+    background: [f32; 3],
     layers: Option<LayerBuffers>,
     /// The camera rays and planes compose read (kept for compose_bwd).
     rays: Option<crate::stages::compose::RayBuffers>,
@@ -166,10 +170,18 @@ fn join_keys(hi: &[u32], lo: &[u32]) -> Vec<u64> {
 }
 
 impl Frame {
-    pub(crate) fn reset(&mut self, grid: TileGrid, plane_count: usize, depth_variance: bool) {
+    pub(crate) fn reset(
+        &mut self,
+        grid: TileGrid,
+        plane_count: usize,
+        gaussian_count: u32,
+        options: &crate::RenderOptions,
+    ) {
         self.grid = Some(grid);
         self.plane_count = plane_count;
-        self.depth_variance = depth_variance;
+        self.gaussian_count = gaussian_count;
+        self.depth_variance = options.depth_variance;
+        self.background = options.background;
         self.views.clear();
         self.stage_times = None;
     }
@@ -217,6 +229,20 @@ impl Frame {
 
     pub(crate) fn grid(&self) -> Option<TileGrid> {
         self.grid
+    }
+
+    /// Number of Gaussians of the scene this frame was rendered from.
+    pub fn gaussian_count(&self) -> u32 {
+        self.gaussian_count
+    }
+
+    /// Whether the frame has the depth-variance layer.
+    pub fn has_depth_variance(&self) -> bool {
+        self.depth_variance
+    }
+
+    pub(crate) fn background(&self) -> [f32; 3] {
+        self.background
     }
 
     /// Number of planes of the scene this frame was rendered from.
@@ -421,5 +447,50 @@ impl Frame {
             sorted_values: gpu::read_buffer(ctx, &keys.values, 0, n),
             ranges: ranges.into_iter().map(|[a, b]| (a, b)).collect(),
         })
+    }
+}
+
+/// The backward pass's working buffers, from the frame's pool (reused from step to step).
+#[derive(Debug)]
+pub(crate) struct BackwardBuffers {
+    /// Per view: PROJECTED_GRAD_FLOATS per Gaussian.
+    pub projected_grads: Vec<wgpu::Buffer>,
+    /// VIEW_GRAD_FLOATS per view at `view_stride` bytes (a binding offset must be aligned).
+    pub view_grads: wgpu::Buffer,
+    pub view_stride: u64,
+    /// PLANE_GRAD_FLOATS per plane (compose_bwd's sums).
+    pub plane_grads: wgpu::Buffer,
+    pub scene_grads: crate::scene::SceneGradBuffers,
+}
+
+impl Frame {
+    pub(crate) fn backward_buffers(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &crate::GpuScene,
+    ) -> BackwardBuffers {
+        use crate::layout::{PROJECTED_GRAD_FLOATS, VIEW_GRAD_FLOATS};
+        let n = u64::from(self.gaussian_count);
+        let views = self.views.len().max(1) as u64;
+        let align = u64::from(ctx.device.limits().min_storage_buffer_offset_alignment);
+        let view_stride = (u64::from(VIEW_GRAD_FLOATS) * 4).div_ceil(align) * align;
+        let planes = self.plane_count.max(1) as u64;
+        let pool = &mut self.pool;
+        BackwardBuffers {
+            projected_grads: (0..self.views.len())
+                .map(|vi| {
+                    let label = format!("trgs.rasterize_bwd.projected_grads.v{vi}");
+                    pool.get(ctx, &label, n * u64::from(PROJECTED_GRAD_FLOATS) * 4)
+                })
+                .collect(),
+            view_grads: pool.get(ctx, "trgs.project_bwd.view_grads", views * view_stride),
+            view_stride,
+            plane_grads: pool.get(
+                ctx,
+                "trgs.compose_bwd.plane_grads",
+                planes * crate::stages::compose_bwd::PLANE_GRAD_FLOATS * 4,
+            ),
+            scene_grads: crate::scene::SceneGradBuffers::new(ctx, pool, scene),
+        }
     }
 }

@@ -17,6 +17,9 @@ pub struct Kernels {
     pub rasterize_reflection: Kernel,
     pub compose: Kernel,
     pub compose_bwd: Kernel,
+    pub rasterize_bwd: Kernel,
+    pub rasterize_reflection_bwd: Kernel,
+    pub project_bwd: Kernel,
 }
 
 /// Defines of the accumulating (adjoint) kernels for the device's features: float atomics or the
@@ -59,6 +62,14 @@ impl Kernels {
             ),
             compose: Kernel::new(ctx, "compose", "compose.wgsl", &[]),
             compose_bwd: Kernel::new(ctx, "compose_bwd", "compose_bwd.wgsl", &acc),
+            rasterize_bwd: Kernel::new(ctx, "rasterize_bwd", "rasterize_bwd.wgsl", &acc),
+            rasterize_reflection_bwd: Kernel::new(
+                ctx,
+                "rasterize_reflection_bwd",
+                "rasterize_reflection_bwd.wgsl",
+                &acc,
+            ),
+            project_bwd: Kernel::new(ctx, "project_bwd", "project_bwd.wgsl", &acc),
         }
     }
 }

@@ -80,7 +80,8 @@ gpu_struct! {
         pub near: f32,
         pub width: u32,
         pub height: u32,
-        pub pad: u32,
+        /// `project_bwd` only: BWD_* bits (how to write the Gaussians' and the view's gradients).
+        pub bwd_mode: u32,
     }
 }
 
@@ -155,7 +156,9 @@ gpu_struct! {
         pub tile_y0: u32,
         /// Plane slot of pass 2's outputs.
         pub slot: u32,
-        pub pad: u32,
+        /// `rasterize_bwd` only: 1 when the frame has the depth-variance layer (else dL/dV is
+        /// ignored: V was never computed).
+        pub depth_variance: u32,
         /// Colour behind the last transmittance of C_t.
         pub background: [f32; 4],
     }
@@ -219,6 +222,18 @@ pub const FLAG_GLASS: u32 = 2;
 pub const FLAG_CLAMPED_R: u32 = 4;
 pub const FLAG_CLAMPED_G: u32 = 8;
 pub const FLAG_CLAMPED_B: u32 = 16;
+/// Floats per Gaussian in a view's screen-space gradient buffer (twin: `ProjectedGrads`), as
+/// three vec4: (dmean2d.xy, dopacity, ddepth), (dconic a b c, dmask), (dcolour rgb, dreflection).
+pub const PROJECTED_GRAD_FLOATS: u32 = 12;
+/// Floats per view in the view-gradient buffer (twin: `ViewGrads`): the linear map by columns
+/// (9), the translation (3), the centre (3), one pad.
+pub const VIEW_GRAD_FLOATS: u32 = 16;
+/// `ProjectParams::bwd_mode` bits. ADD: add into the Gaussian gradients (a mirrored view) instead
+/// of writing them (the primary view writes every Gaussian's, zero for culled ones). NO_GAUSSIANS:
+/// leave them alone (stage 2's stop-gradient). VIEW: sum the view's gradient.
+pub const BWD_ADD: u32 = 1;
+pub const BWD_NO_GAUSSIANS: u32 = 2;
+pub const BWD_VIEW: u32 = 4;
 /// `Population::Glass` as stored in the population buffer.
 pub const POPULATION_GLASS: u32 = 1;
 /// Threads, values per thread and values per workgroup of the prefix sum (few threads, many
@@ -279,6 +294,11 @@ pub fn prelude() -> String {
         ("SORT_THREADS", SORT_THREADS),
         ("SCAN_THREADS", SCAN_THREADS),
         ("SORT_BLOCK", SORT_BLOCK),
+        ("PROJECTED_GRAD_FLOATS", PROJECTED_GRAD_FLOATS),
+        ("VIEW_GRAD_FLOATS", VIEW_GRAD_FLOATS),
+        ("BWD_ADD", BWD_ADD),
+        ("BWD_NO_GAUSSIANS", BWD_NO_GAUSSIANS),
+        ("BWD_VIEW", BWD_VIEW),
     ];
     for (name, v) in consts_u32 {
         s.push_str(&format!("const {name}: u32 = {v}u;\n"));

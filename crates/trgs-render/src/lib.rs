@@ -15,19 +15,23 @@
 //! let layers = frame.read_images(&ctx); // every layer, and each plane's C_raw and A
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
+mod backward;
 mod device;
 mod frame;
 pub mod gpu;
 mod kernels;
+mod layer_grads;
 pub mod layout;
 mod renderer;
 mod scene;
 pub mod shader;
 pub mod stages;
 
+pub use backward::{BackwardError, BackwardOptions, Gradients};
 pub use device::{Capabilities, DeviceError, DeviceOptions, GpuContext};
 pub use frame::{
     Frame, FrameImages, Layer, LayerBuffers, PlaneImages, ViewBuffers, ViewIntermediates,
 };
+pub use layer_grads::{LayerGrads, LayerGradsError};
 pub use renderer::{RenderError, RenderOptions, Renderer};
-pub use scene::GpuScene;
+pub use scene::{GpuScene, SceneGradBuffers};

@@ -3,8 +3,9 @@ use crate::GpuContext;
 use crate::frame::{Frame, ViewBuffers};
 use crate::gpu::{self, Recorder};
 use crate::kernels::Kernels;
+use crate::layer_grads::LayerGrads;
 use crate::scene::GpuScene;
-use crate::stages::compose_bwd::{self, LayerGrads};
+use crate::stages::compose_bwd;
 use crate::stages::emit_keys::Keys;
 use crate::stages::rasterize::Pass1Outputs;
 use crate::stages::{
@@ -60,8 +61,8 @@ pub enum RenderError {
 /// Renders [`GpuScene`]s on one device. Compiles its pipelines once.
 #[derive(Debug)]
 pub struct Renderer {
-    ctx: GpuContext,
-    kernels: Kernels,
+    pub(crate) ctx: GpuContext,
+    pub(crate) kernels: Kernels,
 }
 
 /// One view to project and bin: the real camera, or the camera mirrored about plane `plane`.
@@ -130,7 +131,7 @@ impl Renderer {
                 });
             }
         }
-        frame.reset(grid, planes.len(), options.depth_variance);
+        frame.reset(grid, planes.len(), scene.len(), options);
         let pool = &mut frame.pool;
         let n = u64::from(scene.len());
         let mut rec = Recorder::new(ctx, "trgs.render", options.profile);
@@ -165,6 +166,7 @@ impl Renderer {
                 plane: spec.plane,
                 limit: spec.limit,
                 tile_params: tparams,
+                project_params: pparams,
                 projected,
                 offsets: counts,
                 keys: None,

@@ -118,3 +118,54 @@ impl GpuScene {
             .collect()
     }
 }
+
+/// Gradients of a [`GpuScene`]'s Gaussians, one buffer per attribute in the scene's own layout
+/// (so an optimiser steps each attribute buffer with its gradient buffer).
+#[derive(Clone, Debug)]
+pub struct SceneGradBuffers {
+    pub means: wgpu::Buffer,
+    pub rotations: wgpu::Buffer,
+    pub log_scales: wgpu::Buffer,
+    pub opacity_logits: wgpu::Buffer,
+    pub sh: wgpu::Buffer,
+    pub mask_logits: wgpu::Buffer,
+    pub log_reflections: wgpu::Buffer,
+    len: u32,
+    sh_degree: u32,
+}
+
+impl SceneGradBuffers {
+    /// Buffers for `scene`'s Gaussians (uninitialised: the backward writes every value).
+    pub(crate) fn new(ctx: &GpuContext, pool: &mut gpu::BufferPool, scene: &GpuScene) -> Self {
+        let n = u64::from(scene.len);
+        let coeffs = u64::from(scene.sh_coeffs);
+        let mut get = |name: &str, bytes: u64| pool.get(ctx, &format!("trgs.grads.{name}"), bytes);
+        Self {
+            means: get("means", n * 12),
+            rotations: get("rotations", n * 16),
+            log_scales: get("log_scales", n * 12),
+            opacity_logits: get("opacity_logits", n * 4),
+            sh: get("sh", n * coeffs * 12),
+            mask_logits: get("mask_logits", n * 4),
+            log_reflections: get("log_reflections", n * 4),
+            len: scene.len,
+            sh_degree: scene.sh_degree,
+        }
+    }
+
+    /// Read every gradient back, shaped like the scene's Gaussians (populations are not
+    /// parameters and read as Primary).
+    pub fn read(&self, ctx: &GpuContext) -> Gaussians<f32> {
+        let n = self.len as usize;
+        let mut g = Gaussians::<f32>::zeros(n, self.sh_degree);
+        let coeffs = g.sh_coeffs();
+        g.means = gpu::read_buffer(ctx, &self.means, 0, n);
+        g.rotations = gpu::read_buffer(ctx, &self.rotations, 0, n);
+        g.log_scales = gpu::read_buffer(ctx, &self.log_scales, 0, n);
+        g.opacity_logits = gpu::read_buffer(ctx, &self.opacity_logits, 0, n);
+        g.sh = gpu::read_buffer(ctx, &self.sh, 0, n * coeffs);
+        g.mask_logits = gpu::read_buffer(ctx, &self.mask_logits, 0, n);
+        g.log_reflections = gpu::read_buffer(ctx, &self.log_reflections, 0, n);
+        g
+    }
+}

@@ -18,6 +18,7 @@ pub const SOURCES: &[(&str, &str)] = sources!(
     "shared/sort_digit.wgsl",
     "shared/plane_hit.wgsl",
     "shared/accumulate.wgsl",
+    "shared/sh.wgsl",
     "project.wgsl",
     "tile_counts.wgsl",
     "prefix_sum.wgsl",
@@ -30,6 +31,9 @@ pub const SOURCES: &[(&str, &str)] = sources!(
     "rasterize_reflection.wgsl",
     "compose.wgsl",
     "compose_bwd.wgsl",
+    "rasterize_bwd.wgsl",
+    "rasterize_reflection_bwd.wgsl",
+    "project_bwd.wgsl",
     "splat_loop.wgsl",
 );
 
@@ -51,6 +55,18 @@ pub const VARIANTS: &[(&str, &[&str])] = &[
     ("compose_bwd.wgsl", &["FLOAT_ATOMICS"]),
     ("compose_bwd.wgsl", &["SUBGROUPS"]),
     ("compose_bwd.wgsl", &["FLOAT_ATOMICS", "SUBGROUPS"]),
+    ("rasterize_bwd.wgsl", &[]),
+    ("rasterize_bwd.wgsl", &["FLOAT_ATOMICS"]),
+    ("rasterize_bwd.wgsl", &["SUBGROUPS"]),
+    ("rasterize_bwd.wgsl", &["FLOAT_ATOMICS", "SUBGROUPS"]),
+    ("rasterize_reflection_bwd.wgsl", &[]),
+    ("rasterize_reflection_bwd.wgsl", &["FLOAT_ATOMICS"]),
+    ("rasterize_reflection_bwd.wgsl", &["SUBGROUPS"]),
+    ("rasterize_reflection_bwd.wgsl", &["FLOAT_ATOMICS", "SUBGROUPS"]),
+    ("project_bwd.wgsl", &[]),
+    ("project_bwd.wgsl", &["FLOAT_ATOMICS"]),
+    ("project_bwd.wgsl", &["SUBGROUPS"]),
+    ("project_bwd.wgsl", &["FLOAT_ATOMICS", "SUBGROUPS"]),
     ("splat_loop.wgsl", &[]),
 ];
 

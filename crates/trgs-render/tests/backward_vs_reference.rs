@@ -8,9 +8,9 @@ use trgs_core::fixtures::{SceneSpec, random_scene};
 use trgs_core::reference::{self, FrameGrads, PlaneLayerGrads, RenderSettings, compose_bwd};
 use trgs_core::rng::Rng;
 use trgs_core::scene::Gaussians;
+use trgs_render::LayerGrads;
 use trgs_render::gpu;
-use trgs_render::stages::compose_bwd::LayerGrads;
-use trgs_render::{DeviceOptions, GpuContext, GpuScene, RenderOptions, Renderer};
+use trgs_render::{BackwardOptions, DeviceOptions, GpuContext, GpuScene, RenderOptions, Renderer};
 
 mod common;
 use common::{compare_values, spec};
@@ -187,4 +187,199 @@ fn compose_bwd_two_planes() {
 #[test]
 fn compose_bwd_grazing() {
     check_compose_bwd("80 deg", spec(44, 600, 1, 80.0));
+}
+
+/// Random upstream gradients for every layer of `frame`.
+fn random_grads(seed: u64, frame: &reference::Frame, planes: usize) -> FrameGrads {
+    let (w, h) = (frame.width(), frame.height());
+    let mut rng = Rng::new(seed);
+    FrameGrads {
+        color: random_image(&mut rng, w, h, 3),
+        transmission: random_image(&mut rng, w, h, 3),
+        depth: random_image(&mut rng, w, h, 1),
+        depth_variance: random_image(&mut rng, w, h, 1),
+        mask: random_image(&mut rng, w, h, 1),
+        alpha: random_image(&mut rng, w, h, 1),
+        strength_raw: random_image(&mut rng, w, h, 1),
+        strength: random_image(&mut rng, w, h, 1),
+        reflection: random_image(&mut rng, w, h, 3),
+        planes: (0..planes)
+            .map(|_| PlaneLayerGrads {
+                raw_color: random_image(&mut rng, w, h, 3),
+                intensity: random_image(&mut rng, w, h, 1),
+            })
+            .collect(),
+    }
+}
+
+/// The acceptance rule: every value within 1e-3 of the largest |value| of its attribute (its
+/// scale). Returns the attribute's relative error.
+fn check_scaled(what: &str, gpu: &[f32], cpu: &[f64]) -> f64 {
+    assert_eq!(gpu.len(), cpu.len(), "{what}: value counts");
+    let scale = cpu.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let worst = gpu.iter().zip(cpu).fold(0.0f64, |m, (&g, &c)| m.max((f64::from(g) - c).abs()));
+    let rel = if scale > 0.0 { worst / scale } else { worst };
+    eprintln!("{what}: scale {scale:.3e}, max |gpu - cpu| {worst:.3e}, relative {rel:.2e}");
+    assert!(gpu.iter().all(|v| v.is_finite()), "{what}: non-finite GPU gradient");
+    assert!(rel <= 1e-3 || worst <= 1e-7, "{what}: relative error {rel:.2e} above 1e-3");
+    rel
+}
+
+fn flat<const N: usize>(v: &[[f32; N]]) -> Vec<f32> {
+    v.iter().flatten().copied().collect()
+}
+
+fn flat64<const N: usize>(v: &[[f64; N]]) -> Vec<f64> {
+    v.iter().flatten().copied().collect()
+}
+
+/// Twin screen-space gradients of the real view in the GPU record layout.
+fn projected_record(pg: &reference::ProjectedGrads, i: usize) -> [f64; 12] {
+    let (m, c, col) = (pg.mean2d[i], pg.conic[i], pg.color[i]);
+    [
+        m.x,
+        m.y,
+        pg.opacity[i],
+        pg.depth[i],
+        c[0],
+        c[1],
+        c[2],
+        pg.mask[i],
+        col[0],
+        col[1],
+        col[2],
+        pg.reflection[i],
+    ]
+}
+
+/// The whole backward against the twin's: the real view's screen-space gradients (stage
+/// rasterize_bwd), then every Gaussian attribute and every plane parameter.
+fn check_backward(name: &str, mut scene: trgs_core::fixtures::Scene, block: bool) {
+    // Tiny and huge scales on a few Gaussians (the hard cases of the acceptance).
+    let n = scene.gaussians.len();
+    for i in (0..n).step_by(37) {
+        scene.gaussians.log_scales[i] = [-9.0, -8.5, -9.5];
+    }
+    for i in (5..n).step_by(97) {
+        scene.gaussians.log_scales[i] = [0.3, -0.5, 0.0];
+    }
+    let g32: Gaussians<f32> = scene.gaussians.cast();
+    let g = g32.cast::<f64>();
+    let background = [0.1, 0.2, 0.3];
+    let settings = RenderSettings { background, ..Default::default() };
+    let cpu_frame = reference::render(&g, &scene.planes, &scene.camera, &settings).expect("valid");
+    let grads = random_grads(n as u64 ^ 0xbac4, &cpu_frame, scene.planes.len());
+    let options = reference::BackwardOptions { block_reflection_to_gaussians: block };
+    let cpu = reference::backward(
+        &g,
+        &scene.planes,
+        &scene.camera,
+        &settings,
+        &cpu_frame,
+        &grads,
+        &options,
+    )
+    .expect("valid");
+    // The twin's stage: pass 1's adjoint from compose's totals.
+    let cg = compose_bwd(&scene.camera, &scene.planes, &cpu_frame, &grads);
+    let (w, h) = (cpu_frame.width(), cpu_frame.height());
+    let grid = reference::TileGrid::new(w, h);
+    let pass = &cpu_frame.primary;
+    let cpu_pg = reference::rasterize_bwd(
+        &pass.projected,
+        &pass.values,
+        &pass.ranges,
+        &grid,
+        &cpu_frame.pixels,
+        &cpu_frame.depth,
+        background,
+        reference::RasterizeUpstream {
+            transmission: &cg.transmission,
+            depth: &grads.depth,
+            depth_variance: &grads.depth_variance,
+            mask: &cg.mask,
+            alpha: &grads.alpha,
+        },
+    );
+
+    for (mode, ctx) in contexts() {
+        let what = format!("{name} ({mode})");
+        let renderer = Renderer::new(&ctx);
+        let gpu_scene = GpuScene::upload(&ctx, &g32, &scene.planes).expect("valid scene");
+        let render_options = RenderOptions {
+            background: background.map(|v| v as f32),
+            depth_variance: true,
+            ..Default::default()
+        };
+        let mut frame =
+            renderer.render(&gpu_scene, &scene.camera, &render_options).expect("render");
+        let layer_grads = LayerGrads::upload(&ctx, &frame, &grads).expect("finite gradients");
+        let bwd = BackwardOptions { block_reflection_to_gaussians: block, profile: false };
+        let out = renderer.backward(&gpu_scene, &mut frame, &layer_grads, &bwd).expect("backward");
+
+        let pg = out.read_projected_grads(&ctx, 0).expect("primary view");
+        let gpu_pg: Vec<f32> = pg.iter().flatten().copied().collect();
+        let cpu_pg: Vec<f64> = (0..n).flat_map(|i| projected_record(&cpu_pg, i)).collect();
+        for (c, field) in [
+            "dmean.x", "dmean.y", "dopacity", "ddepth", "dconic.a", "dconic.b", "dconic.c",
+            "dmask", "dcolor.r", "dcolor.g", "dcolor.b",
+        ]
+        .iter()
+        .enumerate()
+        {
+            let gv: Vec<f32> = gpu_pg.iter().skip(c).step_by(12).copied().collect();
+            let cv: Vec<f64> = cpu_pg.iter().skip(c).step_by(12).copied().collect();
+            check_scaled(&format!("{what} rasterize_bwd {field}"), &gv, &cv);
+        }
+
+        let gg = out.gaussians.read(&ctx);
+        let c = &cpu.gaussians;
+        check_scaled(&format!("{what} means"), &flat(&gg.means), &flat64(&c.means));
+        check_scaled(&format!("{what} rotations"), &flat(&gg.rotations), &flat64(&c.rotations));
+        check_scaled(&format!("{what} log_scales"), &flat(&gg.log_scales), &flat64(&c.log_scales));
+        check_scaled(&format!("{what} opacity_logits"), &gg.opacity_logits, &c.opacity_logits);
+        check_scaled(&format!("{what} sh"), &flat(&gg.sh), &flat64(&c.sh));
+        check_scaled(&format!("{what} mask_logits"), &gg.mask_logits, &c.mask_logits);
+        check_scaled(&format!("{what} log_reflections"), &gg.log_reflections, &c.log_reflections);
+        assert_eq!(out.planes.len(), cpu.planes.len());
+        for (k, (gp, cp)) in out.planes.iter().zip(&cpu.planes).enumerate() {
+            let gv = [gp.centre.to_array(), gp.normal.to_array(), [gp.r0_logit, 0.0, 0.0]];
+            let cv = [cp.centre.to_array(), cp.normal.to_array(), [cp.r0_logit, 0.0, 0.0]];
+            for (part, (a, b)) in ["centre", "normal", "r0_logit"].iter().zip(gv.iter().zip(&cv)) {
+                let a32: Vec<f32> = a.iter().map(|&v| v as f32).collect();
+                eprintln!("{what} plane {k} {part}: gpu {a:?} cpu {b:?}");
+                check_scaled(&format!("{what} plane {k} {part}"), &a32, b);
+            }
+        }
+    }
+}
+
+#[test]
+fn backward_no_plane() {
+    check_backward("no plane", random_scene(&spec(51, 600, 0, 20.0)), false);
+}
+
+#[test]
+fn backward_one_plane() {
+    check_backward("1 plane", random_scene(&spec(52, 600, 1, 25.0)), false);
+}
+
+#[test]
+fn backward_two_planes() {
+    check_backward("2 planes", random_scene(&spec(53, 600, 2, 30.0)), false);
+}
+
+#[test]
+fn backward_grazing() {
+    check_backward("80 deg", random_scene(&spec(54, 600, 1, 80.0)), false);
+}
+
+#[test]
+fn backward_edge_on() {
+    check_backward("edge-on 89.9 deg", random_scene(&spec(55, 600, 2, 89.9)), false);
+}
+
+#[test]
+fn backward_stop_gradient() {
+    check_backward("2 planes, stage-2 block", random_scene(&spec(56, 600, 2, 30.0)), true);
 }

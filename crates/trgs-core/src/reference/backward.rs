@@ -9,7 +9,9 @@ use super::rasterize_bwd::{RasterizeUpstream, rasterize_bwd};
 use super::rasterize_reflection_bwd::rasterize_reflection_bwd;
 use super::{RenderSettings, TileGrid};
 use crate::plane_math::outer;
-use crate::scene::{Camera, Gaussians, InvalidInput, ReflectionPlane, validate_scene};
+use crate::scene::{
+    Camera, Gaussians, InvalidInput, ReflectionPlane, ViewTransform, validate_scene,
+};
 use glam::{DMat3, DVec3};
 
 /// Switches of the backward pass that the training stages need.
@@ -36,16 +38,16 @@ pub struct SceneGrads {
     pub planes: Vec<PlaneGrad>,
 }
 
-/// Chain the gradient of a mirrored view into the plane's centre and unit normal.
-/// `W' = R H`, `t' = t + 2 (u.n) R n`, `c' = c - 2 ((c - u).n) n`.
-fn mirrored_view_bwd(
+/// Chain the gradient of a mirrored view into the plane's centre and unit normal, given the real
+/// camera's view. `W' = R H`, `t' = t + 2 (u.n) R n`, `c' = c - 2 ((c - u).n) n`.
+pub fn mirrored_view_bwd(
     plane: &ReflectionPlane,
-    real: &super::ViewPass,
+    real: &ViewTransform,
     vg: &ViewGrads,
 ) -> (DVec3, DVec3) {
     let n = plane.unit_normal();
     let u = plane.centre;
-    let (r, c) = (real.view.linear, real.view.centre);
+    let (r, c) = (real.linear, real.centre);
     let rn = r * n;
     let mut g_n = -2.0 * (r.transpose() * vg.linear * n + vg.linear.transpose() * rn);
     let gt_rn = vg.translation.dot(rn);
@@ -55,6 +57,24 @@ fn mirrored_view_bwd(
     g_u += 2.0 * n.dot(vg.centre) * n;
     g_n -= 2.0 * (vg.centre.dot(n) * cu + cu.dot(n) * vg.centre);
     (g_u, g_n)
+}
+
+/// The gradient of a plane's stored parameters from those of its centre, unit normal and R0:
+/// through the normalisation `n = n_raw / |n_raw|` and `R0 = sigmoid(logit)`.
+pub fn plane_grad(
+    plane: &ReflectionPlane,
+    g_centre: DVec3,
+    g_unit_normal: DVec3,
+    g_r0: f64,
+) -> PlaneGrad {
+    let len = plane.normal.length();
+    let nu = plane.normal / len;
+    let r0 = plane.r0();
+    PlaneGrad {
+        centre: g_centre,
+        normal: (DMat3::IDENTITY - outer(nu, nu)) * g_unit_normal / len,
+        r0_logit: g_r0 * r0 * (1.0 - r0),
+    }
 }
 
 /// Gradients of a scalar loss given dL/d(each layer of `frame`), which `render` produced from the
@@ -114,20 +134,11 @@ pub fn backward(
             );
             let target = if options.block_reflection_to_gaussians { None } else { Some(&mut out) };
             let vg = project_bwd(g, &mp.view, k, &mp.projected, &rpg, target);
-            let (du, dn) = mirrored_view_bwd(plane, pass, &vg);
+            let (du, dn) = mirrored_view_bwd(plane, &pass.view, &vg);
             g_u += du;
             g_n += dn;
         }
-        // n = n_raw / |n_raw|.
-        let len = plane.normal.length();
-        let nu = plane.normal / len;
-        let g_raw_n = (DMat3::IDENTITY - outer(nu, nu)) * g_n / len;
-        let r0 = plane.r0();
-        plane_grads.push(PlaneGrad {
-            centre: g_u,
-            normal: g_raw_n,
-            r0_logit: cg.r0[kp] * r0 * (1.0 - r0),
-        });
+        plane_grads.push(plane_grad(plane, g_u, g_n, cg.r0[kp]));
     }
     Ok(SceneGrads { gaussians: out, planes: plane_grads })
 }

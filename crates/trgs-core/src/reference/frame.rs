@@ -31,8 +31,10 @@ pub struct Frame {
     /// Per plane: the mirrored pass (None when the camera is not in front of the plane or the
     /// rectangle is off screen).
     pub planes: Vec<Option<PlaneLayers>>,
-    pub(crate) primary: ViewPass,
-    pub(crate) pixels: Vec<PixelState>,
+    /// The real camera's pass (what its adjoint replays).
+    pub primary: ViewPass,
+    /// Pass 1's per-pixel states.
+    pub pixels: Vec<PixelState>,
 }
 
 /// One plane's mirrored pass.
@@ -43,8 +45,10 @@ pub struct PlaneLayers {
     /// A^k.
     pub intensity: Image<f64>,
     pub footprint: TileRect,
-    pub(crate) pass: ViewPass,
-    pub(crate) pixels: Vec<ReflectionPixelState>,
+    /// The mirrored view's pass.
+    pub pass: ViewPass,
+    /// Pass 2's per-pixel states.
+    pub pixels: Vec<ReflectionPixelState>,
 }
 
 impl Frame {

@@ -25,7 +25,9 @@ mod sort;
 mod tile_counts;
 mod tile_ranges;
 
-pub use backward::{BackwardOptions, PlaneGrad, SceneGrads, backward};
+pub use backward::{
+    BackwardOptions, PlaneGrad, SceneGrads, backward, mirrored_view_bwd, plane_grad,
+};
 pub use compose::{ComposeOutput, compose};
 pub use compose_bwd::{ComposeGrads, compose_bwd};
 pub use emit_keys::emit_keys;
@@ -33,8 +35,11 @@ pub use footprint::{TileRect, footprint};
 pub use frame::{Frame, FrameGrads, PlaneLayerGrads, PlaneLayers};
 pub use prefix_sum::prefix_sum;
 pub use project::{Projected, ProjectionFilter, project};
+pub use project_bwd::{ProjectedGrads, ViewGrads, project_bwd};
 pub use rasterize::{PixelState, rasterize};
+pub use rasterize_bwd::{RasterizeUpstream, rasterize_bwd};
 pub use rasterize_reflection::{ReflectionPixelState, rasterize_reflection};
+pub use rasterize_reflection_bwd::rasterize_reflection_bwd;
 pub use render::{RenderSettings, ViewPass, render, render_view};
 pub use sort::sort_keys;
 pub use tile_counts::{TileGrid, tile_counts, tile_rect};

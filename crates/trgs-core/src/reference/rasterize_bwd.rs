@@ -9,7 +9,7 @@ use crate::image::Image;
 
 /// Upstream gradients of pass 1's layers.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct RasterizeUpstream<'a> {
+pub struct RasterizeUpstream<'a> {
     pub transmission: &'a Image<f64>,
     pub depth: &'a Image<f64>,
     pub depth_variance: &'a Image<f64>,
@@ -43,7 +43,7 @@ pub(crate) fn alpha_bwd(
     pg.conic[i][2] += g_power * (-0.5 * dy * dy);
 }
 
-pub(crate) fn rasterize_bwd(
+pub fn rasterize_bwd(
     p: &Projected,
     values: &[u32],
     ranges: &[(u32, u32)],

@@ -7,7 +7,7 @@ use super::rasterize_reflection::ReflectionPixelState;
 use super::{Projected, TileGrid, TileRect};
 use crate::image::Image;
 
-pub(crate) fn rasterize_reflection_bwd(
+pub fn rasterize_reflection_bwd(
     p: &Projected,
     values: &[u32],
     ranges: &[(u32, u32)],

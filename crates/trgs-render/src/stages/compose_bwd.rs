@@ -5,24 +5,8 @@ use super::Stage;
 use super::compose::RayBuffers;
 use crate::frame::LayerBuffers;
 use crate::gpu::Recorder;
+use crate::layer_grads::LayerGrads;
 use trgs_core::reference::TileGrid;
-
-/// Gradient buffers shaped like the forward layers they belong to ([`LayerBuffers`]).
-#[derive(Clone, Debug)]
-pub struct LayerGrads {
-    /// dL/d(C, -), read.
-    pub color: wgpu::Buffer,
-    /// dL/d(C_r, -), read.
-    pub reflection: wgpu::Buffer,
-    /// dL/d(R_raw, R, -, -), read.
-    pub strength: wgpu::Buffer,
-    /// dL/d(C_t, alpha): direct in, total out.
-    pub transmission: wgpu::Buffer,
-    /// dL/d(D_t, V, M, -): direct in, total out.
-    pub geometry: wgpu::Buffer,
-    /// dL/d(C_raw^k, A^k) per plane slot: direct in, total out.
-    pub reflection_raw: wgpu::Buffer,
-}
 
 /// Floats per plane in the plane accumulator: dL/dR0 and dL/d(unit normal).
 pub const PLANE_GRAD_FLOATS: u64 = 4;

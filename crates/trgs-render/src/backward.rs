@@ -1,0 +1,224 @@
+//! The backward pass on the GPU: from dL/d(each layer of a frame) to the gradients of every
+//! Gaussian attribute (in GPU buffers shaped like the scene's) and of every plane's centre,
+//! normal and R0 logit. The order is the reverse of the forward's (DESIGN.md data flow):
+//! compose_bwd; rasterize_bwd and project_bwd of the real view; per plane rasterize_reflection_bwd
+//! and project_bwd of its mirrored view, whose view gradient then chains into the plane on the CPU
+//! (a dozen numbers per plane, the twin's own `mirrored_view_bwd`).
+use crate::frame::Frame;
+use crate::gpu::{self, Recorder};
+use crate::layer_grads::LayerGrads;
+use crate::layout::{BWD_ADD, BWD_NO_GAUSSIANS, BWD_VIEW, PROJECTED_GRAD_FLOATS, VIEW_GRAD_FLOATS};
+use crate::renderer::Renderer;
+use crate::scene::{GpuScene, SceneGradBuffers};
+use crate::stages::rasterize_bwd::ViewLists;
+use crate::stages::{Stage, compose_bwd, project_bwd, rasterize_bwd, rasterize_reflection_bwd};
+use glam::{DMat3, DVec3};
+use trgs_core::reference::{PlaneGrad, ViewGrads, mirrored_view_bwd, plane_grad};
+
+/// Switches of the backward pass.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BackwardOptions {
+    /// Stage 2 of training: no gradient from the mirrored passes (C_r) into any Gaussian; the
+    /// planes' centre and normal still learn from them through the mirrored view.
+    pub block_reflection_to_gaussians: bool,
+    /// Time every stage with timestamp queries when the adapter has them.
+    pub profile: bool,
+}
+
+/// The result of [`Renderer::backward`].
+#[derive(Debug)]
+pub struct Gradients {
+    /// dL/d(each Gaussian attribute), on the GPU.
+    pub gaussians: SceneGradBuffers,
+    /// dL/d(each plane's centre, unnormalised normal, R0 logit).
+    pub planes: Vec<PlaneGrad>,
+    /// Per view (0 = camera, then each mirrored pass): the screen-space gradients.
+    projected_grads: Vec<wgpu::Buffer>,
+    gaussian_count: u32,
+    stage_times: Option<Vec<(&'static str, f64)>>,
+}
+
+impl Gradients {
+    /// Screen-space gradients of view `vi` (for stage-by-stage tests): per Gaussian
+    /// (dmean2d.xy, dopacity, ddepth, dconic a b c, dmask, dcolour rgb, dreflection).
+    pub fn read_projected_grads(
+        &self,
+        ctx: &crate::GpuContext,
+        vi: usize,
+    ) -> Option<Vec<[f32; PROJECTED_GRAD_FLOATS as usize]>> {
+        let b = self.projected_grads.get(vi)?;
+        Some(gpu::read_buffer(ctx, b, 0, self.gaussian_count as usize))
+    }
+
+    /// Milliseconds per stage, with `profile` on an adapter with timestamps.
+    pub fn stage_times(&self) -> Option<&[(&'static str, f64)]> {
+        self.stage_times.as_deref()
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum BackwardError {
+    #[error("the frame has not been rendered")]
+    NotRendered,
+    #[error(
+        "the frame was rendered from {frame_gaussians} Gaussians and {frame_planes} planes, the \
+         scene has {scene_gaussians} and {scene_planes}"
+    )]
+    SceneMismatch {
+        frame_gaussians: u32,
+        frame_planes: usize,
+        scene_gaussians: u32,
+        scene_planes: usize,
+    },
+}
+
+/// A mirrored view's gradient from its VIEW_GRAD_FLOATS (linear map by columns, translation,
+/// centre).
+fn view_grads(v: &[f32]) -> ViewGrads {
+    let d = |i: usize| f64::from(v[i]);
+    let col = |i: usize| DVec3::new(d(i), d(i + 1), d(i + 2));
+    ViewGrads {
+        linear: DMat3::from_cols(col(0), col(3), col(6)),
+        translation: col(9),
+        centre: col(12),
+    }
+}
+
+impl Renderer {
+    /// Gradients of a scalar loss from dL/d(each layer of `frame`), which this renderer rendered
+    /// from `scene` (same Gaussians and planes, unchanged since). `grads` is consumed: its
+    /// pass-layer buffers hold compose's totals afterwards. The Gaussian gradient buffers belong
+    /// to `frame` and are overwritten by its next backward.
+    pub fn backward(
+        &self,
+        scene: &GpuScene,
+        frame: &mut Frame,
+        grads: &LayerGrads,
+        options: &BackwardOptions,
+    ) -> Result<Gradients, BackwardError> {
+        let ctx = &self.ctx;
+        let (Some(grid), Some(_)) = (frame.grid(), frame.layer_buffers()) else {
+            return Err(BackwardError::NotRendered);
+        };
+        if frame.gaussian_count() != scene.len() || frame.plane_count() != scene.planes().len() {
+            return Err(BackwardError::SceneMismatch {
+                frame_gaussians: frame.gaussian_count(),
+                frame_planes: frame.plane_count(),
+                scene_gaussians: scene.len(),
+                scene_planes: scene.planes().len(),
+            });
+        }
+        let bufs = frame.backward_buffers(ctx, scene);
+        let frame = &*frame;
+        #[allow(clippy::expect_used)]
+        let (layers, rays) = (
+            frame.layer_buffers().expect("checked above"),
+            frame.rays().expect("a rendered frame keeps its rays"),
+        );
+        let s = Stage { ctx, kernels: &self.kernels };
+        let mut rec = Recorder::new(ctx, "trgs.backward", options.profile);
+        for b in &bufs.projected_grads {
+            rec.encoder.clear_buffer(b, 0, None);
+        }
+        rec.encoder.clear_buffer(&bufs.view_grads, 0, None);
+        rec.encoder.clear_buffer(&bufs.plane_grads, 0, None);
+        compose_bwd::record(s, &mut rec, &grid, rays, layers, grads, &bufs.plane_grads);
+        let views = frame.views();
+        let view_slot = |vi: usize| {
+            gpu::range(
+                &bufs.view_grads,
+                vi as u64 * bufs.view_stride,
+                u64::from(VIEW_GRAD_FLOATS) * 4,
+            )
+        };
+        for (vi, v) in views.iter().enumerate() {
+            #[allow(clippy::expect_used)]
+            let lists = ViewLists {
+                projected: &v.projected,
+                values: &v.keys.as_ref().expect("a rendered view is sorted").values,
+                ranges: v.ranges.as_ref().expect("a rendered view has ranges"),
+            };
+            let pg = &bufs.projected_grads[vi];
+            let mode = match v.plane {
+                None => {
+                    rasterize_bwd::record(
+                        s,
+                        &mut rec,
+                        &grid,
+                        frame.background(),
+                        frame.has_depth_variance(),
+                        lists,
+                        layers,
+                        grads,
+                        pg,
+                    );
+                    0
+                }
+                Some(k) => {
+                    rasterize_reflection_bwd::record(
+                        s, &mut rec, &grid, k as u32, &v.limit, lists, layers, grads, pg,
+                    );
+                    let gaussians = if options.block_reflection_to_gaussians {
+                        BWD_NO_GAUSSIANS
+                    } else {
+                        BWD_ADD
+                    };
+                    BWD_VIEW | gaussians
+                }
+            };
+            project_bwd::record(
+                s,
+                &mut rec,
+                scene,
+                &v.project_params,
+                mode,
+                &v.projected,
+                pg,
+                &bufs.scene_grads,
+                view_slot(vi),
+            );
+        }
+        // The plane sums and view gradients come back in one small readback.
+        let plane_bytes = bufs.plane_grads.size().min(frame.plane_slots() as u64 * 16);
+        let view_bytes = views.len() as u64 * bufs.view_stride;
+        let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("trgs.backward.plane_staging"),
+            size: plane_bytes + view_bytes,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        rec.encoder.copy_buffer_to_buffer(&bufs.plane_grads, 0, &staging, 0, plane_bytes);
+        rec.encoder.copy_buffer_to_buffer(&bufs.view_grads, 0, &staging, plane_bytes, view_bytes);
+        rec.submit_and_wait(ctx);
+        let flat: Vec<f32> = gpu::map_and_read(ctx, &staging, (plane_bytes + view_bytes) as usize);
+        let stride = (bufs.view_stride / 4) as usize;
+        let view_of = |vi: usize| {
+            let o = (plane_bytes / 4) as usize + vi * stride;
+            view_grads(&flat[o..o + VIEW_GRAD_FLOATS as usize])
+        };
+        let real = &views[0].view;
+        let planes = scene
+            .planes()
+            .iter()
+            .enumerate()
+            .map(|(k, plane)| {
+                let c = &flat[4 * k..4 * k + 4];
+                let mut g_n = DVec3::new(f64::from(c[1]), f64::from(c[2]), f64::from(c[3]));
+                let mut g_u = DVec3::ZERO;
+                if let Some(vi) = views.iter().position(|v| v.plane == Some(k)) {
+                    let (du, dn) = mirrored_view_bwd(plane, real, &view_of(vi));
+                    g_u += du;
+                    g_n += dn;
+                }
+                plane_grad(plane, g_u, g_n, f64::from(c[0]))
+            })
+            .collect();
+        Ok(Gradients {
+            gaussians: bufs.scene_grads,
+            planes,
+            projected_grads: bufs.projected_grads,
+            gaussian_count: scene.len(),
+            stage_times: rec.stage_times(),
+        })
+    }
+}

@@ -1,0 +1,52 @@
+//! Stage `project_bwd` (shaders/project_bwd.wgsl; twin `trgs_core::reference::project_bwd`):
+//! from one view's screen-space gradients to the Gaussians' parameters and to the view itself.
+use super::Stage;
+use crate::gpu::{self, Recorder, grid_1d, range};
+use crate::layout::{PROJECTED_GRAD_FLOATS, ProjectParams, ProjectedGaussian};
+use crate::scene::{GpuScene, SceneGradBuffers};
+
+const PROJECTED: u64 = std::mem::size_of::<ProjectedGaussian>() as u64;
+const PROJECTED_GRAD: u64 = PROJECTED_GRAD_FLOATS as u64 * 4;
+
+/// Backpropagate one view: `base` is the view's forward uniform, `mode` its BWD_* bits.
+#[allow(clippy::too_many_arguments)]
+pub fn record(
+    s: Stage<'_>,
+    rec: &mut Recorder,
+    scene: &GpuScene,
+    base: &ProjectParams,
+    mode: u32,
+    projected: &wgpu::Buffer,
+    projected_grads: &wgpu::Buffer,
+    out: &SceneGradBuffers,
+    view_grads: wgpu::BindingResource<'_>,
+) {
+    let k = &s.kernels.project_bwd;
+    let coeffs = u64::from(scene.sh_coeffs());
+    for (first, count) in scene.chunks() {
+        let p = ProjectParams { count, sh_coeffs: scene.sh_coeffs(), bwd_mode: mode, ..*base };
+        let uniform = gpu::uniform(s.ctx, "trgs.project_bwd.params", &p);
+        let (f, c) = (u64::from(first), u64::from(count));
+        let bind = k.bind(
+            s.ctx,
+            &[
+                uniform.as_entire_binding(),
+                range(&scene.means, f * 12, c * 12),
+                range(&scene.rotations, f * 16, c * 16),
+                range(&scene.log_scales, f * 12, c * 12),
+                range(&scene.sh, f * coeffs * 12, c * coeffs * 12),
+                range(projected, f * PROJECTED, c * PROJECTED),
+                range(projected_grads, f * PROJECTED_GRAD, c * PROJECTED_GRAD),
+                range(&out.means, f * 12, c * 12),
+                range(&out.rotations, f * 16, c * 16),
+                range(&out.log_scales, f * 12, c * 12),
+                range(&out.opacity_logits, f * 4, c * 4),
+                range(&out.sh, f * coeffs * 12, c * coeffs * 12),
+                range(&out.mask_logits, f * 4, c * 4),
+                range(&out.log_reflections, f * 4, c * 4),
+                view_grads.clone(),
+            ],
+        );
+        rec.dispatch("project_bwd", k, &bind, grid_1d(count.div_ceil(256)));
+    }
+}

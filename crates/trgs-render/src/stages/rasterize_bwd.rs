@@ -1,0 +1,57 @@
+//! Stage `rasterize_bwd` (shaders/rasterize_bwd.wgsl; twin
+//! `trgs_core::reference::rasterize_bwd`): the adjoint of pass 1, from the total gradients of
+//! C_t, alpha, D_t, V and M to each Gaussian's screen-space gradients.
+use super::Stage;
+use crate::frame::LayerBuffers;
+use crate::gpu::{self, Recorder};
+use crate::layer_grads::LayerGrads;
+use crate::layout::RasterParams;
+use trgs_core::reference::TileGrid;
+
+/// The sorted lists of the view being replayed.
+#[derive(Clone, Copy, Debug)]
+pub struct ViewLists<'a> {
+    pub projected: &'a wgpu::Buffer,
+    pub values: &'a wgpu::Buffer,
+    pub ranges: &'a wgpu::Buffer,
+}
+
+#[allow(clippy::too_many_arguments)]
+pub fn record(
+    s: Stage<'_>,
+    rec: &mut Recorder,
+    grid: &TileGrid,
+    background: [f32; 3],
+    depth_variance: bool,
+    lists: ViewLists<'_>,
+    layers: &LayerBuffers,
+    grads: &LayerGrads,
+    projected_grads: &wgpu::Buffer,
+) {
+    let params = RasterParams {
+        width: grid.width,
+        height: grid.height,
+        tiles_x: grid.tiles_x,
+        tiles_y: grid.tiles_y,
+        depth_variance: u32::from(depth_variance),
+        background: [background[0], background[1], background[2], 0.0],
+        ..Default::default()
+    };
+    let uniform = gpu::uniform(s.ctx, "trgs.rasterize_bwd.params", &params);
+    let k = &s.kernels.rasterize_bwd;
+    let bind = k.bind(
+        s.ctx,
+        &[
+            uniform.as_entire_binding(),
+            lists.projected.as_entire_binding(),
+            lists.values.as_entire_binding(),
+            lists.ranges.as_entire_binding(),
+            layers.states.as_entire_binding(),
+            layers.geometry.as_entire_binding(),
+            grads.transmission.as_entire_binding(),
+            grads.geometry.as_entire_binding(),
+            projected_grads.as_entire_binding(),
+        ],
+    );
+    rec.dispatch("rasterize_bwd", k, &bind, [grid.tiles_x, grid.tiles_y, 1]);
+}

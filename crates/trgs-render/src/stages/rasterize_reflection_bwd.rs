@@ -1,0 +1,53 @@
+//! Stage `rasterize_reflection_bwd` (shaders/rasterize_reflection_bwd.wgsl; twin
+//! `trgs_core::reference::rasterize_reflection_bwd`): the adjoint of pass 2 over the plane's
+//! footprint, from dL/d(C_raw, A) to each mirrored Gaussian's screen-space gradients.
+use super::Stage;
+use super::rasterize_bwd::ViewLists;
+use crate::frame::LayerBuffers;
+use crate::gpu::{self, Recorder};
+use crate::layer_grads::LayerGrads;
+use crate::layout::RasterParams;
+use trgs_core::reference::{TileGrid, TileRect};
+
+#[allow(clippy::too_many_arguments)]
+pub fn record(
+    s: Stage<'_>,
+    rec: &mut Recorder,
+    grid: &TileGrid,
+    slot: u32,
+    footprint: &TileRect,
+    lists: ViewLists<'_>,
+    layers: &LayerBuffers,
+    grads: &LayerGrads,
+    projected_grads: &wgpu::Buffer,
+) {
+    if footprint.is_empty() {
+        return;
+    }
+    let params = RasterParams {
+        width: grid.width,
+        height: grid.height,
+        tiles_x: grid.tiles_x,
+        tiles_y: grid.tiles_y,
+        tile_x0: footprint.x0,
+        tile_y0: footprint.y0,
+        slot,
+        ..Default::default()
+    };
+    let uniform = gpu::uniform(s.ctx, "trgs.rasterize_reflection_bwd.params", &params);
+    let k = &s.kernels.rasterize_reflection_bwd;
+    let bind = k.bind(
+        s.ctx,
+        &[
+            uniform.as_entire_binding(),
+            lists.projected.as_entire_binding(),
+            lists.values.as_entire_binding(),
+            lists.ranges.as_entire_binding(),
+            layers.reflection_states.as_entire_binding(),
+            grads.reflection_raw.as_entire_binding(),
+            projected_grads.as_entire_binding(),
+        ],
+    );
+    let groups = [footprint.x1 - footprint.x0, footprint.y1 - footprint.y0, 1];
+    rec.dispatch("rasterize_reflection_bwd", k, &bind, groups);
+}

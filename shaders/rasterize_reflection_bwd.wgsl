@@ -1,0 +1,106 @@
+// Stage `rasterize_reflection_bwd`, the adjoint of pass 2 (twin:
+// trgs_core::reference::rasterize_reflection_bwd): the back-to-front replay of rasterize_bwd with
+// one transmittance, over the tiles of the plane's footprint (tile_x0, tile_y0 is its corner).
+// Pixels whose ray misses the plane kept the cleared state (last = 0) and replay nothing. Adds
+// each mirrored Gaussian's colour, reflection-intensity, opacity, 2D mean and conic gradients
+// into `grads` (PROJECTED_GRAD_FLOATS per Gaussian) once per subgroup that touched it.
+#include "shared/common.wgsl"
+#include "shared/splat.wgsl"
+#include "shared/accumulate.wgsl"
+
+@group(0) @binding(0) var<uniform> params: RasterParams;
+@group(0) @binding(1) var<storage, read> projected: array<ProjectedGaussian>;
+@group(0) @binding(2) var<storage, read> values: array<u32>;
+@group(0) @binding(3) var<storage, read> ranges: array<u32>;
+// Plane slot params.slot of the per-plane states and of dL/d(C_raw, A) (after compose_bwd).
+@group(0) @binding(4) var<storage, read> states: array<ReflectionState>;
+@group(0) @binding(5) var<storage, read> g_reflection_raw: array<vec4<f32>>;
+#ifdef FLOAT_ATOMICS
+@group(0) @binding(6) var<storage, read_write> grads: array<atomic<f32>>;
+#else
+@group(0) @binding(6) var<storage, read_write> grads: array<atomic<u32>>;
+#endif
+
+// mean, conic with opacity, (colour, reflection intensity a), the Gaussian's index.
+var<workgroup> s_mean: array<vec2<f32>, 256>;
+var<workgroup> s_conic: array<vec4<f32>, 256>;
+var<workgroup> s_color: array<vec4<f32>, 256>;
+var<workgroup> s_index: array<u32, 256>;
+var<workgroup> max_last: atomic<u32>;
+
+@compute @workgroup_size(16, 16)
+fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let tx = wid.x + params.tile_x0;
+    let ty = wid.y + params.tile_y0;
+    let x = tx * TILE_SIZE + lid % TILE_SIZE;
+    let y = ty * TILE_SIZE + lid / TILE_SIZE;
+    let inside = x < params.width && y < params.height;
+    let tile = ty * params.tiles_x + tx;
+    let start = ranges[2u * tile];
+    let end = max(ranges[2u * tile + 1u], start);
+    if lid == 0u {
+        atomicStore(&max_last, 0u);
+    }
+    workgroupBarrier();
+    let p = select(0u, params.slot * params.width * params.height + y * params.width + x, inside);
+    var st: ReflectionState;
+    if inside {
+        st = states[p];
+        atomicMax(&max_last, st.last);
+    }
+    let gr = g_reflection_raw[p];
+    var t = st.t_final;
+    var acc = 0.0;
+    let pixel = vec2<f32>(f32(x) + 0.5, f32(y) + 0.5);
+
+    let last = workgroupUniformLoad(&max_last);
+    let rounds = (last + 255u) / 256u;
+    for (var rr = 0u; rr < rounds; rr++) {
+        let r = rounds - 1u - rr;
+        workgroupBarrier();
+        let idx = start + r * 256u + lid;
+        if idx < end {
+            let gi = values[idx];
+            let g = projected[gi];
+            s_mean[lid] = g.mean2d;
+            s_conic[lid] = g.conic;
+            s_color[lid] = vec4<f32>(g.color.xyz, g.reflection);
+            s_index[lid] = gi;
+        }
+        workgroupBarrier();
+        let batch = min(256u, last - r * 256u);
+        for (var jj = 0u; jj < batch; jj++) {
+            let j = batch - 1u - jj;
+            let li = r * 256u + j;
+            var g0 = vec4<f32>(0.0);
+            var g1 = vec4<f32>(0.0);
+            var g2 = vec4<f32>(0.0);
+            var blended = false;
+            if inside && li < st.last {
+                let conic = s_conic[j];
+                let dd = pixel - s_mean[j];
+                let terms = alpha_terms(conic, dd);
+                let alpha = terms.x;
+                if alpha >= 0.0 {
+                    blended = true;
+                    let tj = t / (1.0 - alpha);
+                    let wgt = alpha * tj;
+                    let phi = dot(gr, s_color[j]);
+                    g2 = gr * wgt;
+                    let g_alpha = phi * tj - acc / (1.0 - alpha);
+                    acc += phi * wgt;
+                    t = tj;
+                    let ga = alpha_bwd(conic, dd, terms, g_alpha);
+                    g0 = ga[0];
+                    g1 = ga[1];
+                }
+            }
+            if subgroup_any(blended) {
+                let base = PROJECTED_GRAD_FLOATS * s_index[j];
+                accumulate_subgroup4(base, g0);
+                accumulate_subgroup4(base + 4u, g1);
+                accumulate_subgroup4(base + 8u, g2);
+            }
+        }
+    }
+}
