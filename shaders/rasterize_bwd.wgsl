@@ -78,6 +78,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
     let pixel = vec2<f32>(f32(x) + 0.5, f32(y) + 0.5);
 
     let last = workgroupUniformLoad(&max_last);
+    let lane = subgroup_lane();
     let rounds = (last + 255u) / 256u;
     for (var rr = 0u; rr < rounds; rr++) {
         let r = rounds - 1u - rr;
@@ -96,9 +97,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         for (var jj = 0u; jj < batch; jj++) {
             let j = batch - 1u - jj;
             let li = r * 256u + j;
-            var g0 = vec4<f32>(0.0);
-            var g1 = vec4<f32>(0.0);
-            var g2 = vec4<f32>(0.0);
+            var g: array<vec4<f32>, 3>;
             var blended = false;
             if inside && li < st.last_t {
                 let mean = s_mean[j];
@@ -108,41 +107,40 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
                 let alpha = terms.x;
                 if alpha >= 0.0 {
                     blended = true;
+                    // 1 / (1 - alpha) recovers each transmittance before this Gaussian.
+                    let ra = 1.0 / (1.0 - alpha);
                     let glass = mean.w != 0.0;
                     var g_alpha = 0.0;
                     if !glass {
-                        let tj = t / (1.0 - alpha);
+                        let tj = t * ra;
                         let wgt = alpha * tj;
                         let z = s_color[j].w;
                         let dz = z - d;
                         let phi = dot(gc, s_color[j].xyz) + g_zsum * z + g_wsum + g_v * abs(dz);
-                        g2 = vec4<f32>(gc * wgt, 0.0);
-                        g0.w = g_zsum * wgt + g_v * wgt * sign(dz);
-                        g_alpha += phi * tj - acc_t / (1.0 - alpha);
+                        g[2] = vec4<f32>(gc * wgt, 0.0);
+                        g[0].w = g_zsum * wgt + g_v * wgt * sign(dz);
+                        g_alpha += phi * tj - acc_t * ra;
                         acc_t += phi * wgt;
                         t = tj;
                     }
                     if li < st.last_m {
-                        let tmj = tm / (1.0 - alpha);
+                        let tmj = tm * ra;
                         var psi = 0.0;
                         if glass {
                             psi = g_m * mean.z;
-                            g1.w = g_m * alpha * tmj;
+                            g[1].w = g_m * alpha * tmj;
                         }
-                        g_alpha += psi * tmj - acc_m / (1.0 - alpha);
+                        g_alpha += psi * tmj - acc_m * ra;
                         acc_m += psi * alpha * tmj;
                         tm = tmj;
                     }
                     let ga = alpha_bwd(conic, dd, terms, g_alpha);
-                    g0 = vec4<f32>(ga[0].xyz, g0.w);
-                    g1 = vec4<f32>(ga[1].xyz, g1.w);
+                    g[0] = vec4<f32>(ga[0].xyz, g[0].w);
+                    g[1] = vec4<f32>(ga[1].xyz, g[1].w);
                 }
             }
             if subgroup_any(blended) {
-                let base = PROJECTED_GRAD_FLOATS * s_index[j];
-                accumulate_subgroup4(base, g0);
-                accumulate_subgroup4(base + 4u, g1);
-                accumulate_subgroup4(base + 8u, g2);
+                accumulate_subgroup12(PROJECTED_GRAD_FLOATS * s_index[j], g, lane.x, lane.y);
             }
         }
     }

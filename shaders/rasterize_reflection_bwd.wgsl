@@ -54,6 +54,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
     let pixel = vec2<f32>(f32(x) + 0.5, f32(y) + 0.5);
 
     let last = workgroupUniformLoad(&max_last);
+    let lane = subgroup_lane();
     let rounds = (last + 255u) / 256u;
     for (var rr = 0u; rr < rounds; rr++) {
         let r = rounds - 1u - rr;
@@ -72,9 +73,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         for (var jj = 0u; jj < batch; jj++) {
             let j = batch - 1u - jj;
             let li = r * 256u + j;
-            var g0 = vec4<f32>(0.0);
-            var g1 = vec4<f32>(0.0);
-            var g2 = vec4<f32>(0.0);
+            var g: array<vec4<f32>, 3>;
             var blended = false;
             if inside && li < st.last {
                 let conic = s_conic[j];
@@ -83,23 +82,21 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
                 let alpha = terms.x;
                 if alpha >= 0.0 {
                     blended = true;
-                    let tj = t / (1.0 - alpha);
+                    let ra = 1.0 / (1.0 - alpha);
+                    let tj = t * ra;
                     let wgt = alpha * tj;
                     let phi = dot(gr, s_color[j]);
-                    g2 = gr * wgt;
-                    let g_alpha = phi * tj - acc / (1.0 - alpha);
+                    g[2] = gr * wgt;
+                    let g_alpha = phi * tj - acc * ra;
                     acc += phi * wgt;
                     t = tj;
                     let ga = alpha_bwd(conic, dd, terms, g_alpha);
-                    g0 = ga[0];
-                    g1 = ga[1];
+                    g[0] = ga[0];
+                    g[1] = ga[1];
                 }
             }
             if subgroup_any(blended) {
-                let base = PROJECTED_GRAD_FLOATS * s_index[j];
-                accumulate_subgroup4(base, g0);
-                accumulate_subgroup4(base + 4u, g1);
-                accumulate_subgroup4(base + 8u, g2);
+                accumulate_subgroup12(PROJECTED_GRAD_FLOATS * s_index[j], g, lane.x, lane.y);
             }
         }
     }

@@ -24,6 +24,11 @@ fn accumulate(i: u32, v: f32) {
 }
 
 #ifdef SUBGROUPS
+// This lane's rank and the subgroup's size (call in uniform control flow).
+fn subgroup_lane() -> vec2<u32> {
+    return vec2<u32>(subgroupExclusiveAdd(1u), subgroupAdd(1u));
+}
+
 // Whether any lane of the subgroup has `b` (lets a whole subgroup skip its reductions).
 fn subgroup_any(b: bool) -> bool {
     return subgroupAny(b);
@@ -42,6 +47,20 @@ fn accumulate_subgroup4(base: u32, v: vec4<f32>) {
     }
 }
 
+// A Gaussian's record of three vec4 at grads[base ..]: one reduction per vector, then the lanes
+// share the atomics (lane l adds the components l, l + size, ...) instead of one lane making
+// them all in turn. `lane` and `size` are subgroupExclusiveAdd(1u) and subgroupAdd(1u) taken in
+// uniform control flow.
+fn accumulate_subgroup12(base: u32, g: array<vec4<f32>, 3>, lane: u32, size: u32) {
+    let t = array<vec4<f32>, 3>(subgroupAdd(g[0]), subgroupAdd(g[1]), subgroupAdd(g[2]));
+    for (var c = lane; c < 12u; c += size) {
+        let v = t[c / 4u][c % 4u];
+        if v != 0.0 {
+            accumulate(base + c, v);
+        }
+    }
+}
+
 fn accumulate_subgroup(i: u32, v: f32) {
     let total = subgroupAdd(v);
     // The first active lane adds (naga has no subgroupElect).
@@ -51,6 +70,10 @@ fn accumulate_subgroup(i: u32, v: f32) {
     }
 }
 #else
+fn subgroup_lane() -> vec2<u32> {
+    return vec2<u32>(0u, 1u);
+}
+
 fn subgroup_any(b: bool) -> bool {
     return b;
 }
@@ -59,6 +82,15 @@ fn accumulate_subgroup4(base: u32, v: vec4<f32>) {
     for (var c = 0u; c < 4u; c++) {
         if v[c] != 0.0 {
             accumulate(base + c, v[c]);
+        }
+    }
+}
+
+fn accumulate_subgroup12(base: u32, g: array<vec4<f32>, 3>, lane: u32, size: u32) {
+    for (var c = 0u; c < 12u; c++) {
+        let v = g[c / 4u][c % 4u];
+        if v != 0.0 {
+            accumulate(base + c, v);
         }
     }
 }

@@ -10,19 +10,23 @@ use std::path::PathBuf;
 use std::time::Instant;
 use trgs_core::fixtures::{RoomDensity, RoomSpec, room_scene};
 use trgs_core::reference::TILE_SIZE;
+use trgs_core::reference::{FrameGrads, PlaneLayerGrads};
 use trgs_render::gpu::{self, Kernel, Recorder};
 use trgs_render::layout::{ProjectedGaussian, RasterParams};
-use trgs_render::{Frame, GpuContext, GpuScene, RenderOptions, Renderer};
+use trgs_render::{
+    BackwardOptions, Frame, GpuContext, GpuScene, LayerGrads, RenderOptions, Renderer,
+};
 
 const HELP: &str = "\
 trgs bench: forward renderer benchmarks
 
 USAGE:
-    bench [--quick] [--plane-cost] [--reps N] [--write FILE]
+    bench [--quick] [--plane-cost] [--backward] [--reps N] [--write FILE]
 
 OPTIONS:
     --quick       only 256x192 and at most 100k Gaussians
-    --plane-cost  only the plane-cost measurement (no grid, no throughput)
+    --plane-cost  only the plane-cost measurement (no grid, no throughput, no backward)
+    --backward    only the backward measurement
     --reps N      timed frames per configuration (default 5; the median is reported)
     --write FILE  also write the report as Markdown (e.g. docs/BENCHMARKS.md)
 ";
@@ -30,18 +34,21 @@ OPTIONS:
 struct Args {
     quick: bool,
     plane_cost_only: bool,
+    backward_only: bool,
     reps: usize,
     write: Option<PathBuf>,
 }
 
 fn parse_args() -> Result<Option<Args>> {
-    let mut args = Args { quick: false, plane_cost_only: false, reps: 5, write: None };
+    let mut args =
+        Args { quick: false, plane_cost_only: false, backward_only: false, reps: 5, write: None };
     let mut it = std::env::args().skip(1);
     while let Some(a) = it.next() {
         match a.as_str() {
             "-h" | "--help" => return Ok(None),
             "--quick" => args.quick = true,
             "--plane-cost" => args.plane_cost_only = true,
+            "--backward" => args.backward_only = true,
             "--reps" => {
                 let v = it.next().context("--reps needs a value")?;
                 args.reps = v.parse().with_context(|| format!("--reps {v:?} is not a count"))?;
@@ -202,6 +209,113 @@ fn plane_cost(
     })
 }
 
+/// Forward and backward of one training-like step on one scene (256x192, 100k Gaussians).
+struct BackwardRow {
+    density: RoomDensity,
+    planes: usize,
+    steps: usize,
+    forward_ms: f64,
+    backward_ms: f64,
+    /// Median over steps of backward / forward.
+    ratio: f64,
+    /// Median GPU ms per backward stage.
+    stages: Vec<(&'static str, f64)>,
+}
+
+/// Upstream gradients with deterministic values in [-1, 1] on every layer (a loss that depends
+/// on all of them, so that no adjoint stage can skip work).
+fn pseudo_grads(w: u32, h: u32, planes: usize) -> FrameGrads {
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let mut image = |channels: u32| {
+        let mut im = trgs_core::Image::new(w, h, channels);
+        for v in &mut im.data {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            *v = ((state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0;
+        }
+        im
+    };
+    FrameGrads {
+        color: image(3),
+        transmission: image(3),
+        depth: image(1),
+        depth_variance: image(1),
+        mask: image(1),
+        alpha: image(1),
+        strength_raw: image(1),
+        strength: image(1),
+        reflection: image(3),
+        planes: (0..planes)
+            .map(|_| PlaneLayerGrads { raw_color: image(3), intensity: image(1) })
+            .collect(),
+    }
+}
+
+fn bench_backward(
+    ctx: &GpuContext,
+    renderer: &Renderer,
+    density: RoomDensity,
+    planes: usize,
+    steps: usize,
+) -> Result<BackwardRow> {
+    let spec = RoomSpec {
+        seed: 7,
+        gaussians: 100_000,
+        planes,
+        width: 256,
+        height: 192,
+        sh_degree: 3,
+        density,
+    };
+    let (scene, camera) = upload(ctx, &spec)?;
+    // As training renders: with the depth-variance layer.
+    let options = RenderOptions { depth_variance: true, ..RenderOptions::default() };
+    let grads = pseudo_grads(spec.width, spec.height, planes);
+    let mut frame = Frame::default();
+    let plain = BackwardOptions::default();
+    // Warm-up (JIT, buffer pools).
+    renderer.render_into(&scene, &camera, &options, &mut frame)?;
+    let layer_grads = LayerGrads::upload(ctx, &frame, &grads)?;
+    renderer.backward(&scene, &mut frame, &layer_grads, &plain)?;
+    let (mut fwd, mut bwd, mut ratios) = (Vec::new(), Vec::new(), Vec::new());
+    for _ in 0..steps {
+        let t = Instant::now();
+        renderer.render_into(&scene, &camera, &options, &mut frame)?;
+        let f = t.elapsed().as_secs_f64() * 1e3;
+        // A fresh copy of the upstream gradients (the backward consumes them), not timed.
+        let layer_grads = LayerGrads::upload(ctx, &frame, &grads)?;
+        let t = Instant::now();
+        renderer.backward(&scene, &mut frame, &layer_grads, &plain)?;
+        let b = t.elapsed().as_secs_f64() * 1e3;
+        fwd.push(f);
+        bwd.push(b);
+        ratios.push(b / f);
+    }
+    let profiled = BackwardOptions { profile: true, ..plain };
+    let mut samples: Vec<(&'static str, Vec<f64>)> = Vec::new();
+    for _ in 0..steps {
+        renderer.render_into(&scene, &camera, &options, &mut frame)?;
+        let layer_grads = LayerGrads::upload(ctx, &frame, &grads)?;
+        let out = renderer.backward(&scene, &mut frame, &layer_grads, &profiled)?;
+        for &(name, ms) in out.stage_times().unwrap_or_default() {
+            match samples.iter_mut().find(|s| s.0 == name) {
+                Some(s) => s.1.push(ms),
+                None => samples.push((name, vec![ms])),
+            }
+        }
+    }
+    Ok(BackwardRow {
+        density,
+        planes,
+        steps,
+        forward_ms: median(fwd),
+        backward_ms: median(bwd),
+        ratio: median(ratios),
+        stages: samples.into_iter().map(|(n, v)| (n, median(v))).collect(),
+    })
+}
+
 /// Pixel-Gaussian evaluations of pass 1: per pixel, the list entries visited before it stopped.
 fn rasterize_evaluations(ctx: &GpuContext, frame: &Frame, gaussians: usize) -> u64 {
     let states = frame.read_states(ctx);
@@ -280,7 +394,7 @@ fn main() -> Result<()> {
         }
     }
     configs.push((RoomDensity::Uniform, 256, 192, 100_000));
-    if args.plane_cost_only {
+    if args.plane_cost_only || args.backward_only {
         configs.clear();
     }
     for (density, width, height, gaussians) in configs {
@@ -318,9 +432,30 @@ fn main() -> Result<()> {
             }
         }
     }
+    let mut backward = Vec::new();
+    if !args.plane_cost_only {
+        for density in [RoomDensity::AsCaptured, RoomDensity::Uniform] {
+            for planes in 0..=2 {
+                let b = bench_backward(&ctx, &renderer, density, planes, args.reps.max(1))?;
+                println!(
+                    "backward, {density:?} 256x192 100k {planes} planes: forward {:.1} ms, backward {:.1} ms, median ratio {:.2}x",
+                    b.forward_ms, b.backward_ms, b.ratio
+                );
+                for (n, ms) in &b.stages {
+                    println!("    {n:26} {ms:8.2} ms GPU");
+                }
+                backward.push(b);
+            }
+        }
+    }
     let pairs = (3 * args.reps).max(9);
     let mut costs = Vec::new();
-    for density in [RoomDensity::AsCaptured, RoomDensity::Uniform] {
+    let densities = if args.backward_only {
+        vec![]
+    } else {
+        vec![RoomDensity::AsCaptured, RoomDensity::Uniform]
+    };
+    for density in densities {
         let c = plane_cost(&ctx, &renderer, density, pairs)?;
         println!(
             "plane cost, {density:?} 256x192 100k: {:.1} ms without, {:.1} ms with, median pair ratio {:.3}x over {pairs} pairs",
@@ -331,7 +466,7 @@ fn main() -> Result<()> {
         }
         costs.push(c);
     }
-    let report = report(&ctx, &rows, &costs, throughput, &args);
+    let report = report(&ctx, &rows, &costs, throughput, &backward, &args);
     println!("\n{report}");
     if let Some(path) = &args.write {
         trgs_core::io::write_atomic(path, report.as_bytes())?;
@@ -361,12 +496,15 @@ fn report(
     rows: &[Row],
     costs: &[PlaneCost],
     throughput: Option<Throughput>,
+    backward: &[BackwardRow],
     args: &Args,
 ) -> String {
     let mut s = String::new();
     let cmd = format!(
-        "cargo run --release --bin bench --{}{}",
+        "cargo run --release --bin bench --{}{}{}{}",
         if args.quick { " --quick" } else { "" },
+        if args.plane_cost_only { " --plane-cost" } else { "" },
+        if args.backward_only { " --backward" } else { "" },
         args.write.as_ref().map_or(String::new(), |p| format!(" --write {}", p.display()))
     );
     let _ = writeln!(s, "## Forward renderer\n");
@@ -491,6 +629,64 @@ fn report(
             t.long,
             100.0 * t.ours / t.long
         );
+    }
+    if !backward.is_empty() {
+        let _ = writeln!(s, "\n## Backward (256x192, 100k Gaussians)\n");
+        let _ = writeln!(
+            s,
+            "One training-like step per row: `Renderer::render_into` with the depth-variance layer, then \
+             `Renderer::backward` from upstream gradients on every layer (deterministic values in [-1, 1], \
+             uploaded before the timer starts), which includes the readback of the plane gradients. \
+             Wall ms: medians over {} steps; ratio: the median over steps of backward / forward. \
+             The issue's bound is 2.5x.\n",
+            backward[0].steps
+        );
+        let _ = writeln!(
+            s,
+            "| room | planes | forward ms | backward ms | forward + backward ms | backward / forward |"
+        );
+        let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|");
+        for b in backward {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {:.1} | {:.1} | {:.1} | {:.2}x |",
+                density_name(b.density),
+                b.planes,
+                b.forward_ms,
+                b.backward_ms,
+                b.forward_ms + b.backward_ms,
+                b.ratio
+            );
+        }
+        let mut names: Vec<&str> = Vec::new();
+        for b in backward {
+            for (n, _) in &b.stages {
+                if !names.contains(n) {
+                    names.push(n);
+                }
+            }
+        }
+        let _ = writeln!(s, "\n### Backward stage breakdown (GPU ms, median per stage)\n");
+        let _ = writeln!(s, "| room | planes | {} |", names.join(" | "));
+        let _ = writeln!(s, "|---|---:|{}", "---:|".repeat(names.len()));
+        for b in backward {
+            let cells: Vec<String> = names
+                .iter()
+                .map(|n| {
+                    b.stages
+                        .iter()
+                        .find(|x| x.0 == *n)
+                        .map_or("-".into(), |x| format!("{:.2}", x.1))
+                })
+                .collect();
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} |",
+                density_name(b.density),
+                b.planes,
+                cells.join(" | ")
+            );
+        }
     }
     s
 }
