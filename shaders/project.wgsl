@@ -27,13 +27,35 @@ fn sh_coeff(i: u32, k: u32) -> vec3<f32> {
 }
 
 // 3DGS's SH evaluation (+0.5 offset), before the clamp at zero.
+// Constant indices into the basis keep it in registers (a dynamically indexed private array
+// costs a gather per lane on CPU adapters).
 fn eval_sh(i: u32, d: vec3<f32>) -> vec3<f32> {
-    let basis = sh_basis(view.sh_degree, d);
+    let b = sh_basis(view.sh_degree, d);
     var rgb = vec3<f32>(0.5);
-    for (var k = 0u; k < view.sh_coeffs; k++) {
-        rgb += basis[k] * sh_coeff(i, k);
-    }
+    rgb += sh_term(i, 0u, b[0]);
+    rgb += sh_term(i, 1u, b[1]);
+    rgb += sh_term(i, 2u, b[2]);
+    rgb += sh_term(i, 3u, b[3]);
+    rgb += sh_term(i, 4u, b[4]);
+    rgb += sh_term(i, 5u, b[5]);
+    rgb += sh_term(i, 6u, b[6]);
+    rgb += sh_term(i, 7u, b[7]);
+    rgb += sh_term(i, 8u, b[8]);
+    rgb += sh_term(i, 9u, b[9]);
+    rgb += sh_term(i, 10u, b[10]);
+    rgb += sh_term(i, 11u, b[11]);
+    rgb += sh_term(i, 12u, b[12]);
+    rgb += sh_term(i, 13u, b[13]);
+    rgb += sh_term(i, 14u, b[14]);
+    rgb += sh_term(i, 15u, b[15]);
     return rgb;
+}
+
+fn sh_term(i: u32, k: u32, basis: f32) -> vec3<f32> {
+    if k >= view.sh_coeffs {
+        return vec3<f32>(0.0);
+    }
+    return basis * sh_coeff(i, k);
 }
 
 fn cull(i: u32) {

@@ -65,9 +65,30 @@ fn outer(a: vec3<f32>, b: vec3<f32>) -> mat3x3<f32> {
     return mat3x3<f32>(a * b.x, a * b.y, a * b.z);
 }
 
-fn sh_coeff(i: u32, k: u32) -> vec3<f32> {
-    let base = (i * view.sh_coeffs + k) * 3u;
-    return vec3<f32>(sh[base], sh[base + 1u], sh[base + 2u]);
+// SH coefficient k (< nk) of Gaussian i: writes (or adds) its gradient basis_k * dL/dcolour
+// when `write`, and returns its term of dL/d(direction).
+fn sh_term_bwd(
+    i: u32,
+    k: u32,
+    nk: u32,
+    basis: f32,
+    dbasis: vec3<f32>,
+    gcol: vec3<f32>,
+    write: bool,
+    add: bool,
+) -> vec3<f32> {
+    if k >= nk {
+        return vec3<f32>(0.0);
+    }
+    let base = (i * nk + k) * 3u;
+    let coeff = vec3<f32>(sh[base], sh[base + 1u], sh[base + 2u]);
+    if write {
+        let gk = basis * gcol;
+        g_sh[base] = select(0.0, g_sh[base], add) + gk.x;
+        g_sh[base + 1u] = select(0.0, g_sh[base + 1u], add) + gk.y;
+        g_sh[base + 2u] = select(0.0, g_sh[base + 2u], add) + gk.z;
+    }
+    return dot(coeff, gcol) * dbasis;
 }
 
 @compute @workgroup_size(256)
@@ -170,10 +191,27 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         let gcol = select(pg2.xyz, vec3<f32>(0.0), clamped);
         let basis = sh_basis(view.sh_degree, dir);
         let dbasis = sh_basis_grad(view.sh_degree, dir);
+        // Constant indices into the basis arrays keep them in registers (a dynamically indexed
+        // private array costs a gather per lane on CPU adapters).
         var g_dir = vec3<f32>(0.0);
-        for (var k = 0u; k < view.sh_coeffs; k++) {
-            g_dir += dot(sh_coeff(i, k), gcol) * dbasis[k];
-        }
+        let nk = view.sh_coeffs;
+        let wr = write;
+        g_dir += sh_term_bwd(i, 0u, nk, basis[0], dbasis[0], gcol, wr, add);
+        g_dir += sh_term_bwd(i, 1u, nk, basis[1], dbasis[1], gcol, wr, add);
+        g_dir += sh_term_bwd(i, 2u, nk, basis[2], dbasis[2], gcol, wr, add);
+        g_dir += sh_term_bwd(i, 3u, nk, basis[3], dbasis[3], gcol, wr, add);
+        g_dir += sh_term_bwd(i, 4u, nk, basis[4], dbasis[4], gcol, wr, add);
+        g_dir += sh_term_bwd(i, 5u, nk, basis[5], dbasis[5], gcol, wr, add);
+        g_dir += sh_term_bwd(i, 6u, nk, basis[6], dbasis[6], gcol, wr, add);
+        g_dir += sh_term_bwd(i, 7u, nk, basis[7], dbasis[7], gcol, wr, add);
+        g_dir += sh_term_bwd(i, 8u, nk, basis[8], dbasis[8], gcol, wr, add);
+        g_dir += sh_term_bwd(i, 9u, nk, basis[9], dbasis[9], gcol, wr, add);
+        g_dir += sh_term_bwd(i, 10u, nk, basis[10], dbasis[10], gcol, wr, add);
+        g_dir += sh_term_bwd(i, 11u, nk, basis[11], dbasis[11], gcol, wr, add);
+        g_dir += sh_term_bwd(i, 12u, nk, basis[12], dbasis[12], gcol, wr, add);
+        g_dir += sh_term_bwd(i, 13u, nk, basis[13], dbasis[13], gcol, wr, add);
+        g_dir += sh_term_bwd(i, 14u, nk, basis[14], dbasis[14], gcol, wr, add);
+        g_dir += sh_term_bwd(i, 15u, nk, basis[15], dbasis[15], gcol, wr, add);
         if len > 0.0 {
             let g_v = (g_dir - dir * dot(dir, g_dir)) / len;
             g_mu += g_v;
@@ -181,13 +219,6 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         }
 
         if write {
-            for (var k = 0u; k < view.sh_coeffs; k++) {
-                let base = (i * view.sh_coeffs + k) * 3u;
-                let gk = basis[k] * gcol;
-                g_sh[base] = select(0.0, g_sh[base], add) + gk.x;
-                g_sh[base + 1u] = select(0.0, g_sh[base + 1u], add) + gk.y;
-                g_sh[base + 2u] = select(0.0, g_sh[base + 2u], add) + gk.z;
-            }
             // Sigma = L L^T, L = R S.
             let g_l = 2.0 * g_cov3 * l;
             let g_r = mat3x3<f32>(g_l[0] * s.x, g_l[1] * s.y, g_l[2] * s.z);
