@@ -1,3 +1,5 @@
+//! (Each test binary uses a part of this module.)
+#![allow(dead_code)]
 //! What the GPU-versus-twin tests share: the tolerance, the value comparison and the scene shape.
 use trgs_core::fixtures::SceneSpec;
 
