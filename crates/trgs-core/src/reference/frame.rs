@@ -95,9 +95,9 @@ pub struct PlaneLayerGrads {
 }
 
 impl FrameGrads {
-    /// All-zero gradients shaped like `frame`.
-    pub fn zeros_like(frame: &Frame) -> Self {
-        let (w, h) = (frame.width(), frame.height());
+    /// All-zero gradients for a `width` x `height` frame of a scene with `planes` planes.
+    pub fn zeros(width: u32, height: u32, planes: usize) -> Self {
+        let (w, h) = (width, height);
         Self {
             color: Image::new(w, h, 3),
             transmission: Image::new(w, h, 3),
@@ -108,15 +108,18 @@ impl FrameGrads {
             strength_raw: Image::new(w, h, 1),
             strength: Image::new(w, h, 1),
             reflection: Image::new(w, h, 3),
-            planes: frame
-                .planes
-                .iter()
+            planes: (0..planes)
                 .map(|_| PlaneLayerGrads {
                     raw_color: Image::new(w, h, 3),
                     intensity: Image::new(w, h, 1),
                 })
                 .collect(),
         }
+    }
+
+    /// All-zero gradients shaped like `frame`.
+    pub fn zeros_like(frame: &Frame) -> Self {
+        Self::zeros(frame.width(), frame.height(), frame.planes.len())
     }
 }
 

@@ -507,7 +507,7 @@ fn report(
         if args.backward_only { " --backward" } else { "" },
         args.write.as_ref().map_or(String::new(), |p| format!(" --write {}", p.display()))
     );
-    let _ = writeln!(s, "## Forward renderer\n");
+    let _ = writeln!(s, "## Renderer benchmarks\n");
     let _ = writeln!(s, "Made by `{cmd}` on {}.", ctx.describe());
     let _ = writeln!(
         s,
@@ -521,85 +521,95 @@ fn report(
          GPU: sum over stages of the median of each stage's timestamp-query time over as many profiled frames.\n",
         args.reps
     );
-    let _ = writeln!(
-        s,
-        "| room | image | Gaussians | planes | wall ms | GPU ms | vs no plane | keys | frame memory MiB |"
-    );
-    let _ = writeln!(s, "|---|---|---:|---:|---:|---:|---:|---:|---:|");
-    for r in rows {
-        let base = rows
-            .iter()
-            .find(|b| {
-                b.density == r.density
-                    && b.width == r.width
-                    && b.gaussians == r.gaussians
-                    && b.planes == 0
-            })
-            .map_or(f64::NAN, |b| b.wall_ms);
+    if !rows.is_empty() {
+        let _ = writeln!(s, "### Forward\n");
         let _ = writeln!(
             s,
-            "| {} | {}x{} | {} | {} | {:.1} | {:.1} | {:.2}x | {} | {:.1} |",
-            density_name(r.density),
-            r.width,
-            r.height,
-            r.gaussians,
-            r.planes,
-            r.wall_ms,
-            r.gpu_ms,
-            r.wall_ms / base,
-            r.keys,
-            r.memory_mb
+            "| room | image | Gaussians | planes | wall ms | GPU ms | vs no plane | keys | frame memory MiB |"
         );
+        let _ = writeln!(s, "|---|---|---:|---:|---:|---:|---:|---:|---:|");
+        for r in rows {
+            let base = rows
+                .iter()
+                .find(|b| {
+                    b.density == r.density
+                        && b.width == r.width
+                        && b.gaussians == r.gaussians
+                        && b.planes == 0
+                })
+                .map_or(f64::NAN, |b| b.wall_ms);
+            let _ = writeln!(
+                s,
+                "| {} | {}x{} | {} | {} | {:.1} | {:.1} | {:.2}x | {} | {:.1} |",
+                density_name(r.density),
+                r.width,
+                r.height,
+                r.gaussians,
+                r.planes,
+                r.wall_ms,
+                r.gpu_ms,
+                r.wall_ms / base,
+                r.keys,
+                r.memory_mb
+            );
+        }
     }
-    let _ = writeln!(s, "\n### What one plane costs (256x192, 100k Gaussians)\n");
-    let _ = writeln!(
-        s,
-        "One scene with one plane whose footprint is a quarter of the image, rendered with the plane \
+    if !costs.is_empty() {
+        let _ = writeln!(s, "\n### What one plane costs (256x192, 100k Gaussians)\n");
+        let _ = writeln!(
+            s,
+            "One scene with one plane whose footprint is a quarter of the image, rendered with the plane \
          disabled and enabled (`RenderOptions::enabled_planes`) in alternating frames, so the Gaussians \
          and the transmitted pass are identical and the machine's drift hits both alike. Ratio: the \
          median over pairs of (with plane) / (without). The issue's bound is 1.25x; the paper's \
          implementation, which renders the mirrored view over the whole image, costs 1.5x.\n"
-    );
-    let _ = writeln!(s, "| room | pairs | without plane ms | with plane ms | ratio |");
-    let _ = writeln!(s, "|---|---:|---:|---:|---:|");
-    for c in costs {
-        let _ = writeln!(
-            s,
-            "| {} | {} | {:.1} | {:.1} | {:.2}x |",
-            density_name(c.density),
-            c.pairs,
-            c.without_ms,
-            c.with_ms,
-            c.ratio
         );
-    }
-    let _ = writeln!(s, "\n### Stage breakdown (GPU ms, median per stage)\n");
-    let mut names: Vec<&str> = Vec::new();
-    for r in rows {
-        for (n, _) in &r.stages {
-            if !names.contains(n) {
-                names.push(n);
-            }
+        let _ = writeln!(s, "| room | pairs | without plane ms | with plane ms | ratio |");
+        let _ = writeln!(s, "|---|---:|---:|---:|---:|");
+        for c in costs {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {:.1} | {:.1} | {:.2}x |",
+                density_name(c.density),
+                c.pairs,
+                c.without_ms,
+                c.with_ms,
+                c.ratio
+            );
         }
     }
-    let _ = writeln!(s, "| room | image | Gaussians | planes | {} |", names.join(" | "));
-    let _ = writeln!(s, "|---|---|---:|---:|{}", "---:|".repeat(names.len()));
-    for r in rows {
-        let cells: Vec<String> = names
-            .iter()
-            .map(|n| {
-                r.stages.iter().find(|s| s.0 == *n).map_or("-".into(), |s| format!("{:.2}", s.1))
-            })
-            .collect();
-        let _ = writeln!(
-            s,
-            "| {}x{} | {} | {} | {} |",
-            r.width,
-            r.height,
-            r.gaussians,
-            r.planes,
-            cells.join(" | ")
-        );
+    if !rows.is_empty() {
+        let _ = writeln!(s, "\n### Stage breakdown (GPU ms, median per stage)\n");
+        let mut names: Vec<&str> = Vec::new();
+        for r in rows {
+            for (n, _) in &r.stages {
+                if !names.contains(n) {
+                    names.push(n);
+                }
+            }
+        }
+        let _ = writeln!(s, "| room | image | Gaussians | planes | {} |", names.join(" | "));
+        let _ = writeln!(s, "|---|---|---:|---:|{}", "---:|".repeat(names.len()));
+        for r in rows {
+            let cells: Vec<String> = names
+                .iter()
+                .map(|n| {
+                    r.stages
+                        .iter()
+                        .find(|s| s.0 == *n)
+                        .map_or("-".into(), |s| format!("{:.2}", s.1))
+                })
+                .collect();
+            let _ = writeln!(
+                s,
+                "| {}x{} | {} | {} | {} |",
+                r.width,
+                r.height,
+                r.gaussians,
+                r.planes,
+                cells.join(" | ")
+            );
+        }
     }
     if let Some(t) = throughput {
         let _ = writeln!(s, "\n### Rasterize throughput (256x192, 100k Gaussians, no plane)\n");
@@ -631,7 +641,7 @@ fn report(
         );
     }
     if !backward.is_empty() {
-        let _ = writeln!(s, "\n## Backward (256x192, 100k Gaussians)\n");
+        let _ = writeln!(s, "\n### Backward (256x192, 100k Gaussians)\n");
         let _ = writeln!(
             s,
             "One training-like step per row: `Renderer::render_into` with the depth-variance layer, then \
@@ -666,7 +676,7 @@ fn report(
                 }
             }
         }
-        let _ = writeln!(s, "\n### Backward stage breakdown (GPU ms, median per stage)\n");
+        let _ = writeln!(s, "\n#### Backward stage breakdown (GPU ms, median per stage)\n");
         let _ = writeln!(s, "| room | planes | {} |", names.join(" | "));
         let _ = writeln!(s, "|---|---:|{}", "---:|".repeat(names.len()));
         for b in backward {
