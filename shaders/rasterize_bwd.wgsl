@@ -79,6 +79,9 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
 
     let last = workgroupUniformLoad(&max_last);
     let lane = subgroup_lane();
+    // The subgroup's own last entry: its lanes skip the entries none of them blended (a subgroup
+    // runs its own trip count; on a CPU adapter it is one SIMD vector).
+    let sg_last = subgroup_max(st.last_t);
     let rounds = (last + 255u) / 256u;
     for (var rr = 0u; rr < rounds; rr++) {
         let r = rounds - 1u - rr;
@@ -94,7 +97,9 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         }
         workgroupBarrier();
         let batch = min(256u, last - r * 256u);
-        for (var jj = 0u; jj < batch; jj++) {
+        // Entries [0, mine) of this batch come before the subgroup's last.
+        let mine = min(batch, sg_last - min(sg_last, r * 256u));
+        for (var jj = batch - mine; jj < batch; jj++) {
             let j = batch - 1u - jj;
             let li = r * 256u + j;
             var g: array<vec4<f32>, 3>;

@@ -24,6 +24,11 @@ fn accumulate(i: u32, v: f32) {
 }
 
 #ifdef SUBGROUPS
+// The largest x over the subgroup.
+fn subgroup_max(x: u32) -> u32 {
+    return subgroupMax(x);
+}
+
 // This lane's rank and the subgroup's size (call in uniform control flow).
 fn subgroup_lane() -> vec2<u32> {
     return vec2<u32>(subgroupExclusiveAdd(1u), subgroupAdd(1u));
@@ -70,6 +75,10 @@ fn accumulate_subgroup(i: u32, v: f32) {
     }
 }
 #else
+fn subgroup_max(x: u32) -> u32 {
+    return x;
+}
+
 fn subgroup_lane() -> vec2<u32> {
     return vec2<u32>(0u, 1u);
 }

@@ -602,7 +602,8 @@ fn report(
                 .collect();
             let _ = writeln!(
                 s,
-                "| {}x{} | {} | {} | {} |",
+                "| {} | {}x{} | {} | {} | {} |",
+                density_name(r.density),
                 r.width,
                 r.height,
                 r.gaussians,
