@@ -64,26 +64,7 @@ fn check_compose_bwd(name: &str, spec: SceneSpec) {
     let settings = RenderSettings { background, ..Default::default() };
     let cpu_frame = reference::render(&g, &scene.planes, &scene.camera, &settings).expect("valid");
     let (w, h) = (cpu_frame.color.width, cpu_frame.color.height);
-    let mut rng = Rng::new(spec.seed ^ 0x5eed);
-    let grads = FrameGrads {
-        color: random_image(&mut rng, w, h, 3),
-        transmission: random_image(&mut rng, w, h, 3),
-        depth: random_image(&mut rng, w, h, 1),
-        depth_variance: random_image(&mut rng, w, h, 1),
-        mask: random_image(&mut rng, w, h, 1),
-        alpha: random_image(&mut rng, w, h, 1),
-        strength_raw: random_image(&mut rng, w, h, 1),
-        strength: random_image(&mut rng, w, h, 1),
-        reflection: random_image(&mut rng, w, h, 3),
-        planes: scene
-            .planes
-            .iter()
-            .map(|_| PlaneLayerGrads {
-                raw_color: random_image(&mut rng, w, h, 3),
-                intensity: random_image(&mut rng, w, h, 1),
-            })
-            .collect(),
-    };
+    let grads = random_grads(spec.seed ^ 0x5eed, &cpu_frame, scene.planes.len());
     let cpu = compose_bwd(&scene.camera, &scene.planes, &cpu_frame, &grads);
 
     for (mode, ctx) in contexts() {
