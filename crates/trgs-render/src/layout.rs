@@ -216,6 +216,21 @@ gpu_struct! {
     }
 }
 
+gpu_struct! {
+    /// Uniform of `adam`: one step over `count` floats of one attribute buffer.
+    pub struct AdamParams {
+        pub count: u32,
+        pub lr: f32,
+        pub beta1: f32,
+        pub beta2: f32,
+        pub eps: f32,
+        /// 1 - beta1^t and 1 - beta2^t of this step.
+        pub bias1: f32,
+        pub bias2: f32,
+        pub pad: u32,
+    }
+}
+
 /// `ProjectedGaussian::flags` bits.
 pub const FLAG_VISIBLE: u32 = 1;
 pub const FLAG_GLASS: u32 = 2;
@@ -269,6 +284,7 @@ pub fn all_structs() -> Vec<StructInfo> {
         entry::<ReflectionState>(),
         entry::<ComposeParams>(),
         entry::<PlaneGpu>(),
+        entry::<AdamParams>(),
     ]
 }
 

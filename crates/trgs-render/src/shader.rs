@@ -35,6 +35,7 @@ pub const SOURCES: &[(&str, &str)] = sources!(
     "rasterize_reflection_bwd.wgsl",
     "project_bwd.wgsl",
     "splat_loop.wgsl",
+    "adam.wgsl",
 );
 
 /// Every (stage file, defines) combination the renderer compiles; a test validates each with naga.
@@ -68,6 +69,7 @@ pub const VARIANTS: &[(&str, &[&str])] = &[
     ("project_bwd.wgsl", &["SUBGROUPS"]),
     ("project_bwd.wgsl", &["FLOAT_ATOMICS", "SUBGROUPS"]),
     ("splat_loop.wgsl", &[]),
+    ("adam.wgsl", &[]),
 ];
 
 #[derive(Debug, thiserror::Error)]

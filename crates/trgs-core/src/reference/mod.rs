@@ -7,6 +7,7 @@
 //! [`render`] runs the forward pipeline of DESIGN.md and keeps what the backward needs;
 //! [`backward`] takes dL/d(each output layer) and returns dL/d(every Gaussian attribute and every
 //! plane's centre, normal and R0 logit).
+mod adam;
 mod backward;
 mod compose;
 mod compose_bwd;
@@ -25,6 +26,7 @@ mod sort;
 mod tile_counts;
 mod tile_ranges;
 
+pub use adam::{AdamSettings, adam};
 pub use backward::{
     BackwardOptions, PlaneGrad, SceneGrads, backward, mirrored_view_bwd, plane_grad,
 };

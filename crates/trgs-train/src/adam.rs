@@ -1,0 +1,99 @@
+//! Stage `adam` on the GPU (shaders/adam.wgsl; twin `trgs_core::reference::adam`): one Adam step
+//! of a parameter buffer from its gradient buffer, with the moments in buffers of the same shape.
+//! Large buffers are stepped in ranges under the adapter's binding limit.
+use trgs_core::reference::AdamSettings;
+use trgs_render::GpuContext;
+use trgs_render::gpu::{self, Kernel, Recorder, grid_1d, range};
+use trgs_render::layout::AdamParams;
+
+/// The first and second moments of one parameter buffer.
+#[derive(Debug)]
+pub struct AdamMoments {
+    pub m: wgpu::Buffer,
+    pub v: wgpu::Buffer,
+    /// Floats per moment.
+    pub len: u64,
+}
+
+impl AdamMoments {
+    /// Zero moments for `len` floats.
+    pub fn zeros(ctx: &GpuContext, label: &str, len: u64) -> Self {
+        let m = gpu::storage(ctx, &format!("trgs.adam.{label}.m"), len * 4);
+        let v = gpu::storage(ctx, &format!("trgs.adam.{label}.v"), len * 4);
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        enc.clear_buffer(&m, 0, None);
+        enc.clear_buffer(&v, 0, None);
+        ctx.queue.submit([enc.finish()]);
+        Self { m, v, len }
+    }
+}
+
+/// The Adam kernel with its constants.
+#[derive(Debug)]
+pub struct Adam {
+    kernel: Kernel,
+    pub settings: AdamSettings,
+    /// Floats per binding range (a multiple of 64, so every range offset is 256-byte aligned).
+    chunk: u64,
+}
+
+impl Adam {
+    pub fn new(ctx: &GpuContext, settings: AdamSettings) -> Self {
+        // A count must fit the u32 of the uniform and the dispatch.
+        let limit = (ctx.device.limits().max_storage_buffer_binding_size / 4).min(1 << 30);
+        Self {
+            kernel: Kernel::new(ctx, "adam", "adam.wgsl", &[]),
+            settings,
+            chunk: limit / 64 * 64,
+        }
+    }
+
+    /// Use at most `floats` per binding range (rounded down to a multiple of 64, at least 64):
+    /// tests exercise the split that very large buffers need.
+    pub fn set_chunk(&mut self, floats: u64) {
+        self.chunk = self.chunk.min((floats / 64 * 64).max(64));
+    }
+
+    /// Record step `t` (1-based) with learning rate `lr` of `values` from `grads` (both of
+    /// `moments.len` floats).
+    pub fn record(
+        &self,
+        ctx: &GpuContext,
+        rec: &mut Recorder,
+        values: &wgpu::Buffer,
+        grads: &wgpu::Buffer,
+        moments: &AdamMoments,
+        lr: f64,
+        t: u32,
+    ) {
+        let (bias1, bias2) = self.settings.bias_corrections(t);
+        let mut first = 0;
+        while first < moments.len {
+            let count = self.chunk.min(moments.len - first);
+            let params = AdamParams {
+                count: count as u32,
+                lr: lr as f32,
+                beta1: self.settings.beta1 as f32,
+                beta2: self.settings.beta2 as f32,
+                eps: self.settings.eps as f32,
+                bias1: bias1 as f32,
+                bias2: bias2 as f32,
+                pad: 0,
+            };
+            let uniform = gpu::uniform(ctx, "trgs.adam.params", &params);
+            let (o, n) = (first * 4, count * 4);
+            let bind = self.kernel.bind(
+                ctx,
+                &[
+                    uniform.as_entire_binding(),
+                    range(values, o, n),
+                    range(grads, o, n),
+                    range(&moments.m, o, n),
+                    range(&moments.v, o, n),
+                ],
+            );
+            rec.dispatch("adam", &self.kernel, &bind, grid_1d((count as u32).div_ceil(256)));
+            first += count;
+        }
+    }
+}
