@@ -1,0 +1,114 @@
+//! The backward measurement of `bench`: forward and backward of one training-like step.
+use crate::{median, upload};
+use anyhow::Result;
+use std::time::Instant;
+use trgs_core::fixtures::{RoomDensity, RoomSpec};
+use trgs_core::reference::{FrameGrads, PlaneLayerGrads};
+use trgs_render::{BackwardOptions, Frame, GpuContext, LayerGrads, RenderOptions, Renderer};
+
+/// Forward and backward of one training-like step on one scene (256x192, 100k Gaussians).
+pub struct BackwardRow {
+    pub density: RoomDensity,
+    pub planes: usize,
+    pub steps: usize,
+    pub forward_ms: f64,
+    pub backward_ms: f64,
+    /// Median over steps of backward / forward.
+    pub ratio: f64,
+    /// Median GPU ms per backward stage.
+    pub stages: Vec<(&'static str, f64)>,
+}
+
+/// Upstream gradients with deterministic values in [-1, 1] on every layer (a loss that depends
+/// on all of them, so that no adjoint stage can skip work).
+fn pseudo_grads(w: u32, h: u32, planes: usize) -> FrameGrads {
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let mut image = |channels: u32| {
+        let mut im = trgs_core::Image::new(w, h, channels);
+        for v in &mut im.data {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            *v = ((state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0;
+        }
+        im
+    };
+    FrameGrads {
+        color: image(3),
+        transmission: image(3),
+        depth: image(1),
+        depth_variance: image(1),
+        mask: image(1),
+        alpha: image(1),
+        strength_raw: image(1),
+        strength: image(1),
+        reflection: image(3),
+        planes: (0..planes)
+            .map(|_| PlaneLayerGrads { raw_color: image(3), intensity: image(1) })
+            .collect(),
+    }
+}
+
+pub fn bench_backward(
+    ctx: &GpuContext,
+    renderer: &Renderer,
+    density: RoomDensity,
+    planes: usize,
+    steps: usize,
+) -> Result<BackwardRow> {
+    let spec = RoomSpec {
+        seed: 7,
+        gaussians: 100_000,
+        planes,
+        width: 256,
+        height: 192,
+        sh_degree: 3,
+        density,
+    };
+    let (scene, camera) = upload(ctx, &spec)?;
+    // As training renders: with the depth-variance layer.
+    let options = RenderOptions { depth_variance: true, ..RenderOptions::default() };
+    let grads = pseudo_grads(spec.width, spec.height, planes);
+    let mut frame = Frame::default();
+    let plain = BackwardOptions::default();
+    // Warm-up (JIT, buffer pools).
+    renderer.render_into(&scene, &camera, &options, &mut frame)?;
+    let layer_grads = LayerGrads::upload(ctx, &frame, &grads)?;
+    renderer.backward(&scene, &mut frame, &layer_grads, &plain)?;
+    let (mut fwd, mut bwd, mut ratios) = (Vec::new(), Vec::new(), Vec::new());
+    for _ in 0..steps {
+        let t = Instant::now();
+        renderer.render_into(&scene, &camera, &options, &mut frame)?;
+        let f = t.elapsed().as_secs_f64() * 1e3;
+        // A fresh copy of the upstream gradients (the backward consumes them), not timed.
+        let layer_grads = LayerGrads::upload(ctx, &frame, &grads)?;
+        let t = Instant::now();
+        renderer.backward(&scene, &mut frame, &layer_grads, &plain)?;
+        let b = t.elapsed().as_secs_f64() * 1e3;
+        fwd.push(f);
+        bwd.push(b);
+        ratios.push(b / f);
+    }
+    let profiled = BackwardOptions { profile: true, ..plain };
+    let mut samples: Vec<(&'static str, Vec<f64>)> = Vec::new();
+    for _ in 0..steps {
+        renderer.render_into(&scene, &camera, &options, &mut frame)?;
+        let layer_grads = LayerGrads::upload(ctx, &frame, &grads)?;
+        let out = renderer.backward(&scene, &mut frame, &layer_grads, &profiled)?;
+        for &(name, ms) in out.stage_times().unwrap_or_default() {
+            match samples.iter_mut().find(|s| s.0 == name) {
+                Some(s) => s.1.push(ms),
+                None => samples.push((name, vec![ms])),
+            }
+        }
+    }
+    Ok(BackwardRow {
+        density,
+        planes,
+        steps,
+        forward_ms: median(fwd),
+        backward_ms: median(bwd),
+        ratio: median(ratios),
+        stages: samples.into_iter().map(|(n, v)| (n, median(v))).collect(),
+    })
+}
