@@ -80,21 +80,22 @@ impl LayerGrads {
     pub fn zeros(ctx: &GpuContext, frame: &Frame) -> Self {
         let pixels = u64::from(frame.width()) * u64::from(frame.height());
         let slots = frame.plane_slots() as u64;
-        let zeroed = |name: &str, bytes: u64| {
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        let mut zeroed = |name: &str, bytes: u64| {
             let b = gpu::storage(ctx, &format!("trgs.layer_grads.{name}"), bytes);
-            let mut enc = ctx.device.create_command_encoder(&Default::default());
             enc.clear_buffer(&b, 0, None);
-            ctx.queue.submit([enc.finish()]);
             b
         };
-        Self {
+        let grads = Self {
             color: zeroed("color", pixels * 16),
             reflection: zeroed("reflection", pixels * 16),
             strength: zeroed("strength", pixels * 16),
             transmission: zeroed("transmission", pixels * 16),
             geometry: zeroed("geometry", pixels * 16),
             reflection_raw: zeroed("reflection_raw", slots * pixels * 16),
-        }
+        };
+        ctx.queue.submit([enc.finish()]);
+        grads
     }
 
     /// Upload gradients computed on the CPU (the twin's [`FrameGrads`] layout), checking that

@@ -5,8 +5,8 @@
 //! attribute of a sample of Gaussians (mean, quaternion, log-scale, opacity, the first SH
 //! coefficients, mask, reflection intensity) and every plane's centre, normal and R0.
 //!
-//! Documented tolerance (f32): step h = 1e-3 (the forward's rounding noise in the loss is about
-//! 1e-5, so the quotient carries about 1e-2 of noise); a parameter passes when
+//! Documented tolerance (f32): step h = 1e-3 (the forward's rounding noise in the loss is, by
+//! estimate, about 1e-5, so the quotient carries about 1e-2 of noise); a parameter passes when
 //! |analytic - fd| <= 3e-2 max(|fd|, |analytic|) + 1e-2 rms(kind), with rms(kind) the RMS of the
 //! analytic gradients of its attribute kind. A step that changes a discrete decision of the
 //! renderer (the CPU twin's fingerprint of the perturbed scenes: culling, order, stop points,

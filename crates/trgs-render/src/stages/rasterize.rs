@@ -15,6 +15,18 @@ pub struct Pass1Outputs<'a> {
     pub states: &'a wgpu::Buffer,
 }
 
+/// The uniform of pass 1 (and of its adjoint) over the whole of `grid`.
+pub fn params(grid: &TileGrid, background: [f32; 3]) -> RasterParams {
+    RasterParams {
+        width: grid.width,
+        height: grid.height,
+        tiles_x: grid.tiles_x,
+        tiles_y: grid.tiles_y,
+        background: [background[0], background[1], background[2], 0.0],
+        ..Default::default()
+    }
+}
+
 pub fn record(
     s: Stage<'_>,
     rec: &mut Recorder,
@@ -26,15 +38,7 @@ pub fn record(
     ranges: &wgpu::Buffer,
     out: &Pass1Outputs<'_>,
 ) {
-    let params = RasterParams {
-        width: grid.width,
-        height: grid.height,
-        tiles_x: grid.tiles_x,
-        tiles_y: grid.tiles_y,
-        background: [background[0], background[1], background[2], 0.0],
-        ..Default::default()
-    };
-    let uniform = gpu::uniform(s.ctx, "trgs.rasterize.params", &params);
+    let uniform = gpu::uniform(s.ctx, "trgs.rasterize.params", &params(grid, background));
     let k = if depth_variance { &s.kernels.rasterize_depth_variance } else { &s.kernels.rasterize };
     let bind = k.bind(
         s.ctx,

@@ -29,13 +29,8 @@ pub fn record(
     projected_grads: &wgpu::Buffer,
 ) {
     let params = RasterParams {
-        width: grid.width,
-        height: grid.height,
-        tiles_x: grid.tiles_x,
-        tiles_y: grid.tiles_y,
         depth_variance: u32::from(depth_variance),
-        background: [background[0], background[1], background[2], 0.0],
-        ..Default::default()
+        ..super::rasterize::params(grid, background)
     };
     let uniform = gpu::uniform(s.ctx, "trgs.rasterize_bwd.params", &params);
     let k = &s.kernels.rasterize_bwd;

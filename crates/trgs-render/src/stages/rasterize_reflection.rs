@@ -7,6 +7,17 @@ use crate::gpu::{self, Recorder};
 use crate::layout::RasterParams;
 use trgs_core::reference::{TileGrid, TileRect};
 
+/// The uniform of pass 2 (and of its adjoint): plane slot `slot`, dispatched over the tiles of
+/// `footprint`.
+pub fn params(grid: &TileGrid, slot: u32, footprint: &TileRect) -> RasterParams {
+    RasterParams {
+        tile_x0: footprint.x0,
+        tile_y0: footprint.y0,
+        slot,
+        ..super::rasterize::params(grid, [0.0; 3])
+    }
+}
+
 pub fn record(
     s: Stage<'_>,
     rec: &mut Recorder,
@@ -23,17 +34,8 @@ pub fn record(
     if footprint.is_empty() {
         return;
     }
-    let params = RasterParams {
-        width: grid.width,
-        height: grid.height,
-        tiles_x: grid.tiles_x,
-        tiles_y: grid.tiles_y,
-        tile_x0: footprint.x0,
-        tile_y0: footprint.y0,
-        slot,
-        ..Default::default()
-    };
-    let uniform = gpu::uniform(s.ctx, "trgs.rasterize_reflection.params", &params);
+    let uniform =
+        gpu::uniform(s.ctx, "trgs.rasterize_reflection.params", &params(grid, slot, footprint));
     let k = &s.kernels.rasterize_reflection;
     let bind = k.bind(
         s.ctx,

@@ -6,7 +6,6 @@ use super::rasterize_bwd::ViewLists;
 use crate::frame::LayerBuffers;
 use crate::gpu::{self, Recorder};
 use crate::layer_grads::LayerGrads;
-use crate::layout::RasterParams;
 use trgs_core::reference::{TileGrid, TileRect};
 
 #[allow(clippy::too_many_arguments)]
@@ -24,16 +23,7 @@ pub fn record(
     if footprint.is_empty() {
         return;
     }
-    let params = RasterParams {
-        width: grid.width,
-        height: grid.height,
-        tiles_x: grid.tiles_x,
-        tiles_y: grid.tiles_y,
-        tile_x0: footprint.x0,
-        tile_y0: footprint.y0,
-        slot,
-        ..Default::default()
-    };
+    let params = super::rasterize_reflection::params(grid, slot, footprint);
     let uniform = gpu::uniform(s.ctx, "trgs.rasterize_reflection_bwd.params", &params);
     let k = &s.kernels.rasterize_reflection_bwd;
     let bind = k.bind(
