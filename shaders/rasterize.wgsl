@@ -1,6 +1,6 @@
-// Stage `rasterize`, pass 1 (twin: trgs_core::reference::rasterize): one workgroup per 16x16
-// tile, one thread per pixel, the tile's depth-sorted Gaussians streamed through workgroup memory
-// in batches of 256. Two transmittances: primary Gaussians advance T_t (C_t, D_t, alpha) and T_m
+// Stage `rasterize`, pass 1 (twin: trgs_core::reference::rasterize): one workgroup per tile
+// (TILE_SIZE x TILE_SIZE threads), one thread per pixel, the tile's depth-sorted Gaussians streamed through workgroup memory
+// in batches of TILE_PIXELS. Two transmittances: primary Gaussians advance T_t (C_t, D_t, alpha) and T_m
 // (the glass mask M, which they occlude but never paint); glass Gaussians advance only T_m and
 // paint M. A primary Gaussian that would bring T_t below 1e-4 ends the pixel; one that would bring
 // T_m below it ends M only. With DEPTH_VARIANCE, a second walk over the blended Gaussians gives
@@ -19,15 +19,15 @@
 @group(0) @binding(6) var<storage, read_write> states: array<RasterState>;
 
 // (mean, m, 1 for glass): the mask rides with the mean so that a step loads three vectors.
-var<workgroup> s_mean: array<vec4<f32>, 256>;
-var<workgroup> s_conic: array<vec4<f32>, 256>;
+var<workgroup> s_mean: array<vec4<f32>, TILE_PIXELS>;
+var<workgroup> s_conic: array<vec4<f32>, TILE_PIXELS>;
 // (colour, depth)
-var<workgroup> s_color: array<vec4<f32>, 256>;
+var<workgroup> s_color: array<vec4<f32>, TILE_PIXELS>;
 var<workgroup> num_done: atomic<u32>;
 var<workgroup> max_last: atomic<u32>;
 
 fn load_batch(start: u32, end: u32, round: u32, lid: u32) {
-    let idx = start + round * 256u + lid;
+    let idx = start + round * TILE_PIXELS + lid;
     if idx < end {
         let g = projected[values[idx]];
         s_mean[lid] = vec4<f32>(g.mean2d, g.mask, f32((g.flags & FLAG_GLASS) != 0u));
@@ -36,7 +36,7 @@ fn load_batch(start: u32, end: u32, round: u32, lid: u32) {
     }
 }
 
-@compute @workgroup_size(16, 16)
+@compute @workgroup_size(TILE_SIZE, TILE_SIZE)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let tx = wid.x + params.tile_x0;
     let ty = wid.y + params.tile_y0;
@@ -47,7 +47,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
     let start = ranges[2u * tile];
     let end = max(ranges[2u * tile + 1u], start);
     let n = end - start;
-    let rounds = (n + 255u) / 256u;
+    let rounds = (n + TILE_PIXELS - 1u) / TILE_PIXELS;
     if lid == 0u {
         atomicStore(&num_done, 0u);
         atomicStore(&max_last, 0u);
@@ -68,19 +68,19 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
     var last_t = n;
     var last_m = n;
     for (var r = 0u; r < rounds; r++) {
-        if workgroupUniformLoad(&num_done) == 256u {
+        if workgroupUniformLoad(&num_done) == TILE_PIXELS {
             break;
         }
         load_batch(start, end, r, lid);
         workgroupBarrier();
-        let batch = min(256u, n - r * 256u);
+        let batch = min(TILE_PIXELS, n - r * TILE_PIXELS);
         for (var j = 0u; j < batch && !done; j++) {
             let mean = s_mean[j];
             let alpha = alpha_at(s_conic[j], pixel - mean.xy);
             if alpha < 0.0 {
                 continue;
             }
-            let li = r * 256u + j;
+            let li = r * TILE_PIXELS + j;
             if mean.w == 0.0 {
                 let next_t = t * (1.0 - alpha);
                 if next_t < MIN_TRANSMITTANCE {
@@ -122,15 +122,15 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         atomicMax(&max_last, last_t);
     }
     let walk = workgroupUniformLoad(&max_last);
-    let walk_rounds = (walk + 255u) / 256u;
+    let walk_rounds = (walk + TILE_PIXELS - 1u) / TILE_PIXELS;
     var tv = 1.0;
     for (var r = 0u; r < walk_rounds; r++) {
         workgroupBarrier();
         load_batch(start, end, r, lid);
         workgroupBarrier();
-        let batch = min(256u, n - r * 256u);
+        let batch = min(TILE_PIXELS, n - r * TILE_PIXELS);
         for (var j = 0u; j < batch; j++) {
-            if !inside || r * 256u + j >= last_t {
+            if !inside || r * TILE_PIXELS + j >= last_t {
                 break;
             }
             let mean = s_mean[j];

@@ -1,6 +1,6 @@
 // Stage `rasterize_bwd`, the adjoint of pass 1 (twin: trgs_core::reference::rasterize_bwd): one
-// workgroup per 16x16 tile, one thread per pixel, a back-to-front replay of the tile's list in
-// batches of 256 from the last entry any pixel blended. Each pixel recovers its transmittances by
+// workgroup per tile, one thread per pixel, a back-to-front replay of the tile's list in
+// batches of TILE_PIXELS from the last entry any pixel blended. Each pixel recovers its transmittances by
 // division (T_j = T_{j+1} / (1 - alpha_j), alpha <= 0.99) from the final ones the forward kept,
 // with the forward's skip and stop rules, and carries the suffix sums that dL/dalpha needs. Every
 // batch entry's per-pixel gradients (colour, depth with the depth-variance term, mask value,
@@ -27,13 +27,13 @@
 #endif
 
 // (mean, m, 1 for glass), conic with opacity, (colour, depth), the Gaussian's index.
-var<workgroup> s_mean: array<vec4<f32>, 256>;
-var<workgroup> s_conic: array<vec4<f32>, 256>;
-var<workgroup> s_color: array<vec4<f32>, 256>;
-var<workgroup> s_index: array<u32, 256>;
+var<workgroup> s_mean: array<vec4<f32>, TILE_PIXELS>;
+var<workgroup> s_conic: array<vec4<f32>, TILE_PIXELS>;
+var<workgroup> s_color: array<vec4<f32>, TILE_PIXELS>;
+var<workgroup> s_index: array<u32, TILE_PIXELS>;
 var<workgroup> max_last: atomic<u32>;
 
-@compute @workgroup_size(16, 16)
+@compute @workgroup_size(TILE_SIZE, TILE_SIZE)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let tx = wid.x;
     let ty = wid.y;
@@ -82,11 +82,11 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
     // The subgroup's own last entry: its lanes skip the entries none of them blended (a subgroup
     // runs its own trip count; on a CPU adapter it is one SIMD vector).
     let sg_last = subgroup_max(st.last_t);
-    let rounds = (last + 255u) / 256u;
+    let rounds = (last + TILE_PIXELS - 1u) / TILE_PIXELS;
     for (var rr = 0u; rr < rounds; rr++) {
         let r = rounds - 1u - rr;
         workgroupBarrier();
-        let idx = start + r * 256u + lid;
+        let idx = start + r * TILE_PIXELS + lid;
         if idx < end {
             let gi = values[idx];
             let g = projected[gi];
@@ -96,12 +96,12 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
             s_index[lid] = gi;
         }
         workgroupBarrier();
-        let batch = min(256u, last - r * 256u);
+        let batch = min(TILE_PIXELS, last - r * TILE_PIXELS);
         // Entries [0, mine) of this batch come before the subgroup's last.
-        let mine = min(batch, sg_last - min(sg_last, r * 256u));
+        let mine = min(batch, sg_last - min(sg_last, r * TILE_PIXELS));
         for (var jj = batch - mine; jj < batch; jj++) {
             let j = batch - 1u - jj;
-            let li = r * 256u + j;
+            let li = r * TILE_PIXELS + j;
             var g: array<vec4<f32>, 3>;
             var blended = false;
             if inside && li < st.last_t {

@@ -19,13 +19,13 @@
 @group(0) @binding(6) var<uniform> camera: ComposeParams;
 @group(0) @binding(7) var<storage, read> planes: array<PlaneGpu>;
 
-var<workgroup> s_mean: array<vec2<f32>, 256>;
-var<workgroup> s_conic: array<vec4<f32>, 256>;
+var<workgroup> s_mean: array<vec2<f32>, TILE_PIXELS>;
+var<workgroup> s_conic: array<vec4<f32>, TILE_PIXELS>;
 // (colour, reflection intensity a)
-var<workgroup> s_color: array<vec4<f32>, 256>;
+var<workgroup> s_color: array<vec4<f32>, TILE_PIXELS>;
 var<workgroup> num_done: atomic<u32>;
 
-@compute @workgroup_size(16, 16)
+@compute @workgroup_size(TILE_SIZE, TILE_SIZE)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let tx = wid.x + params.tile_x0;
     let ty = wid.y + params.tile_y0;
@@ -37,7 +37,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
     let start = ranges[2u * tile];
     let end = max(ranges[2u * tile + 1u], start);
     let n = end - start;
-    let rounds = (n + 255u) / 256u;
+    let rounds = (n + TILE_PIXELS - 1u) / TILE_PIXELS;
     if lid == 0u {
         atomicStore(&num_done, 0u);
     }
@@ -52,10 +52,10 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
     var intensity = 0.0;
     var last = n;
     for (var r = 0u; r < rounds; r++) {
-        if workgroupUniformLoad(&num_done) == 256u {
+        if workgroupUniformLoad(&num_done) == TILE_PIXELS {
             break;
         }
-        let idx = start + r * 256u + lid;
+        let idx = start + r * TILE_PIXELS + lid;
         if idx < end {
             let g = projected[values[idx]];
             s_mean[lid] = g.mean2d;
@@ -63,7 +63,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
             s_color[lid] = vec4<f32>(g.color.xyz, g.reflection);
         }
         workgroupBarrier();
-        let batch = min(256u, n - r * 256u);
+        let batch = min(TILE_PIXELS, n - r * TILE_PIXELS);
         for (var j = 0u; j < batch && !done; j++) {
             let alpha = alpha_at(s_conic[j], pixel - s_mean[j]);
             if alpha < 0.0 {
@@ -71,7 +71,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
             }
             let next_t = t * (1.0 - alpha);
             if next_t < MIN_TRANSMITTANCE {
-                last = r * 256u + j;
+                last = r * TILE_PIXELS + j;
                 done = true;
                 atomicAdd(&num_done, 1u);
                 break;

@@ -1,6 +1,6 @@
 // The throughput baseline of the benchmarks (not a rendering stage): a trivial tiled splat loop.
-// One workgroup per 16x16 tile, one thread per pixel; every tile blends the same `params.slot`
-// Gaussians, streamed through workgroup memory in batches of 256, with no sorting, no early
+// One workgroup per tile, one thread per pixel; every tile blends the same `params.slot`
+// Gaussians, streamed through workgroup memory in batches of TILE_PIXELS, with no sorting, no early
 // exit and a single transmittance. `rasterize`'s pixel-Gaussian evaluations per second are
 // reported next to this loop's on the same adapter.
 #include "shared/common.wgsl"
@@ -10,11 +10,11 @@
 @group(0) @binding(1) var<storage, read> projected: array<ProjectedGaussian>;
 @group(0) @binding(2) var<storage, read_write> out: array<vec4<f32>>;
 
-var<workgroup> s_mean: array<vec2<f32>, 256>;
-var<workgroup> s_conic: array<vec4<f32>, 256>;
-var<workgroup> s_color: array<vec4<f32>, 256>;
+var<workgroup> s_mean: array<vec2<f32>, TILE_PIXELS>;
+var<workgroup> s_conic: array<vec4<f32>, TILE_PIXELS>;
+var<workgroup> s_color: array<vec4<f32>, TILE_PIXELS>;
 
-@compute @workgroup_size(16, 16)
+@compute @workgroup_size(TILE_SIZE, TILE_SIZE)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let x = wid.x * TILE_SIZE + lid % TILE_SIZE;
     let y = wid.y * TILE_SIZE + lid / TILE_SIZE;
@@ -22,7 +22,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
     let n = params.slot;
     var t = 1.0;
     var color = vec3<f32>(0.0);
-    for (var start = 0u; start < n; start += 256u) {
+    for (var start = 0u; start < n; start += TILE_PIXELS) {
         workgroupBarrier();
         if start + lid < n {
             let g = projected[start + lid];
@@ -31,7 +31,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
             s_color[lid] = g.color;
         }
         workgroupBarrier();
-        let batch = min(256u, n - start);
+        let batch = min(TILE_PIXELS, n - start);
         for (var j = 0u; j < batch; j++) {
             let alpha = alpha_at(s_conic[j], pixel - s_mean[j]);
             if alpha < 0.0 {
