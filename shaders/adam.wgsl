@@ -1,6 +1,6 @@
 // Stage `adam` (twin: trgs_core::reference::adam): one Adam step with bias correction over a
 // range of one attribute buffer, one thread per float. The moments live in buffers shaped like
-// the parameters.
+// the parameters. A learning-rate pattern gives the first floats of each record their own rate.
 #include "shared/common.wgsl"
 
 @group(0) @binding(0) var<uniform> params: AdamParams;
@@ -20,5 +20,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     let vi = params.beta2 * v[i] + (1.0 - params.beta2) * g * g;
     m[i] = mi;
     v[i] = vi;
-    values[i] -= params.lr * (mi / params.bias1) / (sqrt(vi / params.bias2) + params.eps);
+    var lr = params.lr;
+    if params.stride != 0u && (params.offset + i) % params.stride < params.lead {
+        lr = params.lead_lr;
+    }
+    values[i] -= lr * (mi / params.bias1) / (sqrt(vi / params.bias2) + params.eps);
 }

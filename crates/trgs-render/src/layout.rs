@@ -229,6 +229,13 @@ gpu_struct! {
         /// 1 - beta1^t and 1 - beta2^t of this step.
         pub bias1: f32,
         pub bias2: f32,
+        /// The first `lead` floats of every record of `stride` floats step with `lead_lr` (the SH
+        /// DC colour in the SH buffer); stride 0: every float steps with `lr`.
+        pub lead: u32,
+        pub stride: u32,
+        pub lead_lr: f32,
+        /// Index in the whole buffer of this range's first float (records are counted from 0).
+        pub offset: u32,
         pub pad: u32,
     }
 }

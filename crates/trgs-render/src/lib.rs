@@ -48,4 +48,4 @@ pub use frame::{
 };
 pub use layer_grads::{LayerGrads, LayerGradsError};
 pub use renderer::{RenderError, RenderOptions, Renderer};
-pub use scene::{GpuScene, SceneGradBuffers};
+pub use scene::{ATTRIBUTES, GpuScene, SceneGradBuffers, attribute_widths};

@@ -31,6 +31,9 @@ pub struct RenderOptions {
     pub enabled_planes: Vec<bool>,
     /// Time every stage with timestamp queries when the adapter has them ([`Frame::stage_times`]).
     pub profile: bool,
+    /// Evaluate SH only up to this degree (training's degree schedule); None or a larger value
+    /// uses the scene's. The backward of the frame follows the same degree.
+    pub sh_degree: Option<u32>,
     /// Keep copies of the tile counts and the unsorted keys (stage-by-stage tests).
     pub capture_intermediates: bool,
 }
@@ -43,6 +46,7 @@ impl Default for RenderOptions {
             depth_variance: false,
             enabled_planes: Vec::new(),
             profile: false,
+            sh_degree: None,
             capture_intermediates: false,
         }
     }
@@ -143,13 +147,14 @@ impl Renderer {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
+        let sh_degree = options.sh_degree.map_or(scene.sh_degree(), |d| d.min(scene.sh_degree()));
         let mut views = Vec::with_capacity(specs.len());
         for (vi, spec) in specs.iter().enumerate() {
             let plane = spec.plane.map(|p| &planes[p]);
             let projected = pool.get(ctx, &format!("trgs.project.projected.v{vi}"), n * 64);
             let counts = pool.get(ctx, &format!("trgs.tile_counts.counts.v{vi}"), n * 4);
             let pparams =
-                project::params(&spec.view, k, plane, &spec.limit, options.near, scene.sh_degree());
+                project::params(&spec.view, k, plane, &spec.limit, options.near, sh_degree);
             project::record(s, &mut rec, scene, &pparams, &projected);
             let tparams = tile_counts::params(&grid, &spec.limit);
             tile_counts::record(s, &mut rec, scene, &tparams, &projected, &counts);

@@ -102,6 +102,45 @@ impl GpuScene {
         Ok(())
     }
 
+    /// Floats per Gaussian of each of [`ATTRIBUTES`].
+    pub fn attribute_widths(&self) -> [u32; 7] {
+        attribute_widths(self.sh_coeffs)
+    }
+
+    /// The buffers of the learnable attributes, in the order of [`ATTRIBUTES`] (an optimiser
+    /// steps them in place).
+    pub fn parameters(&self) -> [&wgpu::Buffer; 7] {
+        [
+            &self.means,
+            &self.rotations,
+            &self.log_scales,
+            &self.opacity_logits,
+            &self.sh,
+            &self.mask_logits,
+            &self.log_reflections,
+        ]
+    }
+
+    /// Read the Gaussians back (after training steps changed them on the GPU).
+    pub fn read(&self, ctx: &GpuContext) -> Gaussians<f32> {
+        let n = self.len as usize;
+        let mut g = Gaussians::<f32>::zeros(n, self.sh_degree);
+        let coeffs = g.sh_coeffs();
+        g.means = gpu::read_buffer(ctx, &self.means, 0, n);
+        g.rotations = gpu::read_buffer(ctx, &self.rotations, 0, n);
+        g.log_scales = gpu::read_buffer(ctx, &self.log_scales, 0, n);
+        g.opacity_logits = gpu::read_buffer(ctx, &self.opacity_logits, 0, n);
+        g.sh = gpu::read_buffer(ctx, &self.sh, 0, n * coeffs);
+        g.mask_logits = gpu::read_buffer(ctx, &self.mask_logits, 0, n);
+        g.log_reflections = gpu::read_buffer(ctx, &self.log_reflections, 0, n);
+        let pops: Vec<u32> = gpu::read_buffer(ctx, &self.populations, 0, n);
+        g.populations = pops
+            .into_iter()
+            .map(|p| trgs_core::scene::Population::from_u8(p as u8).unwrap_or_default())
+            .collect();
+        g
+    }
+
     /// Use at most `gaussians` Gaussians per binding (rounded down to a multiple of 256, at
     /// least 256): tests exercise the split that very large scenes need.
     pub fn set_chunk_size(&mut self, gaussians: u32) {
@@ -117,6 +156,16 @@ impl GpuScene {
             })
             .collect()
     }
+}
+
+/// The learnable attributes of a Gaussian, in the order of [`GpuScene::parameters`] and
+/// [`SceneGradBuffers::parameters`].
+pub const ATTRIBUTES: [&str; 7] =
+    ["means", "rotations", "log_scales", "opacity_logits", "sh", "mask_logits", "log_reflections"];
+
+/// Floats per Gaussian of each of [`ATTRIBUTES`] for `sh_coeffs` SH coefficients per channel.
+pub fn attribute_widths(sh_coeffs: u32) -> [u32; 7] {
+    [3, 4, 3, 1, 3 * sh_coeffs, 1, 1]
 }
 
 /// Gradients of a [`GpuScene`]'s Gaussians, one buffer per attribute in the scene's own layout
@@ -151,6 +200,19 @@ impl SceneGradBuffers {
             len: scene.len,
             sh_degree: scene.sh_degree,
         }
+    }
+
+    /// The gradient buffers in the order of [`ATTRIBUTES`].
+    pub fn parameters(&self) -> [&wgpu::Buffer; 7] {
+        [
+            &self.means,
+            &self.rotations,
+            &self.log_scales,
+            &self.opacity_logits,
+            &self.sh,
+            &self.mask_logits,
+            &self.log_reflections,
+        ]
     }
 
     /// Read every gradient back, shaped like the scene's Gaussians (populations are not

@@ -1,7 +1,7 @@
 //! Stage `adam` on the GPU (shaders/adam.wgsl; twin `trgs_core::reference::adam`): one Adam step
 //! of a parameter buffer from its gradient buffer, with the moments in buffers of the same shape.
 //! Large buffers are stepped in ranges under the adapter's binding limit.
-use trgs_core::reference::AdamSettings;
+use trgs_core::reference::{AdamRate, AdamSettings};
 use trgs_render::GpuContext;
 use trgs_render::gpu::{self, Kernel, Recorder, grid_1d, range};
 use trgs_render::layout::AdamParams;
@@ -54,7 +54,7 @@ impl Adam {
         self.chunk = self.chunk.min((floats / 64 * 64).max(64));
     }
 
-    /// Record step `t` (1-based) with learning rate `lr` of `values` from `grads` (both of
+    /// Record step `t` (1-based) with learning rates `rate` of `values` from `grads` (both of
     /// `moments.len` floats).
     pub fn record(
         &self,
@@ -63,7 +63,7 @@ impl Adam {
         values: &wgpu::Buffer,
         grads: &wgpu::Buffer,
         moments: &AdamMoments,
-        lr: f64,
+        rate: &AdamRate,
         t: u32,
     ) {
         let (bias1, bias2) = self.settings.bias_corrections(t);
@@ -72,12 +72,16 @@ impl Adam {
             let count = self.chunk.min(moments.len - first);
             let params = AdamParams {
                 count: count as u32,
-                lr: lr as f32,
+                lr: rate.lr as f32,
                 beta1: self.settings.beta1 as f32,
                 beta2: self.settings.beta2 as f32,
                 eps: self.settings.eps as f32,
                 bias1: bias1 as f32,
                 bias2: bias2 as f32,
+                lead: rate.lead,
+                stride: rate.stride,
+                lead_lr: rate.lead_lr as f32,
+                offset: first as u32,
                 pad: 0,
             };
             let uniform = gpu::uniform(ctx, "trgs.adam.params", &params);

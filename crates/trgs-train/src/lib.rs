@@ -1,7 +1,12 @@
 //! trgs-train: optimisation of TR-Gaussians models, and the command-line tools around it (`train`,
-//! `render`, `bench`). So far: the GPU Adam step ([`adam`]), and the model loading and output
-//! helpers the tools share; the training loop arrives with the training milestone.
+//! `render`, `bench`): datasets at the training resolution ([`data`]), the initial Gaussians
+//! ([`init`]), the settings and schedules ([`settings`]), the GPU Adam step ([`adam`]) and the
+//! training step ([`trainer`]).
 pub mod adam;
+pub mod data;
 pub mod exr_layers;
+pub mod init;
 pub mod model;
+pub mod settings;
+pub mod trainer;
 pub use trgs_core as core;

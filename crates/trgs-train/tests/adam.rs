@@ -1,6 +1,6 @@
 //! The GPU Adam step against its twin (`trgs_core::reference::adam`, f64) over several steps, on
 //! a buffer split into several binding ranges.
-use trgs_core::reference::{AdamSettings, adam};
+use trgs_core::reference::{AdamRate, AdamSettings, adam};
 use trgs_core::rng::Rng;
 use trgs_render::gpu::{self, Recorder};
 use trgs_render::{DeviceOptions, GpuContext};
@@ -24,6 +24,8 @@ fn gpu_adam_matches_twin() {
     );
     let moments = AdamMoments::zeros(&ctx, "test", n as u64);
     let (mut m, mut v) = (vec![0.0; n], vec![0.0; n]);
+    // Per float, the sum of its learning rates: a bound on how far its updates moved it.
+    let mut step_sum = vec![0.0; n];
     adam_gpu.set_chunk(1024); // several binding ranges
     for t in 1..=6u32 {
         // Gradients of mixed sizes, including exact zeros.
@@ -41,16 +43,27 @@ fn gpu_adam_matches_twin() {
             "test.grads",
             &grads.iter().map(|&v| v as f32).collect::<Vec<f32>>(),
         );
+        // A rate pattern like the SH buffer's (records of 48 floats, the first 3 faster), whose
+        // records straddle the binding ranges.
         let lr = 1e-3 * f64::from(t);
+        let rate = AdamRate { lr, lead_lr: 20.0 * lr, lead: 3, stride: 48 };
         let mut rec = Recorder::new(&ctx, "test.adam", false);
-        adam_gpu.record(&ctx, &mut rec, &values, &g_buf, &moments, lr, t);
+        adam_gpu.record(&ctx, &mut rec, &values, &g_buf, &moments, &rate, t);
         rec.submit_and_wait(&ctx);
-        adam(&mut params, &grads, &mut m, &mut v, lr, t, &adam_gpu.settings);
+        adam(&mut params, &grads, &mut m, &mut v, &rate, t, &adam_gpu.settings);
+        for (i, s) in step_sum.iter_mut().enumerate() {
+            *s += rate.at(i);
+        }
     }
     let got: Vec<f32> = gpu::read_buffer(&ctx, &values, 0, n);
-    // f32 rounding: a few ulps of the parameter (up to 2) plus a relative error of the updates.
-    let worst =
-        got.iter().zip(&params).map(|(&g, &c)| (f64::from(g) - c).abs()).fold(0.0f64, f64::max);
-    eprintln!("adam: worst absolute difference {worst:.2e}");
-    assert!(worst < 2e-6, "GPU Adam differs from the twin by {worst:.2e}");
+    // f32 rounding: a few ulps of the parameter, plus a relative error of the updates (1 - beta2
+    // is 0.001 + 4.7e-8 in f32, which moves sqrt(v) by 2.3e-5 relative) times their size.
+    let mut worst = 0.0f64;
+    for i in 0..n {
+        let err = (f64::from(got[i]) - params[i]).abs();
+        let tol = 8.0 * f64::from(f32::EPSILON) * params[i].abs() + 1e-4 * step_sum[i];
+        worst = worst.max(err / tol);
+    }
+    eprintln!("adam: worst error {worst:.2} of the tolerance");
+    assert!(worst <= 1.0, "GPU Adam differs from the twin by {worst:.2} of the tolerance");
 }

@@ -14,6 +14,7 @@ mod compose_bwd;
 mod emit_keys;
 mod footprint;
 mod frame;
+mod photometric_loss;
 mod prefix_sum;
 mod project;
 mod project_bwd;
@@ -26,7 +27,7 @@ mod sort;
 mod tile_counts;
 mod tile_ranges;
 
-pub use adam::{AdamSettings, adam};
+pub use adam::{AdamRate, AdamSettings, adam};
 pub use backward::{
     BackwardOptions, PlaneGrad, SceneGrads, backward, mirrored_view_bwd, plane_grad,
 };
@@ -35,6 +36,7 @@ pub use compose_bwd::{ComposeGrads, compose_bwd};
 pub use emit_keys::emit_keys;
 pub use footprint::{TileRect, footprint};
 pub use frame::{Frame, FrameGrads, PlaneLayerGrads, PlaneLayers};
+pub use photometric_loss::{DSSIM_LAMBDA, PhotometricLoss, photometric_loss};
 pub use prefix_sum::prefix_sum;
 pub use project::{Projected, ProjectionFilter, project};
 pub use project_bwd::{ProjectedGrads, ViewGrads, project_bwd};

@@ -1,44 +1,126 @@
-//! `train`: TR-Gaussians training. With no `--data` it writes the built-in synthetic glass scene
-//! and uses it. This version prepares and checks the dataset (every image, mask, camera and the
-//! plane annotations); the optimiser itself arrives with the training milestone (see README).
+//! `train`: optimise Gaussians on a scene folder. With no `--data` it writes the built-in
+//! synthetic glass scene and trains on it. Writes runs/<name>/: model.ply (INRIA layout),
+//! planes.json, metrics.json, renders of the test views, and a JSONL log.
 use anyhow::{Context, Result, bail};
-use std::path::PathBuf;
+use indicatif::{ProgressBar, ProgressStyle};
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
-use trgs_core::io::SceneFolder;
+use trgs_core::io::{write_atomic, write_planes_json, write_ply, write_png_rgb};
+use trgs_core::metrics::{psnr, ssim};
+use trgs_core::rng::Rng;
 use trgs_core::synthetic::{SyntheticConfig, generate, write_dataset};
+use trgs_render::{GpuContext, Layer};
+use trgs_train::data::{self, Resolution, TrainingData};
+use trgs_train::init::{SeedPoint, gaussians_from_points, random_points};
+use trgs_train::settings::TrainSettings;
+use trgs_train::trainer::Trainer;
 
 const HELP: &str = "\
 trgs train: TR-Gaussians training
 
 USAGE:
-    train [--data DIR] [--out DIR]
+    train [--data DIR] [--out DIR] [OPTIONS]
 
 OPTIONS:
-    --data DIR   scene folder: COLMAP (sparse/0 + images/) or transforms.json, with optional
-                 glass_masks/, planes.json and test_views.txt. Default: the built-in synthetic
-                 glass scene, written to <out>/dataset
-    --out DIR    output folder (default: runs/demo)
-    -h, --help   this text
+    --data DIR          scene folder: COLMAP (sparse/0 + images/) or transforms.json, with
+                        optional glass_masks/, planes.json and test_views.txt. Default: the
+                        built-in synthetic glass scene, written to <out>/dataset
+    --out DIR           output folder (default: runs/demo)
+    --iterations N      training steps (default 3000; the paper uses 30000)
+    --resolution W      train at width W (the height keeps the aspect ratio)
+    --downscale F       train at 1/F of the image size
+    --sh-degree D       largest SH degree, 0 to 3 (default 3)
+    --eval-every N      evaluate the test views every N steps (default: 10 times a run)
+    --random-init N     start from N random points when the scene has no sparse points
+                        (default 10000)
+    --seed S            order of the training views (default 0)
+    -h, --help          this text
 ";
 
 struct Args {
     data: Option<PathBuf>,
     out: PathBuf,
+    iterations: u32,
+    resolution: Resolution,
+    sh_degree: u32,
+    eval_every: Option<u32>,
+    random_init: usize,
+    seed: u64,
 }
 
 fn parse_args() -> Result<Option<Args>> {
-    let mut args = Args { data: None, out: PathBuf::from("runs/demo") };
+    let mut args = Args {
+        data: None,
+        out: PathBuf::from("runs/demo"),
+        iterations: 3000,
+        resolution: Resolution::Original,
+        sh_degree: 3,
+        eval_every: None,
+        random_init: 10_000,
+        seed: 0,
+    };
     let mut it = std::env::args().skip(1);
     while let Some(a) = it.next() {
         let mut value = |name: &str| it.next().with_context(|| format!("{name} needs a value"));
+        fn num<T: std::str::FromStr>(name: &str, v: String) -> Result<T> {
+            v.parse().map_err(|_| anyhow::anyhow!("{name} {v:?}: expected a number"))
+        }
         match a.as_str() {
             "-h" | "--help" => return Ok(None),
             "--data" => args.data = Some(PathBuf::from(value("--data")?)),
             "--out" => args.out = PathBuf::from(value("--out")?),
+            "--iterations" => args.iterations = num("--iterations", value("--iterations")?)?,
+            "--resolution" => {
+                args.resolution = Resolution::Width(num("--resolution", value("--resolution")?)?)
+            }
+            "--downscale" => {
+                args.resolution = Resolution::Downscale(num("--downscale", value("--downscale")?)?)
+            }
+            "--sh-degree" => args.sh_degree = num("--sh-degree", value("--sh-degree")?)?,
+            "--eval-every" => args.eval_every = Some(num("--eval-every", value("--eval-every")?)?),
+            "--random-init" => args.random_init = num("--random-init", value("--random-init")?)?,
+            "--seed" => args.seed = num("--seed", value("--seed")?)?,
             other => bail!("unknown argument {other:?}\n\n{HELP}"),
         }
     }
+    if args.iterations == 0 {
+        bail!("--iterations must be at least 1");
+    }
+    if args.sh_degree > 3 {
+        bail!("--sh-degree {}: expected 0 to 3", args.sh_degree);
+    }
     Ok(Some(args))
+}
+
+/// PSNR and SSIM of every test view (or of the first training views when there is no test
+/// split), and their means.
+#[derive(Clone, Debug, serde::Serialize)]
+struct Evaluation {
+    step: u32,
+    seconds: f64,
+    views: Vec<(String, f64, f64)>,
+    psnr: f64,
+    ssim: f64,
+}
+
+fn evaluate(trainer: &Trainer, data: &TrainingData, t0: Instant) -> Result<Evaluation> {
+    let views =
+        if data.test.is_empty() { &data.train[..data.train.len().min(4)] } else { &data.test[..] };
+    let mut rows = Vec::new();
+    for v in views {
+        let frame = trainer.render(&v.camera)?;
+        let color = frame.read_layer(trainer.context(), Layer::Color);
+        rows.push((v.camera.name.clone(), psnr(&color, &v.image)?, ssim(&color, &v.image)?));
+    }
+    let n = rows.len().max(1) as f64;
+    Ok(Evaluation {
+        step: trainer.step,
+        seconds: t0.elapsed().as_secs_f64(),
+        psnr: rows.iter().map(|r| r.1).sum::<f64>() / n,
+        ssim: rows.iter().map(|r| r.2).sum::<f64>() / n,
+        views: rows,
+    })
 }
 
 fn main() -> Result<()> {
@@ -46,52 +128,154 @@ fn main() -> Result<()> {
         print!("{HELP}");
         return Ok(());
     };
-    let data = match &args.data {
+    let data_dir = match &args.data {
         Some(d) => d.clone(),
         None => {
             let dir = args.out.join("dataset");
-            let t = Instant::now();
-            let scene = generate(&SyntheticConfig::default());
-            write_dataset(&scene, &dir)
-                .with_context(|| format!("writing the demo scene to {}", dir.display()))?;
-            println!(
-                "wrote the built-in synthetic glass scene ({} views, {}x{}) to {} in {:.1} s",
-                scene.cameras.len(),
-                scene.cameras[0].width(),
-                scene.cameras[0].height(),
-                dir.display(),
-                t.elapsed().as_secs_f64()
-            );
+            if !dir.join("transforms.json").is_file() {
+                let scene = generate(&SyntheticConfig::default());
+                write_dataset(&scene, &dir)
+                    .with_context(|| format!("writing the demo scene to {}", dir.display()))?;
+                println!("wrote the built-in synthetic glass scene to {}", dir.display());
+            }
             dir
         }
     };
-    let folder = SceneFolder::open(&data)
-        .with_context(|| format!("opening the scene folder {}", data.display()))?;
-    let mut masked = 0;
-    for i in 0..folder.views.len() {
-        folder.load_image(i)?;
-        if folder.load_mask(i)?.is_some() {
-            masked += 1;
+    let data = data::load(&data_dir, args.resolution)?;
+    let (w, h) = data.size();
+    println!(
+        "dataset {}: {} training and {} test views at {w}x{h}, {} sparse points, extent {:.2}",
+        data_dir.display(),
+        data.train.len(),
+        data.test.len(),
+        data.points.len(),
+        data.extent
+    );
+    let labels = data.mask_labels();
+    if !labels.is_empty() {
+        println!(
+            "glass masks with labels {labels:?}: this version trains the Gaussians only (plane \
+             initialisation from the masks and the three stages are not implemented yet)"
+        );
+    }
+    let mut rng = Rng::new(args.seed);
+    let seeds: Vec<SeedPoint> = if data.points.is_empty() {
+        let r = data.extent;
+        println!(
+            "no sparse points: {} random points within {r:.2} of the cameras' centre",
+            args.random_init
+        );
+        random_points(args.random_init, data.centre - r, data.centre + r, &mut rng)
+    } else {
+        data.points.iter().map(|&(position, color)| SeedPoint { position, color }).collect()
+    };
+    let gaussians = gaussians_from_points(&seeds, args.sh_degree);
+    let mut settings = TrainSettings::scaled(args.iterations);
+    settings.sh_degree = args.sh_degree;
+    settings.seed = args.seed;
+    let ctx = GpuContext::new()?;
+    let mut trainer = Trainer::new(&ctx, &gaussians, &[], settings, data.extent)?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating the output folder {}", args.out.display()))?;
+    let log_path = args.out.join("log.jsonl");
+    let mut log = std::fs::File::create(&log_path)
+        .with_context(|| format!("creating {}", log_path.display()))?;
+
+    let eval_every = args.eval_every.unwrap_or((args.iterations / 10).max(1));
+    let bar = ProgressBar::new(u64::from(args.iterations));
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} steps  {per_sec}  eta {eta}  {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let t0 = Instant::now();
+    let mut evaluations = Vec::new();
+    let mut order: Vec<usize> = Vec::new();
+    let mut train_seconds = 0.0;
+    while trainer.step < args.iterations {
+        if order.is_empty() {
+            order = (0..data.train.len()).collect();
+            for i in (1..order.len()).rev() {
+                order.swap(i, rng.below(i + 1));
+            }
+        }
+        let Some(vi) = order.pop() else { break };
+        let ts = Instant::now();
+        let stats = trainer.train_step(&data.train[vi])?;
+        train_seconds += ts.elapsed().as_secs_f64();
+        writeln!(
+            log,
+            "{}",
+            serde_json::json!({"step": trainer.step, "view": data.train[vi].camera.name,
+                "loss": stats.loss, "psnr": stats.psnr, "seconds": t0.elapsed().as_secs_f64()})
+        )?;
+        bar.set_position(u64::from(trainer.step));
+        bar.set_message(format!(
+            "loss {:.4}  psnr {:.2}  {} Gaussians",
+            stats.loss,
+            stats.psnr,
+            trainer.scene().len()
+        ));
+        if trainer.step % eval_every == 0 || trainer.step == args.iterations {
+            let e = evaluate(&trainer, &data, t0)?;
+            bar.println(format!(
+                "step {}: test PSNR {:.2} dB, SSIM {:.4} ({:.0} s)",
+                e.step, e.psnr, e.ssim, e.seconds
+            ));
+            writeln!(log, "{}", serde_json::json!({"eval": &e}))?;
+            evaluations.push(e);
         }
     }
-    let labels = folder.mask_labels()?;
-    let planes: Vec<String> =
-        labels.iter().map(|&l| format!("{l}: {:?}", folder.material(l)).to_lowercase()).collect();
+    bar.finish();
+    let last = evaluations.last().cloned().context("no evaluation was made")?;
+    write_outputs(&args.out, &trainer, &data, &last, &evaluations, train_seconds)?;
     println!(
-        "dataset {}: {} views ({} test), {} with glass masks, planes [{}], {} sparse points",
-        data.display(),
-        folder.views.len(),
-        folder.test_views.len(),
-        masked,
-        planes.join(", "),
-        folder.points.len()
+        "done: {} steps in {:.0} s ({:.0} ms per step), test PSNR {:.2} dB, SSIM {:.4}; results in {}",
+        trainer.step,
+        train_seconds,
+        1e3 * train_seconds / f64::from(trainer.step.max(1)),
+        last.psnr,
+        last.ssim,
+        args.out.display()
     );
-    if labels.is_empty() {
-        println!("no glass masks: this scene would train as plain 3DGS (no reflection planes)");
+    Ok(())
+}
+
+fn write_outputs(
+    out: &Path,
+    trainer: &Trainer,
+    data: &TrainingData,
+    last: &Evaluation,
+    evaluations: &[Evaluation],
+    train_seconds: f64,
+) -> Result<()> {
+    let gaussians = trainer.gaussians();
+    write_ply(&out.join("model.ply"), &gaussians)?;
+    write_planes_json(&out.join("planes.json"), trainer.planes())?;
+    let renders = out.join("renders");
+    let test =
+        if data.test.is_empty() { &data.train[..data.train.len().min(4)] } else { &data.test[..] };
+    // Render FPS at the training resolution: the mean over the test views.
+    let t = Instant::now();
+    for v in test {
+        let frame = trainer.render(&v.camera)?;
+        let color = frame.read_layer(trainer.context(), Layer::Color);
+        let stem = Path::new(&v.camera.name)
+            .file_stem()
+            .map_or_else(|| v.camera.name.clone(), |s| s.to_string_lossy().into_owned());
+        write_png_rgb(&renders.join(format!("{stem}.png")), &color)?;
     }
-    println!(
-        "trgs train: the optimiser is not part of this version yet (README, Status); \
-         the dataset above is complete and valid"
-    );
+    let fps = test.len() as f64 / t.elapsed().as_secs_f64();
+    let metrics = serde_json::json!({
+        "psnr": last.psnr,
+        "ssim": last.ssim,
+        "views": last.views.iter().map(|(n, p, s)| serde_json::json!({"name": n, "psnr": p, "ssim": s})).collect::<Vec<_>>(),
+        "train_seconds": train_seconds,
+        "steps": trainer.step,
+        "gaussians": gaussians.len(),
+        "render_fps": fps,
+        "resolution": [data.size().0, data.size().1],
+        "psnr_over_time": evaluations.iter().map(|e| serde_json::json!({"step": e.step, "seconds": e.seconds, "psnr": e.psnr})).collect::<Vec<_>>(),
+    });
+    write_atomic(&out.join("metrics.json"), serde_json::to_string_pretty(&metrics)?.as_bytes())?;
     Ok(())
 }

@@ -1,0 +1,221 @@
+//! A scene folder loaded for training: every view's camera and image at the training resolution,
+//! its glass mask if it has one, the train/test split, and the scene's extent (3DGS's
+//! `cameras_extent`, which scales the position learning rate and the densification thresholds).
+use anyhow::{Context, Result, bail};
+use glam::DVec3;
+use std::path::Path;
+use trgs_core::Image;
+use trgs_core::io::SceneFolder;
+use trgs_core::scene::Camera;
+
+/// How large the training images are.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Resolution {
+    /// The images as they are.
+    Original,
+    /// Divide both sides by this factor (rounded).
+    Downscale(f64),
+    /// This width; the height keeps the aspect ratio.
+    Width(u32),
+}
+
+/// One view at the training resolution.
+#[derive(Clone, Debug)]
+pub struct View {
+    pub camera: Camera,
+    pub image: Image<f32>,
+    /// Glass-mask labels (0: no glass, k: plane label k), nearest-neighbour resized.
+    pub mask: Option<Image<u8>>,
+}
+
+/// The loaded scene.
+#[derive(Debug)]
+pub struct TrainingData {
+    pub train: Vec<View>,
+    pub test: Vec<View>,
+    /// Sparse points (position, colour in [0, 1]).
+    pub points: Vec<(DVec3, [f64; 3])>,
+    /// 1.1 times the largest distance of a training camera from their mean (3DGS).
+    pub extent: f64,
+    pub centre: DVec3,
+}
+
+impl TrainingData {
+    /// Load every view of `folder` at `resolution`.
+    pub fn load(folder: &SceneFolder, resolution: Resolution) -> Result<Self> {
+        let mut train = Vec::new();
+        let mut test = Vec::new();
+        for (i, spec) in folder.views.iter().enumerate() {
+            let image = folder.load_image(i)?;
+            let mask = folder.load_mask(i)?;
+            let (w, h) = target_size(image.width, image.height, resolution)
+                .with_context(|| format!("resizing {}", spec.image_path.display()))?;
+            let mut camera = spec.camera.clone();
+            camera.intrinsics = camera.intrinsics.resized(w, h);
+            let view = View {
+                camera,
+                image: resize_area(&image, w, h),
+                mask: mask.map(|m| resize_nearest(&m, w, h)),
+            };
+            if folder.is_test(&spec.camera.name) {
+                test.push(view);
+            } else {
+                train.push(view);
+            }
+        }
+        if train.is_empty() {
+            bail!("{}: every view is a test view; nothing to train on", folder.root.display());
+        }
+        let centres: Vec<DVec3> = train.iter().map(|v| v.camera.pose.centre()).collect();
+        let centre = centres.iter().copied().sum::<DVec3>() / centres.len() as f64;
+        let radius = centres.iter().map(|c| c.distance(centre)).fold(0.0, f64::max);
+        // One camera (or all at one spot): the scene's scale is unknown; 1 as 3DGS would give.
+        let extent = if radius > 0.0 { 1.1 * radius } else { 1.0 };
+        let points = folder
+            .points
+            .iter()
+            .map(|(p, c)| (DVec3::from_array(*p), c.map(|v| f64::from(v) / 255.0)))
+            .collect();
+        Ok(Self { train, test, points, extent, centre })
+    }
+
+    /// The width and height of the training images.
+    pub fn size(&self) -> (u32, u32) {
+        let c = &self.train[0].camera;
+        (c.width(), c.height())
+    }
+
+    /// The glass-mask labels some training view uses, ascending.
+    pub fn mask_labels(&self) -> Vec<u32> {
+        let mut labels: Vec<u32> = self
+            .train
+            .iter()
+            .filter_map(|v| v.mask.as_ref())
+            .flat_map(|m| m.data.iter().filter(|&&v| v > 0).map(|&v| u32::from(v)))
+            .collect();
+        labels.sort_unstable();
+        labels.dedup();
+        labels
+    }
+}
+
+/// The size of an image of `w x h` at `resolution`.
+pub fn target_size(w: u32, h: u32, resolution: Resolution) -> Result<(u32, u32)> {
+    let (tw, th) = match resolution {
+        Resolution::Original => (w, h),
+        Resolution::Downscale(f) => {
+            if !(f >= 1.0 && f.is_finite()) {
+                bail!("--downscale {f}: expected a factor of at least 1");
+            }
+            ((f64::from(w) / f).round() as u32, (f64::from(h) / f).round() as u32)
+        }
+        Resolution::Width(tw) => (tw, (f64::from(h) * f64::from(tw) / f64::from(w)).round() as u32),
+    };
+    if tw == 0 || th == 0 {
+        bail!("{w}x{h} at {resolution:?} leaves an empty image");
+    }
+    Ok((tw, th))
+}
+
+/// Resample with an area (box) filter: each output pixel averages the input area it covers,
+/// partial pixels weighted by their overlap. Identity when the size is unchanged.
+pub fn resize_area(im: &Image<f32>, w: u32, h: u32) -> Image<f32> {
+    if (im.width, im.height) == (w, h) {
+        return im.clone();
+    }
+    let ch = im.channels as usize;
+    let sx = f64::from(im.width) / f64::from(w);
+    let sy = f64::from(im.height) / f64::from(h);
+    let spans = |n: u32, s: f64, limit: u32| -> Vec<Vec<(u32, f64)>> {
+        (0..n)
+            .map(|o| {
+                let (a, b) = (f64::from(o) * s, f64::from(o + 1) * s);
+                let (first, last) = (a.floor() as u32, (b.ceil() as u32).min(limit));
+                (first..last)
+                    .map(|i| (i, (b.min(f64::from(i + 1)) - a.max(f64::from(i))).max(0.0)))
+                    .filter(|&(_, wgt)| wgt > 0.0)
+                    .collect()
+            })
+            .collect()
+    };
+    let xs = spans(w, sx, im.width);
+    let ys = spans(h, sy, im.height);
+    let mut out = Image::<f32>::new(w, h, im.channels);
+    for (oy, yspan) in ys.iter().enumerate() {
+        for (ox, xspan) in xs.iter().enumerate() {
+            let mut acc = vec![0.0f64; ch];
+            let mut total = 0.0;
+            for &(iy, wy) in yspan {
+                for &(ix, wx) in xspan {
+                    let wgt = wx * wy;
+                    total += wgt;
+                    let base = (iy as usize * im.width as usize + ix as usize) * ch;
+                    for (c, a) in acc.iter_mut().enumerate() {
+                        *a += wgt * f64::from(im.data[base + c]);
+                    }
+                }
+            }
+            let base = (oy * w as usize + ox) * ch;
+            for (c, a) in acc.iter().enumerate() {
+                out.data[base + c] = (a / total) as f32;
+            }
+        }
+    }
+    out
+}
+
+/// Nearest-neighbour resampling (labels must not blend).
+pub fn resize_nearest(im: &Image<u8>, w: u32, h: u32) -> Image<u8> {
+    if (im.width, im.height) == (w, h) {
+        return im.clone();
+    }
+    let ch = im.channels as usize;
+    let mut out = Image::<u8>::new(w, h, im.channels);
+    for y in 0..h {
+        let iy = ((f64::from(y) + 0.5) * f64::from(im.height) / f64::from(h)) as u32;
+        for x in 0..w {
+            let ix = ((f64::from(x) + 0.5) * f64::from(im.width) / f64::from(w)) as u32;
+            let src = (iy.min(im.height - 1) as usize * im.width as usize
+                + ix.min(im.width - 1) as usize)
+                * ch;
+            let dst = (y as usize * w as usize + x as usize) * ch;
+            out.data[dst..dst + ch].copy_from_slice(&im.data[src..src + ch]);
+        }
+    }
+    out
+}
+
+/// Load `root` (a scene folder) at `resolution`.
+pub fn load(root: &Path, resolution: Resolution) -> Result<TrainingData> {
+    let folder = SceneFolder::open(root)
+        .with_context(|| format!("opening the scene folder {}", root.display()))?;
+    TrainingData::load(&folder, resolution)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn area_resize_averages_blocks_and_keeps_the_mean() {
+        let mut im = Image::<f32>::new(4, 2, 1);
+        im.data = vec![0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0];
+        let half = resize_area(&im, 2, 1);
+        assert_eq!(half.data, vec![2.5, 4.5]);
+        // A non-integer factor keeps the image mean.
+        let odd = resize_area(&im, 3, 2);
+        let mean = |v: &[f32]| v.iter().sum::<f32>() / v.len() as f32;
+        assert!((mean(&odd.data) - mean(&im.data)).abs() < 1e-5);
+    }
+
+    #[test]
+    fn sizes_follow_the_resolution() {
+        assert_eq!(
+            target_size(1000, 750, Resolution::Downscale(4.0)).expect("valid size"),
+            (250, 188)
+        );
+        assert_eq!(target_size(1000, 750, Resolution::Width(256)).expect("valid size"), (256, 192));
+        assert!(target_size(10, 10, Resolution::Downscale(0.5)).is_err());
+        assert!(target_size(10, 10, Resolution::Width(0)).is_err());
+    }
+}

@@ -1,0 +1,141 @@
+//! Every setting of a training run, with the paper's and 3DGS's values as defaults. Lengths are
+//! given for the paper's 30k iterations and scale with `iterations`.
+use trgs_core::reference::{AdamRate, DSSIM_LAMBDA};
+
+/// The paper's iteration budget, which the default lengths below refer to.
+pub const PAPER_ITERATIONS: u32 = 30_000;
+
+/// Learning rates (3DGS's defaults for the Gaussians; the position rate is multiplied by the
+/// scene extent and decays exponentially from `position` to `position_final` over the run).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LearningRates {
+    pub position: f64,
+    pub position_final: f64,
+    /// SH DC colour; the higher bands use `sh_rest`.
+    pub sh_dc: f64,
+    pub sh_rest: f64,
+    pub opacity: f64,
+    pub scale: f64,
+    pub rotation: f64,
+    /// The glass-mask logit of glass Gaussians (not given by the paper; as the opacity logit's).
+    pub mask: f64,
+    /// The log reflection intensity (not given by the paper; as the DC colour's).
+    pub reflection: f64,
+    /// Plane centre (times the extent), unnormalised normal and R0 logit; stage 3 multiplies the
+    /// centre and normal rates by `plane_stage3_factor` (paper: 0.1).
+    pub plane_centre: f64,
+    pub plane_normal: f64,
+    pub plane_r0: f64,
+    pub plane_stage3_factor: f64,
+}
+
+impl Default for LearningRates {
+    fn default() -> Self {
+        Self {
+            position: 1.6e-4,
+            position_final: 1.6e-6,
+            sh_dc: 2.5e-3,
+            sh_rest: 2.5e-3 / 20.0,
+            opacity: 2.5e-2,
+            scale: 5e-3,
+            rotation: 1e-3,
+            mask: 2.5e-2,
+            reflection: 2.5e-3,
+            plane_centre: 1e-3,
+            plane_normal: 1e-3,
+            plane_r0: 1e-2,
+            plane_stage3_factor: 0.1,
+        }
+    }
+}
+
+impl LearningRates {
+    /// The position rate at `step` of `iterations` (log-linear from start to final), times
+    /// `extent`.
+    pub fn position_at(&self, step: u32, iterations: u32, extent: f64) -> f64 {
+        let t = (f64::from(step) / f64::from(iterations.max(1))).clamp(0.0, 1.0);
+        let ln = (1.0 - t) * self.position.ln() + t * self.position_final.ln();
+        ln.exp() * extent
+    }
+
+    /// The rate of every attribute buffer (in `trgs_render::ATTRIBUTES` order) at `step`.
+    pub fn attribute_rates(
+        &self,
+        step: u32,
+        iterations: u32,
+        extent: f64,
+        sh_coeffs: u32,
+    ) -> [AdamRate; 7] {
+        [
+            AdamRate::uniform(self.position_at(step, iterations, extent)),
+            AdamRate::uniform(self.rotation),
+            AdamRate::uniform(self.scale),
+            AdamRate::uniform(self.opacity),
+            AdamRate { lr: self.sh_rest, lead_lr: self.sh_dc, lead: 3, stride: 3 * sh_coeffs },
+            AdamRate::uniform(self.mask),
+            AdamRate::uniform(self.reflection),
+        ]
+    }
+}
+
+/// A training run's settings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TrainSettings {
+    pub iterations: u32,
+    /// Largest SH degree; the active degree grows by one every `sh_interval` steps.
+    pub sh_degree: u32,
+    pub sh_interval: u32,
+    /// Weight of D-SSIM in the image loss.
+    pub lambda_dssim: f64,
+    pub background: [f32; 3],
+    pub rates: LearningRates,
+    /// Shuffles the order of the training views.
+    pub seed: u64,
+}
+
+impl TrainSettings {
+    /// The paper's settings scaled to `iterations` steps.
+    pub fn scaled(iterations: u32) -> Self {
+        Self {
+            iterations,
+            sh_degree: 3,
+            sh_interval: scale_len(1000, iterations),
+            lambda_dssim: DSSIM_LAMBDA,
+            background: [0.0; 3],
+            rates: LearningRates::default(),
+            seed: 0,
+        }
+    }
+
+    /// The SH degree in use at `step` (0-based).
+    pub fn active_sh_degree(&self, step: u32) -> u32 {
+        (step / self.sh_interval.max(1)).min(self.sh_degree)
+    }
+}
+
+/// A length given for the paper's 30k iterations, scaled to `iterations` (at least 1).
+pub fn scale_len(paper: u32, iterations: u32) -> u32 {
+    ((u64::from(paper) * u64::from(iterations)) / u64::from(PAPER_ITERATIONS)).max(1) as u32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn position_rate_decays_log_linearly() {
+        let r = LearningRates::default();
+        assert!((r.position_at(0, 100, 2.0) - 3.2e-4).abs() < 1e-12);
+        assert!((r.position_at(100, 100, 2.0) - 3.2e-6).abs() < 1e-14);
+        assert!((r.position_at(50, 100, 1.0) - 1.6e-5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn lengths_scale_with_the_budget() {
+        let s = TrainSettings::scaled(3000);
+        assert_eq!(s.sh_interval, 100);
+        assert_eq!(s.active_sh_degree(0), 0);
+        assert_eq!(s.active_sh_degree(250), 2);
+        assert_eq!(s.active_sh_degree(2999), 3);
+    }
+}
