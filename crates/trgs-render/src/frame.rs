@@ -419,6 +419,16 @@ impl Frame {
             .map_or_else(Vec::new, |l| gpu::read_buffer(ctx, &l.states, 0, self.pixels()))
     }
 
+    /// The projected Gaussians of view `vi` (0 = camera, then mirrored passes).
+    pub fn read_projected(
+        &self,
+        ctx: &GpuContext,
+        vi: usize,
+    ) -> Option<Vec<crate::layout::ProjectedGaussian>> {
+        let v = self.views.get(vi)?;
+        Some(gpu::read_buffer(ctx, &v.projected, 0, self.gaussian_count() as usize))
+    }
+
     /// The geometry stages' results of view `vi` (0 = camera, then mirrored passes).
     pub fn read_intermediates(
         &self,

@@ -28,6 +28,17 @@ impl AdamMoments {
     }
 }
 
+impl AdamMoments {
+    /// Moments with the given values (after an edit of the Gaussians).
+    pub fn from_values(ctx: &GpuContext, label: &str, m: &[f32], v: &[f32]) -> Self {
+        Self {
+            m: gpu::storage_init(ctx, &format!("trgs.adam.{label}.m"), m),
+            v: gpu::storage_init(ctx, &format!("trgs.adam.{label}.v"), v),
+            len: m.len() as u64,
+        }
+    }
+}
+
 /// The Adam kernel with its constants.
 #[derive(Debug)]
 pub struct Adam {

@@ -6,7 +6,7 @@ use glam::DVec3;
 use std::path::Path;
 use trgs_core::Image;
 use trgs_core::io::SceneFolder;
-use trgs_core::scene::Camera;
+use trgs_core::scene::{Camera, Material};
 
 /// How large the training images are.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -38,6 +38,8 @@ pub struct TrainingData {
     /// 1.1 times the largest distance of a training camera from their mean (3DGS).
     pub extent: f64,
     pub centre: DVec3,
+    /// The material of each plane label (planes.json; glass where it says nothing).
+    pub materials: Vec<(u32, Material)>,
 }
 
 impl TrainingData {
@@ -76,7 +78,9 @@ impl TrainingData {
             .iter()
             .map(|(p, c)| (DVec3::from_array(*p), c.map(|v| f64::from(v) / 255.0)))
             .collect();
-        Ok(Self { train, test, points, extent, centre })
+        let mut data = Self { train, test, points, extent, centre, materials: Vec::new() };
+        data.materials = data.mask_labels().into_iter().map(|l| (l, folder.material(l))).collect();
+        Ok(data)
     }
 
     /// The width and height of the training images.

@@ -4,9 +4,12 @@
 //! training step ([`trainer`]).
 pub mod adam;
 pub mod data;
+pub mod densify;
 pub mod exr_layers;
 pub mod init;
 pub mod model;
+pub mod plane_init;
+pub mod regularisers;
 pub mod settings;
 pub mod trainer;
 pub use trgs_core as core;

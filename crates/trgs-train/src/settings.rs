@@ -91,6 +91,22 @@ pub struct TrainSettings {
     pub rates: LearningRates,
     /// Shuffles the order of the training views.
     pub seed: u64,
+    /// Stage 1 (C = C_t, plain 3DGS) and stage 2 (planes learn, the reflection's gradient does
+    /// not reach the Gaussians) lengths; stage 3 is the rest (paper: 3000, 3000, 24000).
+    pub stage1: u32,
+    pub stage2: u32,
+    /// Weights of the depth-variance, gradient-conflict and mask losses (paper: 0.005, 0.2, 0.5).
+    pub lambda_depth: f64,
+    pub lambda_conflict: f64,
+    pub lambda_mask: f64,
+}
+
+/// The three stages of the optimisation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    Initial,
+    PlaneAdjustment,
+    Joint,
 }
 
 impl TrainSettings {
@@ -104,6 +120,22 @@ impl TrainSettings {
             background: [0.0; 3],
             rates: LearningRates::default(),
             seed: 0,
+            stage1: scale_len(3000, iterations),
+            stage2: scale_len(3000, iterations),
+            lambda_depth: 0.005,
+            lambda_conflict: 0.2,
+            lambda_mask: 0.5,
+        }
+    }
+
+    /// The stage of step `step` (0-based).
+    pub fn stage(&self, step: u32) -> Stage {
+        if step < self.stage1 {
+            Stage::Initial
+        } else if step < self.stage1 + self.stage2 {
+            Stage::PlaneAdjustment
+        } else {
+            Stage::Joint
         }
     }
 

@@ -3,15 +3,19 @@
 //! the planes (a few numbers each, on the CPU).
 use crate::adam::{Adam, AdamMoments};
 use crate::data::View;
-use crate::settings::TrainSettings;
+use crate::densify::{
+    ClassicSettings, DensifyReport, DensifyStats, TrainState, densify_and_prune, reset_opacity,
+};
+use crate::regularisers::{depth_variance_loss, gradient_conflict_loss, mask_loss};
+use crate::settings::{Stage, TrainSettings};
 use anyhow::{Context, Result};
 use trgs_core::Image;
 use trgs_core::reference::{AdamRate, AdamSettings, FrameGrads, adam, photometric_loss};
 use trgs_core::scene::{Camera, Gaussians, ReflectionPlane};
 use trgs_render::gpu::Recorder;
 use trgs_render::{
-    ATTRIBUTES, BackwardOptions, Frame, GpuContext, GpuScene, Layer, LayerGrads, RenderOptions,
-    Renderer,
+    ATTRIBUTES, BackwardOptions, Frame, FrameImages, GpuContext, GpuScene, Layer, LayerGrads,
+    RenderOptions, Renderer,
 };
 
 /// What one step measured.
@@ -46,6 +50,9 @@ pub struct Trainer {
     pub settings: TrainSettings,
     /// The scene extent (scales the position and plane-centre rates).
     pub extent: f64,
+    /// Classic densification, when on, and its statistics since the last densification.
+    densify: Option<(ClassicSettings, DensifyStats)>,
+    rng: trgs_core::rng::Rng,
 }
 
 impl Trainer {
@@ -68,9 +75,76 @@ impl Trainer {
             scene,
             frame: Frame::default(),
             step: 0,
+            rng: trgs_core::rng::Rng::new(settings.seed ^ 0x5eed),
             settings,
             extent,
+            densify: None,
         })
+    }
+
+    /// Densify with `settings` from now on.
+    pub fn enable_densification(&mut self, settings: ClassicSettings) {
+        self.densify = Some((settings, DensifyStats::new(self.scene.len() as usize)));
+    }
+
+    /// The parameters and Adam moments, read back.
+    pub fn read_state(&self) -> TrainState {
+        let read = |b: &wgpu::Buffer, len: u64| -> Vec<f32> {
+            trgs_render::gpu::read_buffer(&self.ctx, b, 0, len as usize)
+        };
+        TrainState {
+            gaussians: self.gaussians(),
+            m: self.moments.iter().map(|mo| read(&mo.m, mo.len)).collect(),
+            v: self.moments.iter().map(|mo| read(&mo.v, mo.len)).collect(),
+        }
+    }
+
+    /// Replace the parameters and moments (after an edit such as densification).
+    pub fn set_state(&mut self, state: &TrainState) -> Result<()> {
+        let planes = self.scene.planes().to_vec();
+        self.scene = GpuScene::upload(&self.ctx, &state.gaussians, &planes)
+            .context("uploading the edited Gaussians")?;
+        self.moments = ATTRIBUTES
+            .iter()
+            .enumerate()
+            .map(|(a, name)| AdamMoments::from_values(&self.ctx, name, &state.m[a], &state.v[a]))
+            .collect();
+        if let Some((_, stats)) = &mut self.densify {
+            *stats = DensifyStats::new(state.gaussians.len());
+        }
+        Ok(())
+    }
+
+    /// Densification after step `self.step`, when the schedule says so.
+    fn densify_step(&mut self) -> Result<Option<DensifyReport>> {
+        let Some((settings, stats)) = &self.densify else { return Ok(None) };
+        let t = self.step;
+        let mut report = None;
+        if t > settings.from && t < settings.until && t.is_multiple_of(settings.every) {
+            let (settings, stats) = (settings.clone(), stats.clone());
+            let state = self.read_state();
+            let prune_large = t > settings.opacity_reset_every;
+            let (next, r) = densify_and_prune(
+                &state,
+                &stats,
+                &settings,
+                self.extent,
+                prune_large,
+                &mut self.rng,
+            );
+            self.set_state(&next)?;
+            report = Some(r);
+        }
+        let reset = self
+            .densify
+            .as_ref()
+            .is_some_and(|(s, _)| t < s.until && t.is_multiple_of(s.opacity_reset_every));
+        if reset {
+            let mut state = self.read_state();
+            reset_opacity(&mut state);
+            self.set_state(&state)?;
+        }
+        Ok(report)
     }
 
     pub fn context(&self) -> &GpuContext {
@@ -111,21 +185,30 @@ impl Trainer {
     /// One optimisation step on `view`.
     pub fn train_step(&mut self, view: &View) -> Result<StepStats> {
         let ctx = &self.ctx;
-        let options = self.render_options();
+        let stage = self.settings.stage(self.step);
+        let has_planes = !self.scene.planes().is_empty();
+        let mut options = self.render_options();
+        options.depth_variance = has_planes && self.settings.lambda_depth > 0.0;
         self.renderer.render_into(&self.scene, &view.camera, &options, &mut self.frame)?;
-        let color = self.frame.read_layer(ctx, Layer::Color);
+        let images = has_planes.then(|| self.frame.read_images(ctx));
+        let color = match &images {
+            Some(im) => im.color.clone(),
+            None => self.frame.read_layer(ctx, Layer::Color),
+        };
         let loss =
             photometric_loss(&to_f64(&color), &to_f64(&view.image), self.settings.lambda_dssim)
                 .with_context(|| format!("loss of view {}", view.camera.name))?;
         let mut grads = FrameGrads::zeros(color.width, color.height, self.scene.planes().len());
         grads.color = loss.grad;
+        if let Some(im) = &images {
+            self.add_regularisers(view, im, &mut grads);
+        }
         let layer_grads = LayerGrads::upload(ctx, &self.frame, &grads)?;
-        let g = self.renderer.backward(
-            &self.scene,
-            &mut self.frame,
-            &layer_grads,
-            &BackwardOptions::default(),
-        )?;
+        let backward = BackwardOptions {
+            block_reflection_to_gaussians: stage == Stage::PlaneAdjustment,
+            profile: false,
+        };
+        let g = self.renderer.backward(&self.scene, &mut self.frame, &layer_grads, &backward)?;
         self.step += 1;
         let t = self.step;
         let rates = self.settings.rates.attribute_rates(
@@ -148,10 +231,69 @@ impl Trainer {
                 t,
             );
         }
+        if let Some((settings, stats)) = &mut self.densify
+            && t <= settings.until
+        {
+            let projected = self.frame.read_projected(ctx, 0).unwrap_or_default();
+            let grads = g.read_projected_grads(ctx, 0).unwrap_or_default();
+            stats.add(&projected, &grads, color.width, color.height);
+        }
         rec.submit_and_wait(ctx);
         self.step_planes(&g.planes, t)?;
+        self.densify_step()?;
         let mse = loss_mse(&color, &view.image);
         Ok(StepStats { loss: loss.value, l1: loss.l1, ssim: loss.ssim, psnr: psnr_of(mse) })
+    }
+
+    /// The paper's L_d, L_c and L_m, weighted, into the layer gradients.
+    fn add_regularisers(&self, view: &View, im: &FrameImages, grads: &mut FrameGrads) {
+        let s = &self.settings;
+        let add = |dst: &mut Image<f64>, src: &Image<f64>, weight: f64| {
+            for (d, v) in dst.data.iter_mut().zip(&src.data) {
+                *d += weight * v;
+            }
+        };
+        if s.lambda_depth > 0.0 {
+            let l = depth_variance_loss(&im.depth_variance, &im.hit);
+            add(&mut grads.depth_variance, &l.grad, s.lambda_depth);
+        }
+        if s.lambda_conflict > 0.0 {
+            let l =
+                gradient_conflict_loss(&to_f64(&im.transmission), &to_f64(&im.reflection), &im.hit);
+            add(&mut grads.transmission, &l.grad, s.lambda_conflict);
+        }
+        if s.lambda_mask > 0.0
+            && let Some(annotation) = &view.mask
+        {
+            let l = mask_loss(&im.mask, annotation);
+            add(&mut grads.mask, &l.grad, s.lambda_mask);
+        }
+    }
+
+    /// Add reflection planes and their glass Gaussians (zero moments) to the optimisation.
+    pub fn add_planes(&mut self, planes: &[ReflectionPlane], glass: &Gaussians<f32>) -> Result<()> {
+        let mut state = self.read_state();
+        let n_old = state.gaussians.len();
+        let g = &mut state.gaussians;
+        g.means.extend_from_slice(&glass.means);
+        g.rotations.extend_from_slice(&glass.rotations);
+        g.log_scales.extend_from_slice(&glass.log_scales);
+        g.opacity_logits.extend_from_slice(&glass.opacity_logits);
+        g.sh.extend_from_slice(&glass.with_sh_degree(g.sh_degree).sh);
+        g.mask_logits.extend_from_slice(&glass.mask_logits);
+        g.log_reflections.extend_from_slice(&glass.log_reflections);
+        g.populations.extend_from_slice(&glass.populations);
+        let widths = trgs_render::attribute_widths(g.sh_coeffs() as u32);
+        for (a, w) in widths.iter().enumerate() {
+            let len = (n_old + glass.len()) * *w as usize;
+            state.m[a].resize(len, 0.0);
+            state.v[a].resize(len, 0.0);
+        }
+        let mut all = self.scene.planes().to_vec();
+        all.extend_from_slice(planes);
+        self.scene.set_planes(&all).context("initialised planes")?;
+        self.plane_moments.resize(all.len(), PlaneMoments::default());
+        self.set_state(&state)
     }
 
     /// Adam on the planes' centre, normal and R0 logit (on the CPU: seven numbers a plane).
@@ -160,6 +302,9 @@ impl Trainer {
             return Ok(());
         }
         let r = &self.settings.rates;
+        // Stage 3 fine-tunes the planes' position and normal at a tenth of the rate.
+        let fine =
+            if self.settings.stage(t - 1) == Stage::Joint { r.plane_stage3_factor } else { 1.0 };
         let mut planes = self.scene.planes().to_vec();
         for ((plane, g), mom) in planes.iter_mut().zip(grads).zip(&mut self.plane_moments) {
             let mut p = [
@@ -174,8 +319,11 @@ impl Trainer {
             let gv = [
                 g.centre.x, g.centre.y, g.centre.z, g.normal.x, g.normal.y, g.normal.z, g.r0_logit,
             ];
-            let groups: [(std::ops::Range<usize>, f64); 3] =
-                [(0..3, r.plane_centre * self.extent), (3..6, r.plane_normal), (6..7, r.plane_r0)];
+            let groups: [(std::ops::Range<usize>, f64); 3] = [
+                (0..3, fine * r.plane_centre * self.extent),
+                (3..6, fine * r.plane_normal),
+                (6..7, r.plane_r0),
+            ];
             for (range, lr) in groups {
                 adam(
                     &mut p[range.clone()],

@@ -12,7 +12,9 @@ use trgs_core::rng::Rng;
 use trgs_core::synthetic::{SyntheticConfig, generate, write_dataset};
 use trgs_render::{GpuContext, Layer};
 use trgs_train::data::{self, Resolution, TrainingData};
+use trgs_train::densify::ClassicSettings;
 use trgs_train::init::{SeedPoint, gaussians_from_points, random_points};
+use trgs_train::plane_init::{PlaneInitSettings, initialise_planes};
 use trgs_train::settings::TrainSettings;
 use trgs_train::trainer::Trainer;
 
@@ -34,6 +36,7 @@ OPTIONS:
     --eval-every N      evaluate the test views every N steps (default: 10 times a run)
     --random-init N     start from N random points when the scene has no sparse points
                         (default 10000)
+    --densify MODE      classic (3DGS clone, split, prune, opacity reset; default) or none
     --seed S            order of the training views (default 0)
     -h, --help          this text
 ";
@@ -46,6 +49,7 @@ struct Args {
     sh_degree: u32,
     eval_every: Option<u32>,
     random_init: usize,
+    densify: bool,
     seed: u64,
 }
 
@@ -58,6 +62,7 @@ fn parse_args() -> Result<Option<Args>> {
         sh_degree: 3,
         eval_every: None,
         random_init: 10_000,
+        densify: true,
         seed: 0,
     };
     let mut it = std::env::args().skip(1);
@@ -80,6 +85,13 @@ fn parse_args() -> Result<Option<Args>> {
             "--sh-degree" => args.sh_degree = num("--sh-degree", value("--sh-degree")?)?,
             "--eval-every" => args.eval_every = Some(num("--eval-every", value("--eval-every")?)?),
             "--random-init" => args.random_init = num("--random-init", value("--random-init")?)?,
+            "--densify" => {
+                args.densify = match value("--densify")?.as_str() {
+                    "classic" => true,
+                    "none" => false,
+                    other => bail!("--densify {other:?}: expected classic or none"),
+                }
+            }
             "--seed" => args.seed = num("--seed", value("--seed")?)?,
             other => bail!("unknown argument {other:?}\n\n{HELP}"),
         }
@@ -123,6 +135,12 @@ fn evaluate(trainer: &Trainer, data: &TrainingData, t0: Instant) -> Result<Evalu
     })
 }
 
+/// A line above the progress bar (`ProgressBar::println` prints nothing when the bar is hidden,
+/// as it is when the output is not a terminal).
+fn say(bar: &ProgressBar, line: String) {
+    bar.suspend(|| println!("{line}"));
+}
+
 fn main() -> Result<()> {
     let Some(args) = parse_args()? else {
         print!("{HELP}");
@@ -151,11 +169,12 @@ fn main() -> Result<()> {
         data.points.len(),
         data.extent
     );
-    let labels = data.mask_labels();
-    if !labels.is_empty() {
+    if data.materials.is_empty() {
+        println!("no glass masks: no reflection planes, training plain 3DGS");
+    } else {
         println!(
-            "glass masks with labels {labels:?}: this version trains the Gaussians only (plane \
-             initialisation from the masks and the three stages are not implemented yet)"
+            "glass masks with labels {:?}: planes are initialised after stage 1",
+            data.materials
         );
     }
     let mut rng = Rng::new(args.seed);
@@ -175,6 +194,9 @@ fn main() -> Result<()> {
     settings.seed = args.seed;
     let ctx = GpuContext::new()?;
     let mut trainer = Trainer::new(&ctx, &gaussians, &[], settings, data.extent)?;
+    if args.densify {
+        trainer.enable_densification(ClassicSettings::scaled(args.iterations));
+    }
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating the output folder {}", args.out.display()))?;
     let log_path = args.out.join("log.jsonl");
@@ -199,6 +221,33 @@ fn main() -> Result<()> {
             }
         }
         let Some(vi) = order.pop() else { break };
+        if trainer.step == trainer.settings.stage1
+            && !data.materials.is_empty()
+            && trainer.planes().is_empty()
+        {
+            let init = initialise_planes(
+                &trainer.gaussians(),
+                &data.train,
+                &data.materials,
+                data.extent,
+                &PlaneInitSettings::default(),
+                &mut rng,
+            );
+            for (label, why) in &init.failed {
+                say(&bar, format!("plane {label}: not initialised: {why}"));
+            }
+            for (label, p) in init.labels.iter().zip(&init.planes) {
+                let n = p.unit_normal();
+                say(
+                    &bar,
+                    format!(
+                        "plane {label}: centre ({:.3}, {:.3}, {:.3}), normal ({:.3}, {:.3}, {:.3}), {:.2} x {:.2}",
+                        p.centre.x, p.centre.y, p.centre.z, n.x, n.y, n.z, p.width, p.height
+                    ),
+                );
+            }
+            trainer.add_planes(&init.planes, &init.glass)?;
+        }
         let ts = Instant::now();
         let stats = trainer.train_step(&data.train[vi])?;
         train_seconds += ts.elapsed().as_secs_f64();
@@ -206,7 +255,8 @@ fn main() -> Result<()> {
             log,
             "{}",
             serde_json::json!({"step": trainer.step, "view": data.train[vi].camera.name,
-                "loss": stats.loss, "psnr": stats.psnr, "seconds": t0.elapsed().as_secs_f64()})
+                "loss": stats.loss, "psnr": stats.psnr, "gaussians": trainer.scene().len(),
+                "seconds": t0.elapsed().as_secs_f64()})
         )?;
         bar.set_position(u64::from(trainer.step));
         bar.set_message(format!(
@@ -217,17 +267,24 @@ fn main() -> Result<()> {
         ));
         if trainer.step % eval_every == 0 || trainer.step == args.iterations {
             let e = evaluate(&trainer, &data, t0)?;
-            bar.println(format!(
-                "step {}: test PSNR {:.2} dB, SSIM {:.4} ({:.0} s)",
-                e.step, e.psnr, e.ssim, e.seconds
-            ));
+            say(
+                &bar,
+                format!(
+                    "step {}: test PSNR {:.2} dB, SSIM {:.4} ({:.0} s)",
+                    e.step, e.psnr, e.ssim, e.seconds
+                ),
+            );
             writeln!(log, "{}", serde_json::json!({"eval": &e}))?;
             evaluations.push(e);
         }
     }
     bar.finish();
     let last = evaluations.last().cloned().context("no evaluation was made")?;
-    write_outputs(&args.out, &trainer, &data, &last, &evaluations, train_seconds)?;
+    let truth = compare_with_truth(&trainer, &data, &data_dir)?;
+    if let Some(t) = &truth {
+        println!("against the ground truth in {}: {t}", data_dir.join("gt").display());
+    }
+    write_outputs(&args.out, &trainer, &data, &last, &evaluations, train_seconds, truth.as_ref())?;
     println!(
         "done: {} steps in {:.0} s ({:.0} ms per step), test PSNR {:.2} dB, SSIM {:.4}; results in {}",
         trainer.step,
@@ -240,6 +297,76 @@ fn main() -> Result<()> {
     Ok(())
 }
 
+/// What a synthetic scene's ground truth (`gt/planes.json`, `gt/transmission/`) says of the run.
+#[derive(Clone, Debug, serde::Serialize)]
+struct TruthComparison {
+    /// Per true plane: the angle in degrees between its normal and the nearest trained plane's,
+    /// and the centre distance as a fraction of the true plane's diagonal.
+    planes: Vec<(f64, f64)>,
+    /// PSNR of the transmission layer against the true transmission, mean over the test views.
+    transmission_psnr: Option<f64>,
+}
+
+impl std::fmt::Display for TruthComparison {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        for (i, (angle, centre)) in self.planes.iter().enumerate() {
+            write!(
+                f,
+                "plane {i}: normal off by {angle:.2} deg, centre by {:.2}% of the size; ",
+                100.0 * centre
+            )?;
+        }
+        match self.transmission_psnr {
+            Some(p) => write!(f, "transmission PSNR {p:.2} dB"),
+            None => write!(f, "no true transmission images"),
+        }
+    }
+}
+
+fn compare_with_truth(
+    trainer: &Trainer,
+    data: &TrainingData,
+    root: &Path,
+) -> Result<Option<TruthComparison>> {
+    let gt = root.join("gt");
+    if !gt.is_dir() {
+        return Ok(None);
+    }
+    let mut planes = Vec::new();
+    let planes_path = gt.join("planes.json");
+    if planes_path.is_file() {
+        for spec in trgs_core::io::read_planes_json(&planes_path)? {
+            let Some(truth) = spec.plane else { continue };
+            let diag = truth.width.hypot(truth.height);
+            let best = trainer
+                .planes()
+                .iter()
+                .map(|p| {
+                    let cos = p.unit_normal().dot(truth.unit_normal()).abs().min(1.0);
+                    (cos.acos().to_degrees(), p.centre.distance(truth.centre) / diag)
+                })
+                .min_by(|a, b| a.1.total_cmp(&b.1));
+            planes.push(best.unwrap_or((f64::NAN, f64::NAN)));
+        }
+    }
+    let mut psnrs = Vec::new();
+    for v in &data.test {
+        let path = gt.join("transmission").join(&v.camera.name);
+        if !path.is_file() {
+            continue;
+        }
+        let truth = trgs_core::io::read_rgb_image(&path)?;
+        let (w, h) = (v.camera.width(), v.camera.height());
+        let truth = trgs_train::data::resize_area(&truth, w, h);
+        let frame = trainer.render(&v.camera)?;
+        let t = frame.read_layer(trainer.context(), Layer::Transmission);
+        psnrs.push(psnr(&t, &truth)?);
+    }
+    let transmission_psnr =
+        (!psnrs.is_empty()).then(|| psnrs.iter().sum::<f64>() / psnrs.len() as f64);
+    Ok(Some(TruthComparison { planes, transmission_psnr }))
+}
+
 fn write_outputs(
     out: &Path,
     trainer: &Trainer,
@@ -247,6 +374,7 @@ fn write_outputs(
     last: &Evaluation,
     evaluations: &[Evaluation],
     train_seconds: f64,
+    truth: Option<&TruthComparison>,
 ) -> Result<()> {
     let gaussians = trainer.gaussians();
     write_ply(&out.join("model.ply"), &gaussians)?;
@@ -274,6 +402,7 @@ fn write_outputs(
         "gaussians": gaussians.len(),
         "render_fps": fps,
         "resolution": [data.size().0, data.size().1],
+        "truth": truth,
         "psnr_over_time": evaluations.iter().map(|e| serde_json::json!({"step": e.step, "seconds": e.seconds, "psnr": e.psnr})).collect::<Vec<_>>(),
     });
     write_atomic(&out.join("metrics.json"), serde_json::to_string_pretty(&metrics)?.as_bytes())?;

@@ -1,0 +1,298 @@
+//! Classic 3DGS densification (Kerbl et al. 2023, section 5.2 and the reference code): Gaussians
+//! whose mean moves the image a lot (large average screen-space position gradient) are cloned
+//! when small and split in two when large; transparent, huge or screen-filling ones are pruned;
+//! opacities are reset to at most 0.01 at intervals. Edits run on the CPU over the parameters
+//! and Adam moments read back from the GPU (every `every` steps): survivors keep their moments,
+//! new Gaussians start from zero moments, as in the reference code.
+use crate::settings::scale_len;
+use glam::{DMat3, DQuat, DVec3};
+use trgs_core::rng::Rng;
+use trgs_core::scene::Gaussians;
+use trgs_render::layout::{FLAG_VISIBLE, PROJECTED_GRAD_FLOATS, ProjectedGaussian};
+
+/// The schedule and thresholds (3DGS defaults for 30k steps; lengths scale with the run).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ClassicSettings {
+    pub from: u32,
+    pub until: u32,
+    pub every: u32,
+    pub opacity_reset_every: u32,
+    /// Average norm of dL/d(mean in NDC) above which a Gaussian densifies.
+    pub grad_threshold: f64,
+    /// Fraction of the scene extent separating clone (smaller) from split (larger).
+    pub percent_dense: f64,
+    pub min_opacity: f64,
+    /// Prune Gaussians whose screen radius exceeds this (pixels), after the first reset.
+    pub max_screen_radius: f64,
+    /// Never grow beyond this many Gaussians.
+    pub max_gaussians: usize,
+}
+
+impl ClassicSettings {
+    /// The start and end scale with the run; the interval does not (the statistics need about a
+    /// hundred views' gradients each time, whatever the run's length), and the opacity reset comes
+    /// at least ten densifications apart.
+    pub fn scaled(iterations: u32) -> Self {
+        let every = 100;
+        Self {
+            from: scale_len(500, iterations),
+            until: scale_len(15_000, iterations),
+            every,
+            opacity_reset_every: scale_len(3000, iterations).max(10 * every),
+            grad_threshold: 2e-4,
+            percent_dense: 0.01,
+            min_opacity: 0.005,
+            max_screen_radius: 20.0,
+            max_gaussians: 1_000_000,
+        }
+    }
+}
+
+/// Per-Gaussian statistics gathered between densification steps.
+#[derive(Clone, Debug, Default)]
+pub struct DensifyStats {
+    grad_sum: Vec<f64>,
+    count: Vec<u32>,
+    max_radius: Vec<f64>,
+}
+
+impl DensifyStats {
+    pub fn new(n: usize) -> Self {
+        Self { grad_sum: vec![0.0; n], count: vec![0; n], max_radius: vec![0.0; n] }
+    }
+
+    /// Add one view's screen-space gradients (the camera's pass) of an image `width x height`.
+    pub fn add(
+        &mut self,
+        projected: &[ProjectedGaussian],
+        grads: &[[f32; PROJECTED_GRAD_FLOATS as usize]],
+        width: u32,
+        height: u32,
+    ) {
+        let (hw, hh) = (0.5 * f64::from(width), 0.5 * f64::from(height));
+        for (i, (p, g)) in projected.iter().zip(grads).enumerate().take(self.count.len()) {
+            if p.flags & FLAG_VISIBLE == 0 {
+                continue;
+            }
+            // 3DGS measures the gradient in NDC: d/d(ndc) = d/d(pixel) * size / 2.
+            let (gx, gy) = (f64::from(g[0]) * hw, f64::from(g[1]) * hh);
+            self.grad_sum[i] += (gx * gx + gy * gy).sqrt();
+            self.count[i] += 1;
+            let r = f64::from(p.extent[0].max(p.extent[1]));
+            self.max_radius[i] = self.max_radius[i].max(r);
+        }
+    }
+}
+
+/// Parameters and Adam moments of a set of Gaussians, edited together.
+#[derive(Clone, Debug)]
+pub struct TrainState {
+    pub gaussians: Gaussians<f32>,
+    /// First and second moments per attribute (`trgs_render::ATTRIBUTES` order), flat.
+    pub m: Vec<Vec<f32>>,
+    pub v: Vec<Vec<f32>>,
+}
+
+/// What one densification step did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct DensifyReport {
+    pub cloned: usize,
+    pub split: usize,
+    pub pruned: usize,
+}
+
+fn widths(g: &Gaussians<f32>) -> [usize; 7] {
+    [3, 4, 3, 1, 3 * g.sh_coeffs(), 1, 1]
+}
+
+/// The state made of `sources` (an index into `state` each, in order); moments are copied for
+/// `keep_moments` entries and zero for the others.
+fn gather(state: &TrainState, sources: &[(usize, bool)]) -> TrainState {
+    let g = &state.gaussians;
+    let coeffs = g.sh_coeffs();
+    let mut out = Gaussians::<f32>::empty(g.sh_degree);
+    for &(i, _) in sources {
+        out.means.push(g.means[i]);
+        out.rotations.push(g.rotations[i]);
+        out.log_scales.push(g.log_scales[i]);
+        out.opacity_logits.push(g.opacity_logits[i]);
+        out.sh.extend_from_slice(&g.sh[i * coeffs..(i + 1) * coeffs]);
+        out.mask_logits.push(g.mask_logits[i]);
+        out.log_reflections.push(g.log_reflections[i]);
+        out.populations.push(g.populations[i]);
+    }
+    let w = widths(g);
+    let moments = |src: &[Vec<f32>]| -> Vec<Vec<f32>> {
+        (0..7)
+            .map(|a| {
+                let mut v = Vec::with_capacity(sources.len() * w[a]);
+                for &(i, keep) in sources {
+                    if keep {
+                        v.extend_from_slice(&src[a][i * w[a]..(i + 1) * w[a]]);
+                    } else {
+                        v.extend(std::iter::repeat_n(0.0, w[a]));
+                    }
+                }
+                v
+            })
+            .collect()
+    };
+    TrainState { m: moments(&state.m), v: moments(&state.v), gaussians: out }
+}
+
+fn sigmoid(x: f64) -> f64 {
+    1.0 / (1.0 + (-x).exp())
+}
+
+/// One densify-and-prune step (3DGS's `densify_and_prune`).
+pub fn densify_and_prune(
+    state: &TrainState,
+    stats: &DensifyStats,
+    settings: &ClassicSettings,
+    extent: f64,
+    prune_large: bool,
+    rng: &mut Rng,
+) -> (TrainState, DensifyReport) {
+    let g = &state.gaussians;
+    let n = g.len();
+    let max_scale = |i: usize| {
+        let s = g.log_scales[i];
+        f64::from(s[0].max(s[1]).max(s[2])).exp()
+    };
+    let mut report = DensifyReport::default();
+    let mut room = settings.max_gaussians.saturating_sub(n);
+    let transparent = |i: usize| sigmoid(f64::from(g.opacity_logits[i])) < settings.min_opacity;
+    let prune = |i: usize| {
+        transparent(i)
+            || (prune_large
+                && (stats.max_radius[i] > settings.max_screen_radius
+                    || max_scale(i) > 0.1 * extent))
+    };
+    let mut clone = vec![false; n];
+    let mut split = vec![false; n];
+    for i in 0..n {
+        // A transparent Gaussian is neither cloned nor split: 3DGS prunes the new Gaussians too,
+        // and they inherit the opacity.
+        if stats.count[i] == 0 || room == 0 || transparent(i) {
+            continue;
+        }
+        let avg = stats.grad_sum[i] / f64::from(stats.count[i]);
+        if !(avg >= settings.grad_threshold) {
+            continue;
+        }
+        if max_scale(i) <= settings.percent_dense * extent {
+            clone[i] = true;
+            report.cloned += 1;
+        } else {
+            split[i] = true;
+            report.split += 1;
+        }
+        room -= 1;
+    }
+    // Survivors (split parents are replaced by their children), then clones, then children.
+    let mut sources: Vec<(usize, bool)> = Vec::with_capacity(n + report.cloned + 2 * report.split);
+    for i in 0..n {
+        if split[i] || prune(i) {
+            if !split[i] {
+                report.pruned += 1;
+            }
+            continue;
+        }
+        sources.push((i, true));
+    }
+    sources.extend((0..n).filter(|&i| clone[i]).map(|i| (i, false)));
+    let first_child = sources.len();
+    let parents: Vec<usize> = (0..n).filter(|&i| split[i]).collect();
+    for &i in &parents {
+        sources.push((i, false));
+        sources.push((i, false));
+    }
+    let mut out = gather(state, &sources);
+    // Children: means drawn from the parent's Gaussian, scales divided by 0.8 N (N = 2).
+    for (c, &i) in parents.iter().enumerate() {
+        let q = g.rotations[i].map(f64::from);
+        let rot = DMat3::from_quat(DQuat::from_xyzw(q[1], q[2], q[3], q[0]).normalize());
+        let s = g.log_scales[i].map(|v| f64::from(v).exp());
+        let mean = DVec3::from_array(g.means[i].map(f64::from));
+        for k in 0..2 {
+            let j = first_child + 2 * c + k;
+            let local = DVec3::new(s[0] * rng.normal(), s[1] * rng.normal(), s[2] * rng.normal());
+            let p = mean + rot * local;
+            out.gaussians.means[j] = p.to_array().map(|v| v as f32);
+            out.gaussians.log_scales[j] =
+                g.log_scales[i].map(|v| (f64::from(v) - (0.8f64 * 2.0).ln()) as f32);
+        }
+    }
+    (out, report)
+}
+
+/// 3DGS's opacity reset: every opacity becomes at most 0.01 (their moments are zeroed, as the
+/// reference code replaces the tensor in the optimiser).
+pub fn reset_opacity(state: &mut TrainState) {
+    let cap = (0.01f64 / 0.99).ln() as f32;
+    for (o, (m, v)) in state
+        .gaussians
+        .opacity_logits
+        .iter_mut()
+        .zip(state.m[3].iter_mut().zip(state.v[3].iter_mut()))
+    {
+        *o = o.min(cap);
+        *m = 0.0;
+        *v = 0.0;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use trgs_core::scene::Population;
+
+    fn state(n: usize) -> TrainState {
+        let mut g = Gaussians::<f32>::empty(0);
+        for i in 0..n {
+            g.means.push([i as f32, 0.0, 0.0]);
+            g.rotations.push([1.0, 0.0, 0.0, 0.0]);
+            g.log_scales.push([(0.001f32).ln(); 3]);
+            g.opacity_logits.push(0.0);
+            g.sh.push([0.1, 0.2, 0.3]);
+            g.mask_logits.push(0.0);
+            g.log_reflections.push(0.0);
+            g.populations.push(Population::Primary);
+        }
+        let w = widths(&g);
+        let m = (0..7).map(|a| vec![1.0; n * w[a]]).collect();
+        let v = (0..7).map(|a| vec![2.0; n * w[a]]).collect();
+        TrainState { gaussians: g, m, v }
+    }
+
+    #[test]
+    fn clone_split_and_prune_by_the_rules() {
+        let mut s = state(4);
+        s.gaussians.log_scales[1] = [0.0; 3]; // large: splits
+        s.gaussians.opacity_logits[3] = -10.0; // transparent: pruned
+        let mut stats = DensifyStats::new(4);
+        stats.grad_sum = vec![1e-3, 1e-3, 1e-5, 1e-3];
+        stats.count = vec![1; 4];
+        let settings = ClassicSettings::scaled(30_000);
+        let (out, report) = densify_and_prune(&s, &stats, &settings, 1.0, false, &mut Rng::new(1));
+        assert_eq!(report, DensifyReport { cloned: 1, split: 1, pruned: 1 });
+        // Survivors 0, 2; the clone of 0 (3 is pruned, so not cloned); two children of 1.
+        assert_eq!(out.gaussians.len(), 5);
+        assert_eq!(out.m[0].len(), 15);
+        assert_eq!(&out.m[0][..6], &[1.0; 6]);
+        assert_eq!(&out.m[0][6..], &[0.0; 9]);
+        assert_eq!(out.gaussians.means[2], [0.0, 0.0, 0.0]);
+        let child = out.gaussians.log_scales[3][0];
+        assert!((f64::from(child) + 1.6f64.ln()).abs() < 1e-6);
+    }
+
+    #[test]
+    fn reset_caps_opacity_and_clears_its_moments() {
+        let mut s = state(2);
+        s.gaussians.opacity_logits = vec![5.0, -6.0];
+        reset_opacity(&mut s);
+        assert!((sigmoid(f64::from(s.gaussians.opacity_logits[0])) - 0.01).abs() < 1e-6);
+        assert_eq!(s.gaussians.opacity_logits[1], -6.0);
+        assert_eq!(s.m[3], vec![0.0, 0.0]);
+    }
+}
