@@ -123,17 +123,8 @@ impl GpuScene {
 
     /// Read the Gaussians back (after training steps changed them on the GPU).
     pub fn read(&self, ctx: &GpuContext) -> Gaussians<f32> {
-        let n = self.len as usize;
-        let mut g = Gaussians::<f32>::zeros(n, self.sh_degree);
-        let coeffs = g.sh_coeffs();
-        g.means = gpu::read_buffer(ctx, &self.means, 0, n);
-        g.rotations = gpu::read_buffer(ctx, &self.rotations, 0, n);
-        g.log_scales = gpu::read_buffer(ctx, &self.log_scales, 0, n);
-        g.opacity_logits = gpu::read_buffer(ctx, &self.opacity_logits, 0, n);
-        g.sh = gpu::read_buffer(ctx, &self.sh, 0, n * coeffs);
-        g.mask_logits = gpu::read_buffer(ctx, &self.mask_logits, 0, n);
-        g.log_reflections = gpu::read_buffer(ctx, &self.log_reflections, 0, n);
-        let pops: Vec<u32> = gpu::read_buffer(ctx, &self.populations, 0, n);
+        let mut g = read_attributes(ctx, self.parameters(), self.len as usize, self.sh_degree);
+        let pops: Vec<u32> = gpu::read_buffer(ctx, &self.populations, 0, self.len as usize);
         g.populations = pops
             .into_iter()
             .map(|p| trgs_core::scene::Population::from_u8(p as u8).unwrap_or_default())
@@ -218,16 +209,26 @@ impl SceneGradBuffers {
     /// Read every gradient back, shaped like the scene's Gaussians (populations are not
     /// parameters and read as Primary).
     pub fn read(&self, ctx: &GpuContext) -> Gaussians<f32> {
-        let n = self.len as usize;
-        let mut g = Gaussians::<f32>::zeros(n, self.sh_degree);
-        let coeffs = g.sh_coeffs();
-        g.means = gpu::read_buffer(ctx, &self.means, 0, n);
-        g.rotations = gpu::read_buffer(ctx, &self.rotations, 0, n);
-        g.log_scales = gpu::read_buffer(ctx, &self.log_scales, 0, n);
-        g.opacity_logits = gpu::read_buffer(ctx, &self.opacity_logits, 0, n);
-        g.sh = gpu::read_buffer(ctx, &self.sh, 0, n * coeffs);
-        g.mask_logits = gpu::read_buffer(ctx, &self.mask_logits, 0, n);
-        g.log_reflections = gpu::read_buffer(ctx, &self.log_reflections, 0, n);
-        g
+        read_attributes(ctx, self.parameters(), self.len as usize, self.sh_degree)
     }
+}
+
+/// The seven attribute buffers (in [`ATTRIBUTES`] order) of `n` Gaussians read back; populations
+/// are left Primary.
+fn read_attributes(
+    ctx: &GpuContext,
+    b: [&wgpu::Buffer; 7],
+    n: usize,
+    sh_degree: u32,
+) -> Gaussians<f32> {
+    let mut g = Gaussians::<f32>::zeros(n, sh_degree);
+    let coeffs = g.sh_coeffs();
+    g.means = gpu::read_buffer(ctx, b[0], 0, n);
+    g.rotations = gpu::read_buffer(ctx, b[1], 0, n);
+    g.log_scales = gpu::read_buffer(ctx, b[2], 0, n);
+    g.opacity_logits = gpu::read_buffer(ctx, b[3], 0, n);
+    g.sh = gpu::read_buffer(ctx, b[4], 0, n * coeffs);
+    g.mask_logits = gpu::read_buffer(ctx, b[5], 0, n);
+    g.log_reflections = gpu::read_buffer(ctx, b[6], 0, n);
+    g
 }

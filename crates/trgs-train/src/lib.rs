@@ -1,7 +1,8 @@
 //! trgs-train: optimisation of TR-Gaussians models, and the command-line tools around it (`train`,
 //! `render`, `bench`): datasets at the training resolution ([`data`]), the initial Gaussians
-//! ([`init`]), the settings and schedules ([`settings`]), the GPU Adam step ([`adam`]) and the
-//! training step ([`trainer`]).
+//! ([`init`]), the settings and schedules ([`settings`]), the GPU Adam step ([`adam`]), the
+//! regularisers ([`regularisers`]), densification ([`densify`]), plane initialisation
+//! ([`plane_init`]) and the training step ([`trainer`]).
 pub mod adam;
 pub mod data;
 pub mod densify;

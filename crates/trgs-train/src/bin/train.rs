@@ -29,7 +29,8 @@ OPTIONS:
                         optional glass_masks/, planes.json and test_views.txt. Default: the
                         built-in synthetic glass scene, written to <out>/dataset
     --out DIR           output folder (default: runs/demo)
-    --iterations N      training steps (default 3000; the paper uses 30000)
+    --iterations N      training steps (default 1000, a few minutes on lavapipe; the paper
+                        uses 30000)
     --resolution W      train at width W (the height keeps the aspect ratio)
     --downscale F       train at 1/F of the image size
     --sh-degree D       largest SH degree, 0 to 3 (default 3)
@@ -57,7 +58,7 @@ fn parse_args() -> Result<Option<Args>> {
     let mut args = Args {
         data: None,
         out: PathBuf::from("runs/demo"),
-        iterations: 3000,
+        iterations: 1000,
         resolution: Resolution::Original,
         sh_degree: 3,
         eval_every: None,
