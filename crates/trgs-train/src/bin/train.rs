@@ -37,6 +37,7 @@ OPTIONS:
     --eval-every N      evaluate the test views every N steps (default: 10 times a run)
     --random-init N     start from N random points when the scene has no sparse points
                         (default 10000)
+    --no-planes         ignore the glass masks: plain 3DGS (the baseline of the comparisons)
     --densify MODE      classic (3DGS clone, split, prune, opacity reset; default) or none
     --seed S            order of the training views (default 0)
     -h, --help          this text
@@ -51,6 +52,7 @@ struct Args {
     eval_every: Option<u32>,
     random_init: usize,
     densify: bool,
+    no_planes: bool,
     seed: u64,
 }
 
@@ -64,6 +66,7 @@ fn parse_args() -> Result<Option<Args>> {
         eval_every: None,
         random_init: 10_000,
         densify: true,
+        no_planes: false,
         seed: 0,
     };
     let mut it = std::env::args().skip(1);
@@ -93,6 +96,7 @@ fn parse_args() -> Result<Option<Args>> {
                     other => bail!("--densify {other:?}: expected classic or none"),
                 }
             }
+            "--no-planes" => args.no_planes = true,
             "--seed" => args.seed = num("--seed", value("--seed")?)?,
             other => bail!("unknown argument {other:?}\n\n{HELP}"),
         }
@@ -160,7 +164,10 @@ fn main() -> Result<()> {
             dir
         }
     };
-    let data = data::load(&data_dir, args.resolution)?;
+    let mut data = data::load(&data_dir, args.resolution)?;
+    if args.no_planes {
+        data.materials.clear();
+    }
     let (w, h) = data.size();
     println!(
         "dataset {}: {} training and {} test views at {w}x{h}, {} sparse points, extent {:.2}",
@@ -170,7 +177,9 @@ fn main() -> Result<()> {
         data.points.len(),
         data.extent
     );
-    if data.materials.is_empty() {
+    if args.no_planes {
+        println!("--no-planes: training plain 3DGS");
+    } else if data.materials.is_empty() {
         println!("no glass masks: no reflection planes, training plain 3DGS");
     } else {
         println!(
