@@ -89,6 +89,12 @@ impl TrainingData {
         (c.width(), c.height())
     }
 
+    /// The views a run is evaluated on: the test split, or the first four training views of a
+    /// scene without one.
+    pub fn eval_views(&self) -> &[View] {
+        if self.test.is_empty() { &self.train[..self.train.len().min(4)] } else { &self.test }
+    }
+
     /// The glass-mask labels some training view uses, ascending.
     pub fn mask_labels(&self) -> Vec<u32> {
         let mut labels: Vec<u32> = self

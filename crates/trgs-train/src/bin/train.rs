@@ -122,8 +122,7 @@ struct Evaluation {
 }
 
 fn evaluate(trainer: &Trainer, data: &TrainingData, t0: Instant) -> Result<Evaluation> {
-    let views =
-        if data.test.is_empty() { &data.train[..data.train.len().min(4)] } else { &data.test[..] };
+    let views = data.eval_views();
     let mut rows = Vec::new();
     for v in views {
         let frame = trainer.render(&v.camera)?;
@@ -390,8 +389,7 @@ fn write_outputs(
     write_ply(&out.join("model.ply"), &gaussians)?;
     write_planes_json(&out.join("planes.json"), trainer.planes())?;
     let renders = out.join("renders");
-    let test =
-        if data.test.is_empty() { &data.train[..data.train.len().min(4)] } else { &data.test[..] };
+    let test = data.eval_views();
     // Render FPS at the training resolution: the mean over the test views.
     let t = Instant::now();
     for v in test {
