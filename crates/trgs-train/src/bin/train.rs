@@ -29,7 +29,7 @@ OPTIONS:
                         optional glass_masks/, planes.json and test_views.txt. Default: the
                         built-in synthetic glass scene, written to <out>/dataset
     --out DIR           output folder (default: runs/demo)
-    --iterations N      training steps (default 1000, a few minutes on lavapipe; the paper
+    --iterations N      training steps (default 1000: about 20 minutes for the demo scene on a 2-core lavapipe; the paper
                         uses 30000)
     --resolution W      train at width W (the height keeps the aspect ratio)
     --downscale F       train at 1/F of the image size
