@@ -19,13 +19,60 @@ use trgs_render::{
 };
 
 /// What one step measured.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct StepStats {
     pub loss: f64,
     pub l1: f64,
     pub ssim: f64,
     /// PSNR of the rendered training view.
     pub psnr: f64,
+    /// Where the step's wall-clock time went.
+    pub times: StepTimes,
+    /// With [`Trainer::profile`]: GPU milliseconds of every render and backward stage, from
+    /// timestamp queries (empty when off or when the adapter has none).
+    pub gpu_stages: Vec<(&'static str, f64)>,
+}
+
+/// Wall-clock milliseconds of each phase of a step. Every phase ends with the GPU idle (the
+/// step reads back between phases anyway), so the phases add up to the step.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StepTimes {
+    /// Forward render of every pass.
+    pub render: f64,
+    /// Layer readback, image loss and regularisers on the CPU, upload of their gradients.
+    pub loss: f64,
+    /// The adjoint passes and the plane-gradient readback.
+    pub backward: f64,
+    /// Adam on the Gaussians (GPU) and the planes (CPU), and the densification statistics.
+    pub adam: f64,
+    /// Densification, pruning and opacity reset, when the schedule runs them.
+    pub densify: f64,
+}
+
+impl StepTimes {
+    pub fn total(&self) -> f64 {
+        self.render + self.loss + self.backward + self.adam + self.densify
+    }
+
+    /// The phases as (name, ms) pairs, for logs and reports.
+    pub fn phases(&self) -> [(&'static str, f64); 5] {
+        [
+            ("render", self.render),
+            ("loss", self.loss),
+            ("backward", self.backward),
+            ("adam", self.adam),
+            ("densify", self.densify),
+        ]
+    }
+
+    /// Add `other` phase by phase (for averages over a run).
+    pub fn accumulate(&mut self, other: &StepTimes) {
+        self.render += other.render;
+        self.loss += other.loss;
+        self.backward += other.backward;
+        self.adam += other.adam;
+        self.densify += other.densify;
+    }
 }
 
 /// Adam state of one plane: centre, unnormalised normal, R0 logit.
@@ -53,6 +100,8 @@ pub struct Trainer {
     /// Classic densification, when on, and its statistics since the last densification.
     densify: Option<(ClassicSettings, DensifyStats)>,
     rng: trgs_core::rng::Rng,
+    /// Time every GPU stage of each step with timestamp queries ([`StepStats::gpu_stages`]).
+    pub profile: bool,
 }
 
 impl Trainer {
@@ -79,6 +128,7 @@ impl Trainer {
             settings,
             extent,
             densify: None,
+            profile: false,
         })
     }
 
@@ -189,7 +239,11 @@ impl Trainer {
         let has_planes = !self.scene.planes().is_empty();
         let mut options = self.render_options();
         options.depth_variance = has_planes && self.settings.lambda_depth > 0.0;
+        options.profile = self.profile;
+        let mut times = StepTimes::default();
+        let mut clock = PhaseClock::start();
         self.renderer.render_into(&self.scene, &view.camera, &options, &mut self.frame)?;
+        times.render = clock.lap(&self.ctx);
         let images = has_planes.then(|| self.frame.read_images(ctx));
         let color = match &images {
             Some(im) => im.color.clone(),
@@ -204,11 +258,19 @@ impl Trainer {
             self.add_regularisers(view, im, &mut grads);
         }
         let layer_grads = LayerGrads::upload(ctx, &self.frame, &grads)?;
+        times.loss = clock.lap(&self.ctx);
         let backward = BackwardOptions {
             block_reflection_to_gaussians: stage == Stage::PlaneAdjustment,
-            profile: false,
+            profile: self.profile,
         };
         let g = self.renderer.backward(&self.scene, &mut self.frame, &layer_grads, &backward)?;
+        times.backward = clock.lap(&self.ctx);
+        let gpu_stages: Vec<_> = [self.frame.stage_times(), g.stage_times()]
+            .into_iter()
+            .flatten()
+            .flatten()
+            .copied()
+            .collect();
         self.step += 1;
         let t = self.step;
         let rates = self.settings.rates.attribute_rates(
@@ -240,9 +302,18 @@ impl Trainer {
         }
         rec.submit_and_wait(ctx);
         self.step_planes(&g.planes, t)?;
+        times.adam = clock.lap(&self.ctx);
         self.densify_step()?;
+        times.densify = clock.lap(&self.ctx);
         let mse = loss_mse(&color, &view.image);
-        Ok(StepStats { loss: loss.value, l1: loss.l1, ssim: loss.ssim, psnr: psnr_of(mse) })
+        Ok(StepStats {
+            loss: loss.value,
+            l1: loss.l1,
+            ssim: loss.ssim,
+            psnr: psnr_of(mse),
+            times,
+            gpu_stages,
+        })
     }
 
     /// The paper's L_d, L_c and L_m, weighted, into the layer gradients.
@@ -342,6 +413,27 @@ impl Trainer {
         }
         self.scene.set_planes(&planes).context("a plane step left an invalid plane")?;
         Ok(())
+    }
+}
+
+/// Laps of wall-clock time that wait for the GPU to go idle first, so that work submitted in
+/// one phase is not billed to the next.
+struct PhaseClock {
+    last: std::time::Instant,
+}
+
+impl PhaseClock {
+    fn start() -> Self {
+        Self { last: std::time::Instant::now() }
+    }
+
+    /// Milliseconds since the previous lap.
+    fn lap(&mut self, ctx: &GpuContext) -> f64 {
+        let _ = ctx.device.poll(wgpu::PollType::wait_indefinitely());
+        let now = std::time::Instant::now();
+        let ms = 1e3 * (now - self.last).as_secs_f64();
+        self.last = now;
+        ms
     }
 }
 

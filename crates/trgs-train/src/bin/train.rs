@@ -16,7 +16,7 @@ use trgs_train::densify::ClassicSettings;
 use trgs_train::init::{SeedPoint, gaussians_from_points, random_points};
 use trgs_train::plane_init::{PlaneInitSettings, initialise_planes};
 use trgs_train::settings::TrainSettings;
-use trgs_train::trainer::Trainer;
+use trgs_train::trainer::{StepTimes, Trainer};
 
 const HELP: &str = "\
 trgs train: TR-Gaussians training
@@ -40,6 +40,7 @@ OPTIONS:
     --no-planes         ignore the glass masks: plain 3DGS (the baseline of the comparisons)
     --densify MODE      classic (3DGS clone, split, prune, opacity reset; default) or none
     --seed S            order of the training views (default 0)
+    --profile           time every GPU stage of every step (timestamp queries) into log.jsonl
     -h, --help          this text
 ";
 
@@ -54,6 +55,7 @@ struct Args {
     densify: bool,
     no_planes: bool,
     seed: u64,
+    profile: bool,
 }
 
 fn parse_args() -> Result<Option<Args>> {
@@ -68,6 +70,7 @@ fn parse_args() -> Result<Option<Args>> {
         densify: true,
         no_planes: false,
         seed: 0,
+        profile: false,
     };
     let mut it = std::env::args().skip(1);
     while let Some(a) = it.next() {
@@ -97,6 +100,7 @@ fn parse_args() -> Result<Option<Args>> {
                 }
             }
             "--no-planes" => args.no_planes = true,
+            "--profile" => args.profile = true,
             "--seed" => args.seed = num("--seed", value("--seed")?)?,
             other => bail!("unknown argument {other:?}\n\n{HELP}"),
         }
@@ -203,6 +207,7 @@ fn main() -> Result<()> {
     settings.seed = args.seed;
     let ctx = GpuContext::new()?;
     let mut trainer = Trainer::new(&ctx, &gaussians, &[], settings, data.extent)?;
+    trainer.profile = args.profile;
     if args.densify {
         trainer.enable_densification(ClassicSettings::scaled(args.iterations));
     }
@@ -222,6 +227,7 @@ fn main() -> Result<()> {
     let mut evaluations = Vec::new();
     let mut order: Vec<usize> = Vec::new();
     let mut train_seconds = 0.0;
+    let mut phase_ms = StepTimes::default();
     while trainer.step < args.iterations {
         if order.is_empty() {
             order = (0..data.train.len()).collect();
@@ -260,12 +266,20 @@ fn main() -> Result<()> {
         let ts = Instant::now();
         let stats = trainer.train_step(&data.train[vi])?;
         train_seconds += ts.elapsed().as_secs_f64();
+        phase_ms.accumulate(&stats.times);
+        let phases: serde_json::Map<_, _> = stats
+            .times
+            .phases()
+            .iter()
+            .map(|(k, v)| (k.to_string(), serde_json::json!(v)))
+            .collect();
+        let gpu: Vec<_> = stats.gpu_stages.iter().map(|(k, v)| serde_json::json!([k, v])).collect();
         writeln!(
             log,
             "{}",
             serde_json::json!({"step": trainer.step, "view": data.train[vi].camera.name,
                 "loss": stats.loss, "psnr": stats.psnr, "gaussians": trainer.scene().len(),
-                "seconds": t0.elapsed().as_secs_f64()})
+                "seconds": t0.elapsed().as_secs_f64(), "ms": phases, "gpu_ms": gpu})
         )?;
         bar.set_position(u64::from(trainer.step));
         bar.set_message(format!(
@@ -293,7 +307,15 @@ fn main() -> Result<()> {
     if let Some(t) = &truth {
         println!("against the ground truth in {}: {t}", data_dir.join("gt").display());
     }
-    write_outputs(&args.out, &trainer, &data, &last, &evaluations, train_seconds, truth.as_ref())?;
+    let steps = f64::from(trainer.step.max(1));
+    let mean_ms: Vec<(&str, f64)> =
+        phase_ms.phases().iter().map(|&(k, v)| (k, v / steps)).collect();
+    println!(
+        "ms per step: {}",
+        mean_ms.iter().map(|(k, v)| format!("{k} {v:.1}")).collect::<Vec<_>>().join(", ")
+    );
+    let run = RunSummary { train_seconds, step_ms: mean_ms, truth: truth.as_ref() };
+    write_outputs(&args.out, &trainer, &data, &last, &evaluations, &run)?;
     println!(
         "done: {} steps in {:.0} s ({:.0} ms per step), test PSNR {:.2} dB, SSIM {:.4}; results in {}",
         trainer.step,
@@ -376,14 +398,21 @@ fn compare_with_truth(
     Ok(Some(TruthComparison { planes, transmission_psnr }))
 }
 
+/// What a run measured besides the evaluations.
+struct RunSummary<'a> {
+    train_seconds: f64,
+    /// Mean milliseconds per step of each phase.
+    step_ms: Vec<(&'static str, f64)>,
+    truth: Option<&'a TruthComparison>,
+}
+
 fn write_outputs(
     out: &Path,
     trainer: &Trainer,
     data: &TrainingData,
     last: &Evaluation,
     evaluations: &[Evaluation],
-    train_seconds: f64,
-    truth: Option<&TruthComparison>,
+    run: &RunSummary,
 ) -> Result<()> {
     let gaussians = trainer.gaussians();
     write_ply(&out.join("model.ply"), &gaussians)?;
@@ -405,12 +434,13 @@ fn write_outputs(
         "psnr": last.psnr,
         "ssim": last.ssim,
         "views": last.views.iter().map(|(n, p, s)| serde_json::json!({"name": n, "psnr": p, "ssim": s})).collect::<Vec<_>>(),
-        "train_seconds": train_seconds,
+        "train_seconds": run.train_seconds,
+        "step_ms": run.step_ms.iter().map(|(k, v)| (k.to_string(), serde_json::json!(v))).collect::<serde_json::Map<_, _>>(),
         "steps": trainer.step,
         "gaussians": gaussians.len(),
         "render_fps": fps,
         "resolution": [data.size().0, data.size().1],
-        "truth": truth,
+        "truth": run.truth,
         "psnr_over_time": evaluations.iter().map(|e| serde_json::json!({"step": e.step, "seconds": e.seconds, "psnr": e.psnr})).collect::<Vec<_>>(),
     });
     write_atomic(&out.join("metrics.json"), serde_json::to_string_pretty(&metrics)?.as_bytes())?;
