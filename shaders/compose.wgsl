@@ -1,7 +1,8 @@
 // Stage `compose` (twin: trgs_core::reference::compose): per pixel, the nearest plane whose
 // rectangle the camera ray hits from the front side (hit mask H = k + 1), Schlick's
 // R_raw = R0 + (1 - R0) (1 - cos)^5, R = R_raw M, C_r = C_raw^k A^k and
-// C = (1 - R) C_t + R C_r. Pixels without a hit show C_t.
+// C = (1 - R) C_t + R C_r. Pixels without a hit show C_t. The MODEL_* bits switch Schlick (R_raw
+// = R0) and A (C_r = C_raw) off for the ablations.
 #include "shared/common.wgsl"
 #include "shared/plane_hit.wgsl"
 
@@ -48,10 +49,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let r0 = plane.centre.w;
         let cos_i = clamp(-dot(plane.normal.xyz, dir), 0.0, 1.0);
         let f = 1.0 - cos_i;
-        let r_raw = r0 + (1.0 - r0) * (f * f * f * f * f);
+        var r_raw = r0 + (1.0 - r0) * (f * f * f * f * f);
+        if (params.model & MODEL_NO_FRESNEL) != 0u {
+            r_raw = r0;
+        }
         let r = r_raw * geometry[p].z;
         let raw = reflection_raw[u32(best) * params.width * params.height + p];
-        let cr = raw.xyz * raw.w;
+        let cr = raw.xyz * select(raw.w, 1.0, (params.model & MODEL_NO_INTENSITY) != 0u);
         out_color = (1.0 - r) * ct + r * cr;
         out_reflection = cr;
         out_strength = vec4<f32>(r_raw, r, 0.0, 0.0);

@@ -56,11 +56,15 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let m = geometry[p].z;
         let gc = g_color[p].xyz;
         let ct = transmission[p].xyz;
-        let cr = raw.xyz * raw.w;
+        let no_intensity = (params.model & MODEL_NO_INTENSITY) != 0u;
+        let no_fresnel = (params.model & MODEL_NO_FRESNEL) != 0u;
+        let a = select(raw.w, 1.0, no_intensity);
+        let cr = raw.xyz * a;
         let g_r = g_strength[p].y + dot(cr - ct, gc);
         let g_cr = g_reflection[p].xyz + r * gc;
         g_transmission[p] = g_transmission[p] + vec4<f32>((1.0 - r) * gc, 0.0);
-        g_reflection_raw[q] = g_reflection_raw[q] + vec4<f32>(g_cr * raw.w, dot(g_cr, raw.xyz));
+        let g_a = select(dot(g_cr, raw.xyz), 0.0, no_intensity);
+        g_reflection_raw[q] = g_reflection_raw[q] + vec4<f32>(g_cr * a, g_a);
         g_geometry[p] = g_geometry[p] + vec4<f32>(0.0, 0.0, g_r * r_raw, 0.0);
         let g_schlick = g_strength[p].x + g_r * m;
         // Schlick: dR/dR0 = 1 - f^5, dR/dcos = -5 (1 - R0) f^4 with f = 1 - cos.
@@ -71,9 +75,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let cos_i = clamp(d, 0.0, 1.0);
         let f = 1.0 - cos_i;
         let f4 = f * f * f * f;
-        g_r0 = g_schlick * (1.0 - f4 * f);
+        g_r0 = g_schlick * select(1.0 - f4 * f, 1.0, no_fresnel);
         // Inside the clamp, cos = -n . d.
-        if d > 0.0 && d < 1.0 {
+        if !no_fresnel && d > 0.0 && d < 1.0 {
             g_normal = g_schlick * (-5.0 * (1.0 - r0) * f4) * (-dir);
         }
     }

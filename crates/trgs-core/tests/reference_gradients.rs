@@ -10,7 +10,9 @@
 //! (the fingerprint: culling, order, stop points, thresholds, hit mask) measures a step, not a
 //! derivative; it is retried with a 10x smaller step and otherwise counted and reported.
 use trgs_core::fixtures::{Scene, SceneSpec, random_scene};
-use trgs_core::reference::{BackwardOptions, Frame, FrameGrads, RenderSettings, backward, render};
+use trgs_core::reference::{
+    BackwardOptions, Frame, FrameGrads, ReflectionModel, RenderSettings, backward, render,
+};
 use trgs_core::rng::Rng;
 
 #[derive(Clone, Copy, Debug)]
@@ -161,9 +163,8 @@ struct Report {
     per_kind: std::collections::BTreeMap<&'static str, (f64, f64)>,
 }
 
-fn check_scene(spec: &SceneSpec, options: BackwardOptions) -> Report {
+fn check_scene(spec: &SceneSpec, options: BackwardOptions, settings: RenderSettings) -> Report {
     let scene = random_scene(spec);
-    let settings = RenderSettings::default();
     let render_of =
         |s: &Scene| render(&s.gaussians, &s.planes, &s.camera, &settings).expect("valid scene");
     let frame = render_of(&scene);
@@ -243,7 +244,11 @@ fn check_scene(spec: &SceneSpec, options: BackwardOptions) -> Report {
 }
 
 fn assert_gradients(spec: SceneSpec, options: BackwardOptions) {
-    let r = check_scene(&spec, options);
+    assert_gradients_with(spec, options, RenderSettings::default());
+}
+
+fn assert_gradients_with(spec: SceneSpec, options: BackwardOptions, settings: RenderSettings) {
+    let r = check_scene(&spec, options, settings);
     println!(
         "{spec:?}: {} parameters checked, {} skipped at a discontinuity, worst relative error {:.2e} ({})",
         r.checked, r.skipped, r.worst, r.worst_param
@@ -301,4 +306,19 @@ fn gradients_grazing_view_80_degrees() {
         },
         BackwardOptions::default(),
     );
+}
+
+#[test]
+fn gradients_without_fresnel_or_intensity() {
+    for (fresnel, intensity) in [(false, true), (true, false), (false, false)] {
+        let settings = RenderSettings {
+            reflection: ReflectionModel { fresnel, intensity },
+            ..Default::default()
+        };
+        assert_gradients_with(
+            SceneSpec { seed: 15, gaussians: 24, planes: 1, ..Default::default() },
+            BackwardOptions::default(),
+            settings,
+        );
+    }
 }

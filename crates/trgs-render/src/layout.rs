@@ -192,7 +192,8 @@ gpu_struct! {
         pub width: u32,
         pub height: u32,
         pub num_planes: u32,
-        pub pad: u32,
+        /// `MODEL_*` bits: parts of the reflection model switched off (ablations).
+        pub model: u32,
         /// (fx, fy, cx, cy)
         pub focal: [f32; 4],
         /// Camera centre in world space.
@@ -258,6 +259,9 @@ pub const VIEW_GRAD_FLOATS: u32 = 16;
 pub const BWD_ADD: u32 = 1;
 pub const BWD_NO_GAUSSIANS: u32 = 2;
 pub const BWD_VIEW: u32 = 4;
+/// `ComposeParams::model` bits (trgs_core::reference::ReflectionModel).
+pub const MODEL_NO_FRESNEL: u32 = 1;
+pub const MODEL_NO_INTENSITY: u32 = 2;
 /// `Population::Glass` as stored in the population buffer.
 pub const POPULATION_GLASS: u32 = 1;
 /// Threads, values per thread and values per workgroup of the prefix sum (few threads, many
@@ -301,6 +305,12 @@ fn float(v: f64) -> String {
     format!("{:?}", v as f32)
 }
 
+/// The `ComposeParams::model` bits of `model`.
+pub fn model_bits(model: trgs_core::reference::ReflectionModel) -> u32 {
+    (if model.fresnel { 0 } else { MODEL_NO_FRESNEL })
+        | (if model.intensity { 0 } else { MODEL_NO_INTENSITY })
+}
+
 /// The text every shader starts with: shared constants and struct declarations.
 pub fn prelude() -> String {
     let mut s =
@@ -325,6 +335,8 @@ pub fn prelude() -> String {
         ("BWD_ADD", BWD_ADD),
         ("BWD_NO_GAUSSIANS", BWD_NO_GAUSSIANS),
         ("BWD_VIEW", BWD_VIEW),
+        ("MODEL_NO_FRESNEL", MODEL_NO_FRESNEL),
+        ("MODEL_NO_INTENSITY", MODEL_NO_INTENSITY),
     ];
     for (name, v) in consts_u32 {
         s.push_str(&format!("const {name}: u32 = {v}u;\n"));

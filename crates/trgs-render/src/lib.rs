@@ -49,3 +49,4 @@ pub use frame::{
 pub use layer_grads::{LayerGrads, LayerGradsError};
 pub use renderer::{RenderError, RenderOptions, Renderer};
 pub use scene::{ATTRIBUTES, GpuScene, SceneGradBuffers, attribute_widths};
+pub use trgs_core::reference::ReflectionModel;

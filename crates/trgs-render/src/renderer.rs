@@ -1,4 +1,5 @@
 //! The forward renderer: the stages of DESIGN.md's data flow for one camera, into a [`Frame`].
+use trgs_core::reference::ReflectionModel;
 use crate::GpuContext;
 use crate::frame::{Frame, ViewBuffers};
 use crate::gpu::{self, Recorder};
@@ -36,6 +37,9 @@ pub struct RenderOptions {
     pub sh_degree: Option<u32>,
     /// Keep copies of the tile counts and the unsorted keys (stage-by-stage tests).
     pub capture_intermediates: bool,
+    /// Parts of the reflection model (Schlick, the intensity map A) switched off for ablations;
+    /// the backward of the frame follows the same model.
+    pub reflection: ReflectionModel,
 }
 
 impl Default for RenderOptions {
@@ -48,6 +52,7 @@ impl Default for RenderOptions {
             profile: false,
             sh_degree: None,
             capture_intermediates: false,
+            reflection: ReflectionModel::default(),
         }
     }
 }
@@ -243,7 +248,12 @@ impl Renderer {
         for v in &views[1..] {
             has_pass[v.plane.unwrap_or(0)] = true;
         }
-        let rays = compose::RayBuffers::new(s, camera, &compose::planes_gpu(planes, &has_pass));
+        let rays = compose::RayBuffers::new(
+            s,
+            camera,
+            &compose::planes_gpu(planes, &has_pass),
+            options.reflection,
+        );
         if views.len() == 1 {
             // No plane hit anywhere: H = 0, which compose_bwd reads.
             rec.encoder.clear_buffer(&layers.hit, 0, None);

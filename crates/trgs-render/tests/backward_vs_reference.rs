@@ -5,7 +5,9 @@
 //! off (the compare-exchange fallback without subgroups). Fresh buffers are poison-filled.
 use trgs_core::Image;
 use trgs_core::fixtures::{SceneSpec, random_scene};
-use trgs_core::reference::{self, FrameGrads, PlaneLayerGrads, RenderSettings, compose_bwd};
+use trgs_core::reference::{
+    self, FrameGrads, PlaneLayerGrads, ReflectionModel, RenderSettings, compose_bwd,
+};
 use trgs_core::rng::Rng;
 use trgs_core::scene::Gaussians;
 use trgs_render::LayerGrads;
@@ -57,15 +59,19 @@ fn channel(v: &[[f32; 4]], channels: std::ops::Range<usize>) -> Vec<f32> {
 }
 
 fn check_compose_bwd(name: &str, spec: SceneSpec) {
+    check_compose_bwd_model(name, spec, ReflectionModel::default());
+}
+
+fn check_compose_bwd_model(name: &str, spec: SceneSpec, model: ReflectionModel) {
     let scene = random_scene(&spec);
     let g32: Gaussians<f32> = scene.gaussians.cast();
     let g = g32.cast::<f64>();
     let background = [0.1, 0.2, 0.3];
-    let settings = RenderSettings { background, ..Default::default() };
+    let settings = RenderSettings { background, reflection: model, ..Default::default() };
     let cpu_frame = reference::render(&g, &scene.planes, &scene.camera, &settings).expect("valid");
     let (w, h) = (cpu_frame.color.width, cpu_frame.color.height);
     let grads = random_grads(spec.seed ^ 0x5eed, &cpu_frame, scene.planes.len());
-    let cpu = compose_bwd(&scene.camera, &scene.planes, &cpu_frame, &grads);
+    let cpu = compose_bwd(&scene.camera, &scene.planes, &cpu_frame, &grads, model);
 
     for (mode, ctx) in contexts() {
         let what = format!("{name} ({mode})");
@@ -74,12 +80,18 @@ fn check_compose_bwd(name: &str, spec: SceneSpec) {
         let options = RenderOptions {
             background: background.map(|v| v as f32),
             depth_variance: true,
+            reflection: model,
             ..Default::default()
         };
         let frame = renderer.render(&gpu_scene, &scene.camera, &options).expect("render");
-        let hit = frame.read_images(&ctx).hit;
-        let differing = hit.data.iter().zip(&cpu_frame.hit.data).filter(|(a, b)| a != b).count();
+        let images = frame.read_images(&ctx);
+        let differing =
+            images.hit.data.iter().zip(&cpu_frame.hit.data).filter(|(a, b)| a != b).count();
         assert_eq!(differing, 0, "{what}: hit masks differ");
+        // The forward composition follows the same reflection model.
+        let fwd = compare(&format!("{what} C"), &images.color.data, &cpu_frame.color.data)
+            + compare(&format!("{what} R"), &images.strength.data, &cpu_frame.strength.data);
+        assert_eq!(fwd, 0, "{what}: composed layers");
 
         let slots = frame.plane_slots();
         let mut raw = Vec::new();
@@ -168,6 +180,16 @@ fn compose_bwd_two_planes() {
 #[test]
 fn compose_bwd_grazing() {
     check_compose_bwd("80 deg", spec(44, 600, 1, 80.0));
+}
+
+/// The ablations' reflection models: R_raw = R0 (no normal gradient through Schlick) and
+/// C_r = C_raw (no gradient into A).
+#[test]
+fn compose_bwd_ablation_models() {
+    for (fresnel, intensity) in [(false, true), (true, false)] {
+        let model = ReflectionModel { fresnel, intensity };
+        check_compose_bwd_model(&format!("{model:?}"), spec(45, 600, 1, 40.0), model);
+    }
 }
 
 /// Random upstream gradients for every layer of `frame`.
@@ -262,7 +284,7 @@ fn check_backward(name: &str, mut scene: trgs_core::fixtures::Scene, block: bool
     )
     .expect("valid");
     // The twin's stage: pass 1's adjoint from compose's totals.
-    let cg = compose_bwd(&scene.camera, &scene.planes, &cpu_frame, &grads);
+    let cg = compose_bwd(&scene.camera, &scene.planes, &cpu_frame, &grads, settings.reflection);
     let (w, h) = (cpu_frame.width(), cpu_frame.height());
     let grid = reference::TileGrid::new(w, h);
     let pass = &cpu_frame.primary;

@@ -7,7 +7,8 @@ use glam::DVec2;
 use trgs_core::Image;
 use trgs_core::fixtures::{SceneSpec, random_scene};
 use trgs_core::reference::{
-    self, Projected, ProjectionFilter, RenderSettings, TileGrid, emit_keys, prefix_sum, rasterize,
+    self, Projected, ProjectionFilter, ReflectionModel, RenderSettings, TileGrid, emit_keys,
+    prefix_sum, rasterize,
     rasterize_reflection, sort_keys, tile_counts, tile_ranges,
 };
 use trgs_core::scene::Gaussians;
@@ -192,6 +193,7 @@ fn check_scene(name: &str, spec: SceneSpec, chunk: Option<u32>) {
             &f64img(&images.mask),
             &raw_refs,
             &int_refs,
+            ReflectionModel::default(),
         );
         let hit_diff = images.hit.data.iter().zip(&out.hit.data).filter(|(a, b)| a != b).count();
         eprintln!("{name}: compose hit mask differs at {hit_diff} pixels");
@@ -205,7 +207,7 @@ fn check_scene(name: &str, spec: SceneSpec, chunk: Option<u32>) {
     }
     assert_eq!(bad, 0, "{name}: values outside atol {ATOL} + rtol {RTOL}");
     // End to end against the reference renderer.
-    let settings = RenderSettings { near: 0.2, background: [0.1, 0.2, 0.3] };
+    let settings = RenderSettings { near: 0.2, background: [0.1, 0.2, 0.3], ..Default::default() };
     let cpu = reference::render(&g, &scene.planes, &scene.camera, &settings).expect("reference");
     let total = compare(&format!("{name} end-to-end C"), &images.color, &cpu.color);
     assert!(

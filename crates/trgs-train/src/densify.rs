@@ -49,11 +49,11 @@ impl ClassicSettings {
 }
 
 /// Per-Gaussian statistics gathered between densification steps.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct DensifyStats {
-    grad_sum: Vec<f64>,
-    count: Vec<u32>,
-    max_radius: Vec<f64>,
+    pub(crate) grad_sum: Vec<f64>,
+    pub(crate) count: Vec<u32>,
+    pub(crate) max_radius: Vec<f64>,
 }
 
 impl DensifyStats {

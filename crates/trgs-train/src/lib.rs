@@ -2,8 +2,9 @@
 //! `render`, `bench`): datasets at the training resolution ([`data`]), the initial Gaussians
 //! ([`init`]), the settings and schedules ([`settings`]), the GPU Adam step ([`adam`]), the
 //! regularisers ([`regularisers`]), densification ([`densify`]), plane initialisation
-//! ([`plane_init`]) and the training step ([`trainer`]).
+//! ([`plane_init`]), the training step ([`trainer`]) and checkpoints ([`checkpoint`]).
 pub mod adam;
+pub mod checkpoint;
 pub mod data;
 pub mod densify;
 pub mod exr_layers;

@@ -2,6 +2,7 @@
 //! pass, then Adam on every attribute buffer in place (the Gaussians never leave the GPU) and on
 //! the planes (a few numbers each, on the CPU).
 use crate::adam::{Adam, AdamMoments};
+use crate::checkpoint::{Checkpoint, PlaneMoments};
 use crate::data::View;
 use crate::densify::{
     ClassicSettings, DensifyReport, DensifyStats, TrainState, densify_and_prune, reset_opacity,
@@ -75,13 +76,6 @@ impl StepTimes {
     }
 }
 
-/// Adam state of one plane: centre, unnormalised normal, R0 logit.
-#[derive(Clone, Debug, Default)]
-struct PlaneMoments {
-    m: [f64; 7],
-    v: [f64; 7],
-}
-
 /// The optimisation state on the GPU.
 #[derive(Debug)]
 pub struct Trainer {
@@ -130,6 +124,41 @@ impl Trainer {
             densify: None,
             profile: false,
         })
+    }
+
+    /// Continue from `ck` (written by [`Trainer::checkpoint`]) with `settings`, which should be
+    /// those of the interrupted run; densification as it was then, with `densify`'s schedule.
+    pub fn from_checkpoint(
+        ctx: &GpuContext,
+        ck: &Checkpoint,
+        settings: TrainSettings,
+        extent: f64,
+        densify: Option<ClassicSettings>,
+    ) -> Result<Self> {
+        let mut t = Self::new(ctx, &ck.state.gaussians, &ck.planes, settings, extent)?;
+        t.set_state(&ck.state)?;
+        t.plane_moments = ck.plane_moments.clone();
+        t.step = ck.step;
+        t.rng = trgs_core::rng::Rng::from_state(ck.rng_state);
+        if let Some(d) = densify {
+            let n = ck.state.gaussians.len();
+            let stats = ck.densify_stats.clone().unwrap_or_else(|| DensifyStats::new(n));
+            t.densify = Some((d, stats));
+        }
+        Ok(t)
+    }
+
+    /// Everything needed to continue this run later, with `extra` for the caller's own state.
+    pub fn checkpoint(&self, extra: serde_json::Value) -> Checkpoint {
+        Checkpoint {
+            step: self.step,
+            state: self.read_state(),
+            planes: self.scene.planes().to_vec(),
+            plane_moments: self.plane_moments.clone(),
+            densify_stats: self.densify.as_ref().map(|(_, s)| s.clone()),
+            rng_state: self.rng.state(),
+            extra,
+        }
     }
 
     /// Densify with `settings` from now on.

@@ -93,7 +93,7 @@ pub fn backward(
     let grid = TileGrid::new(k.width, k.height);
     let mut out = Gaussians::<f64>::zeros(g.len(), g.sh_degree);
     out.populations = g.populations.clone();
-    let cg = compose_bwd(camera, planes, frame, grads);
+    let cg = compose_bwd(camera, planes, frame, grads, settings.reflection);
 
     let pass = &frame.primary;
     let up = RasterizeUpstream {

@@ -1,9 +1,43 @@
 //! Stage `compose`: per pixel, the nearest plane hit by the camera ray (hit mask H), Schlick's
 //! R_raw, R = R_raw M, the reflection C_r = C_raw A of the hit plane, and the final
-//! C = (1 - R) C_t + R C_r. Pixels that hit no plane show C_t.
+//! C = (1 - R) C_t + R C_r. Pixels that hit no plane show C_t. [`ReflectionModel`] switches
+//! Schlick and A off for the ablations.
 use crate::image::Image;
-use crate::plane_math::{incidence_cos, nearest_plane_hit, schlick};
+use crate::plane_math::{incidence_cos, nearest_plane_hit, schlick, schlick_grad};
 use crate::scene::{Camera, ReflectionPlane};
+
+/// Which parts of the reflection model are on. The full model has both; each switch off is one
+/// of the paper's ablations (section "Reflection intensity and Fresnel-based reflection").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ReflectionModel {
+    /// Schlick's view-dependent R_raw; off: R_raw = R0, a learnable constant.
+    pub fresnel: bool,
+    /// The reflection intensity map A; off: C_r = C_raw.
+    pub intensity: bool,
+}
+
+impl Default for ReflectionModel {
+    fn default() -> Self {
+        Self { fresnel: true, intensity: true }
+    }
+}
+
+impl ReflectionModel {
+    /// R_raw at incidence cosine `cos`.
+    pub fn strength(self, r0: f64, cos: f64) -> f64 {
+        if self.fresnel { schlick(r0, cos) } else { r0 }
+    }
+
+    /// dR_raw/dR0 and dR_raw/dcos.
+    pub fn strength_grad(self, r0: f64, cos: f64) -> (f64, f64) {
+        if self.fresnel { schlick_grad(r0, cos) } else { (1.0, 0.0) }
+    }
+
+    /// The intensity a pixel's reflection is scaled by.
+    pub fn intensity(self, a: f64) -> f64 {
+        if self.intensity { a } else { 1.0 }
+    }
+}
 
 #[derive(Clone, Debug)]
 pub struct ComposeOutput {
@@ -24,6 +58,7 @@ pub fn compose(
     mask: &Image<f64>,
     raw_color: &[Option<&Image<f64>>],
     intensity: &[Option<&Image<f64>>],
+    model: ReflectionModel,
 ) -> ComposeOutput {
     let (w, h) = (camera.width(), camera.height());
     let mut out = ComposeOutput {
@@ -41,13 +76,13 @@ pub fn compose(
             // A hit implies the camera is in front, so pass 2 ran; guard anyway.
             let (Some(raw), Some(a)) = (raw_color[k], intensity[k]) else { continue };
             let plane = &planes[k];
-            let r_raw = schlick(plane.r0(), incidence_cos(plane.unit_normal(), d));
+            let r_raw = model.strength(plane.r0(), incidence_cos(plane.unit_normal(), d));
             let r = r_raw * mask.get(x, y, 0);
             out.hit.set(x, y, 0, k as u32 + 1);
             out.strength_raw.set(x, y, 0, r_raw);
             out.strength.set(x, y, 0, r);
             for c in 0..3 {
-                let cr = raw.get(x, y, c) * a.get(x, y, 0);
+                let cr = raw.get(x, y, c) * model.intensity(a.get(x, y, 0));
                 out.reflection.set(x, y, c, cr);
                 out.color.set(x, y, c, (1.0 - r) * transmission.get(x, y, c) + r * cr);
             }

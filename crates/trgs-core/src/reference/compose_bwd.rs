@@ -3,7 +3,8 @@
 //! (through Schlick's cosine). H is discrete and passes no gradient.
 use super::frame::{Frame, FrameGrads};
 use crate::image::Image;
-use crate::plane_math::{incidence_cos, schlick_grad};
+use super::compose::ReflectionModel;
+use crate::plane_math::incidence_cos;
 use crate::scene::{Camera, ReflectionPlane};
 use glam::DVec3;
 
@@ -24,6 +25,7 @@ pub fn compose_bwd(
     planes: &[ReflectionPlane],
     f: &Frame,
     g: &FrameGrads,
+    model: ReflectionModel,
 ) -> ComposeGrads {
     let (w, h) = (f.width(), f.height());
     let mut out = ComposeGrads {
@@ -48,7 +50,7 @@ pub fn compose_bwd(
             let plane = &planes[k];
             let (r, r_raw, m) =
                 (f.strength.get(x, y, 0), f.strength_raw.get(x, y, 0), f.mask.get(x, y, 0));
-            let a = layers.intensity.get(x, y, 0);
+            let a = model.intensity(layers.intensity.get(x, y, 0));
             let mut g_r = g.strength.get(x, y, 0);
             let mut g_a = 0.0;
             for c in 0..3 {
@@ -63,19 +65,21 @@ pub fn compose_bwd(
                 out.planes[k].0.data[j] += g_cr * a;
                 g_a += g_cr * raw;
             }
-            let j = out.planes[k].1.index(x, y, 0);
-            out.planes[k].1.data[j] += g_a;
+            if model.intensity {
+                let j = out.planes[k].1.index(x, y, 0);
+                out.planes[k].1.data[j] += g_a;
+            }
             let g_raw = g.strength_raw.get(x, y, 0) + g_r * m;
             let i = out.mask.index(x, y, 0);
             out.mask.data[i] += g_r * r_raw;
             let d = camera.pixel_ray(x, y);
             let n = plane.unit_normal();
             let cos = incidence_cos(n, d);
-            let (d_r0, d_cos) = schlick_grad(plane.r0(), cos);
+            let (d_r0, d_cos) = model.strength_grad(plane.r0(), cos);
             out.r0[k] += g_raw * d_r0;
             let dot = -n.dot(d);
             // Inside the clamp, cos = -n . d.
-            if dot > 0.0 && dot < 1.0 {
+            if model.fresnel && dot > 0.0 && dot < 1.0 {
                 out.unit_normal[k] += g_raw * d_cos * (-d);
             }
         }

@@ -31,7 +31,7 @@ pub use adam::{AdamRate, AdamSettings, adam};
 pub use backward::{
     BackwardOptions, PlaneGrad, SceneGrads, backward, mirrored_view_bwd, plane_grad,
 };
-pub use compose::{ComposeOutput, compose};
+pub use compose::{ComposeOutput, ReflectionModel, compose};
 pub use compose_bwd::{ComposeGrads, compose_bwd};
 pub use emit_keys::emit_keys;
 pub use footprint::{TileRect, footprint};

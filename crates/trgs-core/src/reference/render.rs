@@ -1,7 +1,7 @@
 //! The forward pipeline of one view: validate -> project -> tile_counts -> prefix_sum ->
 //! emit_keys -> sort -> tile_ranges -> rasterize; per plane in front of the camera: footprint and
 //! the same geometry stages with the mirrored camera -> rasterize_reflection; then compose.
-use super::compose::compose;
+use super::compose::{ReflectionModel, compose};
 use super::frame::{Frame, PlaneLayers};
 use super::{
     Projected, ProjectionFilter, TileGrid, TileRect, emit_keys, footprint, prefix_sum, project,
@@ -19,11 +19,13 @@ pub struct RenderSettings {
     pub near: f64,
     /// Colour behind the last transmittance of C_t.
     pub background: [f64; 3],
+    /// The reflection model's switches (the full model by default).
+    pub reflection: ReflectionModel,
 }
 
 impl Default for RenderSettings {
     fn default() -> Self {
-        Self { near: 0.2, background: [0.0; 3] }
+        Self { near: 0.2, background: [0.0; 3], reflection: ReflectionModel::default() }
     }
 }
 
@@ -99,7 +101,8 @@ pub fn render(
     }
     let raw: Vec<_> = plane_layers.iter().map(|p| p.as_ref().map(|p| &p.raw_color)).collect();
     let int: Vec<_> = plane_layers.iter().map(|p| p.as_ref().map(|p| &p.intensity)).collect();
-    let composed = compose(camera, planes, &pass1.transmission, &pass1.mask, &raw, &int);
+    let composed =
+        compose(camera, planes, &pass1.transmission, &pass1.mask, &raw, &int, settings.reflection);
     Ok(Frame {
         color: composed.color,
         transmission: pass1.transmission,

@@ -36,7 +36,12 @@ pub struct RayBuffers {
 }
 
 impl RayBuffers {
-    pub fn new(s: Stage<'_>, camera: &Camera, planes: &[PlaneGpu]) -> Self {
+    pub fn new(
+        s: Stage<'_>,
+        camera: &Camera,
+        planes: &[PlaneGpu],
+        model: trgs_core::reference::ReflectionModel,
+    ) -> Self {
         let k = &camera.intrinsics;
         let to_world = camera.pose.rotation.transpose();
         let v4 = |v: glam::DVec3| [v.x as f32, v.y as f32, v.z as f32, 0.0];
@@ -44,12 +49,12 @@ impl RayBuffers {
             width: k.width,
             height: k.height,
             num_planes: planes.len() as u32,
+            model: crate::layout::model_bits(model),
             focal: [k.fx as f32, k.fy as f32, k.cx as f32, k.cy as f32],
             origin: v4(camera.pose.centre()),
             cam_col0: v4(to_world.x_axis),
             cam_col1: v4(to_world.y_axis),
             cam_col2: v4(to_world.z_axis),
-            ..Default::default()
         };
         Self {
             camera: gpu::uniform(s.ctx, "trgs.compose.params", &params),

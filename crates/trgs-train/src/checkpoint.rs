@@ -1,0 +1,378 @@
+//! Checkpoints: everything a run needs to continue exactly where it stopped (parameters, Adam
+//! moments, planes and their moments, densification statistics, random state, and whatever the
+//! caller keeps besides), in one file written atomically.
+//!
+//! Format: the line `trgs-checkpoint 1`, one line of JSON (the small state and the manifest of
+//! the arrays that follow: name, element type, length), then the arrays, little-endian, in manifest
+//! order. The manifest makes a truncated or mismatched file an error that says which array.
+use crate::densify::{DensifyStats, TrainState};
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+use trgs_core::io::{FormatError, write_atomic};
+use trgs_core::scene::{Gaussians, Material, Population, ReflectionPlane};
+
+/// The checkpoint's file name in a run folder.
+pub const CHECKPOINT_FILE: &str = "checkpoint.trgs";
+const MAGIC: &str = "trgs-checkpoint 1";
+
+/// Adam state of one plane: centre, unnormalised normal, R0 logit.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct PlaneMoments {
+    pub m: [f64; 7],
+    pub v: [f64; 7],
+}
+
+/// A training run's state at the end of step `step`.
+#[derive(Clone, Debug)]
+pub struct Checkpoint {
+    pub step: u32,
+    pub state: TrainState,
+    pub planes: Vec<ReflectionPlane>,
+    pub plane_moments: Vec<PlaneMoments>,
+    /// Classic densification's statistics since its last run (None when it is off).
+    pub densify_stats: Option<DensifyStats>,
+    /// The trainer's random state (densification draws).
+    pub rng_state: u64,
+    /// What the caller keeps besides the trainer (the `train` bin: its arguments, view order,
+    /// evaluations so far).
+    pub extra: serde_json::Value,
+}
+
+#[derive(Serialize, Deserialize)]
+struct PlaneRecord {
+    centre: [f64; 3],
+    normal: [f64; 3],
+    axis: [f64; 3],
+    width: f64,
+    height: f64,
+    r0_logit: f64,
+    material: Material,
+}
+
+#[derive(Serialize, Deserialize)]
+struct Header {
+    step: u32,
+    gaussians: usize,
+    sh_degree: u32,
+    planes: Vec<PlaneRecord>,
+    plane_moments: Vec<PlaneMoments>,
+    densify: bool,
+    rng_state: u64,
+    extra: serde_json::Value,
+    /// (name, "f32" | "f64" | "u32", element count) of each array, in file order.
+    arrays: Vec<(String, String, usize)>,
+}
+
+/// One array of the payload.
+enum Array {
+    F32(Vec<f32>),
+    F64(Vec<f64>),
+    U32(Vec<u32>),
+}
+
+impl Array {
+    fn kind(&self) -> &'static str {
+        match self {
+            Array::F32(_) => "f32",
+            Array::F64(_) => "f64",
+            Array::U32(_) => "u32",
+        }
+    }
+
+    fn len(&self) -> usize {
+        match self {
+            Array::F32(v) => v.len(),
+            Array::F64(v) => v.len(),
+            Array::U32(v) => v.len(),
+        }
+    }
+
+    fn write(&self, out: &mut Vec<u8>) {
+        match self {
+            Array::F32(v) => v.iter().for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
+            Array::F64(v) => v.iter().for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
+            Array::U32(v) => v.iter().for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
+        }
+    }
+}
+
+fn flat<const N: usize>(v: &[[f32; N]]) -> Vec<f32> {
+    v.iter().flatten().copied().collect()
+}
+
+fn chunks<const N: usize>(v: &[f32]) -> Vec<[f32; N]> {
+    v.chunks_exact(N).map(|c| std::array::from_fn(|i| c[i])).collect()
+}
+
+/// Write `ck` to `path` atomically (a temporary file renamed into place).
+pub fn write_checkpoint(path: &Path, ck: &Checkpoint) -> Result<(), FormatError> {
+    let g = &ck.state.gaussians;
+    let mut arrays: Vec<(String, Array)> = vec![
+        ("means".into(), Array::F32(flat(&g.means))),
+        ("rotations".into(), Array::F32(flat(&g.rotations))),
+        ("log_scales".into(), Array::F32(flat(&g.log_scales))),
+        ("opacity_logits".into(), Array::F32(g.opacity_logits.clone())),
+        ("sh".into(), Array::F32(flat(&g.sh))),
+        ("mask_logits".into(), Array::F32(g.mask_logits.clone())),
+        ("log_reflections".into(), Array::F32(g.log_reflections.clone())),
+        ("populations".into(), Array::U32(g.populations.iter().map(|&p| p as u32).collect())),
+    ];
+    for (k, (m, v)) in ck.state.m.iter().zip(&ck.state.v).enumerate() {
+        arrays.push((format!("adam_m_{k}"), Array::F32(m.clone())));
+        arrays.push((format!("adam_v_{k}"), Array::F32(v.clone())));
+    }
+    if let Some(s) = &ck.densify_stats {
+        arrays.push(("densify_grad_sum".into(), Array::F64(s.grad_sum.clone())));
+        arrays.push(("densify_count".into(), Array::U32(s.count.clone())));
+        arrays.push(("densify_max_radius".into(), Array::F64(s.max_radius.clone())));
+    }
+    let header = Header {
+        step: ck.step,
+        gaussians: g.len(),
+        sh_degree: g.sh_degree,
+        planes: ck
+            .planes
+            .iter()
+            .map(|p| PlaneRecord {
+                centre: p.centre.to_array(),
+                normal: p.normal.to_array(),
+                axis: p.axis.to_array(),
+                width: p.width,
+                height: p.height,
+                r0_logit: p.r0_logit,
+                material: p.material,
+            })
+            .collect(),
+        plane_moments: ck.plane_moments.clone(),
+        densify: ck.densify_stats.is_some(),
+        rng_state: ck.rng_state,
+        extra: ck.extra.clone(),
+        arrays: arrays.iter().map(|(n, a)| (n.clone(), a.kind().to_string(), a.len())).collect(),
+    };
+    let json = serde_json::to_string(&header)
+        .map_err(|e| FormatError::new(path, format!("encoding the header: {e}")))?;
+    let mut bytes = format!("{MAGIC}\n{json}\n").into_bytes();
+    for (_, a) in &arrays {
+        a.write(&mut bytes);
+    }
+    write_atomic(path, &bytes)
+}
+
+/// Read a checkpoint written by [`write_checkpoint`].
+pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, FormatError> {
+    let bytes = std::fs::read(path).map_err(|e| FormatError::io(path, &e))?;
+    let bad = |what: String| FormatError::new(path, what);
+    let mut lines = bytes.splitn(3, |&b| b == b'\n');
+    if lines.next() != Some(MAGIC.as_bytes()) {
+        return Err(bad(format!("not a trgs checkpoint (expected a first line {MAGIC:?})")));
+    }
+    let header_line = lines.next().ok_or_else(|| bad("no header line".into()))?;
+    let header: Header = serde_json::from_slice(header_line)
+        .map_err(|e| bad(format!("malformed header: {e}")))?;
+    let mut payload = lines.next().unwrap_or_default();
+    let mut arrays = std::collections::HashMap::new();
+    for (name, kind, len) in &header.arrays {
+        let size = match kind.as_str() {
+            "f32" | "u32" => 4,
+            "f64" => 8,
+            other => return Err(bad(format!("array {name}: unknown element type {other:?}"))),
+        };
+        let n = len * size;
+        if payload.len() < n {
+            return Err(bad(format!(
+                "array {name}: expected {len} {kind} values, the file ends after {} bytes of it \
+                 (truncated?)",
+                payload.len()
+            )));
+        }
+        let (data, rest) = payload.split_at(n);
+        payload = rest;
+        let array = match kind.as_str() {
+            "f32" => Array::F32(
+                data.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect(),
+            ),
+            "u32" => Array::U32(
+                data.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect(),
+            ),
+            _ => Array::F64(
+                data.chunks_exact(8)
+                    .map(|c| f64::from_le_bytes(std::array::from_fn(|i| c[i])))
+                    .collect(),
+            ),
+        };
+        arrays.insert(name.clone(), array);
+    }
+    if !payload.is_empty() {
+        return Err(bad(format!("{} bytes after the last array", payload.len())));
+    }
+    let n = header.gaussians;
+    let coeffs = trgs_core::scene::sh_coeff_count(header.sh_degree);
+    let mut take_f32 = |name: &str, len: usize| -> Result<Vec<f32>, FormatError> {
+        match arrays.remove(name) {
+            Some(Array::F32(v)) if v.len() == len => Ok(v),
+            Some(a) => Err(bad(format!(
+                "array {name}: expected {len} f32 values, found {} {}",
+                a.len(),
+                a.kind()
+            ))),
+            None => Err(bad(format!("array {name} is missing"))),
+        }
+    };
+    let means = chunks::<3>(&take_f32("means", 3 * n)?);
+    let rotations = chunks::<4>(&take_f32("rotations", 4 * n)?);
+    let log_scales = chunks::<3>(&take_f32("log_scales", 3 * n)?);
+    let opacity_logits = take_f32("opacity_logits", n)?;
+    let sh = chunks::<3>(&take_f32("sh", 3 * coeffs * n)?);
+    let mask_logits = take_f32("mask_logits", n)?;
+    let log_reflections = take_f32("log_reflections", n)?;
+    let widths = trgs_render::attribute_widths(coeffs as u32);
+    let mut m = Vec::new();
+    let mut v = Vec::new();
+    for (k, w) in widths.iter().enumerate() {
+        m.push(take_f32(&format!("adam_m_{k}"), n * *w as usize)?);
+        v.push(take_f32(&format!("adam_v_{k}"), n * *w as usize)?);
+    }
+    let mut take_u32 = |name: &str| match arrays.remove(name) {
+        Some(Array::U32(v)) if v.len() == n => Ok(v),
+        _ => Err(bad(format!("array {name}: expected {n} u32 values"))),
+    };
+    let populations = take_u32("populations")?
+        .into_iter()
+        .map(|p| {
+            u8::try_from(p)
+                .ok()
+                .and_then(Population::from_u8)
+                .ok_or_else(|| bad(format!("population code {p} (expected 0 or 1)")))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let densify_stats = if header.densify {
+        let count = take_u32("densify_count")?;
+        let mut take_f64 = |name: &str| match arrays.remove(name) {
+            Some(Array::F64(v)) if v.len() == n => Ok(v),
+            _ => Err(bad(format!("array {name}: expected {n} f64 values"))),
+        };
+        Some(DensifyStats {
+            grad_sum: take_f64("densify_grad_sum")?,
+            count,
+            max_radius: take_f64("densify_max_radius")?,
+        })
+    } else {
+        None
+    };
+    let planes = header
+        .planes
+        .iter()
+        .map(|p| ReflectionPlane {
+            centre: DVec3::from_array(p.centre),
+            normal: DVec3::from_array(p.normal),
+            axis: DVec3::from_array(p.axis),
+            width: p.width,
+            height: p.height,
+            r0_logit: p.r0_logit,
+            material: p.material,
+        })
+        .collect();
+    if header.plane_moments.len() != header.planes.len() {
+        return Err(bad(format!(
+            "{} plane moments for {} planes",
+            header.plane_moments.len(),
+            header.planes.len()
+        )));
+    }
+    let gaussians = Gaussians {
+        means,
+        rotations,
+        log_scales,
+        opacity_logits,
+        sh_degree: header.sh_degree,
+        sh,
+        mask_logits,
+        log_reflections,
+        populations,
+    };
+    Ok(Checkpoint {
+        step: header.step,
+        state: TrainState { gaussians, m, v },
+        planes,
+        plane_moments: header.plane_moments,
+        densify_stats,
+        rng_state: header.rng_state,
+        extra: header.extra,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample() -> Checkpoint {
+        let mut rng = trgs_core::rng::Rng::new(3);
+        let mut g = Gaussians::<f32>::zeros(5, 1);
+        for x in g.means.iter_mut().flatten() {
+            *x = rng.range(-1.0, 1.0) as f32;
+        }
+        g.populations[2] = Population::Glass;
+        let widths = trgs_render::attribute_widths(g.sh_coeffs() as u32);
+        let m: Vec<Vec<f32>> =
+            widths.iter().map(|&w| (0..5 * w).map(|i| i as f32 * 0.5).collect()).collect();
+        let v = m.iter().map(|a| a.iter().map(|x| x * x).collect()).collect();
+        let plane = ReflectionPlane::new(
+            DVec3::new(0.1, 0.2, 0.3),
+            DVec3::new(0.0, 0.0, 2.0),
+            DVec3::X,
+            1.5,
+            0.7,
+            Material::Mirror,
+        );
+        Checkpoint {
+            step: 42,
+            state: TrainState { gaussians: g, m, v },
+            planes: vec![plane],
+            plane_moments: vec![PlaneMoments { m: [0.25; 7], v: [1e-9; 7] }],
+            densify_stats: Some(DensifyStats {
+                grad_sum: vec![1.0, 2.0, 3.0, 4.0, 5.0],
+                count: vec![1, 2, 3, 4, 5],
+                max_radius: vec![0.5; 5],
+            }),
+            rng_state: 0xdead_beef,
+            extra: serde_json::json!({"order": [3, 1, 2]}),
+        }
+    }
+
+    fn scratch(tag: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("trgs-ckpt-{}-{tag}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("scratch dir");
+        dir.join(CHECKPOINT_FILE)
+    }
+
+    #[test]
+    fn round_trip_is_exact() {
+        let path = scratch("rt");
+        let ck = sample();
+        write_checkpoint(&path, &ck).expect("write");
+        let back = read_checkpoint(&path).expect("read");
+        assert_eq!(back.step, ck.step);
+        assert_eq!(back.state.gaussians, ck.state.gaussians);
+        assert_eq!(back.state.m, ck.state.m);
+        assert_eq!(back.state.v, ck.state.v);
+        assert_eq!(back.planes, ck.planes);
+        assert_eq!(back.plane_moments, ck.plane_moments);
+        assert_eq!(back.densify_stats, ck.densify_stats);
+        assert_eq!(back.rng_state, ck.rng_state);
+        assert_eq!(back.extra, ck.extra);
+    }
+
+    #[test]
+    fn truncated_and_foreign_files_are_named_errors() {
+        let path = scratch("bad");
+        write_checkpoint(&path, &sample()).expect("write");
+        let bytes = std::fs::read(&path).expect("read back");
+        std::fs::write(&path, &bytes[..bytes.len() - 10]).expect("truncate");
+        let err = read_checkpoint(&path).expect_err("truncated").to_string();
+        assert!(err.contains("truncated") && err.contains(CHECKPOINT_FILE), "{err}");
+        std::fs::write(&path, b"ply\nformat binary_little_endian 1.0\n").expect("foreign");
+        let err = read_checkpoint(&path).expect_err("foreign").to_string();
+        assert!(err.contains("not a trgs checkpoint"), "{err}");
+    }
+}
