@@ -1,5 +1,4 @@
 //! The forward renderer: the stages of DESIGN.md's data flow for one camera, into a [`Frame`].
-use trgs_core::reference::ReflectionModel;
 use crate::GpuContext;
 use crate::frame::{Frame, ViewBuffers};
 use crate::gpu::{self, Recorder};
@@ -14,6 +13,7 @@ use crate::stages::{
     tile_counts, tile_ranges,
 };
 use trgs_core::plane_math::mirrored_view;
+use trgs_core::reference::ReflectionModel;
 use trgs_core::reference::{TileGrid, footprint};
 use trgs_core::scene::{Camera, CameraError, InvalidInput, ViewTransform};
 

@@ -8,8 +8,7 @@ use trgs_core::Image;
 use trgs_core::fixtures::{SceneSpec, random_scene};
 use trgs_core::reference::{
     self, Projected, ProjectionFilter, ReflectionModel, RenderSettings, TileGrid, emit_keys,
-    prefix_sum, rasterize,
-    rasterize_reflection, sort_keys, tile_counts, tile_ranges,
+    prefix_sum, rasterize, rasterize_reflection, sort_keys, tile_counts, tile_ranges,
 };
 use trgs_core::scene::Gaussians;
 use trgs_render::layout::{

@@ -168,8 +168,8 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, FormatError> {
         return Err(bad(format!("not a trgs checkpoint (expected a first line {MAGIC:?})")));
     }
     let header_line = lines.next().ok_or_else(|| bad("no header line".into()))?;
-    let header: Header = serde_json::from_slice(header_line)
-        .map_err(|e| bad(format!("malformed header: {e}")))?;
+    let header: Header =
+        serde_json::from_slice(header_line).map_err(|e| bad(format!("malformed header: {e}")))?;
     let mut payload = lines.next().unwrap_or_default();
     let mut arrays = std::collections::HashMap::new();
     for (name, kind, len) in &header.arrays {
@@ -190,10 +190,14 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, FormatError> {
         payload = rest;
         let array = match kind.as_str() {
             "f32" => Array::F32(
-                data.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect(),
+                data.chunks_exact(4)
+                    .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+                    .collect(),
             ),
             "u32" => Array::U32(
-                data.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect(),
+                data.chunks_exact(4)
+                    .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+                    .collect(),
             ),
             _ => Array::F64(
                 data.chunks_exact(8)

@@ -9,7 +9,7 @@ use trgs_core::io::SceneFolder;
 use trgs_core::scene::{Camera, Material};
 
 /// How large the training images are.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Resolution {
     /// The images as they are.
     Original,

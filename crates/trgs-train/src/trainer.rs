@@ -7,6 +7,7 @@ use crate::data::View;
 use crate::densify::{
     ClassicSettings, DensifyReport, DensifyStats, TrainState, densify_and_prune, reset_opacity,
 };
+use crate::perturb::{perturb_opacities, seen_through_planes};
 use crate::regularisers::{depth_variance_loss, gradient_conflict_loss, mask_loss};
 use crate::settings::{Stage, TrainSettings};
 use anyhow::{Context, Result};
@@ -32,11 +33,13 @@ pub struct StepStats {
     /// With [`Trainer::profile`]: GPU milliseconds of every render and backward stage, from
     /// timestamp queries (empty when off or when the adapter has none).
     pub gpu_stages: Vec<(&'static str, f64)>,
+    /// Gaussians whose opacity the perturbation changed after this step (0 on most steps).
+    pub perturbed: usize,
 }
 
 /// Wall-clock milliseconds of each phase of a step. Every phase ends with the GPU idle (the
 /// step reads back between phases anyway), so the phases add up to the step.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct StepTimes {
     /// Forward render of every pass.
     pub render: f64,
@@ -46,7 +49,7 @@ pub struct StepTimes {
     pub backward: f64,
     /// Adam on the Gaussians (GPU) and the planes (CPU), and the densification statistics.
     pub adam: f64,
-    /// Densification, pruning and opacity reset, when the schedule runs them.
+    /// Densification, pruning, opacity reset and perturbation, when their schedules run them.
     pub densify: f64,
 }
 
@@ -96,6 +99,9 @@ pub struct Trainer {
     rng: trgs_core::rng::Rng,
     /// Time every GPU stage of each step with timestamp queries ([`StepStats::gpu_stages`]).
     pub profile: bool,
+    /// Centres of the training cameras (the opacity perturbation selects what they see through
+    /// a plane).
+    camera_centres: Vec<glam::DVec3>,
 }
 
 impl Trainer {
@@ -123,6 +129,7 @@ impl Trainer {
             extent,
             densify: None,
             profile: false,
+            camera_centres: Vec::new(),
         })
     }
 
@@ -159,6 +166,37 @@ impl Trainer {
             rng_state: self.rng.state(),
             extra,
         }
+    }
+
+    /// The training cameras (for the opacity perturbation; without them it perturbs nothing).
+    pub fn set_training_cameras(&mut self, cameras: &[Camera]) {
+        self.camera_centres = cameras.iter().map(|c| c.pose.centre()).collect();
+    }
+
+    /// Opacity perturbation after step `self.step`, when its schedule says so; returns how many
+    /// Gaussians it perturbed.
+    fn perturb_step(&mut self) -> Result<usize> {
+        let t = self.step;
+        let Some(p) = self.settings.perturb else { return Ok(0) };
+        let reset_now = self
+            .densify
+            .as_ref()
+            .is_some_and(|(s, _)| t < s.until && t.is_multiple_of(s.opacity_reset_every));
+        if self.scene.planes().is_empty()
+            || self.settings.stage(t) != Stage::Joint
+            || t >= p.until
+            || !t.is_multiple_of(p.every)
+            || reset_now
+        {
+            return Ok(0);
+        }
+        let mut g = self.gaussians();
+        let selected = seen_through_planes(&g, self.scene.planes(), &self.camera_centres);
+        let n = perturb_opacities(&mut g, &selected, p.amplitude, &mut self.rng);
+        // Only the opacity buffer changes: the moments and densification statistics stay.
+        let opacity = self.scene.parameters()[3];
+        self.ctx.queue.write_buffer(opacity, 0, bytemuck::cast_slice(&g.opacity_logits));
+        Ok(n)
     }
 
     /// Densify with `settings` from now on.
@@ -252,6 +290,7 @@ impl Trainer {
         RenderOptions {
             background: self.settings.background,
             sh_degree: Some(self.settings.active_sh_degree(self.step)),
+            reflection: self.settings.reflection,
             ..RenderOptions::default()
         }
     }
@@ -333,6 +372,7 @@ impl Trainer {
         self.step_planes(&g.planes, t)?;
         times.adam = clock.lap(&self.ctx);
         self.densify_step()?;
+        let perturbed = self.perturb_step()?;
         times.densify = clock.lap(&self.ctx);
         let mse = loss_mse(&color, &view.image);
         Ok(StepStats {
@@ -342,6 +382,7 @@ impl Trainer {
             psnr: psnr_of(mse),
             times,
             gpu_stages,
+            perturbed,
         })
     }
 

@@ -1,0 +1,130 @@
+//! Opacity perturbation (paper, appendix "Opacity perturbation"): every so often in stage 3, the
+//! primary Gaussians seen through a plane get uniform noise on their opacity, which shakes both
+//! the depth variance and the gradient similarity out of a local optimum; the Gaussians that
+//! belong in the transmission recover, reflection ghosts behind the glass do not.
+use glam::DVec3;
+use trgs_core::rng::Rng;
+use trgs_core::scene::{Gaussians, Population, ReflectionPlane};
+
+/// The paper's noise: uniform in [-0.4, 0.4] on the opacity (not its logit).
+pub const PERTURB_AMPLITUDE: f64 = 0.4;
+/// Opacities are clamped into [this, 1 - this] after the noise, so that their logits stay finite.
+pub const OPACITY_CLAMP: f64 = 1e-3;
+
+/// Which primary Gaussians some training camera sees through a plane: the Gaussian's centre lies
+/// behind the plane, and the segment from a camera on the front side to it crosses the plane's
+/// rectangle. (The paper selects the Gaussians whose projection onto the plane from a training
+/// view falls inside it; those in front of the glass are left alone here, since the ghosts the
+/// perturbation is for sit behind it.)
+pub fn seen_through_planes(
+    g: &Gaussians<f32>,
+    planes: &[ReflectionPlane],
+    camera_centres: &[DVec3],
+) -> Vec<bool> {
+    let mut selected = vec![false; g.len()];
+    for plane in planes {
+        let n = plane.unit_normal();
+        let bitangent = plane.bitangent();
+        for &c in camera_centres {
+            let side = (c - plane.centre).dot(n);
+            if side <= 0.0 {
+                continue;
+            }
+            for (i, m) in g.means.iter().enumerate() {
+                if selected[i] || g.populations[i] != Population::Primary {
+                    continue;
+                }
+                let mu = DVec3::new(f64::from(m[0]), f64::from(m[1]), f64::from(m[2]));
+                if (mu - plane.centre).dot(n) >= 0.0 {
+                    continue;
+                }
+                let d = mu - c;
+                let denom = d.dot(n);
+                // Ray c + t d meets the plane at t = -side / (d . n) > 0.
+                let hit = c + d * (-side / denom) - plane.centre;
+                selected[i] = hit.dot(plane.axis).abs() <= 0.5 * plane.width
+                    && hit.dot(bitangent).abs() <= 0.5 * plane.height;
+            }
+        }
+    }
+    selected
+}
+
+/// Add uniform noise in [-amplitude, amplitude] to the opacity of the selected Gaussians and
+/// clamp; returns how many were perturbed.
+pub fn perturb_opacities(
+    g: &mut Gaussians<f32>,
+    selected: &[bool],
+    amplitude: f64,
+    rng: &mut Rng,
+) -> usize {
+    let mut count = 0;
+    for (logit, &sel) in g.opacity_logits.iter_mut().zip(selected) {
+        if !sel {
+            continue;
+        }
+        let o = 1.0 / (1.0 + (-f64::from(*logit)).exp());
+        let noisy =
+            (o + rng.range(-amplitude, amplitude)).clamp(OPACITY_CLAMP, 1.0 - OPACITY_CLAMP);
+        *logit = (noisy / (1.0 - noisy)).ln() as f32;
+        count += 1;
+    }
+    count
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use trgs_core::scene::Material;
+
+    fn pane() -> ReflectionPlane {
+        // The pane z = 0, 2 x 1, front side +z.
+        ReflectionPlane::new(DVec3::ZERO, DVec3::Z, DVec3::X, 2.0, 1.0, Material::Glass)
+    }
+
+    #[test]
+    fn selects_what_a_camera_sees_through_the_pane() {
+        let mut g = Gaussians::<f32>::zeros(5, 0);
+        g.means = vec![
+            [0.2, 0.1, -1.0], // behind the pane, straight through it
+            [5.0, 0.0, -1.0], // behind, but outside the rectangle from this camera
+            [0.0, 0.0, 1.0],  // in front of the pane, on the camera's side
+            [0.1, 0.0, -2.0], // behind, but a glass Gaussian
+            [0.0, 0.3, -0.5], // behind and through
+        ];
+        g.populations[3] = Population::Glass;
+        let centres = [DVec3::new(0.0, 0.0, 3.0)];
+        let s = seen_through_planes(&g, &[pane()], &centres);
+        assert_eq!(s, vec![true, false, false, false, true]);
+        // A camera behind the pane sees no reflection through it.
+        let s = seen_through_planes(&g, &[pane()], &[DVec3::new(0.0, 0.0, -3.0)]);
+        assert!(s.iter().all(|&v| !v));
+    }
+
+    #[test]
+    fn noise_stays_in_range_and_only_on_selected() {
+        let mut g = Gaussians::<f32>::zeros(400, 0);
+        for (i, l) in g.opacity_logits.iter_mut().enumerate() {
+            *l = (i as f32 / 40.0) - 5.0;
+        }
+        let before = g.opacity_logits.clone();
+        let selected: Vec<bool> = (0..400).map(|i| i % 2 == 0).collect();
+        let mut rng = Rng::new(9);
+        let n = perturb_opacities(&mut g, &selected, PERTURB_AMPLITUDE, &mut rng);
+        assert_eq!(n, 200);
+        let sig = |l: f32| 1.0 / (1.0 + (-f64::from(l)).exp());
+        let mut moved = 0;
+        for i in 0..400 {
+            let (a, b) = (sig(before[i]), sig(g.opacity_logits[i]));
+            if selected[i] {
+                let range = OPACITY_CLAMP * 0.99..=1.0 - OPACITY_CLAMP * 0.99;
+                assert!(b.is_finite() && range.contains(&b), "opacity {b} outside the clamp");
+                assert!((b - a).abs() <= PERTURB_AMPLITUDE + 1e-6, "noise beyond the amplitude");
+                moved += usize::from((b - a).abs() > 1e-3);
+            } else {
+                assert_eq!(g.opacity_logits[i], before[i]);
+            }
+        }
+        assert!(moved > 150, "the noise barely moved anything: {moved}");
+    }
+}
