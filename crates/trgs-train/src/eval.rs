@@ -10,16 +10,16 @@ use trgs_core::metrics::{psnr, ssim};
 use trgs_core::scene::ReflectionPlane;
 use trgs_render::{GpuContext, GpuScene, Layer, RenderOptions, Renderer};
 
-/// A model as evaluation sees it: something that renders.
+/// A model as evaluation sees it: scene, renderer and options.
 #[derive(Debug)]
-pub struct Model<'a> {
+pub struct Renderable<'a> {
     pub ctx: &'a GpuContext,
     pub renderer: &'a Renderer,
     pub scene: &'a GpuScene,
     pub options: RenderOptions,
 }
 
-impl Model<'_> {
+impl Renderable<'_> {
     pub fn layer(&self, view: &View, layer: Layer) -> Result<trgs_core::Image<f32>> {
         let frame = self
             .renderer
@@ -43,7 +43,12 @@ pub struct Evaluation {
 }
 
 /// Evaluate `model` on `data`'s evaluation views.
-pub fn evaluate(model: &Model, data: &TrainingData, step: u32, seconds: f64) -> Result<Evaluation> {
+pub fn evaluate(
+    model: &Renderable,
+    data: &TrainingData,
+    step: u32,
+    seconds: f64,
+) -> Result<Evaluation> {
     let mut rows = Vec::new();
     for v in data.eval_views() {
         let color = model.layer(v, Layer::Color)?;
@@ -61,7 +66,7 @@ pub fn evaluate(model: &Model, data: &TrainingData, step: u32, seconds: f64) -> 
 
 /// Frames per second of full renders (every layer, as the renderer produces them) of the
 /// evaluation views, after one warm-up render.
-pub fn render_fps(model: &Model, data: &TrainingData) -> Result<f64> {
+pub fn render_fps(model: &Renderable, data: &TrainingData) -> Result<f64> {
     let views = data.eval_views();
     let Some(first) = views.first() else { return Ok(0.0) };
     model.layer(first, Layer::Color)?;
@@ -100,7 +105,7 @@ impl std::fmt::Display for TruthComparison {
 
 /// Compare with `<root>/gt` when the dataset has one (None otherwise).
 pub fn compare_with_truth(
-    model: &Model,
+    model: &Renderable,
     planes: &[ReflectionPlane],
     data: &TrainingData,
     root: &Path,
@@ -143,7 +148,7 @@ pub fn compare_with_truth(
 
 /// Write each evaluation view's render `<dir>/<stem>.png` and, with planes, its decomposition
 /// (the paper's figure: C_t, C_r, R, R C_r) as `<dir>/layers/<stem>_<layer>.png`.
-pub fn write_renders(model: &Model, data: &TrainingData, dir: &Path) -> Result<()> {
+pub fn write_renders(model: &Renderable, data: &TrainingData, dir: &Path) -> Result<()> {
     use trgs_core::io::{write_png_gray, write_png_rgb};
     let has_planes = !model.scene.planes().is_empty();
     for v in data.eval_views() {

@@ -1,6 +1,6 @@
 //! `train` killed mid-run and continued with `--resume`: the run finishes at its planned step
 //! count with its own settings, the log has every step once, and the checkpoint holds the planes
-//! that stage 1 initialised. (That the resumed result matches an uninterrupted run within 0.1 dB
+//! that stage 1 initialised; `eval` of the result reproduces the run's own test PSNR. (That the resumed result matches an uninterrupted run within 0.1 dB
 //! is measured at full size in docs/training.md; GPU float atomics make runs differ slightly.)
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -86,6 +86,25 @@ fn killed_run_resumes_to_the_end() {
     assert!(metrics["psnr"].as_f64().is_some_and(f64::is_finite));
     let steps = logged_steps(&out.join("log.jsonl"));
     assert_eq!(steps, (1..=u64::from(iterations)).collect::<Vec<_>>(), "every step logged once");
+
+    // `eval` of the finished run reproduces its final test PSNR from the files it wrote.
+    let eval = Command::new(env!("CARGO_BIN_EXE_eval"))
+        .arg("--model")
+        .arg(&out)
+        .arg("--data")
+        .arg(&data)
+        .output()
+        .expect("eval");
+    assert!(eval.status.success(), "{}", String::from_utf8_lossy(&eval.stderr));
+    let evaluated: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(out.join("eval.json")).expect("eval.json"),
+    )
+    .expect("eval JSON");
+    let (a, b) = (evaluated["psnr"].as_f64(), metrics["psnr"].as_f64());
+    assert!(
+        a.zip(b).is_some_and(|(a, b)| (a - b).abs() < 1e-3),
+        "eval PSNR {a:?} against the run's {b:?}"
+    );
 
     // Settings come from the checkpoint: changing them on resume is refused.
     let refused = Command::new(env!("CARGO_BIN_EXE_train"))

@@ -16,7 +16,8 @@ use trgs_train::checkpoint::{CHECKPOINT_FILE, read_checkpoint, write_checkpoint}
 use trgs_train::data::{self, Resolution, TrainingData};
 use trgs_train::densify::ClassicSettings;
 use trgs_train::eval::{
-    Evaluation, Model, TruthComparison, compare_with_truth, evaluate, render_fps, write_renders,
+    Evaluation, Renderable, TruthComparison, compare_with_truth, evaluate, render_fps,
+    write_renders,
 };
 use trgs_train::init::{SeedPoint, gaussians_from_points, random_points};
 use trgs_train::plane_init::{PlaneInitSettings, initialise_planes};
@@ -505,8 +506,8 @@ fn init_planes(
     trainer.add_planes(&init.planes, &init.glass)
 }
 
-fn model_of(trainer: &Trainer) -> Model<'_> {
-    Model {
+fn model_of(trainer: &Trainer) -> Renderable<'_> {
+    Renderable {
         ctx: trainer.context(),
         renderer: trainer.renderer(),
         scene: trainer.scene(),
@@ -578,6 +579,8 @@ fn metrics_json(
         "render_fps": fps,
         "resolution": [data.size().0, data.size().1],
         "ablations": args.ablations.names(),
+        "reflection_model": {"fresnel": !args.ablations.no_fresnel, "intensity": !args.ablations.no_intensity},
+        "data": args.data,
         "no_planes": args.no_planes,
         "truth": truth,
         "psnr_over_time": state.evaluations.iter().map(|e| serde_json::json!({"step": e.step, "seconds": e.seconds, "psnr": e.psnr, "ssim": e.ssim})).collect::<Vec<_>>(),

@@ -1,0 +1,142 @@
+//! `eval`: the metrics of a trained model on a dataset's test views (PSNR and SSIM per view and
+//! mean, render FPS, and for a synthetic scene the plane and transmission errors against its
+//! ground truth), printed and written as JSON.
+use anyhow::{Context, Result, bail};
+use std::path::{Path, PathBuf};
+use trgs_core::io::write_atomic;
+use trgs_render::{GpuContext, GpuScene, RenderOptions, Renderer};
+use trgs_train::data::{self, Resolution};
+use trgs_train::eval::{Renderable, compare_with_truth, evaluate, render_fps};
+use trgs_train::model::load_model;
+
+const HELP: &str = "\
+trgs eval: metrics of a trained model on a dataset's test views
+
+USAGE:
+    eval --model PATH [--data DIR] [OPTIONS]
+
+OPTIONS:
+    --model PATH        a run folder of `train` (model.ply, planes.json), a .ply (trgs or any
+                        INRIA-layout 3DGS PLY), or an INRIA output folder
+    --planes FILE       trained planes.json (default: beside the PLY or in the run folder)
+    --data DIR          the scene folder (default: the run folder's dataset/, where `train`
+                        writes the built-in scene)
+    --resolution W      evaluate at width W (default: the images' size)
+    --downscale F       evaluate at 1/F of the image size
+    --out FILE          write the metrics here (default: <run folder>/eval.json when --model is
+                        a folder; otherwise only printed)
+    -h, --help          this text
+";
+
+struct Args {
+    model: PathBuf,
+    planes: Option<PathBuf>,
+    data: Option<PathBuf>,
+    resolution: Resolution,
+    out: Option<PathBuf>,
+}
+
+fn parse_args() -> Result<Option<Args>> {
+    let mut model = None;
+    let mut args = Args {
+        model: PathBuf::new(),
+        planes: None,
+        data: None,
+        resolution: Resolution::Original,
+        out: None,
+    };
+    let mut it = std::env::args().skip(1);
+    while let Some(a) = it.next() {
+        let mut value = |name: &str| it.next().with_context(|| format!("{name} needs a value"));
+        fn num<T: std::str::FromStr>(name: &str, v: String) -> Result<T> {
+            v.parse().map_err(|_| anyhow::anyhow!("{name} {v:?}: expected a number"))
+        }
+        match a.as_str() {
+            "-h" | "--help" => return Ok(None),
+            "--model" => model = Some(PathBuf::from(value("--model")?)),
+            "--planes" => args.planes = Some(PathBuf::from(value("--planes")?)),
+            "--data" => args.data = Some(PathBuf::from(value("--data")?)),
+            "--resolution" => {
+                args.resolution = Resolution::Width(num("--resolution", value("--resolution")?)?)
+            }
+            "--downscale" => {
+                args.resolution = Resolution::Downscale(num("--downscale", value("--downscale")?)?)
+            }
+            "--out" => args.out = Some(PathBuf::from(value("--out")?)),
+            other => bail!("unknown argument {other:?}\n\n{HELP}"),
+        }
+    }
+    args.model = model.with_context(|| format!("--model is required\n\n{HELP}"))?;
+    Ok(Some(args))
+}
+
+/// The reflection model a run trained with (its ablations), from its metrics.json.
+fn reflection_model(run: &Path) -> trgs_render::ReflectionModel {
+    let mut model = trgs_render::ReflectionModel::default();
+    let Ok(text) = std::fs::read_to_string(run.join("metrics.json")) else { return model };
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap_or_default();
+    let flag = |name: &str| v["reflection_model"][name].as_bool();
+    model.fresnel = flag("fresnel").unwrap_or(true);
+    model.intensity = flag("intensity").unwrap_or(true);
+    model
+}
+
+fn main() -> Result<()> {
+    let Some(args) = parse_args()? else {
+        print!("{HELP}");
+        return Ok(());
+    };
+    let run_dir = args.model.is_dir().then(|| args.model.clone());
+    let data_dir = match (&args.data, &run_dir) {
+        (Some(d), _) => d.clone(),
+        (None, Some(run)) if run.join("dataset").is_dir() => run.join("dataset"),
+        _ => bail!("--data is required: {} has no dataset/ folder", args.model.display()),
+    };
+    let model = load_model(&args.model, args.planes.as_deref())?;
+    let data = data::load(&data_dir, args.resolution)?;
+    let ctx = GpuContext::new()?;
+    let scene = GpuScene::upload(&ctx, &model.gaussians, &model.planes)
+        .with_context(|| format!("uploading {}", model.ply.display()))?;
+    let renderer = Renderer::new(&ctx);
+    let options = RenderOptions {
+        reflection: run_dir.as_deref().map(reflection_model).unwrap_or_default(),
+        ..RenderOptions::default()
+    };
+    let subject = Renderable { ctx: &ctx, renderer: &renderer, scene: &scene, options };
+    let e = evaluate(&subject, &data, 0, 0.0)?;
+    for (name, p, s) in &e.views {
+        println!("{name}: PSNR {p:.2} dB, SSIM {s:.4}");
+    }
+    let fps = render_fps(&subject, &data)?;
+    let (w, h) = data.size();
+    println!(
+        "mean over {} views: PSNR {:.2} dB, SSIM {:.4}; {} Gaussians, {} planes, {fps:.1} FPS at {w}x{h}",
+        e.views.len(),
+        e.psnr,
+        e.ssim,
+        model.gaussians.len(),
+        model.planes.len()
+    );
+    let truth = compare_with_truth(&subject, &model.planes, &data, &data_dir)?;
+    if let Some(t) = &truth {
+        println!("against the ground truth: {t}");
+    }
+    let json = serde_json::json!({
+        "model": model.ply,
+        "data": data_dir,
+        "psnr": e.psnr,
+        "ssim": e.ssim,
+        "views": e.views.iter().map(|(n, p, s)| serde_json::json!({"name": n, "psnr": p, "ssim": s})).collect::<Vec<_>>(),
+        "gaussians": model.gaussians.len(),
+        "planes": model.planes.len(),
+        "render_fps": fps,
+        "resolution": [w, h],
+        "truth": truth,
+    });
+    let out = args.out.or_else(|| run_dir.map(|r| r.join("eval.json")));
+    if let Some(out) = out {
+        write_atomic(&out, serde_json::to_string_pretty(&json)?.as_bytes())?;
+        println!("metrics written to {}", out.display());
+    }
+    Ok(())
+}
