@@ -14,6 +14,7 @@ pub mod model;
 pub mod perturb;
 pub mod plane_init;
 pub mod regularisers;
+pub mod report;
 pub mod settings;
 pub mod trainer;
 pub use trgs_core as core;

@@ -96,10 +96,9 @@ fn killed_run_resumes_to_the_end() {
         .output()
         .expect("eval");
     assert!(eval.status.success(), "{}", String::from_utf8_lossy(&eval.stderr));
-    let evaluated: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(out.join("eval.json")).expect("eval.json"),
-    )
-    .expect("eval JSON");
+    let evaluated: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("eval.json")).expect("eval.json"))
+            .expect("eval JSON");
     let (a, b) = (evaluated["psnr"].as_f64(), metrics["psnr"].as_f64());
     assert!(
         a.zip(b).is_some_and(|(a, b)| (a - b).abs() < 1e-3),
