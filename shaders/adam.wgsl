@@ -3,7 +3,7 @@
 // the parameters. A learning-rate pattern gives the first floats of each record their own rate.
 #include "shared/common.wgsl"
 
-@group(0) @binding(0) var<uniform> params: AdamParams;
+@group(0) @binding(0) var<storage, read> params: AdamParams;
 @group(0) @binding(1) var<storage, read_write> values: array<f32>;
 @group(0) @binding(2) var<storage, read> grads: array<f32>;
 @group(0) @binding(3) var<storage, read_write> m: array<f32>;

@@ -6,7 +6,7 @@
 #include "shared/common.wgsl"
 #include "shared/plane_hit.wgsl"
 
-@group(0) @binding(0) var<uniform> params: ComposeParams;
+@group(0) @binding(0) var<storage, read> params: ComposeParams;
 @group(0) @binding(1) var<storage, read> planes: array<PlaneGpu>;
 @group(0) @binding(2) var<storage, read> transmission: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read> geometry: array<vec4<f32>>;

@@ -7,7 +7,7 @@
 #include "shared/plane_hit.wgsl"
 #include "shared/accumulate.wgsl"
 
-@group(0) @binding(0) var<uniform> params: ComposeParams;
+@group(0) @binding(0) var<storage, read> params: ComposeParams;
 @group(0) @binding(1) var<storage, read> planes: array<PlaneGpu>;
 // Forward layers: (C_t, alpha), (D_t, V, M, 0), per plane (C_raw, A), (R_raw, R, 0, 0), H.
 @group(0) @binding(2) var<storage, read> transmission: array<vec4<f32>>;

@@ -4,7 +4,7 @@
 // `block_sums` the same way and adding it back (prefix_sum_add.wgsl).
 #include "shared/common.wgsl"
 
-@group(0) @binding(0) var<uniform> params: ScanParams;
+@group(0) @binding(0) var<storage, read> params: ScanParams;
 @group(0) @binding(1) var<storage, read_write> data: array<u32>;
 @group(0) @binding(2) var<storage, read_write> block_sums: array<u32>;
 

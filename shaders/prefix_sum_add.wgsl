@@ -1,7 +1,7 @@
 // Stage `prefix_sum`, join: add each block's scanned offset to its values.
 #include "shared/common.wgsl"
 
-@group(0) @binding(0) var<uniform> params: ScanParams;
+@group(0) @binding(0) var<storage, read> params: ScanParams;
 @group(0) @binding(1) var<storage, read_write> data: array<u32>;
 @group(0) @binding(2) var<storage, read> block_offsets: array<u32>;
 

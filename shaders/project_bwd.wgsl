@@ -11,7 +11,7 @@
 #include "shared/sh.wgsl"
 #include "shared/accumulate.wgsl"
 
-@group(0) @binding(0) var<uniform> view: ProjectParams;
+@group(0) @binding(0) var<storage, read> view: ProjectParams;
 @group(0) @binding(1) var<storage, read> means: array<f32>;
 @group(0) @binding(2) var<storage, read> rotations: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read> log_scales: array<f32>;

@@ -10,7 +10,7 @@
 #include "shared/splat.wgsl"
 #include "shared/accumulate.wgsl"
 
-@group(0) @binding(0) var<uniform> params: RasterParams;
+@group(0) @binding(0) var<storage, read> params: RasterParams;
 @group(0) @binding(1) var<storage, read> projected: array<ProjectedGaussian>;
 @group(0) @binding(2) var<storage, read> values: array<u32>;
 @group(0) @binding(3) var<storage, read> ranges: array<u32>;

@@ -8,7 +8,7 @@
 #include "shared/splat.wgsl"
 #include "shared/plane_hit.wgsl"
 
-@group(0) @binding(0) var<uniform> params: RasterParams;
+@group(0) @binding(0) var<storage, read> params: RasterParams;
 @group(0) @binding(1) var<storage, read> projected: array<ProjectedGaussian>;
 @group(0) @binding(2) var<storage, read> values: array<u32>;
 @group(0) @binding(3) var<storage, read> ranges: array<u32>;
@@ -16,7 +16,7 @@
 @group(0) @binding(4) var<storage, read_write> reflection_raw: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read_write> states: array<ReflectionState>;
 // The camera's rays, and the planes (this pass's plane is planes[params.slot]).
-@group(0) @binding(6) var<uniform> camera: ComposeParams;
+@group(0) @binding(6) var<storage, read> camera: ComposeParams;
 @group(0) @binding(7) var<storage, read> planes: array<PlaneGpu>;
 
 var<workgroup> s_mean: array<vec2<f32>, TILE_PIXELS>;

@@ -6,7 +6,7 @@
 #include "shared/common.wgsl"
 #include "shared/sort_digit.wgsl"
 
-@group(0) @binding(0) var<uniform> params: SortParams;
+@group(0) @binding(0) var<storage, read> params: SortParams;
 @group(0) @binding(1) var<storage, read> keys_hi: array<u32>;
 @group(0) @binding(2) var<storage, read> keys_lo: array<u32>;
 @group(0) @binding(3) var<storage, read> values: array<u32>;

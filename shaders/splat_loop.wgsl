@@ -6,7 +6,7 @@
 #include "shared/common.wgsl"
 #include "shared/splat.wgsl"
 
-@group(0) @binding(0) var<uniform> params: RasterParams;
+@group(0) @binding(0) var<storage, read> params: RasterParams;
 @group(0) @binding(1) var<storage, read> projected: array<ProjectedGaussian>;
 @group(0) @binding(2) var<storage, read_write> out: array<vec4<f32>>;
 

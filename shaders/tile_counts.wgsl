@@ -3,7 +3,7 @@
 #include "shared/common.wgsl"
 #include "shared/tiles.wgsl"
 
-@group(0) @binding(0) var<uniform> tiles: TileParams;
+@group(0) @binding(0) var<storage, read> tiles: TileParams;
 @group(0) @binding(1) var<storage, read> projected: array<ProjectedGaussian>;
 @group(0) @binding(2) var<storage, read_write> counts: array<u32>;
 

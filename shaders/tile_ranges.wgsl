@@ -2,7 +2,7 @@
 // the sorted key list. `ranges` is cleared to zero first, so tiles without keys stay empty.
 #include "shared/common.wgsl"
 
-@group(0) @binding(0) var<uniform> params: ScanParams;
+@group(0) @binding(0) var<storage, read> params: ScanParams;
 @group(0) @binding(1) var<storage, read> keys_hi: array<u32>;
 @group(0) @binding(2) var<storage, read_write> ranges: array<u32>;
 

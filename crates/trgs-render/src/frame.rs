@@ -17,7 +17,7 @@ pub struct ViewBuffers {
     /// The tiles binned (a plane's footprint, or the whole grid).
     pub limit: TileRect,
     pub(crate) tile_params: TileParams,
-    /// The uniform `project` ran with (its adjoint recomputes from the same view).
+    /// The parameter block `project` ran with (its adjoint recomputes from the same view).
     pub(crate) project_params: ProjectParams,
     pub projected: wgpu::Buffer,
     /// The exclusive scan of the tile counts (each Gaussian's first key slot).

@@ -52,12 +52,17 @@ pub fn storage_init<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, data: &[T])
     })
 }
 
-/// A uniform buffer holding `value`.
-pub fn uniform<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, value: &T) -> wgpu::Buffer {
+/// A dispatch's parameter block holding `value`, bound as `var<storage, read>`.
+///
+/// Not a uniform buffer on purpose: lavapipe inlines uniform values that steer control flow into
+/// the shader and recompiles it (LLVM, 0.1 to 0.5 s) for every new set of values, e.g. every
+/// mirrored view of a moving plane; a storage buffer is never inlined. Real GPUs read a small
+/// block shared by all threads equally fast from either.
+pub fn params<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, value: &T) -> wgpu::Buffer {
     ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some(label),
         contents: bytemuck::bytes_of(value),
-        usage: wgpu::BufferUsages::UNIFORM,
+        usage: wgpu::BufferUsages::STORAGE,
     })
 }
 

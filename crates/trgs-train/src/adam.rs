@@ -95,12 +95,12 @@ impl Adam {
                 offset: first as u32,
                 pad: 0,
             };
-            let uniform = gpu::uniform(ctx, "trgs.adam.params", &params);
+            let block = gpu::params(ctx, "trgs.adam.params", &params);
             let (o, n) = (first * 4, count * 4);
             let bind = self.kernel.bind(
                 ctx,
                 &[
-                    uniform.as_entire_binding(),
+                    block.as_entire_binding(),
                     range(values, o, n),
                     range(grads, o, n),
                     range(&moments.m, o, n),

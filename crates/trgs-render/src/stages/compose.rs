@@ -57,7 +57,7 @@ impl RayBuffers {
             cam_col2: v4(to_world.z_axis),
         };
         Self {
-            camera: gpu::uniform(s.ctx, "trgs.compose.params", &params),
+            camera: gpu::params(s.ctx, "trgs.compose.params", &params),
             planes: gpu::storage_init(s.ctx, "trgs.compose.planes", planes),
         }
     }

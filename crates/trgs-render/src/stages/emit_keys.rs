@@ -26,12 +26,12 @@ pub fn record(
     let k = &s.kernels.emit_keys;
     for (first, count) in scene.chunks() {
         let p = TileParams { count, first, ..*base };
-        let uniform = gpu::uniform(s.ctx, "trgs.emit_keys.params", &p);
+        let block = gpu::params(s.ctx, "trgs.emit_keys.params", &p);
         let (f, c) = (u64::from(first), u64::from(count));
         let bind = k.bind(
             s.ctx,
             &[
-                uniform.as_entire_binding(),
+                block.as_entire_binding(),
                 range(projected, f * PROJECTED, c * PROJECTED),
                 range(offsets, f * 4, c * 4),
                 keys.hi.as_entire_binding(),

@@ -33,12 +33,12 @@ fn scan_level(
         rec.encoder.clear_buffer(&sums, 0, None);
         return sums;
     }
-    let uniform =
-        gpu::uniform(s.ctx, "trgs.prefix_sum.params", &ScanParams { count, ..Default::default() });
+    let block =
+        gpu::params(s.ctx, "trgs.prefix_sum.params", &ScanParams { count, ..Default::default() });
     let scan = &s.kernels.prefix_sum;
     let bind = scan.bind(
         s.ctx,
-        &[uniform.as_entire_binding(), data.as_entire_binding(), sums.as_entire_binding()],
+        &[block.as_entire_binding(), data.as_entire_binding(), sums.as_entire_binding()],
     );
     rec.dispatch("prefix_sum", scan, &bind, grid_1d(blocks));
     if blocks == 1 {
@@ -48,7 +48,7 @@ fn scan_level(
     let add = &s.kernels.prefix_sum_add;
     let bind = add.bind(
         s.ctx,
-        &[uniform.as_entire_binding(), data.as_entire_binding(), sums.as_entire_binding()],
+        &[block.as_entire_binding(), data.as_entire_binding(), sums.as_entire_binding()],
     );
     rec.dispatch("prefix_sum", add, &bind, grid_1d(count.div_ceil(256)));
     total

@@ -8,7 +8,7 @@ use trgs_core::scene::{Intrinsics, ReflectionPlane, ViewTransform};
 
 const PROJECTED: u64 = std::mem::size_of::<ProjectedGaussian>() as u64;
 
-/// The uniform of one view: `plane` is Some for a mirrored view (front-side filter).
+/// The parameter block of one view: `plane` is Some for a mirrored view (front-side filter).
 pub fn params(
     view: &ViewTransform,
     k: &Intrinsics,
@@ -62,12 +62,12 @@ pub fn record(
     let coeffs = u64::from(scene.sh_coeffs());
     for (first, count) in scene.chunks() {
         let p = ProjectParams { count, sh_coeffs: scene.sh_coeffs(), ..*base };
-        let uniform = gpu::uniform(s.ctx, "trgs.project.params", &p);
+        let block = gpu::params(s.ctx, "trgs.project.params", &p);
         let (f, c) = (u64::from(first), u64::from(count));
         let bind = k.bind(
             s.ctx,
             &[
-                uniform.as_entire_binding(),
+                block.as_entire_binding(),
                 range(&scene.means, f * 12, c * 12),
                 range(&scene.rotations, f * 16, c * 16),
                 range(&scene.log_scales, f * 12, c * 12),

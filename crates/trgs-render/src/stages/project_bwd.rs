@@ -8,7 +8,7 @@ use crate::scene::{GpuScene, SceneGradBuffers};
 const PROJECTED: u64 = std::mem::size_of::<ProjectedGaussian>() as u64;
 const PROJECTED_GRAD: u64 = PROJECTED_GRAD_FLOATS as u64 * 4;
 
-/// Backpropagate one view: `base` is the view's forward uniform, `mode` its BWD_* bits.
+/// Backpropagate one view: `base` is the view's forward parameter block, `mode` its BWD_* bits.
 #[allow(clippy::too_many_arguments)]
 pub fn record(
     s: Stage<'_>,
@@ -25,12 +25,12 @@ pub fn record(
     let coeffs = u64::from(scene.sh_coeffs());
     for (first, count) in scene.chunks() {
         let p = ProjectParams { count, sh_coeffs: scene.sh_coeffs(), bwd_mode: mode, ..*base };
-        let uniform = gpu::uniform(s.ctx, "trgs.project_bwd.params", &p);
+        let block = gpu::params(s.ctx, "trgs.project_bwd.params", &p);
         let (f, c) = (u64::from(first), u64::from(count));
         let bind = k.bind(
             s.ctx,
             &[
-                uniform.as_entire_binding(),
+                block.as_entire_binding(),
                 range(&scene.means, f * 12, c * 12),
                 range(&scene.rotations, f * 16, c * 16),
                 range(&scene.log_scales, f * 12, c * 12),

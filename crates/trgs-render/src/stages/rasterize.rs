@@ -15,7 +15,7 @@ pub struct Pass1Outputs<'a> {
     pub states: &'a wgpu::Buffer,
 }
 
-/// The uniform of pass 1 (and of its adjoint) over the whole of `grid`.
+/// The parameter block of pass 1 (and of its adjoint) over the whole of `grid`.
 pub fn params(grid: &TileGrid, background: [f32; 3]) -> RasterParams {
     RasterParams {
         width: grid.width,
@@ -38,12 +38,12 @@ pub fn record(
     ranges: &wgpu::Buffer,
     out: &Pass1Outputs<'_>,
 ) {
-    let uniform = gpu::uniform(s.ctx, "trgs.rasterize.params", &params(grid, background));
+    let block = gpu::params(s.ctx, "trgs.rasterize.params", &params(grid, background));
     let k = if depth_variance { &s.kernels.rasterize_depth_variance } else { &s.kernels.rasterize };
     let bind = k.bind(
         s.ctx,
         &[
-            uniform.as_entire_binding(),
+            block.as_entire_binding(),
             projected.as_entire_binding(),
             values.as_entire_binding(),
             ranges.as_entire_binding(),

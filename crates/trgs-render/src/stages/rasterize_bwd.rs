@@ -32,12 +32,12 @@ pub fn record(
         depth_variance: u32::from(depth_variance),
         ..super::rasterize::params(grid, background)
     };
-    let uniform = gpu::uniform(s.ctx, "trgs.rasterize_bwd.params", &params);
+    let block = gpu::params(s.ctx, "trgs.rasterize_bwd.params", &params);
     let k = &s.kernels.rasterize_bwd;
     let bind = k.bind(
         s.ctx,
         &[
-            uniform.as_entire_binding(),
+            block.as_entire_binding(),
             lists.projected.as_entire_binding(),
             lists.values.as_entire_binding(),
             lists.ranges.as_entire_binding(),

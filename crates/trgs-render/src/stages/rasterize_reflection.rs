@@ -7,7 +7,7 @@ use crate::gpu::{self, Recorder};
 use crate::layout::RasterParams;
 use trgs_core::reference::{TileGrid, TileRect};
 
-/// The uniform of pass 2 (and of its adjoint): plane slot `slot`, dispatched over the tiles of
+/// The parameter block of pass 2 (and of its adjoint): plane slot `slot`, dispatched over the tiles of
 /// `footprint`.
 pub fn params(grid: &TileGrid, slot: u32, footprint: &TileRect) -> RasterParams {
     RasterParams {
@@ -34,13 +34,13 @@ pub fn record(
     if footprint.is_empty() {
         return;
     }
-    let uniform =
-        gpu::uniform(s.ctx, "trgs.rasterize_reflection.params", &params(grid, slot, footprint));
+    let block =
+        gpu::params(s.ctx, "trgs.rasterize_reflection.params", &params(grid, slot, footprint));
     let k = &s.kernels.rasterize_reflection;
     let bind = k.bind(
         s.ctx,
         &[
-            uniform.as_entire_binding(),
+            block.as_entire_binding(),
             projected.as_entire_binding(),
             values.as_entire_binding(),
             ranges.as_entire_binding(),

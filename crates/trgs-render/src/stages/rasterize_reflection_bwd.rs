@@ -24,12 +24,12 @@ pub fn record(
         return;
     }
     let params = super::rasterize_reflection::params(grid, slot, footprint);
-    let uniform = gpu::uniform(s.ctx, "trgs.rasterize_reflection_bwd.params", &params);
+    let block = gpu::params(s.ctx, "trgs.rasterize_reflection_bwd.params", &params);
     let k = &s.kernels.rasterize_reflection_bwd;
     let bind = k.bind(
         s.ctx,
         &[
-            uniform.as_entire_binding(),
+            block.as_entire_binding(),
             lists.projected.as_entire_binding(),
             lists.values.as_entire_binding(),
             lists.ranges.as_entire_binding(),

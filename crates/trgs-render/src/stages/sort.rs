@@ -39,12 +39,12 @@ pub fn record(
     let (mut src, mut dst) = (keys.clone(), alt);
     for (shift, use_hi) in passes {
         let params = SortParams { count, shift, use_hi, num_blocks };
-        let uniform = gpu::uniform(s.ctx, "trgs.sort.params", &params);
+        let block = gpu::params(s.ctx, "trgs.sort.params", &params);
         let count_k = &s.kernels.sort_count;
         let bind = count_k.bind(
             s.ctx,
             &[
-                uniform.as_entire_binding(),
+                block.as_entire_binding(),
                 src.hi.as_entire_binding(),
                 src.lo.as_entire_binding(),
                 hist.as_entire_binding(),
@@ -56,7 +56,7 @@ pub fn record(
         let bind = scatter.bind(
             s.ctx,
             &[
-                uniform.as_entire_binding(),
+                block.as_entire_binding(),
                 src.hi.as_entire_binding(),
                 src.lo.as_entire_binding(),
                 src.values.as_entire_binding(),

@@ -7,7 +7,7 @@ use trgs_core::reference::{TileGrid, TileRect};
 
 const PROJECTED: u64 = std::mem::size_of::<ProjectedGaussian>() as u64;
 
-/// The uniform of a view's binning, limited to `limit` (a footprint, or the whole grid).
+/// The parameter block of a view's binning, limited to `limit` (a footprint, or the whole grid).
 pub fn params(grid: &TileGrid, limit: &TileRect) -> TileParams {
     TileParams {
         width: grid.width,
@@ -30,12 +30,12 @@ pub fn record(
     let k = &s.kernels.tile_counts;
     for (first, count) in scene.chunks() {
         let p = TileParams { count, first, ..*base };
-        let uniform = gpu::uniform(s.ctx, "trgs.tile_counts.params", &p);
+        let block = gpu::params(s.ctx, "trgs.tile_counts.params", &p);
         let (f, c) = (u64::from(first), u64::from(count));
         let bind = k.bind(
             s.ctx,
             &[
-                uniform.as_entire_binding(),
+                block.as_entire_binding(),
                 range(projected, f * PROJECTED, c * PROJECTED),
                 range(counts, f * 4, c * 4),
             ],

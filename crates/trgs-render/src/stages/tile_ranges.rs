@@ -13,11 +13,11 @@ pub fn record(
 ) {
     rec.encoder.clear_buffer(ranges, 0, None);
     let k = &s.kernels.tile_ranges;
-    let uniform =
-        gpu::uniform(s.ctx, "trgs.tile_ranges.params", &ScanParams { count, ..Default::default() });
+    let block =
+        gpu::params(s.ctx, "trgs.tile_ranges.params", &ScanParams { count, ..Default::default() });
     let bind = k.bind(
         s.ctx,
-        &[uniform.as_entire_binding(), keys_hi.as_entire_binding(), ranges.as_entire_binding()],
+        &[block.as_entire_binding(), keys_hi.as_entire_binding(), ranges.as_entire_binding()],
     );
     rec.dispatch("tile_ranges", k, &bind, grid_1d(count.div_ceil(256)));
 }

@@ -250,10 +250,10 @@ fn splat_loop_throughput(
         slot: visible.len() as u32,
         ..Default::default()
     };
-    let uniform = gpu::uniform(ctx, "trgs.splat_loop.params", &params);
+    let block = gpu::params(ctx, "trgs.splat_loop.params", &params);
     let bind = kernel.bind(
         ctx,
-        &[uniform.as_entire_binding(), projected.as_entire_binding(), out.as_entire_binding()],
+        &[block.as_entire_binding(), projected.as_entire_binding(), out.as_entire_binding()],
     );
     let mut best = f64::MAX;
     for _ in 0..4 {
