@@ -54,7 +54,7 @@ macro_rules! gpu_struct {
 }
 
 gpu_struct! {
-    /// Uniform of `project`: one view (real or mirrored camera) and its culling rules.
+    /// Parameters of `project`: one view (real or mirrored camera) and its culling rules.
     pub struct ProjectParams {
         /// Rows of the view's 3x3 linear map (a rotation, or R H for a mirrored camera).
         pub row0: [f32; 4],
@@ -109,7 +109,7 @@ gpu_struct! {
 }
 
 gpu_struct! {
-    /// Uniform of `tile_counts` and `emit_keys`.
+    /// Parameters of `tile_counts` and `emit_keys`.
     pub struct TileParams {
         pub width: u32,
         pub height: u32,
@@ -125,7 +125,7 @@ gpu_struct! {
 }
 
 gpu_struct! {
-    /// Uniform of `prefix_sum`, `prefix_sum_add` and `tile_ranges`.
+    /// Parameters of `prefix_sum`, `prefix_sum_add` and `tile_ranges`.
     pub struct ScanParams {
         pub count: u32,
         pub pad0: u32,
@@ -135,7 +135,7 @@ gpu_struct! {
 }
 
 gpu_struct! {
-    /// Uniform of one radix pass of `sort`.
+    /// Parameters of one radix pass of `sort`.
     pub struct SortParams {
         pub count: u32,
         /// Bit offset of the 4-bit digit in the key word.
@@ -147,7 +147,7 @@ gpu_struct! {
 }
 
 gpu_struct! {
-    /// Uniform of `rasterize` and `rasterize_reflection`.
+    /// Parameters of `rasterize` and `rasterize_reflection`.
     pub struct RasterParams {
         pub width: u32,
         pub height: u32,
@@ -187,7 +187,7 @@ gpu_struct! {
 }
 
 gpu_struct! {
-    /// Uniform of `compose`: the real camera's rays.
+    /// Parameters of `compose`: the real camera's rays.
     pub struct ComposeParams {
         pub width: u32,
         pub height: u32,
@@ -220,7 +220,7 @@ gpu_struct! {
 }
 
 gpu_struct! {
-    /// Uniform of `adam`: one step over `count` floats of one attribute buffer.
+    /// Parameters of `adam`: one step over `count` floats of one attribute buffer.
     pub struct AdamParams {
         pub count: u32,
         pub lr: f32,
@@ -238,6 +238,24 @@ gpu_struct! {
         /// Index in the whole buffer of this range's first float (records are counted from 0).
         pub offset: u32,
         pub pad: u32,
+    }
+}
+
+gpu_struct! {
+    /// Parameters of `mcmc_regularise` and `mcmc_noise` over `count` Gaussians.
+    pub struct McmcParams {
+        pub count: u32,
+        /// The step's random seed (`mcmc_noise`).
+        pub seed: u32,
+        /// Position learning rate times the noise rate (`mcmc_noise`).
+        pub noise_scale: f32,
+        /// lambda_o / N and lambda_s / (3 N) (`mcmc_regularise`).
+        pub opacity_weight: f32,
+        pub scale_weight: f32,
+        /// Index in the scene of this range's first Gaussian (numbers the random draws).
+        pub first: u32,
+        pub pad1: u32,
+        pub pad2: u32,
     }
 }
 
@@ -298,6 +316,7 @@ pub fn all_structs() -> Vec<StructInfo> {
         entry::<ComposeParams>(),
         entry::<PlaneGpu>(),
         entry::<AdamParams>(),
+        entry::<McmcParams>(),
     ]
 }
 
@@ -346,6 +365,8 @@ pub fn prelude() -> String {
         ("MIN_ALPHA".to_string(), MIN_ALPHA),
         ("MIN_TRANSMITTANCE".to_string(), MIN_TRANSMITTANCE),
         ("COV2D_BLUR".to_string(), COV2D_BLUR),
+        ("NOISE_GATE_STEEPNESS".to_string(), trgs_core::reference::NOISE_GATE_STEEPNESS),
+        ("NOISE_GATE_THRESHOLD".to_string(), trgs_core::reference::NOISE_GATE_THRESHOLD),
         ("SH_C0".to_string(), sh::C0),
         ("SH_C1".to_string(), sh::C1),
     ];

@@ -121,6 +121,12 @@ impl GpuScene {
         ]
     }
 
+    /// Each Gaussian's `Population` as a u32 (fixed during training; optimiser-side stages read
+    /// it to leave glass Gaussians alone).
+    pub fn populations(&self) -> &wgpu::Buffer {
+        &self.populations
+    }
+
     /// Read the Gaussians back (after training steps changed them on the GPU).
     pub fn read(&self, ctx: &GpuContext) -> Gaussians<f32> {
         let mut g = read_attributes(ctx, self.parameters(), self.len as usize, self.sh_degree);
@@ -191,6 +197,17 @@ impl SceneGradBuffers {
             len: scene.len,
             sh_degree: scene.sh_degree,
         }
+    }
+
+    /// All-zero gradients for `scene` (for stages that add to gradients, outside a backward).
+    pub fn zeros(ctx: &GpuContext, scene: &GpuScene) -> Self {
+        let g = Self::new(ctx, &mut gpu::BufferPool::default(), scene);
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        for b in g.parameters() {
+            enc.clear_buffer(b, 0, None);
+        }
+        ctx.queue.submit([enc.finish()]);
+        g
     }
 
     /// The gradient buffers in the order of [`ATTRIBUTES`].

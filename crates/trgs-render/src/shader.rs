@@ -19,6 +19,7 @@ pub const SOURCES: &[(&str, &str)] = sources!(
     "shared/plane_hit.wgsl",
     "shared/accumulate.wgsl",
     "shared/sh.wgsl",
+    "shared/random.wgsl",
     "project.wgsl",
     "tile_counts.wgsl",
     "prefix_sum.wgsl",
@@ -36,6 +37,8 @@ pub const SOURCES: &[(&str, &str)] = sources!(
     "project_bwd.wgsl",
     "splat_loop.wgsl",
     "adam.wgsl",
+    "mcmc_regularise.wgsl",
+    "mcmc_noise.wgsl",
 );
 
 /// Every (stage file, defines) combination the renderer compiles; a test validates each with naga.
@@ -70,6 +73,8 @@ pub const VARIANTS: &[(&str, &[&str])] = &[
     ("project_bwd.wgsl", &["FLOAT_ATOMICS", "SUBGROUPS"]),
     ("splat_loop.wgsl", &[]),
     ("adam.wgsl", &[]),
+    ("mcmc_regularise.wgsl", &[]),
+    ("mcmc_noise.wgsl", &[]),
 ];
 
 #[derive(Debug, thiserror::Error)]

@@ -101,13 +101,13 @@ pub struct DensifyReport {
     pub pruned: usize,
 }
 
-fn widths(g: &Gaussians<f32>) -> [usize; 7] {
+pub(crate) fn widths(g: &Gaussians<f32>) -> [usize; 7] {
     [3, 4, 3, 1, 3 * g.sh_coeffs(), 1, 1]
 }
 
 /// The state made of `sources` (an index into `state` each, in order); moments are copied for
 /// `keep_moments` entries and zero for the others.
-fn gather(state: &TrainState, sources: &[(usize, bool)]) -> TrainState {
+pub(crate) fn gather(state: &TrainState, sources: &[(usize, bool)]) -> TrainState {
     let g = &state.gaussians;
     let coeffs = g.sh_coeffs();
     let mut out = Gaussians::<f32>::empty(g.sh_degree);

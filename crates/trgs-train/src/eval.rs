@@ -90,6 +90,10 @@ pub struct TruthComparison {
 impl std::fmt::Display for TruthComparison {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         for (i, (angle, centre)) in self.planes.iter().enumerate() {
+            if angle.is_nan() {
+                write!(f, "plane {i}: not modelled (the model has no plane); ")?;
+                continue;
+            }
             write!(
                 f,
                 "plane {i}: normal off by {angle:.2} deg, centre by {:.2}% of the size; ",

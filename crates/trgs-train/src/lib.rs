@@ -10,6 +10,7 @@ pub mod densify;
 pub mod eval;
 pub mod exr_layers;
 pub mod init;
+pub mod mcmc;
 pub mod model;
 pub mod perturb;
 pub mod plane_init;

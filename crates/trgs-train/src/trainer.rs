@@ -7,6 +7,7 @@ use crate::data::View;
 use crate::densify::{
     ClassicSettings, DensifyReport, DensifyStats, TrainState, densify_and_prune, reset_opacity,
 };
+use crate::mcmc::{McmcKernels, McmcSettings, relocate_and_grow};
 use crate::perturb::{perturb_opacities, seen_through_planes};
 use crate::regularisers::{depth_variance_loss, gradient_conflict_loss, mask_loss};
 use crate::settings::{Stage, TrainSettings};
@@ -96,6 +97,8 @@ pub struct Trainer {
     pub extent: f64,
     /// Classic densification, when on, and its statistics since the last densification.
     densify: Option<(ClassicSettings, DensifyStats)>,
+    /// MCMC densification, when on (instead of classic), with its GPU stages.
+    mcmc: Option<(McmcSettings, McmcKernels)>,
     rng: trgs_core::rng::Rng,
     /// Time every GPU stage of each step with timestamp queries ([`StepStats::gpu_stages`]).
     pub profile: bool,
@@ -128,6 +131,7 @@ impl Trainer {
             settings,
             extent,
             densify: None,
+            mcmc: None,
             profile: false,
             camera_centres: Vec::new(),
         })
@@ -204,6 +208,14 @@ impl Trainer {
         self.densify = Some((settings, DensifyStats::new(self.scene.len() as usize)));
     }
 
+    /// Densify with MCMC (relocation, growth up to the cap, noise, regularisers) from now on,
+    /// instead of classic densification.
+    pub fn enable_mcmc(&mut self, settings: McmcSettings) {
+        self.densify = None;
+        let kernels = McmcKernels::new(&self.ctx);
+        self.mcmc = Some((settings, kernels));
+    }
+
     /// The parameters and Adam moments, read back.
     pub fn read_state(&self) -> TrainState {
         let read = |b: &wgpu::Buffer, len: u64| -> Vec<f32> {
@@ -234,6 +246,15 @@ impl Trainer {
 
     /// Densification after step `self.step`, when the schedule says so.
     fn densify_step(&mut self) -> Result<Option<DensifyReport>> {
+        if let Some((settings, _)) = &self.mcmc {
+            if settings.relocates_at(self.step) {
+                let settings = settings.clone();
+                let state = self.read_state();
+                let (next, _) = relocate_and_grow(&state, &settings, &mut self.rng);
+                self.set_state(&next)?;
+            }
+            return Ok(None);
+        }
         let Some((settings, stats)) = &self.densify else { return Ok(None) };
         let t = self.step;
         let mut report = None;
@@ -348,6 +369,9 @@ impl Trainer {
             self.scene.attribute_widths()[4] / 3,
         );
         let mut rec = Recorder::new(ctx, "trgs.train.adam", false);
+        if let Some((settings, kernels)) = &self.mcmc {
+            kernels.record_regularise(ctx, &mut rec, &self.scene, &g.gaussians, settings);
+        }
         let values = self.scene.parameters();
         let grad_buffers = g.gaussians.parameters();
         for k in 0..ATTRIBUTES.len() {
@@ -360,6 +384,11 @@ impl Trainer {
                 &rates[k],
                 t,
             );
+        }
+        if let Some((settings, kernels)) = &self.mcmc {
+            // A seed per step (the step survives a resume, so the noise does too).
+            let seed = (self.settings.seed as u32).wrapping_mul(0x9e37_79b9) ^ t;
+            kernels.record_noise(ctx, &mut rec, &self.scene, settings, &rates[0], seed);
         }
         if let Some((settings, stats)) = &mut self.densify
             && t <= settings.until

@@ -14,6 +14,7 @@ mod compose_bwd;
 mod emit_keys;
 mod footprint;
 mod frame;
+mod mcmc;
 mod photometric_loss;
 mod prefix_sum;
 mod project;
@@ -36,6 +37,10 @@ pub use compose_bwd::{ComposeGrads, compose_bwd};
 pub use emit_keys::emit_keys;
 pub use footprint::{TileRect, footprint};
 pub use frame::{Frame, FrameGrads, PlaneLayerGrads, PlaneLayers};
+pub use mcmc::{
+    NOISE_GATE_STEEPNESS, NOISE_GATE_THRESHOLD, mcmc_noise, mcmc_regularise, noise_normal,
+    noise_offset, pcg_hash,
+};
 pub use photometric_loss::{DSSIM_LAMBDA, PhotometricLoss, photometric_loss};
 pub use prefix_sum::prefix_sum;
 pub use project::{Projected, ProjectionFilter, project};

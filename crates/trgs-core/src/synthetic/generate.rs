@@ -337,14 +337,26 @@ fn camera_path(i: usize, n: usize) -> (DVec3, DVec3) {
     (eye, target)
 }
 
+/// Room view `j` of `n`: an eye near the window looking back into the camera room, the targets
+/// sweeping the poster wall and the side walls from left to right.
+fn room_view_path(j: usize, n: usize) -> (DVec3, DVec3) {
+    let s = (j as f64 + 0.5) / n as f64;
+    let eye = DVec3::new(-1.2 + 2.4 * s, 1.35 + 0.2 * (TAU * s).sin(), 0.8 + 0.4 * (PI * s).sin());
+    let target = DVec3::new(-3.0 + 6.0 * s, 1.3, FRONT_DEPTH - 0.5);
+    (eye, target)
+}
+
 pub(crate) fn layout(config: &SyntheticConfig) -> Layout {
     let (world, frame_boxes, sizes) = build_world(config);
     let placement = Placement::fixed();
     let up = placement.rotation * DVec3::Y;
     let intrinsics = Intrinsics::from_fov_x(FOV_X_DEG.to_radians(), config.width, config.height);
+    let room = (0..config.room_views).map(|j| room_view_path(j, config.room_views));
     let cameras = (0..config.views)
-        .map(|i| {
-            let (eye, target) = camera_path(i, config.views);
+        .map(|i| camera_path(i, config.views))
+        .chain(room)
+        .enumerate()
+        .map(|(i, (eye, target))| {
             let pose =
                 Pose::look_at(placement.point_to_world(eye), placement.point_to_world(target), up);
             Camera::new(format!("view_{i:03}.png"), intrinsics, pose)
@@ -477,7 +489,7 @@ pub(crate) fn project(camera: &Camera, p: DVec3) -> Option<[f64; 2]> {
     inside.then_some([u, v])
 }
 
-/// Indices of `count` training views (views that are not every 8th) spread over the loop.
+/// Indices of `count` training views of the loop (views that are not every 8th) spread over it.
 fn masked_view_indices(views: usize, count: usize) -> Vec<usize> {
     let train: Vec<usize> = (0..views).filter(|i| i % 8 != 0).collect();
     let count = count.min(train.len());
@@ -502,7 +514,11 @@ pub fn generate(config: &SyntheticConfig) -> SyntheticScene {
         planes: layout.planes.clone(),
         points,
         tracks,
-        test_views: layout.cameras.iter().step_by(8).map(|c| c.name.clone()).collect(),
+        test_views: layout.cameras[..config.views]
+            .iter()
+            .step_by(8)
+            .map(|c| c.name.clone())
+            .collect(),
     };
     for (i, view) in views.into_iter().enumerate() {
         scene.images.push(view.image);

@@ -22,7 +22,11 @@
 //!
 //! Cameras follow a closed loop 2.3 to 2.9 m from the wall, up to about 52 degrees off the pane
 //! normal, between 0.9 and 1.7 m high, all looking at a point 0.8 m behind the glass; every 8th
-//! view is a test view. The whole scene is then placed in the world by a fixed rigid motion that
+//! view of the loop is a test view. A few more training views stand near the window and look back
+//! into the camera room, as a walk-through capture would: they reconstruct what the glass
+//! reflects (the poster wall is otherwise seen only in reflection), which TR-Gaussians renders
+//! from its primary Gaussians mirrored, while plain 3DGS has to fake the reflection behind the
+//! glass. The whole scene is then placed in the world by a fixed rigid motion that
 //! is not axis-aligned (world "up" is roughly -y, as in many COLMAP reconstructions), so that no
 //! consumer can get away with assuming axis-aligned planes.
 //!
@@ -65,8 +69,11 @@ pub const MIRROR_R0: f64 = 0.95;
 pub struct SyntheticConfig {
     pub width: u32,
     pub height: u32,
-    /// Number of views along the camera loop.
+    /// Number of views along the camera loop (every 8th a test view).
     pub views: usize,
+    /// Training views after the loop that look back into the camera room (`view_<views>.png`
+    /// on); no masks, never test views.
+    pub room_views: usize,
     /// Varies textures (noise, panel colours) and the sparse points; the geometry is fixed.
     pub seed: u64,
     /// The panes, left to right; empty gives a scene without glass (and no masks or planes).
@@ -83,6 +90,7 @@ impl Default for SyntheticConfig {
             width: 256,
             height: 192,
             views: 40,
+            room_views: 8,
             seed: 7,
             panes: vec![PaneKind::Glass],
             masked_views: 6,
@@ -92,12 +100,13 @@ impl Default for SyntheticConfig {
 }
 
 impl SyntheticConfig {
-    /// A fast variant for tests: 64x48, 12 views, 800 points.
+    /// A fast variant for tests: 64x48, 12 loop views and 2 room views, 800 points.
     pub fn small() -> Self {
         Self {
             width: 64,
             height: 48,
             views: 12,
+            room_views: 2,
             masked_views: 3,
             sparse_points: 800,
             ..Self::default()
@@ -133,7 +142,7 @@ pub struct SyntheticScene {
     /// For each point, the indices of the cameras that see it (at least two); it projects inside
     /// each of their images, in front of the camera.
     pub tracks: Vec<Vec<usize>>,
-    /// Names of the test views (every 8th view, starting with the first).
+    /// Names of the test views (every 8th view of the loop, starting with the first).
     pub test_views: Vec<String>,
 }
 

@@ -56,15 +56,20 @@ fn small_scene_is_bit_identical_twice() {
 fn small_scene_shapes_and_split() {
     let cfg = SyntheticConfig::small();
     let s = generate(&cfg);
-    assert_eq!(s.cameras.len(), cfg.views);
-    assert_eq!(s.images.len(), cfg.views);
-    assert_eq!(s.transmission.len(), cfg.views);
-    assert_eq!(s.masks.len(), cfg.views);
+    let n = cfg.views + cfg.room_views;
+    assert_eq!(s.cameras.len(), n);
+    assert_eq!(s.images.len(), n);
+    assert_eq!(s.transmission.len(), n);
+    assert_eq!(s.masks.len(), n);
     assert_eq!(s.cameras[3].name, "view_003.png");
+    assert_eq!(s.cameras[n - 1].name, format!("view_{:03}.png", n - 1));
     assert_eq!(s.test_views, vec!["view_000.png".to_string(), "view_008.png".to_string()]);
-    let masked: Vec<usize> = (0..cfg.views).filter(|&i| s.masks[i].is_some()).collect();
+    let masked: Vec<usize> = (0..n).filter(|&i| s.masks[i].is_some()).collect();
     assert_eq!(masked.len(), cfg.masked_views);
-    assert!(masked.iter().all(|i| i % 8 != 0), "masks only on training views: {masked:?}");
+    assert!(
+        masked.iter().all(|&i| i % 8 != 0 && i < cfg.views),
+        "masks only on training views of the loop: {masked:?}"
+    );
     for img in s.images.iter().chain(&s.transmission) {
         assert_eq!((img.width, img.height, img.channels), (64, 48, 3));
         assert!(img.data.iter().all(|v| (0.0..=1.0).contains(v)));
@@ -288,4 +293,24 @@ fn contact_sheet(s: &SyntheticScene, path: &std::path::Path) {
         panic!("cannot write {}: {e}", path.display());
     }
     println!("contact sheet written to {}", path.display());
+}
+
+/// The room views look away from the panes, and the sparse points reach the poster wall that the
+/// loop views see only in reflection: the primary Gaussians can then render the reflection.
+#[test]
+fn room_views_reconstruct_what_the_glass_reflects() {
+    let cfg = SyntheticConfig::small();
+    let s = generate(&cfg);
+    let lay = layout(&cfg);
+    for (cam, mask) in s.cameras.iter().zip(&s.masks).skip(cfg.views) {
+        let forward = lay.placement.dir_to_local(cam.pose.direction_to_world(DVec3::Z));
+        assert!(forward.z > 0.5, "{} should face the camera room: {forward}", cam.name);
+        assert!(mask.is_none(), "{} has a mask", cam.name);
+    }
+    let on_poster_wall = s
+        .points
+        .iter()
+        .filter(|(p, _)| lay.placement.point_to_local(DVec3::from_array(*p)).z > 4.9)
+        .count();
+    assert!(on_poster_wall >= 10, "{on_poster_wall} sparse points on the poster wall");
 }

@@ -20,6 +20,7 @@ use trgs_train::eval::{
     write_renders,
 };
 use trgs_train::init::{SeedPoint, gaussians_from_points, random_points};
+use trgs_train::mcmc::McmcSettings;
 use trgs_train::plane_init::{PlaneInitSettings, initialise_planes};
 use trgs_train::settings::TrainSettings;
 use trgs_train::trainer::{StepTimes, Trainer};
@@ -48,7 +49,10 @@ OPTIONS:
     --random-init N     start from N random points when the scene has no sparse points
                         (default 10000)
     --no-planes         ignore the glass masks: plain 3DGS (the baseline of the comparisons)
-    --densify MODE      classic (3DGS clone, split, prune, opacity reset; default) or none
+    --densify MODE      classic (3DGS clone, split, prune, opacity reset; default), mcmc
+                        (3DGS-MCMC: relocation of dead Gaussians, growth to --cap, noise,
+                        opacity and scale regularisers) or none
+    --cap N             mcmc: the most Gaussians (default 300000)
     --seed S            order of the training views (default 0)
     --profile           time every GPU stage of every step (timestamp queries) into log.jsonl
 
@@ -73,11 +77,21 @@ struct Args {
     eval_every: Option<u32>,
     checkpoint_every: Option<u32>,
     random_init: usize,
-    densify: bool,
+    densify: DensifyMode,
+    /// MCMC's cap on the Gaussian count.
+    cap: usize,
     no_planes: bool,
     seed: u64,
     profile: bool,
     ablations: Ablations,
+}
+
+/// How the Gaussian count changes during training.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+enum DensifyMode {
+    Classic,
+    Mcmc,
+    None,
 }
 
 /// The paper's ablations: each true switches one component off.
@@ -125,7 +139,8 @@ fn parse_args() -> Result<Command> {
         eval_every: None,
         checkpoint_every: None,
         random_init: 10_000,
-        densify: true,
+        densify: DensifyMode::Classic,
+        cap: 300_000,
         no_planes: false,
         seed: 0,
         profile: false,
@@ -171,11 +186,13 @@ fn parse_args() -> Result<Command> {
             "--random-init" => args.random_init = num("--random-init", value("--random-init")?)?,
             "--densify" => {
                 args.densify = match value("--densify")?.as_str() {
-                    "classic" => true,
-                    "none" => false,
-                    other => bail!("--densify {other:?}: expected classic or none"),
+                    "classic" => DensifyMode::Classic,
+                    "mcmc" => DensifyMode::Mcmc,
+                    "none" => DensifyMode::None,
+                    other => bail!("--densify {other:?}: expected classic, mcmc or none"),
                 }
             }
+            "--cap" => args.cap = num("--cap", value("--cap")?)?,
             "--no-planes" => args.no_planes = true,
             "--profile" => args.profile = true,
             "--seed" => args.seed = num("--seed", value("--seed")?)?,
@@ -349,14 +366,21 @@ fn main() -> Result<()> {
     let data = load_data(&args, &data_dir)?;
     let ctx = GpuContext::new()?;
     let settings = settings_of(&args);
-    let densify = args.densify.then(|| ClassicSettings::scaled(args.iterations));
+    let densify =
+        (args.densify == DensifyMode::Classic).then(|| ClassicSettings::scaled(args.iterations));
+    let mcmc = (args.densify == DensifyMode::Mcmc)
+        .then(|| McmcSettings::scaled(args.iterations, args.cap));
     let log_path = args.out.join("log.jsonl");
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating the output folder {}", args.out.display()))?;
     let (mut trainer, mut state) = match resumed {
         Some((ck, state)) => {
             truncate_log(&log_path, ck.step)?;
-            (Trainer::from_checkpoint(&ctx, &ck, settings, data.extent, densify)?, state)
+            let mut trainer = Trainer::from_checkpoint(&ctx, &ck, settings, data.extent, densify)?;
+            if let Some(m) = mcmc.clone() {
+                trainer.enable_mcmc(m);
+            }
+            (trainer, state)
         }
         None => {
             let mut rng = Rng::new(args.seed);
@@ -374,6 +398,9 @@ fn main() -> Result<()> {
             let mut trainer = Trainer::new(&ctx, &gaussians, &[], settings, data.extent)?;
             if let Some(d) = densify {
                 trainer.enable_densification(d);
+            }
+            if let Some(m) = mcmc {
+                trainer.enable_mcmc(m);
             }
             std::fs::File::create(&log_path)
                 .with_context(|| format!("creating {}", log_path.display()))?;

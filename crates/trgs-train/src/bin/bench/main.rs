@@ -6,12 +6,14 @@
 //! forward + backward per training-like step (`backward.rs`).
 //! `--write FILE` writes the report as Markdown (docs/BENCHMARKS.md).
 mod backward;
+mod train_step;
 
 use anyhow::{Context, Result, bail};
 use backward::{BackwardRow, bench_backward};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::time::Instant;
+use train_step::{TrainStepRow, bench_train_step};
 use trgs_core::fixtures::{RoomDensity, RoomSpec, room_scene};
 use trgs_core::reference::TILE_SIZE;
 use trgs_render::gpu::{self, Kernel, Recorder};
@@ -19,15 +21,16 @@ use trgs_render::layout::{ProjectedGaussian, RasterParams};
 use trgs_render::{Frame, GpuContext, GpuScene, RenderOptions, Renderer};
 
 const HELP: &str = "\
-trgs bench: renderer benchmarks (forward, and forward + backward per step)
+trgs bench: renderer benchmarks (forward, forward + backward, whole training steps)
 
 USAGE:
-    bench [--quick] [--plane-cost] [--backward] [--reps N] [--write FILE]
+    bench [--quick] [--plane-cost] [--backward] [--train-step] [--reps N] [--write FILE]
 
 OPTIONS:
     --quick       only 256x192 and at most 100k Gaussians
     --plane-cost  only the plane-cost measurement (no grid, no throughput, no backward)
     --backward    only the backward measurement
+    --train-step  only the training-step measurement (100k Gaussians, phase breakdown)
     --reps N      timed frames per configuration (default 5; the median is reported)
     --write FILE  also write the report as Markdown (e.g. docs/BENCHMARKS.md)
 ";
@@ -36,13 +39,20 @@ struct Args {
     quick: bool,
     plane_cost_only: bool,
     backward_only: bool,
+    train_step_only: bool,
     reps: usize,
     write: Option<PathBuf>,
 }
 
 fn parse_args() -> Result<Option<Args>> {
-    let mut args =
-        Args { quick: false, plane_cost_only: false, backward_only: false, reps: 5, write: None };
+    let mut args = Args {
+        quick: false,
+        plane_cost_only: false,
+        backward_only: false,
+        train_step_only: false,
+        reps: 5,
+        write: None,
+    };
     let mut it = std::env::args().skip(1);
     while let Some(a) = it.next() {
         match a.as_str() {
@@ -50,6 +60,7 @@ fn parse_args() -> Result<Option<Args>> {
             "--quick" => args.quick = true,
             "--plane-cost" => args.plane_cost_only = true,
             "--backward" => args.backward_only = true,
+            "--train-step" => args.train_step_only = true,
             "--reps" => {
                 let v = it.next().context("--reps needs a value")?;
                 args.reps = v.parse().with_context(|| format!("--reps {v:?} is not a count"))?;
@@ -288,7 +299,8 @@ fn main() -> Result<()> {
         }
     }
     configs.push((RoomDensity::Uniform, 256, 192, 100_000));
-    if args.plane_cost_only || args.backward_only {
+    let only = args.plane_cost_only || args.backward_only || args.train_step_only;
+    if only {
         configs.clear();
     }
     for (density, width, height, gaussians) in configs {
@@ -327,7 +339,7 @@ fn main() -> Result<()> {
         }
     }
     let mut backward = Vec::new();
-    if !args.plane_cost_only {
+    if !only || args.backward_only {
         for density in [RoomDensity::AsCaptured, RoomDensity::Uniform] {
             for planes in 0..=2 {
                 let b = bench_backward(&ctx, &renderer, density, planes, args.reps.max(1))?;
@@ -344,10 +356,10 @@ fn main() -> Result<()> {
     }
     let pairs = (3 * args.reps).max(9);
     let mut costs = Vec::new();
-    let densities = if args.backward_only {
-        vec![]
-    } else {
+    let densities = if !only || args.plane_cost_only {
         vec![RoomDensity::AsCaptured, RoomDensity::Uniform]
+    } else {
+        vec![]
     };
     for density in densities {
         let c = plane_cost(&ctx, &renderer, density, pairs)?;
@@ -360,7 +372,24 @@ fn main() -> Result<()> {
         }
         costs.push(c);
     }
-    let report = report(&ctx, &rows, &costs, throughput, &backward, &args);
+    let mut steps = Vec::new();
+    if !only || args.train_step_only {
+        for planes in 0..=1 {
+            let t = bench_train_step(&ctx, planes, args.reps.max(1))?;
+            println!(
+                "training step, 256x192 {} Gaussians {planes} planes: {:.1} ms ({})",
+                t.gaussians,
+                t.step_ms,
+                t.phases
+                    .iter()
+                    .map(|(n, ms)| format!("{n} {ms:.1}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+            steps.push(t);
+        }
+    }
+    let report = report(&ctx, &rows, &costs, throughput, &backward, &steps, &args);
     println!("\n{report}");
     if let Some(path) = &args.write {
         trgs_core::io::write_atomic(path, report.as_bytes())?;
@@ -391,14 +420,16 @@ fn report(
     costs: &[PlaneCost],
     throughput: Option<Throughput>,
     backward: &[BackwardRow],
+    steps: &[TrainStepRow],
     args: &Args,
 ) -> String {
     let mut s = String::new();
     let cmd = format!(
-        "cargo run --release --bin bench --{}{}{}{}",
+        "cargo run --release --bin bench --{}{}{}{}{}",
         if args.quick { " --quick" } else { "" },
         if args.plane_cost_only { " --plane-cost" } else { "" },
         if args.backward_only { " --backward" } else { "" },
+        if args.train_step_only { " --train-step" } else { "" },
         args.write.as_ref().map_or(String::new(), |p| format!(" --write {}", p.display()))
     );
     let _ = writeln!(s, "## Renderer benchmarks\n");
@@ -593,5 +624,48 @@ fn report(
             );
         }
     }
+    if !steps.is_empty() {
+        train_step_section(&mut s, steps);
+    }
     s
+}
+
+fn train_step_section(s: &mut String, steps: &[TrainStepRow]) {
+    let _ = writeln!(s, "\n### Training step (256x192, {} Gaussians)\n", steps[0].gaussians);
+    let _ = writeln!(
+        s,
+        "Whole `Trainer::train_step` calls on the capture-like room, joint stage (every loss of the \
+         paper on, SH degree 3, no densification), target: the scene's own render darkened by 10%. \
+         Wall ms: medians over {} steps; each phase ends with the GPU idle, so the phases add up \
+         to the step. GPU ms: medians of the timestamp-query time of each stage, summed over the \
+         views of a step.\n",
+        steps[0].steps
+    );
+    let names: Vec<&str> = steps[0].phases.iter().map(|p| p.0).collect();
+    let _ = writeln!(s, "| planes | step ms | {} |", names.join(" ms | ") + " ms");
+    let _ = writeln!(s, "|---:|---:|{}", "---:|".repeat(names.len()));
+    for t in steps {
+        let cells: Vec<String> = t.phases.iter().map(|p| format!("{:.1}", p.1)).collect();
+        let _ = writeln!(s, "| {} | {:.1} | {} |", t.planes, t.step_ms, cells.join(" | "));
+    }
+    let mut stages: Vec<&str> = Vec::new();
+    for t in steps {
+        for (n, _) in &t.stages {
+            if !stages.contains(n) {
+                stages.push(n);
+            }
+        }
+    }
+    let _ = writeln!(s, "\n#### Training-step GPU stages (ms, median)\n");
+    let _ = writeln!(s, "| planes | {} |", stages.join(" | "));
+    let _ = writeln!(s, "|---:|{}", "---:|".repeat(stages.len()));
+    for t in steps {
+        let cells: Vec<String> = stages
+            .iter()
+            .map(|n| {
+                t.stages.iter().find(|x| x.0 == *n).map_or("-".into(), |x| format!("{:.2}", x.1))
+            })
+            .collect();
+        let _ = writeln!(s, "| {} | {} |", t.planes, cells.join(" | "));
+    }
 }

@@ -1,0 +1,84 @@
+//! The training-step measurement of `bench`: whole steps of `Trainer` (render, loss, backward,
+//! Adam) at 256x192 on the capture-like room with 100k Gaussians, with their phase breakdown.
+use crate::median;
+use anyhow::Result;
+use trgs_core::fixtures::{RoomDensity, RoomSpec, room_scene};
+use trgs_render::{GpuContext, Layer};
+use trgs_train::data::View;
+use trgs_train::settings::TrainSettings;
+use trgs_train::trainer::Trainer;
+
+/// Median times of one configuration's training steps.
+pub struct TrainStepRow {
+    pub planes: usize,
+    pub gaussians: usize,
+    pub steps: usize,
+    /// Median whole step, wall clock.
+    pub step_ms: f64,
+    /// Median of each phase (render, loss, backward, adam, densify), wall clock.
+    pub phases: Vec<(&'static str, f64)>,
+    /// Median GPU ms of each stage (timestamp queries) of a profiled step.
+    pub stages: Vec<(&'static str, f64)>,
+}
+
+/// `steps` timed training steps (after one warm-up) of the joint stage, with the paper's losses
+/// and no densification: the target is the scene's own render darkened by 10%, so that every
+/// parameter gets a gradient.
+pub fn bench_train_step(ctx: &GpuContext, planes: usize, steps: usize) -> Result<TrainStepRow> {
+    let spec = RoomSpec {
+        seed: 7,
+        gaussians: 100_000,
+        planes,
+        width: 256,
+        height: 192,
+        sh_degree: 3,
+        density: RoomDensity::AsCaptured,
+    };
+    let scene = room_scene(&spec);
+    let gaussians = scene.gaussians.cast::<f32>();
+    let mut settings = TrainSettings::scaled(30_000);
+    // The joint stage from the first step: every loss and pass of the model is on.
+    settings.stage1 = 0;
+    settings.stage2 = 0;
+    settings.perturb = None;
+    let mut trainer = Trainer::new(ctx, &gaussians, &scene.planes, settings, 1.0)?;
+    let mut image = trainer.render(&scene.camera)?.read_layer(ctx, Layer::Color);
+    image.data.iter_mut().for_each(|v| *v *= 0.9);
+    let view = View { camera: scene.camera.clone(), image, mask: None };
+    trainer.train_step(&view)?;
+    let (mut totals, mut phases) = (Vec::new(), vec![Vec::new(); 5]);
+    for _ in 0..steps {
+        let s = trainer.train_step(&view)?;
+        totals.push(s.times.total());
+        for (k, (_, ms)) in s.times.phases().into_iter().enumerate() {
+            phases[k].push(ms);
+        }
+    }
+    trainer.profile = true;
+    let mut samples: Vec<(&'static str, Vec<f64>)> = Vec::new();
+    for _ in 0..steps {
+        // A stage runs once per view (the camera's and each mirrored one): sum per step.
+        let mut step: Vec<(&'static str, f64)> = Vec::new();
+        for (name, ms) in trainer.train_step(&view)?.gpu_stages {
+            match step.iter_mut().find(|s| s.0 == name) {
+                Some(s) => s.1 += ms,
+                None => step.push((name, ms)),
+            }
+        }
+        for (name, ms) in step {
+            match samples.iter_mut().find(|s| s.0 == name) {
+                Some(s) => s.1.push(ms),
+                None => samples.push((name, vec![ms])),
+            }
+        }
+    }
+    let names = trgs_train::trainer::StepTimes::default().phases().map(|(n, _)| n);
+    Ok(TrainStepRow {
+        planes,
+        gaussians: gaussians.len(),
+        steps,
+        step_ms: median(totals),
+        phases: names.into_iter().zip(phases.into_iter().map(median)).collect(),
+        stages: samples.into_iter().map(|(n, v)| (n, median(v))).collect(),
+    })
+}

@@ -1,0 +1,362 @@
+//! MCMC densification (3DGS-MCMC, Kheradmand et al. 2024), the alternative to classic
+//! densification selected by `--densify mcmc`:
+//! - every step, the regularisers' gradients (`mcmc_regularise`) before Adam and the exploration
+//!   noise on the means (`mcmc_noise`) after it, both on the GPU;
+//! - every `every` steps of [from, until), on the CPU over the state read back: dead Gaussians
+//!   (opacity at most `min_opacity`) are moved onto live ones drawn in proportion to their
+//!   opacity, then 5% more Gaussians are added the same way, up to `cap`. A Gaussian that receives
+//!   N - 1 copies and its copies all take the opacity and scale of the paper's Eq. 9, so that the
+//!   N of them render about as the one did. Moved and sampled Gaussians restart their Adam moments.
+//!
+//! There is no pruning and no opacity reset. Glass Gaussians are never moved, sampled or noised:
+//! they belong to their plane.
+use crate::densify::{TrainState, gather, widths as attribute_widths};
+use crate::settings::scale_len;
+use trgs_core::reference::AdamRate;
+use trgs_core::rng::Rng;
+use trgs_core::scene::Population;
+use trgs_render::gpu::{self, Kernel, Recorder, grid_1d, range};
+use trgs_render::layout::McmcParams;
+use trgs_render::{GpuContext, GpuScene, SceneGradBuffers};
+
+/// The largest number of Gaussians sharing one source in the relocation formula (the binomial
+/// sums alternate in sign and lose precision beyond; the reference code caps at 51 too).
+pub const MAX_SHARE: usize = 51;
+
+/// The schedule and constants (the paper's values for 30k steps; lengths scale with the run).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct McmcSettings {
+    pub from: u32,
+    pub until: u32,
+    pub every: u32,
+    /// Never more Gaussians than this.
+    pub cap: usize,
+    /// Gaussians at or below this opacity are dead and get relocated.
+    pub min_opacity: f64,
+    /// Growth per relocation step (1.05: 5% more Gaussians).
+    pub growth: f64,
+    /// The noise's rate relative to the position learning rate (the paper's 5e5).
+    pub noise_rate: f64,
+    /// Weights of mean(opacity) and mean(scale) in the loss (the paper's 0.01 each).
+    pub opacity_weight: f64,
+    pub scale_weight: f64,
+}
+
+impl McmcSettings {
+    /// The paper's settings with the count capped at `cap`. The relocation interval scales with
+    /// the run too (at least 20 steps): relocation needs no gradient statistics, and a short run
+    /// has to reach its cap at 5% per relocation as the paper's run does.
+    pub fn scaled(iterations: u32, cap: usize) -> Self {
+        Self {
+            from: scale_len(500, iterations),
+            until: scale_len(25_000, iterations),
+            every: scale_len(100, iterations).max(20),
+            cap,
+            min_opacity: 0.005,
+            growth: 1.05,
+            noise_rate: 5e5,
+            opacity_weight: 0.01,
+            scale_weight: 0.01,
+        }
+    }
+
+    /// Whether step `t` (1-based, after its optimiser step) relocates and grows.
+    pub fn relocates_at(&self, t: u32) -> bool {
+        t > self.from && t < self.until && t.is_multiple_of(self.every)
+    }
+}
+
+/// What one relocation step did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct McmcReport {
+    pub relocated: usize,
+    pub added: usize,
+}
+
+/// Eq. 9 of the paper: the opacity and the scale factor of each of `share` Gaussians that replace
+/// one of opacity `opacity` (at most [`MAX_SHARE`] are accounted for).
+pub fn relocation(opacity: f64, share: usize, min_opacity: f64) -> (f64, f64) {
+    let n = share.clamp(1, MAX_SHARE);
+    let new_o = (1.0 - (1.0 - opacity).powf(1.0 / n as f64)).clamp(min_opacity, 1.0 - 1e-7);
+    let mut denom = 0.0;
+    for i in 1..=n {
+        let mut binom = 1.0;
+        for k in 0..i {
+            let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
+            denom += binom * sign * new_o.powi(k as i32 + 1) / ((k + 1) as f64).sqrt();
+            binom = binom * (i - 1 - k) as f64 / (k + 1) as f64;
+        }
+    }
+    (new_o, opacity / denom)
+}
+
+fn sigmoid(x: f64) -> f64 {
+    1.0 / (1.0 + (-x).exp())
+}
+
+fn logit(p: f64) -> f32 {
+    (p / (1.0 - p)).ln() as f32
+}
+
+/// Draw `count` indices among `candidates` with probability proportional to `weights[index]`.
+fn sample_by_weight(
+    candidates: &[usize],
+    weights: &[f64],
+    count: usize,
+    rng: &mut Rng,
+) -> Vec<usize> {
+    let mut cumulative = Vec::with_capacity(candidates.len());
+    let mut total = 0.0;
+    for &i in candidates {
+        total += weights[i];
+        cumulative.push(total);
+    }
+    if candidates.is_empty() || !(total > 0.0) {
+        return Vec::new();
+    }
+    (0..count)
+        .map(|_| {
+            let u = rng.uniform() * total;
+            let k = cumulative.partition_point(|&c| c <= u).min(candidates.len() - 1);
+            candidates[k]
+        })
+        .collect()
+}
+
+/// Give each source of `counts` (copies it receives) its share's opacity and scale, and zero its
+/// moments.
+fn apply_shares(state: &mut TrainState, counts: &[(usize, usize)], min_opacity: f64) {
+    let w = attribute_widths(&state.gaussians);
+    for &(src, copies) in counts {
+        let g = &mut state.gaussians;
+        let o = sigmoid(f64::from(g.opacity_logits[src]));
+        let (new_o, factor) = relocation(o, copies + 1, min_opacity);
+        g.opacity_logits[src] = logit(new_o);
+        let ln_factor = factor.ln() as f32;
+        g.log_scales[src] = g.log_scales[src].map(|s| s + ln_factor);
+        for a in 0..w.len() {
+            state.m[a][src * w[a]..(src + 1) * w[a]].fill(0.0);
+            state.v[a][src * w[a]..(src + 1) * w[a]].fill(0.0);
+        }
+    }
+}
+
+/// How many times each index occurs in `draws`, as (index, count) in index order.
+fn tally(draws: &[usize]) -> Vec<(usize, usize)> {
+    let mut sorted = draws.to_vec();
+    sorted.sort_unstable();
+    let mut out: Vec<(usize, usize)> = Vec::new();
+    for i in sorted {
+        match out.last_mut() {
+            Some((j, c)) if *j == i => *c += 1,
+            _ => out.push((i, 1)),
+        }
+    }
+    out
+}
+
+/// One relocation step: move the dead primary Gaussians onto live ones, then grow by `growth` up
+/// to `cap` (3DGS-MCMC's `relocate_gs` and `add_new_gs`).
+pub fn relocate_and_grow(
+    state: &TrainState,
+    settings: &McmcSettings,
+    rng: &mut Rng,
+) -> (TrainState, McmcReport) {
+    let mut out = state.clone();
+    let n = state.gaussians.len();
+    let primary =
+        |g: &trgs_core::scene::Gaussians<f32>, i: usize| g.populations[i] == Population::Primary;
+    let opacities = |g: &trgs_core::scene::Gaussians<f32>| -> Vec<f64> {
+        g.opacity_logits.iter().map(|&l| sigmoid(f64::from(l))).collect()
+    };
+    let o = opacities(&out.gaussians);
+    let dead: Vec<usize> =
+        (0..n).filter(|&i| primary(&out.gaussians, i) && o[i] <= settings.min_opacity).collect();
+    let alive: Vec<usize> =
+        (0..n).filter(|&i| primary(&out.gaussians, i) && o[i] > settings.min_opacity).collect();
+    let sources = sample_by_weight(&alive, &o, dead.len(), rng);
+    apply_shares(&mut out, &tally(&sources), settings.min_opacity);
+    // Each dead slot becomes a copy of its (updated) source, with zero moments.
+    let w = attribute_widths(&out.gaussians);
+    for (&d, &s) in dead.iter().zip(&sources) {
+        let g = &mut out.gaussians;
+        g.means[d] = g.means[s];
+        g.rotations[d] = g.rotations[s];
+        g.log_scales[d] = g.log_scales[s];
+        g.opacity_logits[d] = g.opacity_logits[s];
+        g.mask_logits[d] = g.mask_logits[s];
+        g.log_reflections[d] = g.log_reflections[s];
+        let c = g.sh_coeffs();
+        g.sh.copy_within(s * c..(s + 1) * c, d * c);
+        for a in 0..w.len() {
+            out.m[a][d * w[a]..(d + 1) * w[a]].fill(0.0);
+            out.v[a][d * w[a]..(d + 1) * w[a]].fill(0.0);
+        }
+    }
+    let relocated = sources.len();
+    // Growth: sample among every primary Gaussian by its (new) opacity.
+    let target = ((settings.growth * n as f64) as usize).min(settings.cap);
+    let wanted = target.saturating_sub(n);
+    let o = opacities(&out.gaussians);
+    let candidates: Vec<usize> = (0..n).filter(|&i| primary(&out.gaussians, i)).collect();
+    let added_from = sample_by_weight(&candidates, &o, wanted, rng);
+    apply_shares(&mut out, &tally(&added_from), settings.min_opacity);
+    let mut gather_list: Vec<(usize, bool)> = (0..n).map(|i| (i, true)).collect();
+    gather_list.extend(added_from.iter().map(|&i| (i, false)));
+    let grown = gather(&out, &gather_list);
+    (grown, McmcReport { relocated, added: added_from.len() })
+}
+
+/// The two per-step GPU stages.
+#[derive(Debug)]
+pub struct McmcKernels {
+    regularise: Kernel,
+    noise: Kernel,
+}
+
+impl McmcKernels {
+    pub fn new(ctx: &GpuContext) -> Self {
+        Self {
+            regularise: Kernel::new(ctx, "mcmc_regularise", "mcmc_regularise.wgsl", &[]),
+            noise: Kernel::new(ctx, "mcmc_noise", "mcmc_noise.wgsl", &[]),
+        }
+    }
+
+    /// Record `mcmc_regularise`: add the regularisers' gradients to `grads`.
+    pub fn record_regularise(
+        &self,
+        ctx: &GpuContext,
+        rec: &mut Recorder,
+        scene: &GpuScene,
+        grads: &SceneGradBuffers,
+        settings: &McmcSettings,
+    ) {
+        let n = f64::from(scene.len().max(1));
+        let base = McmcParams {
+            opacity_weight: (settings.opacity_weight / n) as f32,
+            scale_weight: (settings.scale_weight / (3.0 * n)) as f32,
+            ..Default::default()
+        };
+        let p = scene.parameters();
+        for (first, count) in scene.chunks() {
+            let block =
+                gpu::params(ctx, "trgs.mcmc_regularise.params", &McmcParams { count, ..base });
+            let (f, c) = (u64::from(first), u64::from(count));
+            let bind = self.regularise.bind(
+                ctx,
+                &[
+                    block.as_entire_binding(),
+                    range(p[2], f * 12, c * 12),
+                    range(p[3], f * 4, c * 4),
+                    range(scene.populations(), f * 4, c * 4),
+                    range(&grads.log_scales, f * 12, c * 12),
+                    range(&grads.opacity_logits, f * 4, c * 4),
+                ],
+            );
+            rec.dispatch("mcmc_regularise", &self.regularise, &bind, grid_1d(count.div_ceil(256)));
+        }
+    }
+
+    /// Record `mcmc_noise` with the position learning rate `position_lr` of this step.
+    pub fn record_noise(
+        &self,
+        ctx: &GpuContext,
+        rec: &mut Recorder,
+        scene: &GpuScene,
+        settings: &McmcSettings,
+        position_lr: &AdamRate,
+        seed: u32,
+    ) {
+        let base = McmcParams {
+            seed,
+            noise_scale: (settings.noise_rate * position_lr.lr) as f32,
+            ..Default::default()
+        };
+        let p = scene.parameters();
+        for (first, count) in scene.chunks() {
+            let block =
+                gpu::params(ctx, "trgs.mcmc_noise.params", &McmcParams { count, first, ..base });
+            let (f, c) = (u64::from(first), u64::from(count));
+            let bind = self.noise.bind(
+                ctx,
+                &[
+                    block.as_entire_binding(),
+                    range(p[0], f * 12, c * 12),
+                    range(p[1], f * 16, c * 16),
+                    range(p[2], f * 12, c * 12),
+                    range(p[3], f * 4, c * 4),
+                    range(scene.populations(), f * 4, c * 4),
+                ],
+            );
+            rec.dispatch("mcmc_noise", &self.noise, &bind, grid_1d(count.div_ceil(256)));
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use trgs_core::scene::Gaussians;
+
+    /// N copies at the relocated opacity composite to the old opacity where they overlap
+    /// (1 - (1 - o')^N = o), and one share leaves a Gaussian unchanged.
+    #[test]
+    fn relocation_keeps_opacity_and_identity() {
+        let (o1, f1) = relocation(0.6, 1, 0.005);
+        assert!((o1 - 0.6).abs() < 1e-12 && (f1 - 1.0).abs() < 1e-12, "{o1} {f1}");
+        for share in [2, 3, 5, 20, 51, 80] {
+            let (o, f) = relocation(0.8, share, 0.005);
+            let n = share.min(MAX_SHARE) as i32;
+            assert!((1.0 - (1.0 - o).powi(n) - 0.8).abs() < 1e-9, "share {share}: {o}");
+            assert!(f.is_finite() && f > 0.0, "share {share}: scale factor {f}");
+        }
+        // Two copies of an opaque Gaussian must each be wider than half its footprint.
+        let (_, f) = relocation(0.9, 2, 0.005);
+        assert!(f > 0.5 && f < 2.0, "{f}");
+    }
+
+    fn state(opacities: &[f64]) -> TrainState {
+        let mut g = Gaussians::<f32>::zeros(opacities.len(), 1);
+        g.rotations = vec![[1.0, 0.0, 0.0, 0.0]; opacities.len()];
+        g.opacity_logits = opacities.iter().map(|&o| logit(o)).collect();
+        for (i, m) in g.means.iter_mut().enumerate() {
+            *m = [i as f32, 0.0, 0.0];
+        }
+        let w = attribute_widths(&g);
+        let ones = |k: usize| vec![1.0f32; opacities.len() * w[k]];
+        TrainState { m: (0..7).map(ones).collect(), v: (0..7).map(ones).collect(), gaussians: g }
+    }
+
+    #[test]
+    fn dead_gaussians_move_onto_live_ones_and_the_count_grows() {
+        let mut s = state(&[0.9, 0.001, 0.5, 0.002, 0.7, 0.3, 0.8, 0.6, 0.4, 0.95, 0.85, 0.65]);
+        s.gaussians.populations[11] = Population::Glass;
+        let settings = McmcSettings { cap: 100, ..McmcSettings::scaled(30_000, 100) };
+        let (out, report) = relocate_and_grow(&s, &settings, &mut Rng::new(3));
+        assert_eq!(report.relocated, 2);
+        assert_eq!(report.added, 12 * 105 / 100 - 12);
+        let g = &out.gaussians;
+        assert_eq!(g.len(), 12 + report.added);
+        for d in [1, 3] {
+            let o = sigmoid(f64::from(g.opacity_logits[d]));
+            assert!(o > settings.min_opacity, "slot {d} is still dead: {o}");
+            let copy_of = (0..12).find(|&j| j != d && g.means[j] == g.means[d]);
+            assert!(copy_of.is_some(), "slot {d} holds a copy of a live Gaussian");
+            assert_eq!(out.m[0][3 * d], 0.0, "moved Gaussians restart Adam");
+        }
+        // The glass Gaussian is never a source, a slot or touched.
+        assert_eq!(g.opacity_logits[11], s.gaussians.opacity_logits[11]);
+        assert!(g.means[12..].iter().all(|m| *m != s.gaussians.means[11]));
+        assert_eq!(out.m[0][3 * 11], 1.0);
+    }
+
+    #[test]
+    fn growth_stops_at_the_cap() {
+        let s = state(&[0.5; 40]);
+        let settings = McmcSettings { cap: 41, ..McmcSettings::scaled(30_000, 41) };
+        let (out, report) = relocate_and_grow(&s, &settings, &mut Rng::new(1));
+        assert_eq!((report.relocated, report.added, out.gaussians.len()), (0, 1, 41));
+        let (out, _) = relocate_and_grow(&out, &settings, &mut Rng::new(1));
+        assert_eq!(out.gaussians.len(), 41);
+    }
+}
