@@ -594,35 +594,12 @@ fn report(
                 b.ratio
             );
         }
-        let mut names: Vec<&str> = Vec::new();
-        for b in backward {
-            for (n, _) in &b.stages {
-                if !names.contains(n) {
-                    names.push(n);
-                }
-            }
-        }
         let _ = writeln!(s, "\n#### Backward stage breakdown (GPU ms, median per stage)\n");
-        let _ = writeln!(s, "| room | planes | {} |", names.join(" | "));
-        let _ = writeln!(s, "|---|---:|{}", "---:|".repeat(names.len()));
-        for b in backward {
-            let cells: Vec<String> = names
-                .iter()
-                .map(|n| {
-                    b.stages
-                        .iter()
-                        .find(|x| x.0 == *n)
-                        .map_or("-".into(), |x| format!("{:.2}", x.1))
-                })
-                .collect();
-            let _ = writeln!(
-                s,
-                "| {} | {} | {} |",
-                density_name(b.density),
-                b.planes,
-                cells.join(" | ")
-            );
-        }
+        let rows: Vec<(String, &[(&str, f64)])> = backward
+            .iter()
+            .map(|b| (format!("{} | {}", density_name(b.density), b.planes), &b.stages[..]))
+            .collect();
+        stage_table(&mut s, "room | planes", "---|---:", &rows);
     }
     if !steps.is_empty() {
         train_step_section(&mut s, steps);
@@ -648,24 +625,37 @@ fn train_step_section(s: &mut String, steps: &[TrainStepRow]) {
         let cells: Vec<String> = t.phases.iter().map(|p| format!("{:.1}", p.1)).collect();
         let _ = writeln!(s, "| {} | {:.1} | {} |", t.planes, t.step_ms, cells.join(" | "));
     }
-    let mut stages: Vec<&str> = Vec::new();
-    for t in steps {
-        for (n, _) in &t.stages {
-            if !stages.contains(n) {
-                stages.push(n);
+    let _ = writeln!(s, "\n#### Training-step GPU stages (ms, median)\n");
+    let rows: Vec<(String, &[(&str, f64)])> =
+        steps.iter().map(|t| (t.planes.to_string(), &t.stages[..])).collect();
+    stage_table(s, "planes", "---:", &rows);
+}
+
+/// A table of GPU ms per stage: one row per (key cells, stages), one column per stage name in
+/// order of first appearance, "-" where a row lacks the stage.
+fn stage_table(
+    s: &mut String,
+    key_header: &str,
+    key_align: &str,
+    rows: &[(String, &[(&str, f64)])],
+) {
+    let mut names: Vec<&str> = Vec::new();
+    for (_, stages) in rows {
+        for (n, _) in stages.iter() {
+            if !names.contains(n) {
+                names.push(n);
             }
         }
     }
-    let _ = writeln!(s, "\n#### Training-step GPU stages (ms, median)\n");
-    let _ = writeln!(s, "| planes | {} |", stages.join(" | "));
-    let _ = writeln!(s, "|---:|{}", "---:|".repeat(stages.len()));
-    for t in steps {
-        let cells: Vec<String> = stages
+    let _ = writeln!(s, "| {key_header} | {} |", names.join(" | "));
+    let _ = writeln!(s, "|{key_align}|{}", "---:|".repeat(names.len()));
+    for (key, stages) in rows {
+        let cells: Vec<String> = names
             .iter()
             .map(|n| {
-                t.stages.iter().find(|x| x.0 == *n).map_or("-".into(), |x| format!("{:.2}", x.1))
+                stages.iter().find(|x| x.0 == *n).map_or("-".into(), |x| format!("{:.2}", x.1))
             })
             .collect();
-        let _ = writeln!(s, "| {} | {} |", t.planes, cells.join(" | "));
+        let _ = writeln!(s, "| {key} | {} |", cells.join(" | "));
     }
 }
