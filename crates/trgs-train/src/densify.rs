@@ -140,7 +140,7 @@ pub(crate) fn gather(state: &TrainState, sources: &[(usize, bool)]) -> TrainStat
     TrainState { m: moments(&state.m), v: moments(&state.v), gaussians: out }
 }
 
-fn sigmoid(x: f64) -> f64 {
+pub(crate) fn sigmoid(x: f64) -> f64 {
     1.0 / (1.0 + (-x).exp())
 }
 

@@ -10,7 +10,7 @@
 //!
 //! There is no pruning and no opacity reset. Glass Gaussians are never moved, sampled or noised:
 //! they belong to their plane.
-use crate::densify::{TrainState, gather, widths as attribute_widths};
+use crate::densify::{TrainState, gather, sigmoid, widths};
 use crate::settings::scale_len;
 use trgs_core::reference::AdamRate;
 use trgs_core::rng::Rng;
@@ -90,10 +90,6 @@ pub fn relocation(opacity: f64, share: usize, min_opacity: f64) -> (f64, f64) {
     (new_o, opacity / denom)
 }
 
-fn sigmoid(x: f64) -> f64 {
-    1.0 / (1.0 + (-x).exp())
-}
-
 fn logit(p: f64) -> f32 {
     (p / (1.0 - p)).ln() as f32
 }
@@ -126,7 +122,7 @@ fn sample_by_weight(
 /// Give each source of `counts` (copies it receives) its share's opacity and scale, and zero its
 /// moments.
 fn apply_shares(state: &mut TrainState, counts: &[(usize, usize)], min_opacity: f64) {
-    let w = attribute_widths(&state.gaussians);
+    let w = widths(&state.gaussians);
     for &(src, copies) in counts {
         let g = &mut state.gaussians;
         let o = sigmoid(f64::from(g.opacity_logits[src]));
@@ -177,22 +173,11 @@ pub fn relocate_and_grow(
     let sources = sample_by_weight(&alive, &o, dead.len(), rng);
     apply_shares(&mut out, &tally(&sources), settings.min_opacity);
     // Each dead slot becomes a copy of its (updated) source, with zero moments.
-    let w = attribute_widths(&out.gaussians);
-    for (&d, &s) in dead.iter().zip(&sources) {
-        let g = &mut out.gaussians;
-        g.means[d] = g.means[s];
-        g.rotations[d] = g.rotations[s];
-        g.log_scales[d] = g.log_scales[s];
-        g.opacity_logits[d] = g.opacity_logits[s];
-        g.mask_logits[d] = g.mask_logits[s];
-        g.log_reflections[d] = g.log_reflections[s];
-        let c = g.sh_coeffs();
-        g.sh.copy_within(s * c..(s + 1) * c, d * c);
-        for a in 0..w.len() {
-            out.m[a][d * w[a]..(d + 1) * w[a]].fill(0.0);
-            out.v[a][d * w[a]..(d + 1) * w[a]].fill(0.0);
-        }
+    let mut slots: Vec<(usize, bool)> = (0..n).map(|i| (i, true)).collect();
+    for (&d, &src) in dead.iter().zip(&sources) {
+        slots[d] = (src, false);
     }
+    let mut out = gather(&out, &slots);
     let relocated = sources.len();
     // Growth: sample among every primary Gaussian by its (new) opacity.
     let target = ((settings.growth * n as f64) as usize).min(settings.cap);
@@ -322,7 +307,7 @@ mod tests {
         for (i, m) in g.means.iter_mut().enumerate() {
             *m = [i as f32, 0.0, 0.0];
         }
-        let w = attribute_widths(&g);
+        let w = widths(&g);
         let ones = |k: usize| vec![1.0f32; opacities.len() * w[k]];
         TrainState { m: (0..7).map(ones).collect(), v: (0..7).map(ones).collect(), gaussians: g }
     }

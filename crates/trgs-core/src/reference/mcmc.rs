@@ -4,7 +4,7 @@
 //!
 //! - `mcmc_regularise` adds the gradient of the paper's regularisers to the Gaussians' gradients:
 //!   `lambda_o mean(o) + lambda_s mean(s)` over the primary Gaussians' opacities `o` and scale
-//!   components `s` (their means over N and 3N values), which pushes unused Gaussians to
+//!   components `s` (sums divided by the scene's N and 3N; glass Gaussians add nothing), which pushes unused Gaussians to
 //!   transparency so that relocation can reuse them.
 //! - `mcmc_noise` is the SGLD exploration term added to every primary mean after the optimiser
 //!   step: `Sigma eta * sigmoid(k (1 - o - t)) * scale`, with `Sigma` the Gaussian's 3D

@@ -1,8 +1,8 @@
 //! The backward measurement of `bench`: forward and backward of one training-like step.
-use crate::{median, upload};
+use crate::{median, room_100k, upload};
 use anyhow::Result;
 use std::time::Instant;
-use trgs_core::fixtures::{RoomDensity, RoomSpec};
+use trgs_core::fixtures::RoomDensity;
 use trgs_core::reference::{FrameGrads, PlaneLayerGrads};
 use trgs_render::{BackwardOptions, Frame, GpuContext, LayerGrads, RenderOptions, Renderer};
 
@@ -56,15 +56,7 @@ pub fn bench_backward(
     planes: usize,
     steps: usize,
 ) -> Result<BackwardRow> {
-    let spec = RoomSpec {
-        seed: 7,
-        gaussians: 100_000,
-        planes,
-        width: 256,
-        height: 192,
-        sh_degree: 3,
-        density,
-    };
+    let spec = room_100k(planes, density);
     let (scene, camera) = upload(ctx, &spec)?;
     // As training renders: with the depth-variance layer.
     let options = RenderOptions { depth_variance: true, ..RenderOptions::default() };

@@ -169,21 +169,19 @@ fn stage_medians(
     Ok(samples.into_iter().map(|(n, v)| (n, median(v))).collect())
 }
 
+/// The room at 256x192 with 100k Gaussians and SH degree 3: the configuration of the plane-cost,
+/// backward and training-step measurements.
+fn room_100k(planes: usize, density: RoomDensity) -> RoomSpec {
+    RoomSpec { seed: 7, gaussians: 100_000, planes, width: 256, height: 192, sh_degree: 3, density }
+}
+
 fn plane_cost(
     ctx: &GpuContext,
     renderer: &Renderer,
     density: RoomDensity,
     pairs: usize,
 ) -> Result<PlaneCost> {
-    let spec = RoomSpec {
-        seed: 7,
-        gaussians: 100_000,
-        planes: 1,
-        width: 256,
-        height: 192,
-        sh_degree: 3,
-        density,
-    };
+    let spec = room_100k(1, density);
     let (scene, camera) = upload(ctx, &spec)?;
     let off = RenderOptions { enabled_planes: vec![false], ..RenderOptions::default() };
     let on = RenderOptions::default();

@@ -1,8 +1,8 @@
 //! The training-step measurement of `bench`: whole steps of `Trainer` (render, loss, backward,
 //! Adam) at 256x192 on the capture-like room with 100k Gaussians, with their phase breakdown.
-use crate::median;
+use crate::{median, room_100k};
 use anyhow::Result;
-use trgs_core::fixtures::{RoomDensity, RoomSpec, room_scene};
+use trgs_core::fixtures::{RoomDensity, room_scene};
 use trgs_render::{GpuContext, Layer};
 use trgs_train::data::View;
 use trgs_train::settings::TrainSettings;
@@ -25,15 +25,7 @@ pub struct TrainStepRow {
 /// and no densification: the target is the scene's own render darkened by 10%, so that every
 /// parameter gets a gradient.
 pub fn bench_train_step(ctx: &GpuContext, planes: usize, steps: usize) -> Result<TrainStepRow> {
-    let spec = RoomSpec {
-        seed: 7,
-        gaussians: 100_000,
-        planes,
-        width: 256,
-        height: 192,
-        sh_degree: 3,
-        density: RoomDensity::AsCaptured,
-    };
+    let spec = room_100k(planes, RoomDensity::AsCaptured);
     let scene = room_scene(&spec);
     let gaussians = scene.gaussians.cast::<f32>();
     let mut settings = TrainSettings::scaled(30_000);
