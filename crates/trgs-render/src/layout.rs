@@ -4,6 +4,7 @@
 //! blur, SH constants) come from `trgs_core` the same way. A test compares every struct's field
 //! offsets and size with naga's layout of the generated WGSL, so a field whose WGSL alignment
 //! differs from its Rust position fails instead of drifting.
+use trgs_core::metrics::{SSIM_C1, SSIM_C2, SSIM_RADIUS, SSIM_WINDOW, gaussian_window};
 use trgs_core::reference::{
     COV2D_BLUR, MAX_ALPHA, MIN_ALPHA, MIN_TRANSMITTANCE, TILE_PIXELS, TILE_SIZE,
 };
@@ -242,6 +243,26 @@ gpu_struct! {
 }
 
 gpu_struct! {
+    /// Parameters of the training losses: `photometric_loss` (both passes) and `regularisers`,
+    /// over one `width` x `height` frame.
+    pub struct LossParams {
+        pub width: u32,
+        pub height: u32,
+        /// The D-SSIM weight lambda of `(1 - lambda) L1 + lambda (1 - SSIM)`.
+        pub lambda_dssim: f32,
+        /// 1 / (width height 3): the photometric loss and L_c are means over samples.
+        pub inv_samples: f32,
+        /// 1 / (width height): L_d and L_m are means over pixels.
+        pub inv_pixels: f32,
+        /// The regularisers' weights (`regularisers`).
+        pub weight_depth: f32,
+        pub weight_conflict: f32,
+        /// Zero on views without a glass annotation.
+        pub weight_mask: f32,
+    }
+}
+
+gpu_struct! {
     /// Parameters of `mcmc_regularise` and `mcmc_noise` over `count` Gaussians.
     pub struct McmcParams {
         pub count: u32,
@@ -317,6 +338,7 @@ pub fn all_structs() -> Vec<StructInfo> {
         entry::<PlaneGpu>(),
         entry::<AdamParams>(),
         entry::<McmcParams>(),
+        entry::<LossParams>(),
     ]
 }
 
@@ -372,9 +394,17 @@ pub fn prelude() -> String {
     ];
     consts_f32.extend(sh::C2.iter().enumerate().map(|(i, &v)| (format!("SH_C2_{i}"), v)));
     consts_f32.extend(sh::C3.iter().enumerate().map(|(i, &v)| (format!("SH_C3_{i}"), v)));
+    consts_f32.push(("SSIM_C1".to_string(), SSIM_C1));
+    consts_f32.push(("SSIM_C2".to_string(), SSIM_C2));
     for (name, v) in consts_f32 {
         s.push_str(&format!("const {name}: f32 = {};\n", float(v)));
     }
+    // The SSIM window of trgs_core::metrics (photometric_loss blurs with it).
+    let window: Vec<String> = gaussian_window().iter().map(|&v| float(v)).collect();
+    s.push_str(&format!(
+        "const SSIM_RADIUS: u32 = {SSIM_RADIUS}u;\nconst SSIM_WEIGHTS = array<f32, {SSIM_WINDOW}>({});\n",
+        window.join(", ")
+    ));
     for (_, decl, _, _) in all_structs() {
         s.push_str(&decl);
     }

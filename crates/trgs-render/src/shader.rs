@@ -20,6 +20,7 @@ pub const SOURCES: &[(&str, &str)] = sources!(
     "shared/accumulate.wgsl",
     "shared/sh.wgsl",
     "shared/random.wgsl",
+    "shared/loss_block.wgsl",
     "project.wgsl",
     "tile_counts.wgsl",
     "prefix_sum.wgsl",
@@ -39,6 +40,9 @@ pub const SOURCES: &[(&str, &str)] = sources!(
     "adam.wgsl",
     "mcmc_regularise.wgsl",
     "mcmc_noise.wgsl",
+    "photometric_loss.wgsl",
+    "photometric_loss_grad.wgsl",
+    "regularisers.wgsl",
 );
 
 /// Every (stage file, defines) combination the renderer compiles; a test validates each with naga.
@@ -75,6 +79,9 @@ pub const VARIANTS: &[(&str, &[&str])] = &[
     ("adam.wgsl", &[]),
     ("mcmc_regularise.wgsl", &[]),
     ("mcmc_noise.wgsl", &[]),
+    ("photometric_loss.wgsl", &[]),
+    ("photometric_loss_grad.wgsl", &[]),
+    ("regularisers.wgsl", &[]),
 ];
 
 #[derive(Debug, thiserror::Error)]

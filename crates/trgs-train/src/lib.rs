@@ -1,7 +1,7 @@
 //! trgs-train: optimisation of TR-Gaussians models, and the command-line tools around it (`train`,
 //! `render`, `bench`): datasets at the training resolution ([`data`]), the initial Gaussians
 //! ([`init`]), the settings and schedules ([`settings`]), the GPU Adam step ([`adam`]), the
-//! regularisers ([`regularisers`]), densification ([`densify`]), plane initialisation
+//! losses and regularisers on the GPU ([`losses`]), densification ([`densify`]), plane initialisation
 //! ([`plane_init`]), the training step ([`trainer`]) and checkpoints ([`checkpoint`]).
 pub mod adam;
 pub mod checkpoint;
@@ -10,11 +10,11 @@ pub mod densify;
 pub mod eval;
 pub mod exr_layers;
 pub mod init;
+pub mod losses;
 pub mod mcmc;
 pub mod model;
 pub mod perturb;
 pub mod plane_init;
-pub mod regularisers;
 pub mod report;
 pub mod settings;
 pub mod trainer;

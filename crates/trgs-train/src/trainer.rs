@@ -7,18 +7,17 @@ use crate::data::View;
 use crate::densify::{
     ClassicSettings, DensifyReport, DensifyStats, TrainState, densify_and_prune, reset_opacity,
 };
+use crate::losses::{GpuTarget, LossKernels, LossLayers, LossSettings};
 use crate::mcmc::{McmcKernels, McmcSettings, relocate_and_grow};
 use crate::perturb::{perturb_opacities, seen_through_planes};
-use crate::regularisers::{depth_variance_loss, gradient_conflict_loss, mask_loss};
 use crate::settings::{Stage, TrainSettings};
 use anyhow::{Context, Result};
-use trgs_core::Image;
-use trgs_core::reference::{AdamRate, AdamSettings, FrameGrads, adam, photometric_loss};
+use std::collections::HashMap;
+use trgs_core::reference::{AdamRate, AdamSettings, RegulariserWeights, adam};
 use trgs_core::scene::{Camera, Gaussians, ReflectionPlane};
 use trgs_render::gpu::Recorder;
 use trgs_render::{
-    ATTRIBUTES, BackwardOptions, Frame, FrameImages, GpuContext, GpuScene, Layer, LayerGrads,
-    RenderOptions, Renderer,
+    ATTRIBUTES, BackwardOptions, Frame, GpuContext, GpuScene, LayerGrads, RenderOptions, Renderer,
 };
 
 /// What one step measured.
@@ -44,7 +43,7 @@ pub struct StepStats {
 pub struct StepTimes {
     /// Forward render of every pass.
     pub render: f64,
-    /// Layer readback, image loss and regularisers on the CPU, upload of their gradients.
+    /// The image loss and the regularisers (GPU), and the readback of their values.
     pub loss: f64,
     /// The adjoint passes and the plane-gradient readback.
     pub backward: f64,
@@ -90,6 +89,11 @@ pub struct Trainer {
     moments: Vec<AdamMoments>,
     plane_moments: Vec<PlaneMoments>,
     frame: Frame,
+    losses: LossKernels,
+    /// Every training view's image and glass labels, uploaded on first use.
+    targets: HashMap<String, GpuTarget>,
+    /// dL/d(layer) buffers, reused while the frame size and plane count stay.
+    layer_grads: Option<((u32, u32, usize), LayerGrads)>,
     /// Steps taken so far.
     pub step: u32,
     pub settings: TrainSettings,
@@ -126,6 +130,9 @@ impl Trainer {
             plane_moments: vec![PlaneMoments::default(); planes.len()],
             scene,
             frame: Frame::default(),
+            losses: LossKernels::new(ctx),
+            targets: HashMap::new(),
+            layer_grads: None,
             step: 0,
             rng: trgs_core::rng::Rng::new(settings.seed ^ 0x5eed),
             settings,
@@ -333,33 +340,62 @@ impl Trainer {
         let mut clock = PhaseClock::start();
         self.renderer.render_into(&self.scene, &view.camera, &options, &mut self.frame)?;
         times.render = clock.lap(&self.ctx);
-        let images = has_planes.then(|| self.frame.read_images(ctx));
-        let color = match &images {
-            Some(im) => im.color.clone(),
-            None => self.frame.read_layer(ctx, Layer::Color),
+        let target = match self.targets.entry(view.camera.name.clone()) {
+            std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
+            std::collections::hash_map::Entry::Vacant(e) => e.insert(GpuTarget::upload(
+                ctx,
+                &view.camera.name,
+                &view.image,
+                view.mask.as_ref(),
+            )?),
         };
-        let loss =
-            photometric_loss(&to_f64(&color), &to_f64(&view.image), self.settings.lambda_dssim)
-                .with_context(|| format!("loss of view {}", view.camera.name))?;
-        let mut grads = FrameGrads::zeros(color.width, color.height, self.scene.planes().len());
-        grads.color = loss.grad;
-        if let Some(im) = &images {
-            self.add_regularisers(view, im, &mut grads);
+        let shape = (self.frame.width(), self.frame.height(), self.frame.plane_slots());
+        if self.layer_grads.as_ref().is_none_or(|(s, _)| *s != shape) {
+            self.layer_grads = Some((shape, LayerGrads::zeros(ctx, &self.frame)));
         }
-        let layer_grads = LayerGrads::upload(ctx, &self.frame, &grads)?;
+        #[allow(clippy::expect_used)]
+        let layer_grads = &self.layer_grads.as_ref().expect("allocated above").1;
+        let s = &self.settings;
+        let loss_settings = LossSettings {
+            lambda_dssim: s.lambda_dssim,
+            regularisers: has_planes.then_some(RegulariserWeights {
+                depth: s.lambda_depth,
+                conflict: s.lambda_conflict,
+                mask: s.lambda_mask,
+            }),
+        };
+        let mut rec = Recorder::new(ctx, "trgs.train.loss", self.profile);
+        let pending = self
+            .losses
+            .record(
+                ctx,
+                &mut rec,
+                &LossLayers::of_frame(&self.frame)?,
+                target,
+                layer_grads,
+                &loss_settings,
+            )
+            .with_context(|| format!("loss of view {}", view.camera.name))?;
+        rec.submit_and_wait(ctx);
+        let loss = pending.read(ctx);
+        if !loss.value.is_finite() {
+            anyhow::bail!("loss of view {}: not finite ({})", view.camera.name, loss.value);
+        }
+        let loss_stages = rec.stage_times().unwrap_or_default();
         times.loss = clock.lap(&self.ctx);
         let backward = BackwardOptions {
             block_reflection_to_gaussians: stage == Stage::PlaneAdjustment,
             profile: self.profile,
         };
-        let g = self.renderer.backward(&self.scene, &mut self.frame, &layer_grads, &backward)?;
+        let g = self.renderer.backward(&self.scene, &mut self.frame, layer_grads, &backward)?;
         times.backward = clock.lap(&self.ctx);
-        let gpu_stages: Vec<_> = [self.frame.stage_times(), g.stage_times()]
-            .into_iter()
-            .flatten()
-            .flatten()
-            .copied()
-            .collect();
+        let gpu_stages: Vec<_> =
+            [self.frame.stage_times(), Some(&loss_stages[..]), g.stage_times()]
+                .into_iter()
+                .flatten()
+                .flatten()
+                .copied()
+                .collect();
         self.step += 1;
         let t = self.step;
         let rates = self.settings.rates.attribute_rates(
@@ -395,7 +431,7 @@ impl Trainer {
         {
             let projected = self.frame.read_projected(ctx, 0).unwrap_or_default();
             let grads = g.read_projected_grads(ctx, 0).unwrap_or_default();
-            stats.add(&projected, &grads, color.width, color.height);
+            stats.add(&projected, &grads, self.frame.width(), self.frame.height());
         }
         rec.submit_and_wait(ctx);
         self.step_planes(&g.planes, t)?;
@@ -403,41 +439,15 @@ impl Trainer {
         self.densify_step()?;
         let perturbed = self.perturb_step()?;
         times.densify = clock.lap(&self.ctx);
-        let mse = loss_mse(&color, &view.image);
         Ok(StepStats {
             loss: loss.value,
             l1: loss.l1,
             ssim: loss.ssim,
-            psnr: psnr_of(mse),
+            psnr: psnr_of(loss.mse),
             times,
             gpu_stages,
             perturbed,
         })
-    }
-
-    /// The paper's L_d, L_c and L_m, weighted, into the layer gradients.
-    fn add_regularisers(&self, view: &View, im: &FrameImages, grads: &mut FrameGrads) {
-        let s = &self.settings;
-        let add = |dst: &mut Image<f64>, src: &Image<f64>, weight: f64| {
-            for (d, v) in dst.data.iter_mut().zip(&src.data) {
-                *d += weight * v;
-            }
-        };
-        if s.lambda_depth > 0.0 {
-            let l = depth_variance_loss(&im.depth_variance, &im.hit);
-            add(&mut grads.depth_variance, &l.grad, s.lambda_depth);
-        }
-        if s.lambda_conflict > 0.0 {
-            let l =
-                gradient_conflict_loss(&to_f64(&im.transmission), &to_f64(&im.reflection), &im.hit);
-            add(&mut grads.transmission, &l.grad, s.lambda_conflict);
-        }
-        if s.lambda_mask > 0.0
-            && let Some(annotation) = &view.mask
-        {
-            let l = mask_loss(&im.mask, annotation);
-            add(&mut grads.mask, &l.grad, s.lambda_mask);
-        }
     }
 
     /// Add reflection planes and their glass Gaussians (zero moments) to the optimisation.
@@ -543,21 +553,6 @@ fn zero_moments(ctx: &GpuContext, scene: &GpuScene) -> Vec<AdamMoments> {
         .zip(scene.attribute_widths())
         .map(|(name, w)| AdamMoments::zeros(ctx, name, n * u64::from(w)))
         .collect()
-}
-
-fn to_f64(im: &Image<f32>) -> Image<f64> {
-    Image {
-        width: im.width,
-        height: im.height,
-        channels: im.channels,
-        data: im.data.iter().map(|&v| f64::from(v)).collect(),
-    }
-}
-
-fn loss_mse(a: &Image<f32>, b: &Image<f32>) -> f64 {
-    let n = a.data.len().max(1) as f64;
-    a.data.iter().zip(&b.data).map(|(&x, &y)| (f64::from(x) - f64::from(y)).powi(2)).sum::<f64>()
-        / n
 }
 
 /// PSNR for data range 1 (infinite for a perfect match).

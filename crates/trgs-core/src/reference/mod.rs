@@ -23,6 +23,7 @@ mod rasterize;
 mod rasterize_bwd;
 mod rasterize_reflection;
 mod rasterize_reflection_bwd;
+mod regularisers;
 mod render;
 mod sort;
 mod tile_counts;
@@ -49,6 +50,10 @@ pub use rasterize::{PixelState, rasterize};
 pub use rasterize_bwd::{RasterizeUpstream, rasterize_bwd};
 pub use rasterize_reflection::{ReflectionPixelState, rasterize_reflection};
 pub use rasterize_reflection_bwd::rasterize_reflection_bwd;
+pub use regularisers::{
+    LayerLoss, RegulariserInputs, RegulariserWeights, Regularisers, depth_variance_loss,
+    gradient_conflict_loss, mask_loss, regularisers,
+};
 pub use render::{RenderSettings, ViewPass, render, render_view};
 pub use sort::sort_keys;
 pub use tile_counts::{TileGrid, tile_counts, tile_rect};

@@ -1,9 +1,13 @@
-//! The paper's regularisers (section 3.3), each as its value and dL/d(layer), on the CPU:
+//! Stage `regularisers` (the CPU twin of the WGSL stage of that name): the paper's regularisers
+//! (section 3.3), each as its value and dL/d(layer):
 //! - `mask_loss`: L_m = mean |M - M_a| on annotated views;
 //! - `depth_variance_loss`: L_d = mean H V, with V = sum |z - D_t| w the renderer's layer;
 //! - `gradient_conflict_loss`: L_c = mean H |grad C_t * sg(grad C_r)| with Sobel gradients,
 //!   element-wise over channels and both directions, on interior pixels (no padding).
-use trgs_core::Image;
+//!
+//! [`regularisers`] weights and combines the three as the GPU stage does: it writes the direct
+//! gradients of the transmission layer (C_t, alpha) and of the geometry layer (D_t, V, M).
+use crate::image::Image;
 
 /// A regulariser's value and its gradient with respect to one layer.
 #[derive(Clone, Debug)]
@@ -13,12 +17,12 @@ pub struct LayerLoss {
 }
 
 /// L_m for the rendered mask `m` (one channel) and the annotation (label > 0 is glass).
-pub fn mask_loss(m: &Image<f32>, annotation: &Image<u8>) -> LayerLoss {
+pub fn mask_loss(m: &Image<f64>, annotation: &Image<u8>) -> LayerLoss {
     let n = m.data.len().max(1) as f64;
     let mut grad = Image::<f64>::new(m.width, m.height, 1);
     let mut value = 0.0;
     for ((g, &v), &a) in grad.data.iter_mut().zip(&m.data).zip(&annotation.data) {
-        let d = f64::from(v) - if a > 0 { 1.0 } else { 0.0 };
+        let d = v - if a > 0 { 1.0 } else { 0.0 };
         value += d.abs();
         *g = d.signum() * f64::from(u8::from(d != 0.0)) / n;
     }
@@ -26,13 +30,13 @@ pub fn mask_loss(m: &Image<f32>, annotation: &Image<u8>) -> LayerLoss {
 }
 
 /// L_d for the depth-variance layer `v` and the hit mask `hit` (nonzero: a plane's pixel).
-pub fn depth_variance_loss(v: &Image<f32>, hit: &Image<u32>) -> LayerLoss {
+pub fn depth_variance_loss(v: &Image<f64>, hit: &Image<u32>) -> LayerLoss {
     let n = v.data.len().max(1) as f64;
     let mut grad = Image::<f64>::new(v.width, v.height, 1);
     let mut value = 0.0;
     for ((g, &x), &h) in grad.data.iter_mut().zip(&v.data).zip(&hit.data) {
         if h != 0 {
-            value += f64::from(x);
+            value += x;
             *g = 1.0 / n;
         }
     }
@@ -91,10 +95,69 @@ pub fn gradient_conflict_loss(ct: &Image<f64>, cr: &Image<f64>, hit: &Image<u32>
     LayerLoss { value: value / n, grad }
 }
 
+/// The weights of the three regularisers (zero switches one off).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RegulariserWeights {
+    pub depth: f64,
+    pub conflict: f64,
+    pub mask: f64,
+}
+
+/// What stage `regularisers` reads: the frame's layers and the view's annotation.
+#[derive(Clone, Copy, Debug)]
+pub struct RegulariserInputs<'a> {
+    /// C_t (3 channels).
+    pub transmission: &'a Image<f64>,
+    /// C_r (3 channels).
+    pub reflection: &'a Image<f64>,
+    /// V (1 channel).
+    pub depth_variance: &'a Image<f64>,
+    /// M (1 channel).
+    pub mask: &'a Image<f64>,
+    /// The plane hit by each pixel's ray (0: none).
+    pub hit: &'a Image<u32>,
+    /// The view's glass labels, when it has them.
+    pub annotation: Option<&'a Image<u8>>,
+}
+
+/// The unweighted values and the weighted direct gradients of stage `regularisers`.
+#[derive(Clone, Debug)]
+pub struct Regularisers {
+    pub depth: f64,
+    pub conflict: f64,
+    pub mask: f64,
+    /// dL/d(C_t) (3 channels; the alpha channel's gradient is zero).
+    pub transmission: Image<f64>,
+    /// dL/d(V) (1 channel).
+    pub depth_variance: Image<f64>,
+    /// dL/d(M) (1 channel).
+    pub mask_grad: Image<f64>,
+}
+
+/// Stage `regularisers`: `w.depth L_d + w.conflict L_c + w.mask L_m` (L_m on annotated views).
+pub fn regularisers(inputs: &RegulariserInputs<'_>, w: RegulariserWeights) -> Regularisers {
+    let scaled = |l: LayerLoss, weight: f64| {
+        let mut grad = l.grad;
+        grad.data.iter_mut().for_each(|g| *g *= weight);
+        (l.value, grad)
+    };
+    let (depth, depth_variance) =
+        scaled(depth_variance_loss(inputs.depth_variance, inputs.hit), w.depth);
+    let (conflict, transmission) = scaled(
+        gradient_conflict_loss(inputs.transmission, inputs.reflection, inputs.hit),
+        w.conflict,
+    );
+    let (mask, mask_grad) = match inputs.annotation {
+        Some(a) => scaled(mask_loss(inputs.mask, a), w.mask),
+        None => (0.0, Image::new(inputs.mask.width, inputs.mask.height, 1)),
+    };
+    Regularisers { depth, conflict, mask, transmission, depth_variance, mask_grad }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use trgs_core::rng::Rng;
+    use crate::rng::Rng;
 
     #[test]
     fn conflict_gradient_matches_central_differences() {
@@ -125,7 +188,7 @@ mod tests {
 
     #[test]
     fn mask_and_depth_losses() {
-        let mut m = Image::<f32>::new(2, 1, 1);
+        let mut m = Image::<f64>::new(2, 1, 1);
         m.data = vec![0.25, 0.5];
         let mut a = Image::<u8>::new(2, 1, 1);
         a.data = vec![1, 0];

@@ -1,0 +1,307 @@
+//! The training losses on the GPU, writing dL/d(layer) where the backward pass reads it:
+//! - stage `photometric_loss` (passes `photometric_loss` and `photometric_loss_grad`): 3DGS's
+//!   `(1 - lambda) L1 + lambda (1 - SSIM)` with the 11x11 window, into dL/dC;
+//! - stage `regularisers`: the paper's L_d, L_c and L_m, into dL/d(C_t, alpha) and
+//!   dL/d(D_t, V, M).
+//!
+//! Each has its f64 twin of the same name in `trgs_core::reference`. A view's target image and
+//! glass labels are uploaded once ([`GpuTarget`]) and stay on the GPU; only the workgroups' partial
+//! sums (a few kB) come back, for the step's statistics.
+use trgs_core::Image;
+use trgs_core::reference::RegulariserWeights;
+use trgs_render::gpu::{self, BufferPool, Kernel, Recorder};
+use trgs_render::layout::LossParams;
+use trgs_render::{Frame, GpuContext, LayerGrads};
+
+/// Side of the square pixel block of one loss workgroup (`shared/loss_block.wgsl`).
+const BLOCK: u32 = 16;
+
+#[derive(Debug, thiserror::Error)]
+pub enum LossError {
+    #[error("target image {name}: {channels} channels, the loss needs RGB")]
+    Channels { name: String, channels: u32 },
+    #[error("glass mask of {name}: {got_w}x{got_h}, its image is {want_w}x{want_h}")]
+    MaskSize { name: String, got_w: u32, got_h: u32, want_w: u32, want_h: u32 },
+    #[error("target image {name} is {got_w}x{got_h}, the rendered frame {want_w}x{want_h}")]
+    FrameSize { name: String, got_w: u32, got_h: u32, want_w: u32, want_h: u32 },
+    #[error("the frame has not been rendered")]
+    NotRendered,
+}
+
+/// A view's target image (RGB, 0 per pixel) and glass labels on the GPU.
+#[derive(Debug)]
+pub struct GpuTarget {
+    name: String,
+    width: u32,
+    height: u32,
+    image: wgpu::Buffer,
+    annotation: Option<wgpu::Buffer>,
+}
+
+impl GpuTarget {
+    /// Upload `image` (RGB) and its glass labels `mask` (same size), if any.
+    pub fn upload(
+        ctx: &GpuContext,
+        name: &str,
+        image: &Image<f32>,
+        mask: Option<&Image<u8>>,
+    ) -> Result<Self, LossError> {
+        if image.channels != 3 {
+            return Err(LossError::Channels { name: name.to_string(), channels: image.channels });
+        }
+        let rgb: Vec<[f32; 4]> = image.data.chunks(3).map(|c| [c[0], c[1], c[2], 0.0]).collect();
+        let annotation = match mask {
+            Some(m) if (m.width, m.height) != (image.width, image.height) || m.channels != 1 => {
+                return Err(LossError::MaskSize {
+                    name: name.to_string(),
+                    got_w: m.width,
+                    got_h: m.height,
+                    want_w: image.width,
+                    want_h: image.height,
+                });
+            }
+            Some(m) => {
+                let labels: Vec<u32> = m.data.iter().map(|&v| u32::from(v)).collect();
+                Some(gpu::storage_init(ctx, &format!("trgs.target.{name}.annotation"), &labels))
+            }
+            None => None,
+        };
+        Ok(Self {
+            name: name.to_string(),
+            width: image.width,
+            height: image.height,
+            image: gpu::storage_init(ctx, &format!("trgs.target.{name}.image"), &rgb),
+            annotation,
+        })
+    }
+
+    pub fn has_annotation(&self) -> bool {
+        self.annotation.is_some()
+    }
+}
+
+/// The loss weights of a step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LossSettings {
+    /// The D-SSIM weight lambda.
+    pub lambda_dssim: f64,
+    /// The regularisers' weights; `None` skips stage `regularisers` (a frame without planes).
+    pub regularisers: Option<RegulariserWeights>,
+}
+
+/// The values of a step's losses, from the workgroups' partial sums (f32 on the GPU, summed in
+/// f64 here). The regularisers' values are unweighted; a zero weight leaves its value at zero.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LossValues {
+    /// `(1 - lambda) l1 + lambda (1 - ssim)`.
+    pub value: f64,
+    pub l1: f64,
+    pub ssim: f64,
+    /// Mean squared error of the rendered image.
+    pub mse: f64,
+    pub depth: f64,
+    pub conflict: f64,
+    pub mask: f64,
+}
+
+/// What [`LossKernels::record`] leaves to read once its work has run.
+#[derive(Debug)]
+pub struct PendingLoss {
+    photometric: wgpu::Buffer,
+    regularisers: Option<wgpu::Buffer>,
+    groups: usize,
+    lambda_dssim: f64,
+    inv_samples: f64,
+    inv_pixels: f64,
+}
+
+impl PendingLoss {
+    /// Sum the partial sums (blocking read of a few kB).
+    pub fn read(&self, ctx: &GpuContext) -> LossValues {
+        let total = |buffer: &wgpu::Buffer| {
+            gpu::read_buffer::<[f32; 4]>(ctx, buffer, 0, self.groups).iter().fold(
+                [0.0f64; 3],
+                |acc, p| {
+                    [acc[0] + f64::from(p[0]), acc[1] + f64::from(p[1]), acc[2] + f64::from(p[2])]
+                },
+            )
+        };
+        let [l1, ssim, sq] = total(&self.photometric).map(|v| v * self.inv_samples);
+        let [depth, conflict, mask] = match &self.regularisers {
+            Some(b) => {
+                let [d, c, m] = total(b);
+                [d * self.inv_pixels, c * self.inv_samples, m * self.inv_pixels]
+            }
+            None => [0.0; 3],
+        };
+        let lambda = self.lambda_dssim;
+        LossValues {
+            value: (1.0 - lambda) * l1 + lambda * (1.0 - ssim),
+            l1,
+            ssim,
+            mse: sq,
+            depth,
+            conflict,
+            mask,
+        }
+    }
+}
+
+/// The layers the losses read: a rendered frame's, or any buffers laid out like them.
+#[derive(Clone, Copy, Debug)]
+pub struct LossLayers<'a> {
+    pub width: u32,
+    pub height: u32,
+    /// The image: (C, -) per pixel; only RGB is read.
+    pub color: &'a wgpu::Buffer,
+    /// (C_t, 1 - T_t)
+    pub transmission: &'a wgpu::Buffer,
+    /// (C_r, -)
+    pub reflection: &'a wgpu::Buffer,
+    /// (D_t, V, M, -)
+    pub geometry: &'a wgpu::Buffer,
+    /// The plane hit by each pixel's ray (u32, 0: none).
+    pub hit: &'a wgpu::Buffer,
+}
+
+impl<'a> LossLayers<'a> {
+    /// The layers of a rendered frame.
+    pub fn of_frame(frame: &'a Frame) -> Result<Self, LossError> {
+        let l = frame.layer_buffers().ok_or(LossError::NotRendered)?;
+        Ok(Self {
+            width: frame.width(),
+            height: frame.height(),
+            // Without a composite the transmission layer's RGB is the image.
+            color: if frame.composed() { &l.color } else { &l.transmission },
+            transmission: &l.transmission,
+            reflection: &l.reflection,
+            geometry: &l.geometry,
+            hit: &l.hit,
+        })
+    }
+}
+
+/// The loss pipelines, compiled once.
+#[derive(Debug)]
+pub struct LossKernels {
+    photometric_loss: Kernel,
+    photometric_loss_grad: Kernel,
+    regularisers: Kernel,
+    scratch: BufferPool,
+}
+
+impl LossKernels {
+    pub fn new(ctx: &GpuContext) -> Self {
+        Self {
+            photometric_loss: Kernel::new(ctx, "photometric_loss", "photometric_loss.wgsl", &[]),
+            photometric_loss_grad: Kernel::new(
+                ctx,
+                "photometric_loss_grad",
+                "photometric_loss_grad.wgsl",
+                &[],
+            ),
+            regularisers: Kernel::new(ctx, "regularisers", "regularisers.wgsl", &[]),
+            scratch: BufferPool::default(),
+        }
+    }
+
+    /// Record the losses of `layers` against `target` into `grads`. Every gradient layer the
+    /// backward accumulates into is reset first, so `grads` can be reused step after step.
+    pub fn record(
+        &mut self,
+        ctx: &GpuContext,
+        rec: &mut Recorder,
+        layers: &LossLayers<'_>,
+        target: &GpuTarget,
+        grads: &LayerGrads,
+        settings: &LossSettings,
+    ) -> Result<PendingLoss, LossError> {
+        let (w, h) = (layers.width, layers.height);
+        if (target.width, target.height) != (w, h) {
+            return Err(LossError::FrameSize {
+                name: target.name.clone(),
+                got_w: target.width,
+                got_h: target.height,
+                want_w: w,
+                want_h: h,
+            });
+        }
+        for b in [&grads.transmission, &grads.geometry, &grads.reflection_raw] {
+            rec.encoder.clear_buffer(b, 0, None);
+        }
+        let pixels = u64::from(w) * u64::from(h);
+        let groups = [w.div_ceil(BLOCK), h.div_ceil(BLOCK), 1];
+        let group_count = (groups[0] * groups[1]) as usize;
+        let weights = settings.regularisers.unwrap_or_default();
+        let params = LossParams {
+            width: w,
+            height: h,
+            lambda_dssim: settings.lambda_dssim as f32,
+            inv_samples: (1.0 / (3 * pixels).max(1) as f64) as f32,
+            inv_pixels: (1.0 / pixels.max(1) as f64) as f32,
+            weight_depth: weights.depth as f32,
+            weight_conflict: weights.conflict as f32,
+            weight_mask: if target.has_annotation() { weights.mask as f32 } else { 0.0 },
+        };
+        let block = gpu::params(ctx, "trgs.photometric_loss.params", &params);
+        let rendered = layers.color;
+        let terms = self.scratch.get(ctx, "trgs.photometric_loss.terms", pixels * 48);
+        let photometric =
+            self.scratch.get(ctx, "trgs.photometric_loss.partials", group_count as u64 * 16);
+        let bind = self.photometric_loss.bind(
+            ctx,
+            &[
+                block.as_entire_binding(),
+                rendered.as_entire_binding(),
+                target.image.as_entire_binding(),
+                terms.as_entire_binding(),
+                photometric.as_entire_binding(),
+            ],
+        );
+        rec.dispatch("photometric_loss", &self.photometric_loss, &bind, groups);
+        let bind = self.photometric_loss_grad.bind(
+            ctx,
+            &[
+                block.as_entire_binding(),
+                rendered.as_entire_binding(),
+                target.image.as_entire_binding(),
+                terms.as_entire_binding(),
+                grads.color.as_entire_binding(),
+            ],
+        );
+        rec.dispatch("photometric_loss_grad", &self.photometric_loss_grad, &bind, groups);
+        let regularisers = match settings.regularisers {
+            Some(_) => {
+                let partials =
+                    self.scratch.get(ctx, "trgs.regularisers.partials", group_count as u64 * 16);
+                // Bound but never read when the view has no labels.
+                let annotation = target.annotation.as_ref().unwrap_or(layers.hit);
+                let bind = self.regularisers.bind(
+                    ctx,
+                    &[
+                        block.as_entire_binding(),
+                        layers.transmission.as_entire_binding(),
+                        layers.reflection.as_entire_binding(),
+                        layers.geometry.as_entire_binding(),
+                        layers.hit.as_entire_binding(),
+                        annotation.as_entire_binding(),
+                        grads.transmission.as_entire_binding(),
+                        grads.geometry.as_entire_binding(),
+                        partials.as_entire_binding(),
+                    ],
+                );
+                rec.dispatch("regularisers", &self.regularisers, &bind, groups);
+                Some(partials)
+            }
+            None => None,
+        };
+        Ok(PendingLoss {
+            photometric,
+            regularisers,
+            groups: group_count,
+            lambda_dssim: settings.lambda_dssim,
+            inv_samples: 1.0 / (3 * pixels).max(1) as f64,
+            inv_pixels: 1.0 / pixels.max(1) as f64,
+        })
+    }
+}

@@ -1,0 +1,230 @@
+//! The GPU loss stages (`photometric_loss`, `regularisers`) against their f64 twins in
+//! `trgs_core::reference`, on random layers of sizes that do and do not fill the 16x16 blocks
+//! (one pixel included), with and without glass labels. Every gradient buffer starts
+//! poison-filled, so a pixel a kernel forgets to write fails the comparison.
+use trgs_core::Image;
+use trgs_core::reference::{
+    DSSIM_LAMBDA, RegulariserInputs, RegulariserWeights, photometric_loss, regularisers,
+};
+use trgs_core::rng::Rng;
+use trgs_render::gpu::{self, Recorder};
+use trgs_render::{DeviceOptions, GpuContext, LayerGrads};
+use trgs_train::losses::{GpuTarget, LossKernels, LossLayers, LossSettings};
+
+const WEIGHTS: RegulariserWeights = RegulariserWeights { depth: 0.3, conflict: 0.7, mask: 0.5 };
+
+struct Layers {
+    width: u32,
+    height: u32,
+    color: Image<f32>,
+    target: Image<f32>,
+    transmission: Image<f32>,
+    alpha: Image<f32>,
+    reflection: Image<f32>,
+    geometry: Image<f32>,
+    hit: Image<u32>,
+    annotation: Image<u8>,
+}
+
+fn random(w: u32, h: u32, channels: u32, rng: &mut Rng) -> Image<f32> {
+    let mut im = Image::<f32>::new(w, h, channels);
+    im.data.iter_mut().for_each(|v| *v = rng.uniform() as f32);
+    im
+}
+
+fn layers(w: u32, h: u32, rng: &mut Rng) -> Layers {
+    let mut hit = Image::<u32>::new(w, h, 1);
+    hit.data
+        .iter_mut()
+        .for_each(|v| *v = if rng.uniform() < 0.65 { 1 + (rng.uniform() * 2.0) as u32 } else { 0 });
+    let mut annotation = Image::<u8>::new(w, h, 1);
+    annotation.data.iter_mut().for_each(|v| *v = u8::from(rng.uniform() < 0.5));
+    Layers {
+        width: w,
+        height: h,
+        color: random(w, h, 3, rng),
+        target: random(w, h, 3, rng),
+        transmission: random(w, h, 3, rng),
+        alpha: random(w, h, 1, rng),
+        reflection: random(w, h, 3, rng),
+        geometry: random(w, h, 3, rng),
+        hit,
+        annotation,
+    }
+}
+
+/// Pixels as vec4: the channels of `parts` side by side, zero after.
+fn vec4s(parts: &[&Image<f32>]) -> Vec<[f32; 4]> {
+    let n = (parts[0].width * parts[0].height) as usize;
+    let mut out = vec![[0.0f32; 4]; n];
+    for (i, px) in out.iter_mut().enumerate() {
+        let mut k = 0;
+        for im in parts {
+            let c = im.channels as usize;
+            px[k..k + c].copy_from_slice(&im.data[i * c..(i + 1) * c]);
+            k += c;
+        }
+    }
+    out
+}
+
+fn f64s(im: &Image<f32>) -> Image<f64> {
+    Image {
+        width: im.width,
+        height: im.height,
+        channels: im.channels,
+        data: im.data.iter().map(|&v| f64::from(v)).collect(),
+    }
+}
+
+fn channel(im: &Image<f32>, c: usize) -> Image<f32> {
+    let ch = im.channels as usize;
+    Image {
+        width: im.width,
+        height: im.height,
+        channels: 1,
+        data: im.data.chunks(ch).map(|p| p[c]).collect(),
+    }
+}
+
+/// The largest |gpu - twin| over the largest |twin| (or over 1e-12 when the twin is zero).
+fn relative_error(gpu: &[f32], twin: &[f64]) -> f64 {
+    assert_eq!(gpu.len(), twin.len());
+    let scale = twin.iter().fold(1e-12f64, |m, v| m.max(v.abs()));
+    gpu.iter().zip(twin).map(|(&g, &t)| (f64::from(g) - t).abs()).fold(0.0, f64::max) / scale
+}
+
+fn check(ctx: &GpuContext, kernels: &mut LossKernels, l: &Layers, labelled: bool, planes: bool) {
+    let tag = format!("{}x{} labels {labelled} planes {planes}", l.width, l.height);
+    let pixels = u64::from(l.width * l.height);
+    let up = |name: &str, data: &[[f32; 4]]| gpu::storage_init(ctx, name, data);
+    let color = up("test.color", &vec4s(&[&l.color]));
+    let transmission = up("test.transmission", &vec4s(&[&l.transmission, &l.alpha]));
+    let reflection = up("test.reflection", &vec4s(&[&l.reflection]));
+    let geometry = up("test.geometry", &vec4s(&[&l.geometry]));
+    let hit = gpu::storage_init(ctx, "test.hit", &l.hit.data);
+    let inputs = LossLayers {
+        width: l.width,
+        height: l.height,
+        color: &color,
+        transmission: &transmission,
+        reflection: &reflection,
+        geometry: &geometry,
+        hit: &hit,
+    };
+    let target =
+        GpuTarget::upload(ctx, "test", &l.target, labelled.then_some(&l.annotation)).expect("rgb");
+    let poisoned = |name: &str, bytes: u64| gpu::storage(ctx, name, bytes);
+    let grads = LayerGrads {
+        color: poisoned("test.g.color", pixels * 16),
+        reflection: poisoned("test.g.reflection", pixels * 16),
+        strength: poisoned("test.g.strength", pixels * 16),
+        transmission: poisoned("test.g.transmission", pixels * 16),
+        geometry: poisoned("test.g.geometry", pixels * 16),
+        reflection_raw: poisoned("test.g.reflection_raw", 2 * pixels * 16),
+    };
+    let settings =
+        LossSettings { lambda_dssim: DSSIM_LAMBDA, regularisers: planes.then_some(WEIGHTS) };
+    let mut rec = Recorder::new(ctx, "test.losses", false);
+    let pending =
+        kernels.record(ctx, &mut rec, &inputs, &target, &grads, &settings).expect("same size");
+    rec.submit_and_wait(ctx);
+    let values = pending.read(ctx);
+    let read = |b: &wgpu::Buffer| -> Vec<[f32; 4]> { gpu::read_buffer(ctx, b, 0, pixels as usize) };
+    let rgb = |v: &[[f32; 4]]| -> Vec<f32> { v.iter().flat_map(|p| [p[0], p[1], p[2]]).collect() };
+
+    // photometric_loss
+    let twin =
+        photometric_loss(&f64s(&l.color), &f64s(&l.target), DSSIM_LAMBDA).expect("same size");
+    let g_color = read(&grads.color);
+    let err = relative_error(&rgb(&g_color), &twin.grad.data);
+    assert!(err < 1e-5, "{tag}: dL/dC relative error {err:e}");
+    assert!(g_color.iter().all(|p| p[3] == 0.0), "{tag}: dL/dC has a fourth channel");
+    for (name, got, want) in [
+        ("value", values.value, twin.value),
+        ("l1", values.l1, twin.l1),
+        ("ssim", values.ssim, twin.ssim),
+    ] {
+        assert!((got - want).abs() <= 1e-5 * want.abs().max(1.0), "{tag}: {name} {got} vs {want}");
+    }
+    let mse = l
+        .color
+        .data
+        .iter()
+        .zip(&l.target.data)
+        .map(|(&a, &b)| f64::from(a - b).powi(2))
+        .sum::<f64>()
+        / (3 * pixels) as f64;
+    assert!((values.mse - mse).abs() <= 1e-5 * mse, "{tag}: mse {} vs {mse}", values.mse);
+
+    // regularisers, or zeros where the backward accumulates
+    let g_t = read(&grads.transmission);
+    let g_geo = read(&grads.geometry);
+    let raw: Vec<[f32; 4]> = gpu::read_buffer(ctx, &grads.reflection_raw, 0, 2 * pixels as usize);
+    assert!(raw.iter().flatten().all(|&v| v == 0.0), "{tag}: dL/dC_raw not reset");
+    if !planes {
+        assert!(
+            g_t.iter().chain(&g_geo).flatten().all(|&v| v == 0.0),
+            "{tag}: direct grads not reset"
+        );
+        return;
+    }
+    let (ct, cr) = (f64s(&l.transmission), f64s(&l.reflection));
+    let (v, m) = (f64s(&channel(&l.geometry, 1)), f64s(&channel(&l.geometry, 2)));
+    let twin = regularisers(
+        &RegulariserInputs {
+            transmission: &ct,
+            reflection: &cr,
+            depth_variance: &v,
+            mask: &m,
+            hit: &l.hit,
+            annotation: labelled.then_some(&l.annotation),
+        },
+        WEIGHTS,
+    );
+    let err = relative_error(&rgb(&g_t), &twin.transmission.data);
+    assert!(err < 1e-6, "{tag}: dL_c/dC_t relative error {err:e}");
+    assert!(g_t.iter().all(|p| p[3] == 0.0), "{tag}: dL/dalpha not zero");
+    let depth: Vec<f32> = g_geo.iter().map(|p| p[1]).collect();
+    let mask: Vec<f32> = g_geo.iter().map(|p| p[2]).collect();
+    assert!(relative_error(&depth, &twin.depth_variance.data) < 1e-6, "{tag}: dL_d/dV");
+    assert!(relative_error(&mask, &twin.mask_grad.data) < 1e-6, "{tag}: dL_m/dM");
+    assert!(g_geo.iter().all(|p| p[0] == 0.0 && p[3] == 0.0), "{tag}: dL/dD_t not zero");
+    for (name, got, want) in [
+        ("L_d", values.depth, twin.depth),
+        ("L_c", values.conflict, twin.conflict),
+        ("L_m", values.mask, twin.mask),
+    ] {
+        assert!((got - want).abs() <= 1e-5 * want.abs().max(1e-3), "{tag}: {name} {got} vs {want}");
+    }
+}
+
+#[test]
+fn gpu_losses_match_twins() {
+    let ctx = GpuContext::with_options(&DeviceOptions {
+        poison_fresh_buffers: true,
+        ..Default::default()
+    })
+    .expect("adapter");
+    let mut kernels = LossKernels::new(&ctx);
+    let mut rng = Rng::new(5);
+    for (w, h) in [(37, 29), (16, 16), (1, 1), (70, 3), (64, 48)] {
+        let l = layers(w, h, &mut rng);
+        check(&ctx, &mut kernels, &l, true, true);
+        check(&ctx, &mut kernels, &l, false, true);
+        check(&ctx, &mut kernels, &l, false, false);
+    }
+}
+
+#[test]
+fn a_target_of_the_wrong_shape_is_refused() {
+    let ctx = GpuContext::new().expect("adapter");
+    let mut rng = Rng::new(6);
+    let grey = random(8, 8, 1, &mut rng);
+    let err = GpuTarget::upload(&ctx, "grey.png", &grey, None).expect_err("one channel");
+    assert!(err.to_string().contains("grey.png"), "{err}");
+    let rgb = random(8, 8, 3, &mut rng);
+    let mask = Image::<u8>::new(8, 7, 1);
+    let err = GpuTarget::upload(&ctx, "view.png", &rgb, Some(&mask)).expect_err("mask size");
+    assert!(err.to_string().contains("8x7"), "{err}");
+}

@@ -1,0 +1,131 @@
+// Stage `regularisers` (twin: trgs_core::reference::regularisers): the paper's depth variance,
+// gradient conflict and mask losses (section 3.3), one thread per pixel. It writes (overwrites)
+// the direct gradients of the transmission layer, dL/d(C_t, alpha) = (w_c dL_c/dC_t, 0), and of
+// the geometry layer, dL/d(D_t, V, M, -) = (0, w_d dL_d/dV, w_m dL_m/dM, 0); each workgroup
+// writes its sums of the unweighted L_d, L_c and L_m terms.
+//
+// L_c's gradient at pixel p gathers, from every interior hit pixel q of its 3x3 neighbourhood,
+// the Sobel taps through which C_t(p) enters q's gradients:
+// dL_c/dC_t(p) = sum_q sum_{k = x, y} K_k(p - q) sign(g_k^t(q) g_k^r(q)) g_k^r(q) / samples,
+// with the reflection side stop-gradient.
+#include "shared/common.wgsl"
+
+@group(0) @binding(0) var<storage, read> params: LossParams;
+// (C_t, 1 - T_t)
+@group(0) @binding(1) var<storage, read> transmission: array<vec4<f32>>;
+// (C_r, 0)
+@group(0) @binding(2) var<storage, read> reflection: array<vec4<f32>>;
+// (D_t, V, M, 0)
+@group(0) @binding(3) var<storage, read> geometry: array<vec4<f32>>;
+@group(0) @binding(4) var<storage, read> hit: array<u32>;
+// Glass labels of the view (> 0: glass); read only when weight_mask > 0.
+@group(0) @binding(5) var<storage, read> annotation: array<u32>;
+@group(0) @binding(6) var<storage, read_write> grad_transmission: array<vec4<f32>>;
+@group(0) @binding(7) var<storage, read_write> grad_geometry: array<vec4<f32>>;
+// Per workgroup: (sum H V, sum |g^t g^r|, sum |M - M_a|, 0).
+@group(0) @binding(8) var<storage, read_write> partials: array<vec4<f32>>;
+
+var<workgroup> sums: array<vec4<f32>, 256>;
+
+// The Sobel kernels' tap at offset (dx, dy) in -1..1 (x: horizontal derivative).
+fn sobel_x(dx: i32, dy: i32) -> f32 {
+    return f32(dx) * select(1.0, 2.0, dy == 0);
+}
+
+fn sobel_y(dx: i32, dy: i32) -> f32 {
+    return f32(dy) * select(1.0, 2.0, dx == 0);
+}
+
+// Whether pixel q is interior (its 3x3 neighbourhood is in the image) and hits a plane.
+fn conflict_pixel(q: vec2<i32>) -> bool {
+    let w = i32(params.width);
+    let h = i32(params.height);
+    if q.x < 1 || q.y < 1 || q.x > w - 2 || q.y > h - 2 {
+        return false;
+    }
+    return hit[u32(q.y) * params.width + u32(q.x)] != 0u;
+}
+
+// The Sobel gradients of C_t and C_r at the interior pixel q: (g_x^t, g_y^t, g_x^r, g_y^r).
+struct SobelPair {
+    tx: vec3<f32>,
+    ty: vec3<f32>,
+    rx: vec3<f32>,
+    ry: vec3<f32>,
+}
+
+fn sobel_at(q: vec2<i32>) -> SobelPair {
+    var s = SobelPair(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
+    for (var dy = -1; dy <= 1; dy++) {
+        for (var dx = -1; dx <= 1; dx++) {
+            let j = u32(q.y + dy) * params.width + u32(q.x + dx);
+            let t = transmission[j].xyz;
+            let r = reflection[j].xyz;
+            let kx = sobel_x(dx, dy);
+            let ky = sobel_y(dx, dy);
+            s.tx += kx * t;
+            s.ty += ky * t;
+            s.rx += kx * r;
+            s.ry += ky * r;
+        }
+    }
+    return s;
+}
+
+@compute @workgroup_size(16, 16)
+fn main(
+    @builtin(global_invocation_id) gid: vec3<u32>,
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) li: u32,
+) {
+    let inside = gid.x < params.width && gid.y < params.height;
+    var sum = vec4<f32>(0.0);
+    if inside {
+        let p = gid.y * params.width + gid.x;
+        let here = vec2<i32>(gid.xy);
+        var g_geometry = vec4<f32>(0.0);
+        if hit[p] != 0u {
+            sum.x = geometry[p].y;
+            g_geometry.y = params.weight_depth * params.inv_pixels;
+        }
+        if params.weight_mask > 0.0 {
+            let d = geometry[p].z - select(0.0, 1.0, annotation[p] > 0u);
+            sum.z = abs(d);
+            g_geometry.z = params.weight_mask * sign(d) * params.inv_pixels;
+        }
+        var g_t = vec3<f32>(0.0);
+        if params.weight_conflict > 0.0 {
+            if conflict_pixel(here) {
+                let s = sobel_at(here);
+                sum.y = dot(abs(s.tx * s.rx), vec3<f32>(1.0)) + dot(abs(s.ty * s.ry), vec3<f32>(1.0));
+            }
+            for (var dy = -1; dy <= 1; dy++) {
+                for (var dx = -1; dx <= 1; dx++) {
+                    // p = q + (dx, dy): q's tap at (dx, dy) reads p.
+                    let q = here - vec2<i32>(dx, dy);
+                    if !conflict_pixel(q) {
+                        continue;
+                    }
+                    let s = sobel_at(q);
+                    g_t += sobel_x(dx, dy) * sign(s.tx * s.rx) * s.rx;
+                    g_t += sobel_y(dx, dy) * sign(s.ty * s.ry) * s.ry;
+                }
+            }
+            g_t *= params.weight_conflict * params.inv_samples;
+        }
+        grad_transmission[p] = vec4<f32>(g_t, 0.0);
+        grad_geometry[p] = g_geometry;
+    }
+    sums[li] = sum;
+    workgroupBarrier();
+    for (var stride = 128u; stride > 0u; stride >>= 1u) {
+        if li < stride {
+            sums[li] += sums[li + stride];
+        }
+        workgroupBarrier();
+    }
+    if li == 0u {
+        partials[wg.y * nwg.x + wg.x] = sums[0];
+    }
+}
