@@ -2,7 +2,7 @@
 //! synthetic glass scene and trains on it. Writes runs/<name>/: model.ply (INRIA layout),
 //! planes.json, metrics.json, renders of the test views and their decomposition, a JSONL log,
 //! and a checkpoint that `--resume` continues from.
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
 use std::io::Write as _;
@@ -13,7 +13,7 @@ use trgs_core::rng::Rng;
 use trgs_core::synthetic::{SyntheticConfig, generate, write_dataset};
 use trgs_render::GpuContext;
 use trgs_train::checkpoint::{CHECKPOINT_FILE, read_checkpoint, write_checkpoint};
-use trgs_train::data::{self, Resolution, TrainingData};
+use trgs_train::data::{self, TrainingData};
 use trgs_train::densify::ClassicSettings;
 use trgs_train::eval::{
     Evaluation, Renderable, TruthComparison, compare_with_truth, evaluate, render_fps,
@@ -22,232 +22,12 @@ use trgs_train::eval::{
 use trgs_train::init::{SeedPoint, gaussians_from_points, random_points};
 use trgs_train::mcmc::McmcSettings;
 use trgs_train::plane_init::{PlaneInitSettings, initialise_planes};
-use trgs_train::settings::TrainSettings;
 use trgs_train::trainer::{StepTimes, Trainer};
 
-const HELP: &str = "\
-trgs train: TR-Gaussians training
+#[path = "train/args.rs"]
+mod args;
 
-USAGE:
-    train [--data DIR] [--out DIR] [OPTIONS]
-    train --out DIR --resume
-
-OPTIONS:
-    --data DIR          scene folder: COLMAP (sparse/0 + images/) or transforms.json, with
-                        optional glass_masks/, planes.json and test_views.txt. Default: the
-                        built-in synthetic scene, written to <out>/dataset
-    --demo-scene KIND   the built-in scene: glass (default) or no-glass
-    --out DIR           output folder (default: runs/demo)
-    --iterations N      training steps (default 1000: about 20 minutes for the demo scene on a
-                        2-core lavapipe; the paper uses 30000)
-    --resolution W      train at width W (the height keeps the aspect ratio)
-    --downscale F       train at 1/F of the image size
-    --sh-degree D       largest SH degree, 0 to 3 (default 3)
-    --eval-every N      evaluate the test views every N steps (default: 10 times a run)
-    --checkpoint-every N  write <out>/checkpoint.trgs every N steps (default: at each evaluation)
-    --resume            continue the run in --out from its checkpoint, with its own settings
-    --random-init N     start from N random points when the scene has no sparse points
-                        (default 10000)
-    --no-planes         ignore the glass masks: plain 3DGS (the baseline of the comparisons)
-    --densify MODE      classic (3DGS clone, split, prune, opacity reset; default), mcmc
-                        (3DGS-MCMC: relocation of dead Gaussians, growth to --cap, noise,
-                        opacity and scale regularisers) or none
-    --cap N             mcmc: the most Gaussians (default 300000)
-    --seed S            order of the training views (default 0)
-    --profile           time every GPU stage of every step (timestamp queries) into log.jsonl
-
-ABLATIONS (the paper's table; each switches one component off):
-    --no-multi-stage    no stage 2: joint optimisation right after stage 1
-    --no-depth-loss     no depth variance loss L_d
-    --no-conflict-loss  no gradient conflict loss L_c
-    --no-perturbation   no opacity perturbation
-    --no-intensity      no reflection intensity map: C_r = C_raw
-    --no-fresnel        no Schlick: a constant learnable R = R0
-    -h, --help          this text
-";
-
-#[derive(Clone, Debug, Serialize, Deserialize)]
-struct Args {
-    data: Option<PathBuf>,
-    demo_no_glass: bool,
-    out: PathBuf,
-    iterations: u32,
-    resolution: Resolution,
-    sh_degree: u32,
-    eval_every: Option<u32>,
-    checkpoint_every: Option<u32>,
-    random_init: usize,
-    densify: DensifyMode,
-    /// MCMC's cap on the Gaussian count.
-    cap: usize,
-    no_planes: bool,
-    seed: u64,
-    profile: bool,
-    ablations: Ablations,
-}
-
-/// How the Gaussian count changes during training.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-enum DensifyMode {
-    Classic,
-    Mcmc,
-    None,
-}
-
-/// The paper's ablations: each true switches one component off.
-#[derive(Clone, Debug, Default, Serialize, Deserialize)]
-struct Ablations {
-    no_multi_stage: bool,
-    no_depth_loss: bool,
-    no_conflict_loss: bool,
-    no_perturbation: bool,
-    no_intensity: bool,
-    no_fresnel: bool,
-}
-
-impl Ablations {
-    fn names(&self) -> Vec<&'static str> {
-        [
-            (self.no_multi_stage, "no multi-stage"),
-            (self.no_depth_loss, "no L_d"),
-            (self.no_conflict_loss, "no L_c"),
-            (self.no_perturbation, "no opacity perturbation"),
-            (self.no_intensity, "no reflection intensity"),
-            (self.no_fresnel, "no Fresnel"),
-        ]
-        .into_iter()
-        .filter_map(|(on, name)| on.then_some(name))
-        .collect()
-    }
-}
-
-/// What the command line asked for.
-enum Command {
-    Help,
-    Train(Args),
-    Resume { out: PathBuf },
-}
-
-fn parse_args() -> Result<Command> {
-    let mut args = Args {
-        data: None,
-        demo_no_glass: false,
-        out: PathBuf::from("runs/demo"),
-        iterations: 1000,
-        resolution: Resolution::Original,
-        sh_degree: 3,
-        eval_every: None,
-        checkpoint_every: None,
-        random_init: 10_000,
-        densify: DensifyMode::Classic,
-        cap: 300_000,
-        no_planes: false,
-        seed: 0,
-        profile: false,
-        ablations: Ablations::default(),
-    };
-    let mut resume = false;
-    let mut others = Vec::new();
-    let mut it = std::env::args().skip(1);
-    while let Some(a) = it.next() {
-        let mut value = |name: &str| it.next().with_context(|| format!("{name} needs a value"));
-        fn num<T: std::str::FromStr>(name: &str, v: String) -> Result<T> {
-            v.parse().map_err(|_| anyhow::anyhow!("{name} {v:?}: expected a number"))
-        }
-        if !matches!(a.as_str(), "--out" | "--resume") {
-            others.push(a.clone());
-        }
-        let ab = &mut args.ablations;
-        match a.as_str() {
-            "-h" | "--help" => return Ok(Command::Help),
-            "--data" => args.data = Some(PathBuf::from(value("--data")?)),
-            "--demo-scene" => {
-                args.demo_no_glass = match value("--demo-scene")?.as_str() {
-                    "glass" => false,
-                    "no-glass" => true,
-                    other => bail!("--demo-scene {other:?}: expected glass or no-glass"),
-                }
-            }
-            "--out" => args.out = PathBuf::from(value("--out")?),
-            "--resume" => resume = true,
-            "--iterations" => args.iterations = num("--iterations", value("--iterations")?)?,
-            "--resolution" => {
-                args.resolution = Resolution::Width(num("--resolution", value("--resolution")?)?)
-            }
-            "--downscale" => {
-                args.resolution = Resolution::Downscale(num("--downscale", value("--downscale")?)?)
-            }
-            "--sh-degree" => args.sh_degree = num("--sh-degree", value("--sh-degree")?)?,
-            "--eval-every" => args.eval_every = Some(num("--eval-every", value("--eval-every")?)?),
-            "--checkpoint-every" => {
-                args.checkpoint_every =
-                    Some(num("--checkpoint-every", value("--checkpoint-every")?)?)
-            }
-            "--random-init" => args.random_init = num("--random-init", value("--random-init")?)?,
-            "--densify" => {
-                args.densify = match value("--densify")?.as_str() {
-                    "classic" => DensifyMode::Classic,
-                    "mcmc" => DensifyMode::Mcmc,
-                    "none" => DensifyMode::None,
-                    other => bail!("--densify {other:?}: expected classic, mcmc or none"),
-                }
-            }
-            "--cap" => args.cap = num("--cap", value("--cap")?)?,
-            "--no-planes" => args.no_planes = true,
-            "--profile" => args.profile = true,
-            "--seed" => args.seed = num("--seed", value("--seed")?)?,
-            "--no-multi-stage" => ab.no_multi_stage = true,
-            "--no-depth-loss" => ab.no_depth_loss = true,
-            "--no-conflict-loss" => ab.no_conflict_loss = true,
-            "--no-perturbation" => ab.no_perturbation = true,
-            "--no-intensity" => ab.no_intensity = true,
-            "--no-fresnel" => ab.no_fresnel = true,
-            other => bail!("unknown argument {other:?}\n\n{HELP}"),
-        }
-    }
-    if resume {
-        if !others.is_empty() {
-            bail!(
-                "--resume continues a run with the settings it started with; drop {}",
-                others.join(" ")
-            );
-        }
-        return Ok(Command::Resume { out: args.out });
-    }
-    if args.iterations == 0 {
-        bail!("--iterations must be at least 1");
-    }
-    if args.sh_degree > 3 {
-        bail!("--sh-degree {}: expected 0 to 3", args.sh_degree);
-    }
-    if args.checkpoint_every == Some(0) || args.eval_every == Some(0) {
-        bail!("--eval-every and --checkpoint-every must be at least 1");
-    }
-    Ok(Command::Train(args))
-}
-
-/// The training settings `args` ask for.
-fn settings_of(args: &Args) -> TrainSettings {
-    let mut s = TrainSettings::scaled(args.iterations);
-    s.sh_degree = args.sh_degree;
-    s.seed = args.seed;
-    let ab = &args.ablations;
-    if ab.no_multi_stage {
-        s.stage2 = 0;
-    }
-    if ab.no_depth_loss {
-        s.lambda_depth = 0.0;
-    }
-    if ab.no_conflict_loss {
-        s.lambda_conflict = 0.0;
-    }
-    if ab.no_perturbation {
-        s.perturb = None;
-    }
-    s.reflection.intensity = !ab.no_intensity;
-    s.reflection.fresnel = !ab.no_fresnel;
-    s
-}
+use args::{Args, Command, DensifyMode, HELP, parse_args, settings_of};
 
 /// The `train` bin's own state in a checkpoint, besides the trainer's.
 #[derive(Serialize, Deserialize)]
