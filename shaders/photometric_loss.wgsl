@@ -11,8 +11,8 @@
 @group(0) @binding(0) var<storage, read> params: LossParams;
 // The frame's colour layer (C, 0).
 @group(0) @binding(1) var<storage, read> rendered: array<vec4<f32>>;
-// The view's image (RGB, 0).
-@group(0) @binding(2) var<storage, read> target_image: array<vec4<f32>>;
+// The view's image, 8-bit RGBA (unpack4x8unorm).
+@group(0) @binding(2) var<storage, read> target_image: array<u32>;
 // Per pixel: dL/dm_x, dL/dm_xx, dL/dm_xy (RGB, 0).
 @group(0) @binding(3) var<storage, read_write> terms: array<vec4<f32>>;
 // Per workgroup: (sum |x - y|, sum SSIM, sum (x - y)^2, 0) over its pixels and channels.
@@ -48,7 +48,7 @@ fn main(
             if q.z == 1u {
                 let j = q.y * params.width + q.x;
                 a = rendered[j][c];
-                b = target_image[j][c];
+                b = unpack4x8unorm(target_image[j])[c];
             }
             span_x[k] = a;
             span_y[k] = b;
@@ -105,7 +105,7 @@ fn main(
         terms[3u * p] = g_mx;
         terms[3u * p + 1u] = g_mxx;
         terms[3u * p + 2u] = g_mxy;
-        let d = rendered[p].xyz - target_image[p].xyz;
+        let d = rendered[p].xyz - unpack4x8unorm(target_image[p]).xyz;
         l1 = abs(d.x) + abs(d.y) + abs(d.z);
         sq = dot(d, d);
     }

@@ -7,7 +7,7 @@
 
 @group(0) @binding(0) var<storage, read> params: LossParams;
 @group(0) @binding(1) var<storage, read> rendered: array<vec4<f32>>;
-@group(0) @binding(2) var<storage, read> target_image: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read> target_image: array<u32>;
 // Pass 1's dL/dm_x, dL/dm_xx, dL/dm_xy per pixel.
 @group(0) @binding(3) var<storage, read> terms: array<vec4<f32>>;
 // dL/d(C, -).
@@ -34,7 +34,7 @@ fn main(
     var y = vec4<f32>(0.0);
     if inside {
         x = rendered[p];
-        y = target_image[p];
+        y = unpack4x8unorm(target_image[p]);
     }
     var grad = vec4<f32>(0.0);
     for (var c = 0u; c < 3u; c++) {

@@ -28,7 +28,9 @@ pub enum LossError {
     NotRendered,
 }
 
-/// A view's target image (RGB, 0 per pixel) and glass labels on the GPU.
+/// A view's target image and glass labels on the GPU. The image is stored as 8-bit RGBA (4 bytes
+/// a pixel, a quarter of f32 RGBA), as 3DGS keeps its 8-bit images: a dataset of a few hundred
+/// views then fits next to the model.
 #[derive(Debug)]
 pub struct GpuTarget {
     name: String,
@@ -49,7 +51,11 @@ impl GpuTarget {
         if image.channels != 3 {
             return Err(LossError::Channels { name: name.to_string(), channels: image.channels });
         }
-        let rgb: Vec<[f32; 4]> = image.data.chunks(3).map(|c| [c[0], c[1], c[2], 0.0]).collect();
+        let rgb: Vec<u32> = image
+            .data
+            .chunks(3)
+            .map(|c| u32::from_le_bytes([unorm8(c[0]), unorm8(c[1]), unorm8(c[2]), 0]))
+            .collect();
         let annotation = match mask {
             Some(m) if (m.width, m.height) != (image.width, image.height) || m.channels != 1 => {
                 return Err(LossError::MaskSize {
@@ -78,6 +84,11 @@ impl GpuTarget {
     pub fn has_annotation(&self) -> bool {
         self.annotation.is_some()
     }
+}
+
+/// `v` in [0, 1] to the nearest of 256 levels (WGSL's `unpack4x8unorm` reads it back as k / 255).
+fn unorm8(v: f32) -> u8 {
+    (v.clamp(0.0, 1.0) * 255.0).round() as u8
 }
 
 /// The loss weights of a step.

@@ -32,6 +32,11 @@ fn random(w: u32, h: u32, channels: u32, rng: &mut Rng) -> Image<f32> {
     im
 }
 
+fn levels(mut im: Image<f32>) -> Image<f32> {
+    im.data.iter_mut().for_each(|v| *v = (*v * 255.0).round() / 255.0);
+    im
+}
+
 fn layers(w: u32, h: u32, rng: &mut Rng) -> Layers {
     let mut hit = Image::<u32>::new(w, h, 1);
     hit.data
@@ -43,7 +48,8 @@ fn layers(w: u32, h: u32, rng: &mut Rng) -> Layers {
         width: w,
         height: h,
         color: random(w, h, 3, rng),
-        target: random(w, h, 3, rng),
+        // On the 8-bit grid, as GpuTarget stores it.
+        target: levels(random(w, h, 3, rng)),
         transmission: random(w, h, 3, rng),
         alpha: random(w, h, 1, rng),
         reflection: random(w, h, 3, rng),
