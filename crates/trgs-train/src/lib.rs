@@ -14,6 +14,7 @@ pub mod losses;
 pub mod mcmc;
 pub mod model;
 pub mod perturb;
+pub mod plane_adam;
 pub mod plane_init;
 pub mod report;
 pub mod settings;

@@ -10,10 +10,11 @@ use crate::densify::{
 use crate::losses::{GpuTarget, LossKernels, LossLayers, LossSettings};
 use crate::mcmc::{McmcKernels, McmcSettings, relocate_and_grow};
 use crate::perturb::{perturb_opacities, seen_through_planes};
+use crate::plane_adam::{PlaneRates, plane_adam};
 use crate::settings::{Stage, TrainSettings};
 use anyhow::{Context, Result};
 use std::collections::HashMap;
-use trgs_core::reference::{AdamRate, AdamSettings, RegulariserWeights, adam};
+use trgs_core::reference::{AdamSettings, RegulariserWeights};
 use trgs_core::scene::{Camera, Gaussians, ReflectionPlane};
 use trgs_render::gpu::Recorder;
 use trgs_render::{
@@ -476,7 +477,7 @@ impl Trainer {
         self.set_state(&state)
     }
 
-    /// Adam on the planes' centre, normal and R0 logit (on the CPU: seven numbers a plane).
+    /// Adam on the planes' offset along the normal, normal and R0 logit ([`plane_adam`]).
     fn step_planes(&mut self, grads: &[trgs_core::reference::PlaneGrad], t: u32) -> Result<()> {
         if grads.is_empty() {
             return Ok(());
@@ -486,39 +487,13 @@ impl Trainer {
         let fine =
             if self.settings.stage(t - 1) == Stage::Joint { r.plane_stage3_factor } else { 1.0 };
         let mut planes = self.scene.planes().to_vec();
+        let rates = PlaneRates {
+            offset: fine * r.plane_centre * self.extent,
+            normal: fine * r.plane_normal,
+            r0_logit: r.plane_r0,
+        };
         for ((plane, g), mom) in planes.iter_mut().zip(grads).zip(&mut self.plane_moments) {
-            let mut p = [
-                plane.centre.x,
-                plane.centre.y,
-                plane.centre.z,
-                plane.normal.x,
-                plane.normal.y,
-                plane.normal.z,
-                plane.r0_logit,
-            ];
-            let gv = [
-                g.centre.x, g.centre.y, g.centre.z, g.normal.x, g.normal.y, g.normal.z, g.r0_logit,
-            ];
-            let groups: [(std::ops::Range<usize>, f64); 3] = [
-                (0..3, fine * r.plane_centre * self.extent),
-                (3..6, fine * r.plane_normal),
-                (6..7, r.plane_r0),
-            ];
-            for (range, lr) in groups {
-                adam(
-                    &mut p[range.clone()],
-                    &gv[range.clone()],
-                    &mut mom.m[range.clone()],
-                    &mut mom.v[range],
-                    &AdamRate::uniform(lr),
-                    t,
-                    &AdamSettings::default(),
-                );
-            }
-            plane.centre = glam::DVec3::new(p[0], p[1], p[2]);
-            plane.normal = glam::DVec3::new(p[3], p[4], p[5]);
-            plane.r0_logit = p[6];
-            plane.orthogonalise_axis();
+            plane_adam(plane, g, mom, &rates, t);
         }
         self.scene.set_planes(&planes).context("a plane step left an invalid plane")?;
         Ok(())

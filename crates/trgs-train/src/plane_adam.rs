@@ -1,0 +1,116 @@
+//! Adam on a reflection plane's parameters: its offset along the normal, its normal and its R0
+//! logit (on the CPU: a few numbers a plane).
+//!
+//! The centre is not stepped per coordinate. Its true gradient lies along the normal (the mirror
+//! `x - 2 ((x - u).n) n` sees the centre u only through u.n), and per-coordinate Adam divides
+//! each world coordinate of that gradient by its own running magnitude: a normal along z with a
+//! small tilt would take full-size steps in x and y too, and the centre would wander across the
+//! plane, dragging the plane's rectangle (its hit region) off the window. Adam therefore steps
+//! the scalar offset `d = u.n` and moves the centre along the normal only; the rectangle stays
+//! where the initialisation fitted it.
+use crate::checkpoint::PlaneMoments;
+use glam::DVec3;
+use trgs_core::reference::{AdamRate, AdamSettings, PlaneGrad, adam};
+use trgs_core::scene::ReflectionPlane;
+
+/// Learning rates of one plane step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlaneRates {
+    /// Of the offset along the normal (world units).
+    pub offset: f64,
+    pub normal: f64,
+    pub r0_logit: f64,
+}
+
+/// One Adam step (step number `t`, from 1) of `plane` with gradient `g`. Moment slot 0 holds the
+/// offset's, 3..6 the normal's and 6 the R0 logit's; slots 1 and 2 stay unused.
+pub fn plane_adam(
+    plane: &mut ReflectionPlane,
+    g: &PlaneGrad,
+    mom: &mut PlaneMoments,
+    rates: &PlaneRates,
+    t: u32,
+) {
+    let settings = AdamSettings::default();
+    let n = plane.unit_normal();
+    let mut offset = [plane.centre.dot(n)];
+    adam(
+        &mut offset,
+        &[g.centre.dot(n)],
+        &mut mom.m[0..1],
+        &mut mom.v[0..1],
+        &AdamRate::uniform(rates.offset),
+        t,
+        &settings,
+    );
+    plane.centre += (offset[0] - plane.centre.dot(n)) * n;
+    let mut normal = plane.normal.to_array();
+    adam(
+        &mut normal,
+        &g.normal.to_array(),
+        &mut mom.m[3..6],
+        &mut mom.v[3..6],
+        &AdamRate::uniform(rates.normal),
+        t,
+        &settings,
+    );
+    plane.normal = DVec3::from_array(normal);
+    let mut r0 = [plane.r0_logit];
+    adam(
+        &mut r0,
+        &[g.r0_logit],
+        &mut mom.m[6..7],
+        &mut mom.v[6..7],
+        &AdamRate::uniform(rates.r0_logit),
+        t,
+        &settings,
+    );
+    plane.r0_logit = r0[0];
+    plane.orthogonalise_axis();
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use trgs_core::scene::Material;
+
+    fn tilted_plane() -> ReflectionPlane {
+        let normal = DVec3::new(-0.08, 0.09, -0.99).normalize();
+        ReflectionPlane::new(
+            DVec3::new(1.1, -1.5, 1.8),
+            normal,
+            DVec3::X,
+            1.6,
+            1.0,
+            Material::Glass,
+        )
+    }
+
+    /// A centre gradient along a tilted normal, as the mirror gives, moves the centre along the
+    /// normal only, in the descent direction; an in-plane gradient does not move it at all.
+    #[test]
+    fn the_centre_moves_along_the_normal_only() {
+        let rates = PlaneRates { offset: 1e-2, normal: 0.0, r0_logit: 0.0 };
+        let mut plane = tilted_plane();
+        let start = plane.centre;
+        let n = plane.unit_normal();
+        let mut mom = PlaneMoments::default();
+        for t in 1..=50 {
+            let g = PlaneGrad { centre: 0.3 * n, normal: DVec3::ZERO, r0_logit: 0.0 };
+            plane_adam(&mut plane, &g, &mut mom, &rates, t);
+        }
+        let moved = plane.centre - start;
+        let along = moved.dot(n);
+        assert!(along < -0.4, "descends along the normal: {along}");
+        assert!((moved - along * n).length() < 1e-12, "in-plane drift {:?}", moved - along * n);
+
+        let mut plane = tilted_plane();
+        let mut mom = PlaneMoments::default();
+        let in_plane = n.cross(DVec3::X).normalize();
+        for t in 1..=50 {
+            let g = PlaneGrad { centre: in_plane, normal: DVec3::ZERO, r0_logit: 0.0 };
+            plane_adam(&mut plane, &g, &mut mom, &rates, t);
+        }
+        assert!((plane.centre - start).length() < 1e-12, "{:?}", plane.centre - start);
+    }
+}
