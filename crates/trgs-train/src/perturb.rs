@@ -11,11 +11,19 @@ pub const PERTURB_AMPLITUDE: f64 = 0.4;
 /// Opacities are clamped into [this, 1 - this] after the noise, so that their logits stay finite.
 pub const OPACITY_CLAMP: f64 = 1e-3;
 
+/// How far behind a plane a Gaussian's centre must lie to be perturbed, as a fraction of the
+/// plane rectangle's shorter side (11.5 cm for the synthetic 1.77 x 1.15 m fit).
+pub const BEHIND_MARGIN: f64 = 0.1;
+
 /// Which primary Gaussians some training camera sees through a plane: the Gaussian's centre lies
-/// behind the plane, and the segment from a camera on the front side to it crosses the plane's
-/// rectangle. (The paper selects the Gaussians whose projection onto the plane from a training
-/// view falls inside it; those in front of the glass are left alone here, since the ghosts the
-/// perturbation is for sit behind it.)
+/// behind the plane by more than [`BEHIND_MARGIN`] of its shorter side, and the segment from a
+/// camera on the front side to it crosses the plane's rectangle. (The paper selects the Gaussians
+/// whose projection onto the plane from a training view falls inside it. Two deviations, both
+/// because the ghosts the perturbation is for sit behind the glass at the depth of what it
+/// reflects: those in front of the glass are left alone, and so are those that straddle the
+/// plane, i.e. the window frame and the wall around it, which are seen outside the glass too.
+/// A 2000-step run without the margin ended 0.84 dB below plain 3DGS outside the glass region,
+/// though 0.12 dB above it inside.)
 pub fn seen_through_planes(
     g: &Gaussians<f32>,
     planes: &[ReflectionPlane],
@@ -30,12 +38,13 @@ pub fn seen_through_planes(
             if side <= 0.0 {
                 continue;
             }
+            let margin = BEHIND_MARGIN * plane.width.min(plane.height);
             for (i, m) in g.means.iter().enumerate() {
                 if selected[i] || g.populations[i] != Population::Primary {
                     continue;
                 }
                 let mu = DVec3::new(f64::from(m[0]), f64::from(m[1]), f64::from(m[2]));
-                if (mu - plane.centre).dot(n) >= 0.0 {
+                if (mu - plane.centre).dot(n) >= -margin {
                     continue;
                 }
                 let d = mu - c;
@@ -84,18 +93,20 @@ mod tests {
 
     #[test]
     fn selects_what_a_camera_sees_through_the_pane() {
-        let mut g = Gaussians::<f32>::zeros(5, 0);
+        let mut g = Gaussians::<f32>::zeros(7, 0);
         g.means = vec![
-            [0.2, 0.1, -1.0], // behind the pane, straight through it
-            [5.0, 0.0, -1.0], // behind, but outside the rectangle from this camera
-            [0.0, 0.0, 1.0],  // in front of the pane, on the camera's side
-            [0.1, 0.0, -2.0], // behind, but a glass Gaussian
-            [0.0, 0.3, -0.5], // behind and through
+            [0.2, 0.1, -1.0],   // behind the pane, straight through it
+            [5.0, 0.0, -1.0],   // behind, but outside the rectangle from this camera
+            [0.0, 0.0, 1.0],    // in front of the pane, on the camera's side
+            [0.1, 0.0, -2.0],   // behind, but a glass Gaussian
+            [0.0, 0.3, -0.5],   // behind and through
+            [0.9, 0.45, -0.05], // on the frame, within the margin (0.1 of the 1 m side)
+            [0.0, 0.0, -0.11],  // just past the margin
         ];
         g.populations[3] = Population::Glass;
         let centres = [DVec3::new(0.0, 0.0, 3.0)];
         let s = seen_through_planes(&g, &[pane()], &centres);
-        assert_eq!(s, vec![true, false, false, false, true]);
+        assert_eq!(s, vec![true, false, false, false, true, false, true]);
         // A camera behind the pane sees no reflection through it.
         let s = seen_through_planes(&g, &[pane()], &[DVec3::new(0.0, 0.0, -3.0)]);
         assert!(s.iter().all(|&v| !v));
