@@ -1,7 +1,8 @@
-//! Loading a trained model: a Gaussian PLY (trgs or any INRIA-layout file) and its planes.
+//! Loading a trained model: a Gaussian PLY (trgs or any INRIA-layout file) and its planes, or a
+//! `.glb` with `KHR_gaussian_splatting` (Gaussians and planes in one file).
 use anyhow::{Context, Result, bail};
 use std::path::{Path, PathBuf};
-use trgs_core::io::{read_planes_json, read_ply};
+use trgs_core::io::{read_glb, read_planes_json, read_ply};
 use trgs_core::scene::{Gaussians, ReflectionPlane};
 
 /// A model to render.
@@ -9,6 +10,7 @@ use trgs_core::scene::{Gaussians, ReflectionPlane};
 pub struct Model {
     pub gaussians: Gaussians<f32>,
     pub planes: Vec<ReflectionPlane>,
+    /// The file the Gaussians came from (.ply or .glb).
     pub ply: PathBuf,
 }
 
@@ -51,6 +53,13 @@ pub fn find_ply(path: &Path) -> Result<PathBuf> {
 /// Load the Gaussians of `path` and the planes of `planes` (or, when None, of a `planes.json`
 /// beside the PLY or in the run folder; none found means no planes: plain 3DGS).
 pub fn load_model(path: &Path, planes: Option<&Path>) -> Result<Model> {
+    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("glb")) {
+        let (gaussians, mut inside) = read_glb(path)?;
+        if let Some(p) = planes {
+            inside = load_model_planes(p)?;
+        }
+        return Ok(Model { gaussians, planes: inside, ply: path.to_path_buf() });
+    }
     let ply = find_ply(path)?;
     let gaussians = read_ply(&ply)?;
     let planes_path = match planes {
@@ -59,19 +68,26 @@ pub fn load_model(path: &Path, planes: Option<&Path>) -> Result<Model> {
             .into_iter()
             .find(|p| p.is_file()),
     };
+    let planes = match planes_path {
+        Some(pp) => load_model_planes(&pp)?,
+        None => Vec::new(),
+    };
+    Ok(Model { gaussians, planes, ply })
+}
+
+/// The trained planes of a planes.json (every plane must have its geometry).
+fn load_model_planes(path: &Path) -> Result<Vec<ReflectionPlane>> {
     let mut out = Vec::new();
-    if let Some(pp) = planes_path {
-        for (i, spec) in read_planes_json(&pp)?.into_iter().enumerate() {
-            match spec.plane {
-                Some(p) => out.push(p),
-                None => bail!(
-                    "{}: plane {i} (label {}) has a material but no geometry; rendering needs \
-                     trained planes (centre, normal, axis, width, height)",
-                    pp.display(),
-                    spec.label
-                ),
-            }
+    for (i, spec) in read_planes_json(path)?.into_iter().enumerate() {
+        match spec.plane {
+            Some(p) => out.push(p),
+            None => bail!(
+                "{}: plane {i} (label {}) has a material but no geometry; rendering needs \
+                 trained planes (centre, normal, axis, width, height)",
+                path.display(),
+                spec.label
+            ),
         }
     }
-    Ok(Model { gaussians, planes: out, ply })
+    Ok(out)
 }

@@ -8,11 +8,13 @@
 //! - [`test_split`]: `test_views.txt` and the default every-8th split;
 //! - [`planes_json`]: `planes.json` (plane annotations and trained planes);
 //! - [`ply`]: INRIA-layout 3DGS PLY with trgs's extra properties;
+//! - [`glb`]: binary glTF with `KHR_gaussian_splatting`, planes as nodes;
 //! - [`dataset`]: a scene folder that puts the above together.
 mod bytes;
 pub mod colmap;
 pub mod dataset;
 mod error;
+pub mod glb;
 pub mod masks;
 pub mod planes_json;
 pub mod ply;
@@ -25,6 +27,7 @@ pub mod transforms;
 pub use colmap::{ColmapCamera, ColmapImage, ColmapModel, ColmapPoint};
 pub use dataset::{SceneFolder, ViewSpec};
 pub use error::{FormatError, write_atomic};
+pub use glb::{encode_glb, parse_glb, read_glb, write_glb};
 pub use masks::{mask_path, read_glass_mask, write_glass_mask};
 pub use planes_json::{PlaneSpec, read_planes_json, write_plane_materials, write_planes_json};
 pub use ply::{encode_ply, parse_ply, read_ply, write_ply};

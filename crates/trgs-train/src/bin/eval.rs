@@ -17,7 +17,8 @@ USAGE:
 
 OPTIONS:
     --model PATH        a run folder of `train` (model.ply, planes.json), a .ply (trgs or any
-                        INRIA-layout 3DGS PLY), or an INRIA output folder
+                        INRIA-layout 3DGS PLY), a .glb (KHR_gaussian_splatting), or an INRIA
+                        output folder
     --planes FILE       trained planes.json (default: beside the PLY or in the run folder)
     --data DIR          the scene folder (default: the run folder's dataset/, where `train`
                         writes the built-in scene)

@@ -18,7 +18,8 @@ USAGE:
     render --model PATH --cameras PATH [OPTIONS]
 
 OPTIONS:
-    --model PATH        a .ply (trgs or any INRIA-layout 3DGS PLY), or a run folder holding
+    --model PATH        a .ply (trgs or any INRIA-layout 3DGS PLY), a .glb
+                        (KHR_gaussian_splatting, planes included), or a run folder holding
                         model.ply or point_cloud/iteration_*/point_cloud.ply
     --planes FILE       trained planes.json (default: planes.json beside the PLY or in the run
                         folder; none means no planes)

@@ -1,0 +1,468 @@
+//! Binary glTF (`.glb`) with the Khronos `KHR_gaussian_splatting` extension: a model's Gaussians
+//! as one POINTS primitive, its reflection planes as nodes.
+//!
+//! Written per the extension (release candidate of 2026-04): `POSITION` (with min/max),
+//! `KHR_gaussian_splatting:ROTATION` (unit quaternion, x y z w), `:SCALE` (linear), `:OPACITY`
+//! (after the sigmoid), `:SH_DEGREE_l_COEF_n` (3DGS's raw coefficients, `n` from the lowest order
+//! m; trgs's coefficient `l^2 + n`), and a `COLOR_0` fallback for point-cloud viewers, all f32.
+//! What the standard attributes cannot carry exactly goes into application attributes (the
+//! leading underscore of glTF): `_TRGS_OPACITY_LOGIT` (a logit does not survive a round trip
+//! through an f32 sigmoid near 0 or 1), `_TRGS_MASK_LOGIT`, `_TRGS_LOG_REFLECTION` and
+//! `_TRGS_POPULATION` (0 primary, 1 glass). A reader that finds them uses them; a file from
+//! another tool without them reads as primary Gaussians with logit(opacity) and ln(scale).
+//!
+//! trgs's world is a COLMAP-style frame (y down, z forward); the Gaussians and plane nodes hang
+//! under a root node turned 180 degrees about x, so that glTF viewers (y up) show the scene
+//! upright, while the mesh and plane data stay in trgs's coordinates. Each plane node has the
+//! plane's centre and orientation (x: width axis, y: height axis, z: normal) as its transform, and
+//! every parameter exactly in `extras.trgs_plane`.
+use std::path::Path;
+
+use glam::{DMat3, DQuat, DVec3};
+use serde_json::{Value, json};
+
+use super::error::{FormatError, read_bytes, write_atomic};
+use crate::scene::{Gaussians, Material, Population, ReflectionPlane, sh_coeff_count};
+use crate::sh::C0;
+
+const MAGIC: u32 = 0x4654_6C67;
+const CHUNK_JSON: u32 = 0x4E4F_534A;
+const CHUNK_BIN: u32 = 0x004E_4942;
+const FLOAT: u64 = 5126;
+const MODE_POINTS: u64 = 0;
+const EXTENSION: &str = "KHR_gaussian_splatting";
+
+/// One attribute: its semantic, accessor type and components per element.
+struct Column {
+    semantic: String,
+    kind: &'static str,
+    values: Vec<f32>,
+}
+
+fn columns(g: &Gaussians<f32>) -> Vec<Column> {
+    let n = g.len();
+    let col = |semantic: &str, kind: &'static str, values: Vec<f32>| Column {
+        semantic: semantic.to_string(),
+        kind,
+        values,
+    };
+    let mut cols = vec![
+        col("POSITION", "VEC3", g.means.iter().flatten().copied().collect()),
+        col(
+            "KHR_gaussian_splatting:ROTATION",
+            "VEC4",
+            g.rotations
+                .iter()
+                .flat_map(|q| {
+                    let norm = q.iter().map(|v| v * v).sum::<f32>().sqrt();
+                    if norm > 0.0 && norm.is_finite() {
+                        [q[1] / norm, q[2] / norm, q[3] / norm, q[0] / norm]
+                    } else {
+                        [0.0, 0.0, 0.0, 1.0]
+                    }
+                })
+                .collect(),
+        ),
+        col(
+            "KHR_gaussian_splatting:SCALE",
+            "VEC3",
+            g.log_scales.iter().flatten().map(|v| v.exp()).collect(),
+        ),
+        col(
+            "KHR_gaussian_splatting:OPACITY",
+            "SCALAR",
+            g.opacity_logits.iter().map(|v| 1.0 / (1.0 + (-v).exp())).collect(),
+        ),
+    ];
+    let coeffs = sh_coeff_count(g.sh_degree);
+    for degree in 0..=g.sh_degree {
+        for order in 0..2 * degree + 1 {
+            let k = (degree * degree + order) as usize;
+            cols.push(col(
+                &format!("KHR_gaussian_splatting:SH_DEGREE_{degree}_COEF_{order}"),
+                "VEC3",
+                (0..n).flat_map(|i| g.sh[i * coeffs + k]).collect(),
+            ));
+        }
+    }
+    let fallback = (0..n)
+        .flat_map(|i| g.sh[i * coeffs].map(|v| (0.5 + C0 as f32 * v).clamp(0.0, 1.0)))
+        .collect();
+    cols.push(col("COLOR_0", "VEC3", fallback));
+    cols.push(col("_TRGS_OPACITY_LOGIT", "SCALAR", g.opacity_logits.clone()));
+    cols.push(col("_TRGS_MASK_LOGIT", "SCALAR", g.mask_logits.clone()));
+    cols.push(col("_TRGS_LOG_REFLECTION", "SCALAR", g.log_reflections.clone()));
+    cols.push(col(
+        "_TRGS_POPULATION",
+        "SCALAR",
+        g.populations.iter().map(|&p| p as u8 as f32).collect(),
+    ));
+    cols
+}
+
+fn components(kind: &str) -> Option<usize> {
+    match kind {
+        "SCALAR" => Some(1),
+        "VEC3" => Some(3),
+        "VEC4" => Some(4),
+        _ => None,
+    }
+}
+
+fn material_name(m: Material) -> &'static str {
+    match m {
+        Material::Glass => "glass",
+        Material::Mirror => "mirror",
+    }
+}
+
+fn plane_node(k: usize, p: &ReflectionPlane) -> Value {
+    let n = p.unit_normal();
+    let basis = DMat3::from_cols(p.axis, p.bitangent(), n);
+    let q = DQuat::from_mat3(&basis).normalize();
+    json!({
+        "name": format!("plane {} ({})", k + 1, material_name(p.material)),
+        "translation": p.centre.to_array(),
+        "rotation": [q.x, q.y, q.z, q.w],
+        "extras": { "trgs_plane": {
+            "label": k + 1,
+            "material": material_name(p.material),
+            "centre": p.centre.to_array(),
+            "normal": p.normal.to_array(),
+            "axis": p.axis.to_array(),
+            "width": p.width,
+            "height": p.height,
+            "r0_logit": p.r0_logit,
+            "r0": p.r0(),
+        }},
+    })
+}
+
+/// `g` and `planes` as a GLB file.
+pub fn encode_glb(g: &Gaussians<f32>, planes: &[ReflectionPlane]) -> Result<Vec<u8>, String> {
+    g.check_lengths()?;
+    if g.is_empty() {
+        return Err("a glTF point primitive needs at least one Gaussian".into());
+    }
+    let mut bin: Vec<u8> = Vec::new();
+    let mut views = Vec::new();
+    let mut accessors = Vec::new();
+    let mut attributes = serde_json::Map::new();
+    for (i, c) in columns(g).into_iter().enumerate() {
+        let offset = bin.len();
+        bin.extend(c.values.iter().flat_map(|v| v.to_le_bytes()));
+        views.push(json!({"buffer": 0, "byteOffset": offset, "byteLength": c.values.len() * 4}));
+        let mut accessor = json!({
+            "bufferView": i, "componentType": FLOAT, "count": g.len(), "type": c.kind,
+        });
+        if c.semantic == "POSITION" {
+            let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+            for m in &g.means {
+                for a in 0..3 {
+                    lo[a] = lo[a].min(m[a]);
+                    hi[a] = hi[a].max(m[a]);
+                }
+            }
+            accessor["min"] = json!(lo);
+            accessor["max"] = json!(hi);
+        }
+        accessors.push(accessor);
+        attributes.insert(c.semantic, json!(i));
+    }
+    let mut children = vec![1];
+    let mut nodes = vec![
+        // COLMAP-style (y down, z forward) to glTF (y up, z backward).
+        json!({"name": "trgs", "rotation": [1.0, 0.0, 0.0, 0.0], "children": []}),
+        json!({"name": "gaussians", "mesh": 0}),
+    ];
+    for (k, p) in planes.iter().enumerate() {
+        children.push(nodes.len());
+        nodes.push(plane_node(k, p));
+    }
+    nodes[0]["children"] = json!(children);
+    let doc = json!({
+        "asset": {"version": "2.0", "generator": concat!("trgs ", env!("CARGO_PKG_VERSION"))},
+        "extensionsUsed": [EXTENSION],
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": nodes,
+        "meshes": [{"name": "gaussians", "primitives": [{
+            "mode": MODE_POINTS,
+            "attributes": attributes,
+            "extensions": {EXTENSION: {"kernel": "ellipse", "colorSpace": "srgb_rec709_display"}},
+        }]}],
+        "buffers": [{"byteLength": bin.len()}],
+        "bufferViews": views,
+        "accessors": accessors,
+    });
+    let mut text = serde_json::to_vec(&doc).map_err(|e| e.to_string())?;
+    text.resize(text.len().next_multiple_of(4), b' ');
+    bin.resize(bin.len().next_multiple_of(4), 0);
+    let total = 12 + 8 + text.len() + 8 + bin.len();
+    let total = u32::try_from(total).map_err(|_| format!("{total} bytes: over GLB's 4 GiB"))?;
+    let mut out = Vec::with_capacity(total as usize);
+    for word in [MAGIC, 2, total, text.len() as u32, CHUNK_JSON] {
+        out.extend(word.to_le_bytes());
+    }
+    out.extend(&text);
+    out.extend((bin.len() as u32).to_le_bytes());
+    out.extend(CHUNK_BIN.to_le_bytes());
+    out.extend(&bin);
+    Ok(out)
+}
+
+/// Write `g` and `planes` to `path` (atomically).
+pub fn write_glb(
+    path: &Path,
+    g: &Gaussians<f32>,
+    planes: &[ReflectionPlane],
+) -> Result<(), FormatError> {
+    let bytes = encode_glb(g, planes).map_err(|m| FormatError::new(path, m))?;
+    write_atomic(path, &bytes)
+}
+
+/// Read the Gaussians and planes of the GLB at `path`.
+pub fn read_glb(path: &Path) -> Result<(Gaussians<f32>, Vec<ReflectionPlane>), FormatError> {
+    parse_glb(&read_bytes(path)?, path)
+}
+
+fn word(bytes: &[u8], at: usize) -> Option<u32> {
+    bytes.get(at..at + 4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+}
+
+/// The JSON document and the BIN chunk of a GLB.
+fn chunks(bytes: &[u8]) -> Result<(Value, &[u8]), String> {
+    if word(bytes, 0) != Some(MAGIC) {
+        return Err("not a binary glTF file (no 'glTF' magic at the start)".into());
+    }
+    if word(bytes, 4) != Some(2) {
+        return Err(format!("glTF container version {:?}, expected 2", word(bytes, 4)));
+    }
+    let mut at = 12;
+    let (mut json, mut bin) = (None, None);
+    while at + 8 <= bytes.len() {
+        let (Some(len), Some(kind)) = (word(bytes, at), word(bytes, at + 4)) else { break };
+        let data = bytes.get(at + 8..at + 8 + len as usize).ok_or_else(|| {
+            format!("chunk at byte {at} claims {len} bytes; the file ends at {}", bytes.len())
+        })?;
+        match kind {
+            CHUNK_JSON if json.is_none() => {
+                json = Some(
+                    serde_json::from_slice::<Value>(data)
+                        .map_err(|e| format!("JSON chunk: {e}"))?,
+                )
+            }
+            CHUNK_BIN if bin.is_none() => bin = Some(data),
+            _ => {} // unknown chunks are ignored, as the spec says
+        }
+        at += 8 + (len as usize).next_multiple_of(4);
+    }
+    let json = json.ok_or("no JSON chunk")?;
+    Ok((json, bin.unwrap_or(&[])))
+}
+
+/// The f32 values of accessor `index` with `kind`, `count` elements.
+fn read_accessor(
+    doc: &Value,
+    bin: &[u8],
+    index: &Value,
+    semantic: &str,
+    kinds: &[&str],
+    count: Option<usize>,
+) -> Result<(Vec<f32>, usize), String> {
+    let what = |m: String| format!("attribute {semantic}: {m}");
+    let i = index.as_u64().ok_or_else(|| what("accessor index is not a number".into()))?;
+    let acc = &doc["accessors"][i as usize];
+    if acc.is_null() {
+        return Err(what(format!("accessor {i} does not exist")));
+    }
+    let kind = acc["type"].as_str().unwrap_or("");
+    if !kinds.contains(&kind) {
+        return Err(what(format!("accessor type {kind:?}, expected {}", kinds.join(" or "))));
+    }
+    if acc["componentType"].as_u64() != Some(FLOAT) {
+        return Err(what(format!(
+            "componentType {}, trgs reads float (5126) attributes only",
+            acc["componentType"]
+        )));
+    }
+    let n = acc["count"].as_u64().ok_or_else(|| what("no count".into()))? as usize;
+    if let Some(c) = count
+        && n != c
+    {
+        return Err(what(format!("{n} elements, POSITION has {c}")));
+    }
+    #[allow(clippy::expect_used)]
+    let width = components(kind).expect("checked above");
+    let view = &doc["bufferViews"][acc["bufferView"].as_u64().unwrap_or(u64::MAX) as usize];
+    if view.is_null() {
+        return Err(what("no bufferView (sparse accessors are not supported)".into()));
+    }
+    if view["buffer"].as_u64() != Some(0) {
+        return Err(what("data outside the GLB's own buffer".into()));
+    }
+    let start = (view["byteOffset"].as_u64().unwrap_or(0) + acc["byteOffset"].as_u64().unwrap_or(0))
+        as usize;
+    let stride = view["byteStride"].as_u64().map_or(width * 4, |s| s as usize);
+    let mut out = Vec::with_capacity(n * width);
+    for e in 0..n {
+        for c in 0..width {
+            let at = start + e * stride + c * 4;
+            let b = bin.get(at..at + 4).ok_or_else(|| {
+                what(format!("element {e} lies past the BIN chunk ({} bytes)", bin.len()))
+            })?;
+            out.push(f32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+        }
+    }
+    Ok((out, n))
+}
+
+fn vec3(v: &Value, field: &str) -> Result<DVec3, String> {
+    let a: Vec<f64> =
+        v[field].as_array().map_or(Vec::new(), |a| a.iter().filter_map(Value::as_f64).collect());
+    match a[..] {
+        [x, y, z] => Ok(DVec3::new(x, y, z)),
+        _ => Err(format!("field {field:?} is not three numbers")),
+    }
+}
+
+fn plane_of(index: usize, extras: &Value) -> Result<ReflectionPlane, String> {
+    let what = |m: String| format!("node {index} extras.trgs_plane: {m}");
+    let number = |f: &str| extras[f].as_f64().ok_or_else(|| what(format!("no number {f:?}")));
+    let material = match extras["material"].as_str() {
+        Some("mirror") => Material::Mirror,
+        Some("glass") | None => Material::Glass,
+        Some(other) => return Err(what(format!("material {other:?}, expected glass or mirror"))),
+    };
+    let mut p = ReflectionPlane::new(
+        vec3(extras, "centre").map_err(what)?,
+        vec3(extras, "normal").map_err(what)?,
+        vec3(extras, "axis").map_err(what)?,
+        number("width")?,
+        number("height")?,
+        material,
+    );
+    p.r0_logit = number("r0_logit")?;
+    Ok(p)
+}
+
+/// Parse a GLB; `path` names the file in errors.
+pub fn parse_glb(
+    bytes: &[u8],
+    path: &Path,
+) -> Result<(Gaussians<f32>, Vec<ReflectionPlane>), FormatError> {
+    parse(bytes).map_err(|m| FormatError::new(path, m))
+}
+
+fn parse(bytes: &[u8]) -> Result<(Gaussians<f32>, Vec<ReflectionPlane>), String> {
+    let (doc, bin) = chunks(bytes)?;
+    let primitive = doc["meshes"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .flat_map(|m| m["primitives"].as_array().into_iter().flatten())
+        .find(|p| !p["extensions"][EXTENSION].is_null())
+        .ok_or_else(|| format!("no mesh primitive with the {EXTENSION} extension"))?;
+    let ext = &primitive["extensions"][EXTENSION];
+    if primitive["mode"].as_u64() != Some(MODE_POINTS) {
+        return Err(format!("the {EXTENSION} primitive's mode must be 0 (POINTS)"));
+    }
+    for field in ["kernel", "colorSpace"] {
+        if !ext[field].is_string() {
+            return Err(format!("the {EXTENSION} object lacks its required {field:?}"));
+        }
+    }
+    let attrs = &primitive["attributes"];
+    let get = |semantic: &str, kinds: &[&str], count: Option<usize>| {
+        let index = &attrs[semantic];
+        if index.is_null() {
+            return Ok(None);
+        }
+        read_accessor(&doc, bin, index, semantic, kinds, count).map(|(v, _)| Some(v))
+    };
+    let required = |semantic: &str, kinds: &[&str], count: Option<usize>| {
+        get(semantic, kinds, count)?.ok_or_else(|| format!("no {semantic} attribute"))
+    };
+    let (positions, n) = match &attrs["POSITION"] {
+        Value::Null => return Err("no POSITION attribute".into()),
+        index => read_accessor(&doc, bin, index, "POSITION", &["VEC3"], None)?,
+    };
+    if n == 0 {
+        return Err("POSITION has no elements".into());
+    }
+    let rot = required("KHR_gaussian_splatting:ROTATION", &["VEC4"], Some(n))?;
+    let scale = required("KHR_gaussian_splatting:SCALE", &["VEC3"], Some(n))?;
+    let opacity = required("KHR_gaussian_splatting:OPACITY", &["SCALAR"], Some(n))?;
+    // The SH degree: every coefficient of each degree up to it, none partly.
+    let mut bands: Vec<Vec<Vec<f32>>> = Vec::new();
+    for degree in 0..=3u32 {
+        let mut band = Vec::new();
+        for order in 0..2 * degree + 1 {
+            let name = format!("KHR_gaussian_splatting:SH_DEGREE_{degree}_COEF_{order}");
+            band.push(get(&name, &["VEC3"], Some(n))?);
+        }
+        match band.iter().filter(|c| c.is_some()).count() {
+            0 => break,
+            k if k == band.len() => bands.push(band.into_iter().flatten().collect()),
+            k => return Err(format!("SH degree {degree} is partly defined ({k} coefficients)")),
+        }
+    }
+    if bands.is_empty() {
+        return Err("no KHR_gaussian_splatting:SH_DEGREE_0_COEF_0 attribute".into());
+    }
+    let degree = bands.len() as u32 - 1;
+    let mut g = Gaussians::<f32>::zeros(n, degree);
+    let coeffs = sh_coeff_count(degree);
+    for (l, band) in bands.iter().enumerate() {
+        for (order, values) in band.iter().enumerate() {
+            for i in 0..n {
+                let v = &values[3 * i..3 * i + 3];
+                g.sh[i * coeffs + l * l + order] = [v[0], v[1], v[2]];
+            }
+        }
+    }
+    for i in 0..n {
+        g.means[i] = [positions[3 * i], positions[3 * i + 1], positions[3 * i + 2]];
+        let q = &rot[4 * i..4 * i + 4];
+        g.rotations[i] = [q[3], q[0], q[1], q[2]];
+        for a in 0..3 {
+            let s = scale[3 * i + a];
+            if s.is_nan() || s < 0.0 {
+                return Err(format!("Gaussian {i}: scale {s} (scales must not be negative)"));
+            }
+            g.log_scales[i][a] = s.ln();
+        }
+        let o = opacity[i];
+        if !(0.0..=1.0).contains(&o) {
+            return Err(format!("Gaussian {i}: opacity {o} outside [0, 1]"));
+        }
+        let o = o.clamp(1e-7, 1.0 - 1e-7);
+        g.opacity_logits[i] = (o / (1.0 - o)).ln();
+    }
+    if let Some(v) = get("_TRGS_OPACITY_LOGIT", &["SCALAR"], Some(n))? {
+        g.opacity_logits = v;
+    }
+    if let Some(v) = get("_TRGS_MASK_LOGIT", &["SCALAR"], Some(n))? {
+        g.mask_logits = v;
+    }
+    if let Some(v) = get("_TRGS_LOG_REFLECTION", &["SCALAR"], Some(n))? {
+        g.log_reflections = v;
+    }
+    if let Some(v) = get("_TRGS_POPULATION", &["SCALAR"], Some(n))? {
+        g.populations = v
+            .iter()
+            .map(|&p| if p == 1.0 { Population::Glass } else { Population::Primary })
+            .collect();
+    }
+    let mut planes = Vec::new();
+    for (index, node) in doc["nodes"].as_array().into_iter().flatten().enumerate() {
+        let extras = &node["extras"]["trgs_plane"];
+        if !extras.is_null() {
+            planes.push(plane_of(index, extras)?);
+        }
+    }
+    Ok((g, planes))
+}
+
+#[cfg(test)]
+mod tests;

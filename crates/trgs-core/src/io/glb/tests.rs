@@ -1,0 +1,277 @@
+use super::*;
+use crate::io::test_util::{assert_mentions, scratch_dir};
+use crate::rng::Rng;
+
+fn random_gaussians(n: usize, degree: u32, rng: &mut Rng) -> Gaussians<f32> {
+    let mut g = Gaussians::<f32>::zeros(n, degree);
+    let r = |rng: &mut Rng, lo: f64, hi: f64| rng.range(lo, hi) as f32;
+    for i in 0..n {
+        g.means[i] = [r(rng, -5.0, 5.0), r(rng, -5.0, 5.0), r(rng, 0.0, 9.0)];
+        // Unnormalised, as training leaves them.
+        g.rotations[i] = [0; 4].map(|_| r(rng, -2.0, 2.0));
+        g.log_scales[i] = [0; 3].map(|_| r(rng, -9.0, 2.0));
+        // Logits far into the sigmoid's flat ends, where an f32 opacity loses them.
+        g.opacity_logits[i] = r(rng, -14.0, 14.0);
+        g.mask_logits[i] = r(rng, -3.0, 3.0);
+        g.log_reflections[i] = r(rng, -1.0, 1.0);
+        if i % 5 == 0 {
+            g.populations[i] = Population::Glass;
+        }
+    }
+    for v in g.sh.iter_mut().flatten() {
+        *v = r(rng, -1.5, 1.5);
+    }
+    g
+}
+
+fn planes() -> Vec<ReflectionPlane> {
+    let mut glass = ReflectionPlane::new(
+        DVec3::new(1.08, -1.53, 1.77),
+        DVec3::new(-0.08, 0.086, -0.99),
+        DVec3::new(0.94, 0.33, -0.05),
+        1.6,
+        1.0,
+        Material::Glass,
+    );
+    glass.r0_logit = -1.234_567_890_123;
+    let mirror = ReflectionPlane::new(
+        DVec3::new(-2.0, 0.5, 3.0),
+        DVec3::new(1.0, 0.0, 0.2),
+        DVec3::Y,
+        0.7,
+        1.9,
+        Material::Mirror,
+    );
+    vec![glass, mirror]
+}
+
+/// The JSON document of a GLB and its BIN chunk.
+fn split(bytes: &[u8]) -> (Value, Vec<u8>) {
+    let (doc, bin) = chunks(bytes).expect("a GLB");
+    (doc, bin.to_vec())
+}
+
+/// A GLB with the same BIN chunk and an edited document.
+fn rebuild(bytes: &[u8], edit: impl FnOnce(&mut Value)) -> Vec<u8> {
+    let (mut doc, bin) = split(bytes);
+    edit(&mut doc);
+    let mut text = serde_json::to_vec(&doc).expect("json");
+    text.resize(text.len().next_multiple_of(4), b' ');
+    let total = (12 + 8 + text.len() + 8 + bin.len()) as u32;
+    let mut out = Vec::new();
+    for w in [MAGIC, 2, total, text.len() as u32, CHUNK_JSON] {
+        out.extend(w.to_le_bytes());
+    }
+    out.extend(&text);
+    out.extend((bin.len() as u32).to_le_bytes());
+    out.extend(CHUNK_BIN.to_le_bytes());
+    out.extend(&bin);
+    out
+}
+
+fn unit(q: [f32; 4]) -> [f32; 4] {
+    let n = q.iter().map(|v| v * v).sum::<f32>().sqrt();
+    let s = if q[0] < 0.0 { -1.0 } else { 1.0 };
+    q.map(|v| s * v / n)
+}
+
+#[test]
+fn round_trip_is_lossless() {
+    let dir = scratch_dir("glb-round-trip");
+    let mut rng = Rng::new(17);
+    for degree in 0..=3 {
+        let g = random_gaussians(257, degree, &mut rng);
+        let path = dir.join(format!("model{degree}.glb"));
+        write_glb(&path, &g, &planes()).expect("write");
+        let (back, back_planes) = read_glb(&path).expect("read");
+        assert_eq!(back.sh_degree, degree);
+        assert_eq!(back.means, g.means);
+        assert_eq!(back.sh, g.sh);
+        assert_eq!(back.opacity_logits, g.opacity_logits);
+        assert_eq!(back.mask_logits, g.mask_logits);
+        assert_eq!(back.log_reflections, g.log_reflections);
+        assert_eq!(back.populations, g.populations);
+        for (a, b) in back.log_scales.iter().flatten().zip(g.log_scales.iter().flatten()) {
+            // ln(exp(x)) in f32: the scale itself to an ulp or two.
+            assert!((a - b).abs() <= 2e-7 * b.abs().max(1.0), "log scale {a} vs {b}");
+        }
+        for (a, b) in back.rotations.iter().zip(&g.rotations) {
+            let (a, b) = (unit(*a), unit(*b));
+            for k in 0..4 {
+                assert!((a[k] - b[k]).abs() < 1e-6, "rotation {a:?} vs {b:?}");
+            }
+        }
+        assert_eq!(back_planes.len(), 2);
+        for (a, b) in back_planes.iter().zip(&planes()) {
+            assert_eq!(a.material, b.material);
+            assert_eq!(a.r0_logit, b.r0_logit);
+            assert_eq!((a.width, a.height), (b.width, b.height));
+            assert_eq!((a.centre, a.normal), (b.centre, b.normal));
+            assert!((a.axis - b.axis).length() < 1e-15, "{} vs {}", a.axis, b.axis);
+        }
+    }
+}
+
+/// The glTF 2.0 and KHR_gaussian_splatting rules a validator checks: container layout, required
+/// properties, attribute types and counts, POSITION bounds, value ranges, buffer alignment.
+#[test]
+fn the_file_follows_the_extension_rules() {
+    let mut rng = Rng::new(3);
+    let g = random_gaussians(101, 3, &mut rng);
+    let bytes = encode_glb(&g, &planes()).expect("encode");
+    assert_eq!(word(&bytes, 8), Some(bytes.len() as u32), "header length");
+    let json_len = word(&bytes, 12).expect("chunk") as usize;
+    assert_eq!(json_len % 4, 0);
+    let text = &bytes[20..20 + json_len];
+    let end = text.iter().rposition(|&b| b != b' ').expect("text");
+    assert_eq!(text[end], b'}', "the JSON chunk is padded with spaces only");
+    let bin_len = word(&bytes, 20 + json_len).expect("bin chunk") as usize;
+    assert_eq!(bin_len % 4, 0);
+    assert_eq!(word(&bytes, 24 + json_len), Some(CHUNK_BIN));
+    assert_eq!(bytes.len(), 28 + json_len + bin_len);
+
+    let (doc, bin) = split(&bytes);
+    assert_eq!(doc["asset"]["version"], "2.0");
+    assert!(doc["extensionsUsed"].as_array().expect("list").contains(&json!(EXTENSION)));
+    let byte_length = doc["buffers"][0]["byteLength"].as_u64().expect("length") as usize;
+    assert!(
+        doc["buffers"][0]["uri"].is_null()
+            && byte_length <= bin.len()
+            && bin.len() < byte_length + 4
+    );
+    let prim = &doc["meshes"][0]["primitives"][0];
+    assert_eq!(prim["mode"], 0);
+    let ext = &prim["extensions"][EXTENSION];
+    assert_eq!(ext["kernel"], "ellipse");
+    assert!(ext["colorSpace"].is_string());
+
+    let mut required = vec![
+        ("POSITION".to_string(), "VEC3"),
+        ("KHR_gaussian_splatting:ROTATION".to_string(), "VEC4"),
+        ("KHR_gaussian_splatting:SCALE".to_string(), "VEC3"),
+        ("KHR_gaussian_splatting:OPACITY".to_string(), "SCALAR"),
+    ];
+    for l in 0..=3u32 {
+        for n in 0..2 * l + 1 {
+            required.push((format!("KHR_gaussian_splatting:SH_DEGREE_{l}_COEF_{n}"), "VEC3"));
+        }
+    }
+    let attrs = prim["attributes"].as_object().expect("attributes");
+    for (name, kind) in &required {
+        let acc = &doc["accessors"][attrs[name].as_u64().expect(name) as usize];
+        assert_eq!(acc["type"], *kind, "{name}");
+    }
+    let values = |name: &str| -> Vec<f32> {
+        read_accessor(&doc, &bin, &attrs[name], name, &["SCALAR", "VEC3", "VEC4"], None)
+            .expect(name)
+            .0
+    };
+    for (name, index) in attrs {
+        assert!(
+            name.starts_with("KHR_gaussian_splatting:")
+                || name.starts_with('_')
+                || ["POSITION", "COLOR_0"].contains(&name.as_str()),
+            "{name}: application attributes must start with an underscore"
+        );
+        let acc = &doc["accessors"][index.as_u64().expect("index") as usize];
+        assert_eq!(acc["componentType"], 5126, "{name}");
+        assert_eq!(acc["count"], 101, "{name}: every attribute has the same count");
+        let view = &doc["bufferViews"][acc["bufferView"].as_u64().expect("view") as usize];
+        let offset = view["byteOffset"].as_u64().expect("offset") as usize;
+        let len = view["byteLength"].as_u64().expect("len") as usize;
+        let width = components(acc["type"].as_str().expect("type")).expect("known type");
+        assert_eq!(offset % 4, 0, "{name}: 4-byte aligned");
+        assert_eq!(len, 101 * width * 4, "{name}");
+        assert!(offset + len <= byte_length, "{name}: inside the buffer");
+    }
+    let pos = values("POSITION");
+    let acc = &doc["accessors"][attrs["POSITION"].as_u64().expect("index") as usize];
+    for a in 0..3 {
+        let axis: Vec<f32> = pos.iter().skip(a).step_by(3).copied().collect();
+        let lo = axis.iter().copied().fold(f32::INFINITY, f32::min);
+        let hi = axis.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+        assert_eq!(acc["min"][a].as_f64(), Some(f64::from(lo)));
+        assert_eq!(acc["max"][a].as_f64(), Some(f64::from(hi)));
+    }
+    for q in values("KHR_gaussian_splatting:ROTATION").chunks(4) {
+        let norm = q.iter().map(|v| v * v).sum::<f32>().sqrt();
+        assert!((norm - 1.0).abs() < 1e-6, "unit quaternions: {q:?}");
+    }
+    assert!(values("KHR_gaussian_splatting:SCALE").iter().all(|&s| s >= 0.0));
+    assert!(values("KHR_gaussian_splatting:OPACITY").iter().all(|o| (0.0..=1.0).contains(o)));
+    assert!(values("COLOR_0").iter().all(|c| (0.0..=1.0).contains(c)));
+    // The plane nodes hang under the root with their transform and extras.
+    let root = &doc["nodes"][doc["scenes"][0]["nodes"][0].as_u64().expect("root") as usize];
+    assert_eq!(root["children"].as_array().expect("children").len(), 3);
+    assert!(!doc["nodes"][2]["extras"]["trgs_plane"].is_null());
+}
+
+#[test]
+fn a_file_from_another_tool_reads_with_defaults() {
+    let mut rng = Rng::new(4);
+    let mut g = random_gaussians(40, 1, &mut rng);
+    g.opacity_logits.iter_mut().for_each(|l| *l = l.clamp(-5.0, 5.0));
+    let bytes = rebuild(&encode_glb(&g, &[]).expect("encode"), |doc| {
+        let attrs = doc["meshes"][0]["primitives"][0]["attributes"].as_object_mut().expect("map");
+        attrs.retain(|name, _| !name.starts_with('_'));
+    });
+    let (back, planes) = parse_glb(&bytes, Path::new("other.glb")).expect("read");
+    assert!(planes.is_empty());
+    assert!(back.populations.iter().all(|&p| p == Population::Primary));
+    assert!(back.log_reflections.iter().all(|&v| v == 0.0));
+    for (a, b) in back.opacity_logits.iter().zip(&g.opacity_logits) {
+        assert!((a - b).abs() < 1e-3, "logit {a} vs {b}");
+    }
+}
+
+#[test]
+fn malformed_files_get_named_errors() {
+    let mut rng = Rng::new(5);
+    let g = random_gaussians(10, 1, &mut rng);
+    let good = encode_glb(&g, &planes()).expect("encode");
+    let path = Path::new("scene/model.glb");
+    let cases: Vec<(Vec<u8>, &str)> = vec![
+        (b"PLY\n....".to_vec(), "no 'glTF' magic"),
+        (good[..good.len() - 100].to_vec(), "claims"),
+        (
+            rebuild(&good, |d| {
+                d["meshes"][0]["primitives"][0]["attributes"]
+                    .as_object_mut()
+                    .expect("map")
+                    .remove("KHR_gaussian_splatting:ROTATION");
+            }),
+            "no KHR_gaussian_splatting:ROTATION attribute",
+        ),
+        (
+            rebuild(&good, |d| {
+                d["meshes"][0]["primitives"][0]["attributes"]
+                    .as_object_mut()
+                    .expect("map")
+                    .remove("KHR_gaussian_splatting:SH_DEGREE_1_COEF_2");
+            }),
+            "SH degree 1 is partly defined",
+        ),
+        (rebuild(&good, |d| d["meshes"][0]["primitives"][0]["mode"] = json!(4)), "POINTS"),
+        (
+            rebuild(&good, |d| {
+                d["meshes"][0]["primitives"][0]["extensions"][EXTENSION]
+                    .as_object_mut()
+                    .expect("map")
+                    .remove("colorSpace");
+            }),
+            "colorSpace",
+        ),
+        (rebuild(&good, |d| d["accessors"][1]["componentType"] = json!(5122)), "float (5126)"),
+        (rebuild(&good, |d| d["accessors"][2]["count"] = json!(9)), "9 elements"),
+        (
+            rebuild(&good, |d| d["nodes"][2]["extras"]["trgs_plane"]["material"] = json!("chrome")),
+            "chrome",
+        ),
+    ];
+    for (bytes, expected) in cases {
+        let err = parse_glb(&bytes, path).expect_err(expected);
+        assert_mentions(&err, &["scene/model.glb", expected]);
+    }
+    let empty = Gaussians::<f32>::zeros(0, 0);
+    assert!(encode_glb(&empty, &[]).is_err(), "a point primitive needs a point");
+}

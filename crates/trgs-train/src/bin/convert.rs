@@ -1,0 +1,69 @@
+//! `convert`: a model between trgs's formats: a run folder or .ply (with its planes.json) to a
+//! .glb with `KHR_gaussian_splatting`, or a .glb back to model.ply and planes.json.
+use anyhow::{Context, Result, bail};
+use std::path::{Path, PathBuf};
+use trgs_core::io::{write_glb, write_planes_json, write_ply};
+use trgs_train::model::load_model;
+
+const HELP: &str = "\
+trgs convert: a model to glTF (KHR_gaussian_splatting) or back to PLY
+
+USAGE:
+    convert MODEL OUT [--planes FILE]
+
+    MODEL   a run folder of `train`, a .ply (trgs or any INRIA-layout 3DGS PLY) or a .glb
+    OUT     a .glb: Gaussians and planes in one file (planes as nodes, every parameter in
+            their extras); or a .ply: the Gaussians, with the planes in planes.json beside it
+    --planes FILE   the planes.json of MODEL (default: beside the PLY or in the run folder)
+";
+
+fn main() -> Result<()> {
+    let mut paths = Vec::new();
+    let mut planes: Option<PathBuf> = None;
+    let mut it = std::env::args().skip(1);
+    while let Some(a) = it.next() {
+        match a.as_str() {
+            "-h" | "--help" => {
+                print!("{HELP}");
+                return Ok(());
+            }
+            "--planes" => planes = Some(it.next().context("--planes needs a file")?.into()),
+            _ if a.starts_with("--") => bail!("unknown option {a}\n\n{HELP}"),
+            _ => paths.push(PathBuf::from(a)),
+        }
+    }
+    let [model, out] = &paths[..] else {
+        bail!("expected MODEL and OUT, got {} paths\n\n{HELP}", paths.len());
+    };
+    let m = load_model(model, planes.as_deref())?;
+    let extension = out.extension().map(|e| e.to_string_lossy().to_lowercase());
+    match extension.as_deref() {
+        Some("glb") => write_glb(out, &m.gaussians, &m.planes)?,
+        Some("ply") => {
+            write_ply(out, &m.gaussians)?;
+            if !m.planes.is_empty() {
+                let json = out.with_file_name("planes.json");
+                write_planes_json(&json, &m.planes)?;
+            }
+        }
+        _ => bail!("{}: the output must end in .glb or .ply", out.display()),
+    }
+    println!(
+        "{} Gaussians (SH degree {}) and {} planes from {} written to {}",
+        m.gaussians.len(),
+        m.gaussians.sh_degree,
+        m.planes.len(),
+        m.ply.display(),
+        display_with_planes(out, !m.planes.is_empty())
+    );
+    Ok(())
+}
+
+fn display_with_planes(out: &Path, planes: bool) -> String {
+    let is_ply = out.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply"));
+    if is_ply && planes {
+        format!("{} (planes in {})", out.display(), out.with_file_name("planes.json").display())
+    } else {
+        out.display().to_string()
+    }
+}
