@@ -1,8 +1,8 @@
 // Stage `regularisers` (twin: trgs_core::reference::regularisers): the paper's depth variance,
 // gradient conflict and mask losses (section 3.3), one thread per pixel. It writes (overwrites)
 // the direct gradients of the transmission layer, dL/d(C_t, alpha) = (w_c dL_c/dC_t, 0), and of
-// the geometry layer, dL/d(D_t, V, M, -) = (0, w_d dL_d/dV, w_m dL_m/dM, 0); each workgroup
-// writes its sums of the unweighted L_d, L_c and L_m terms.
+// the geometry layer, dL/d(D_t, V, M, -) = (0, w_d dL_d/dV, w_m dL_m/dM, 0); and each pixel's
+// unweighted L_d, L_c and L_m terms for `loss_sums`.
 //
 // L_c's gradient at pixel p gathers, from every interior hit pixel q of its 3x3 neighbourhood,
 // the Sobel taps through which C_t(p) enters q's gradients:
@@ -22,10 +22,8 @@
 @group(0) @binding(5) var<storage, read> annotation: array<u32>;
 @group(0) @binding(6) var<storage, read_write> grad_transmission: array<vec4<f32>>;
 @group(0) @binding(7) var<storage, read_write> grad_geometry: array<vec4<f32>>;
-// Per workgroup: (sum H V, sum |g^t g^r|, sum |M - M_a|, 0).
-@group(0) @binding(8) var<storage, read_write> partials: array<vec4<f32>>;
-
-var<workgroup> sums: array<vec4<f32>, 256>;
+// Per pixel at 2 p + 1: (H V, sum |g^t g^r|, |M - M_a|, 0); the photometric terms are at 2 p.
+@group(0) @binding(8) var<storage, read_write> stats: array<vec4<f32>>;
 
 // The Sobel kernels' tap at offset (dx, dy) in -1..1 (x: horizontal derivative).
 fn sobel_x(dx: i32, dy: i32) -> f32 {
@@ -73,15 +71,12 @@ fn sobel_at(q: vec2<i32>) -> SobelPair {
 }
 
 @compute @workgroup_size(16, 16)
-fn main(
-    @builtin(global_invocation_id) gid: vec3<u32>,
-    @builtin(workgroup_id) wg: vec3<u32>,
-    @builtin(num_workgroups) nwg: vec3<u32>,
-    @builtin(local_invocation_index) li: u32,
-) {
-    let inside = gid.x < params.width && gid.y < params.height;
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= params.width || gid.y >= params.height {
+        return;
+    }
     var sum = vec4<f32>(0.0);
-    if inside {
+    {
         let p = gid.y * params.width + gid.x;
         let here = vec2<i32>(gid.xy);
         var g_geometry = vec4<f32>(0.0);
@@ -116,16 +111,6 @@ fn main(
         }
         grad_transmission[p] = vec4<f32>(g_t, 0.0);
         grad_geometry[p] = g_geometry;
-    }
-    sums[li] = sum;
-    workgroupBarrier();
-    for (var stride = 128u; stride > 0u; stride >>= 1u) {
-        if li < stride {
-            sums[li] += sums[li + stride];
-        }
-        workgroupBarrier();
-    }
-    if li == 0u {
-        partials[wg.y * nwg.x + wg.x] = sums[0];
+        stats[2u * p + 1u] = sum;
     }
 }

@@ -242,9 +242,12 @@ gpu_struct! {
     }
 }
 
+/// Pixels per thread of `loss_sums` (the losses' readback is 32 bytes per strip).
+pub const LOSS_STRIP: u32 = 64;
+
 gpu_struct! {
-    /// Parameters of the training losses: `photometric_loss` (both passes) and `regularisers`,
-    /// over one `width` x `height` frame.
+    /// Parameters of the training losses: `photometric_loss` (its four passes), `regularisers`
+    /// and `loss_sums`, over one `width` x `height` frame.
     pub struct LossParams {
         pub width: u32,
         pub height: u32,
@@ -378,6 +381,7 @@ pub fn prelude() -> String {
         ("BWD_VIEW", BWD_VIEW),
         ("MODEL_NO_FRESNEL", MODEL_NO_FRESNEL),
         ("MODEL_NO_INTENSITY", MODEL_NO_INTENSITY),
+        ("LOSS_STRIP", LOSS_STRIP),
     ];
     for (name, v) in consts_u32 {
         s.push_str(&format!("const {name}: u32 = {v}u;\n"));

@@ -20,7 +20,6 @@ pub const SOURCES: &[(&str, &str)] = sources!(
     "shared/accumulate.wgsl",
     "shared/sh.wgsl",
     "shared/random.wgsl",
-    "shared/loss_block.wgsl",
     "project.wgsl",
     "tile_counts.wgsl",
     "prefix_sum.wgsl",
@@ -40,9 +39,12 @@ pub const SOURCES: &[(&str, &str)] = sources!(
     "adam.wgsl",
     "mcmc_regularise.wgsl",
     "mcmc_noise.wgsl",
+    "photometric_loss_rows.wgsl",
     "photometric_loss.wgsl",
+    "photometric_loss_grad_rows.wgsl",
     "photometric_loss_grad.wgsl",
     "regularisers.wgsl",
+    "loss_sums.wgsl",
 );
 
 /// Every (stage file, defines) combination the renderer compiles; a test validates each with naga.
@@ -79,9 +81,12 @@ pub const VARIANTS: &[(&str, &[&str])] = &[
     ("adam.wgsl", &[]),
     ("mcmc_regularise.wgsl", &[]),
     ("mcmc_noise.wgsl", &[]),
+    ("photometric_loss_rows.wgsl", &[]),
     ("photometric_loss.wgsl", &[]),
+    ("photometric_loss_grad_rows.wgsl", &[]),
     ("photometric_loss_grad.wgsl", &[]),
     ("regularisers.wgsl", &[]),
+    ("loss_sums.wgsl", &[]),
 ];
 
 #[derive(Debug, thiserror::Error)]

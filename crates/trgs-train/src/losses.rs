@@ -1,19 +1,21 @@
 //! The training losses on the GPU, writing dL/d(layer) where the backward pass reads it:
-//! - stage `photometric_loss` (passes `photometric_loss` and `photometric_loss_grad`): 3DGS's
-//!   `(1 - lambda) L1 + lambda (1 - SSIM)` with the 11x11 window, into dL/dC;
+//! - stage `photometric_loss`: 3DGS's `(1 - lambda) L1 + lambda (1 - SSIM)` with the 11x11
+//!   window, into dL/dC, as four separable passes (`photometric_loss_rows`, `photometric_loss`,
+//!   `photometric_loss_grad_rows`, `photometric_loss_grad`);
 //! - stage `regularisers`: the paper's L_d, L_c and L_m, into dL/d(C_t, alpha) and
-//!   dL/d(D_t, V, M).
+//!   dL/d(D_t, V, M);
+//! - stage `loss_sums`: their per-pixel values summed over strips of pixels.
 //!
-//! Each has its f64 twin of the same name in `trgs_core::reference`. A view's target image and
-//! glass labels are uploaded once ([`GpuTarget`]) and stay on the GPU; only the workgroups' partial
+//! The first two have their f64 twins of the same name in `trgs_core::reference`. A view's target
+//! image and glass labels are uploaded once ([`GpuTarget`]) and stay on the GPU; only the strips'
 //! sums (a few kB) come back, for the step's statistics.
 use trgs_core::Image;
 use trgs_core::reference::RegulariserWeights;
 use trgs_render::gpu::{self, BufferPool, Kernel, Recorder};
-use trgs_render::layout::LossParams;
+use trgs_render::layout::{LOSS_STRIP, LossParams};
 use trgs_render::{Frame, GpuContext, LayerGrads};
 
-/// Side of the square pixel block of one loss workgroup (`shared/loss_block.wgsl`).
+/// Side of the 16x16 workgroups of the per-pixel passes.
 const BLOCK: u32 = 16;
 
 #[derive(Debug, thiserror::Error)]
@@ -118,32 +120,29 @@ pub struct LossValues {
 /// What [`LossKernels::record`] leaves to read once its work has run.
 #[derive(Debug)]
 pub struct PendingLoss {
-    photometric: wgpu::Buffer,
-    regularisers: Option<wgpu::Buffer>,
-    groups: usize,
+    partials: wgpu::Buffer,
+    regularisers: bool,
+    strips: usize,
     lambda_dssim: f64,
     inv_samples: f64,
     inv_pixels: f64,
 }
 
 impl PendingLoss {
-    /// Sum the partial sums (blocking read of a few kB).
+    /// Sum the strips' sums (blocking read of a few kB).
     pub fn read(&self, ctx: &GpuContext) -> LossValues {
-        let total = |buffer: &wgpu::Buffer| {
-            gpu::read_buffer::<[f32; 4]>(ctx, buffer, 0, self.groups).iter().fold(
-                [0.0f64; 3],
-                |acc, p| {
-                    [acc[0] + f64::from(p[0]), acc[1] + f64::from(p[1]), acc[2] + f64::from(p[2])]
-                },
-            )
+        let partials = gpu::read_buffer::<[f32; 4]>(ctx, &self.partials, 0, 2 * self.strips);
+        let total = |slot: usize| {
+            partials.iter().skip(slot).step_by(2).fold([0.0f64; 3], |acc, p| {
+                [acc[0] + f64::from(p[0]), acc[1] + f64::from(p[1]), acc[2] + f64::from(p[2])]
+            })
         };
-        let [l1, ssim, sq] = total(&self.photometric).map(|v| v * self.inv_samples);
-        let [depth, conflict, mask] = match &self.regularisers {
-            Some(b) => {
-                let [d, c, m] = total(b);
-                [d * self.inv_pixels, c * self.inv_samples, m * self.inv_pixels]
-            }
-            None => [0.0; 3],
+        let [l1, ssim, sq] = total(0).map(|v| v * self.inv_samples);
+        let [depth, conflict, mask] = if self.regularisers {
+            let [d, c, m] = total(1);
+            [d * self.inv_pixels, c * self.inv_samples, m * self.inv_pixels]
+        } else {
+            [0.0; 3]
         };
         let lambda = self.lambda_dssim;
         LossValues {
@@ -195,23 +194,25 @@ impl<'a> LossLayers<'a> {
 /// The loss pipelines, compiled once.
 #[derive(Debug)]
 pub struct LossKernels {
+    photometric_loss_rows: Kernel,
     photometric_loss: Kernel,
+    photometric_loss_grad_rows: Kernel,
     photometric_loss_grad: Kernel,
     regularisers: Kernel,
+    loss_sums: Kernel,
     scratch: BufferPool,
 }
 
 impl LossKernels {
     pub fn new(ctx: &GpuContext) -> Self {
+        let kernel = |name: &'static str| Kernel::new(ctx, name, &format!("{name}.wgsl"), &[]);
         Self {
-            photometric_loss: Kernel::new(ctx, "photometric_loss", "photometric_loss.wgsl", &[]),
-            photometric_loss_grad: Kernel::new(
-                ctx,
-                "photometric_loss_grad",
-                "photometric_loss_grad.wgsl",
-                &[],
-            ),
-            regularisers: Kernel::new(ctx, "regularisers", "regularisers.wgsl", &[]),
+            photometric_loss_rows: kernel("photometric_loss_rows"),
+            photometric_loss: kernel("photometric_loss"),
+            photometric_loss_grad_rows: kernel("photometric_loss_grad_rows"),
+            photometric_loss_grad: kernel("photometric_loss_grad"),
+            regularisers: kernel("regularisers"),
+            loss_sums: kernel("loss_sums"),
             scratch: BufferPool::default(),
         }
     }
@@ -242,7 +243,7 @@ impl LossKernels {
         }
         let pixels = u64::from(w) * u64::from(h);
         let groups = [w.div_ceil(BLOCK), h.div_ceil(BLOCK), 1];
-        let group_count = (groups[0] * groups[1]) as usize;
+        let strips = (pixels as u32).div_ceil(LOSS_STRIP);
         let weights = settings.regularisers.unwrap_or_default();
         let params = LossParams {
             width: w,
@@ -255,61 +256,58 @@ impl LossKernels {
             weight_mask: if target.has_annotation() { weights.mask as f32 } else { 0.0 },
         };
         let block = gpu::params(ctx, "trgs.photometric_loss.params", &params);
-        let rendered = layers.color;
+        let (rendered, image) = (layers.color, &target.image);
+        let rows = self.scratch.get(ctx, "trgs.photometric_loss.rows", pixels * 80);
         let terms = self.scratch.get(ctx, "trgs.photometric_loss.terms", pixels * 48);
-        let photometric =
-            self.scratch.get(ctx, "trgs.photometric_loss.partials", group_count as u64 * 16);
-        let bind = self.photometric_loss.bind(
+        let stats = self.scratch.get(ctx, "trgs.loss_sums.stats", pixels * 32);
+        let partials = self.scratch.get(ctx, "trgs.loss_sums.partials", u64::from(strips) * 32);
+        let passes: [(&'static str, &Kernel, Vec<&wgpu::Buffer>); 4] = [
+            ("photometric_loss_rows", &self.photometric_loss_rows, vec![rendered, image, &rows]),
+            (
+                "photometric_loss",
+                &self.photometric_loss,
+                vec![rendered, image, &rows, &terms, &stats],
+            ),
+            ("photometric_loss_grad_rows", &self.photometric_loss_grad_rows, vec![&terms, &rows]),
+            (
+                "photometric_loss_grad",
+                &self.photometric_loss_grad,
+                vec![rendered, image, &rows, &grads.color],
+            ),
+        ];
+        for (stage, kernel, buffers) in passes {
+            let mut entries = vec![block.as_entire_binding()];
+            entries.extend(buffers.iter().map(|b| b.as_entire_binding()));
+            rec.dispatch(stage, kernel, &kernel.bind(ctx, &entries), groups);
+        }
+        if settings.regularisers.is_some() {
+            // Bound but never read when the view has no labels.
+            let annotation = target.annotation.as_ref().unwrap_or(layers.hit);
+            let bind = self.regularisers.bind(
+                ctx,
+                &[
+                    block.as_entire_binding(),
+                    layers.transmission.as_entire_binding(),
+                    layers.reflection.as_entire_binding(),
+                    layers.geometry.as_entire_binding(),
+                    layers.hit.as_entire_binding(),
+                    annotation.as_entire_binding(),
+                    grads.transmission.as_entire_binding(),
+                    grads.geometry.as_entire_binding(),
+                    stats.as_entire_binding(),
+                ],
+            );
+            rec.dispatch("regularisers", &self.regularisers, &bind, groups);
+        }
+        let bind = self.loss_sums.bind(
             ctx,
-            &[
-                block.as_entire_binding(),
-                rendered.as_entire_binding(),
-                target.image.as_entire_binding(),
-                terms.as_entire_binding(),
-                photometric.as_entire_binding(),
-            ],
+            &[block.as_entire_binding(), stats.as_entire_binding(), partials.as_entire_binding()],
         );
-        rec.dispatch("photometric_loss", &self.photometric_loss, &bind, groups);
-        let bind = self.photometric_loss_grad.bind(
-            ctx,
-            &[
-                block.as_entire_binding(),
-                rendered.as_entire_binding(),
-                target.image.as_entire_binding(),
-                terms.as_entire_binding(),
-                grads.color.as_entire_binding(),
-            ],
-        );
-        rec.dispatch("photometric_loss_grad", &self.photometric_loss_grad, &bind, groups);
-        let regularisers = match settings.regularisers {
-            Some(_) => {
-                let partials =
-                    self.scratch.get(ctx, "trgs.regularisers.partials", group_count as u64 * 16);
-                // Bound but never read when the view has no labels.
-                let annotation = target.annotation.as_ref().unwrap_or(layers.hit);
-                let bind = self.regularisers.bind(
-                    ctx,
-                    &[
-                        block.as_entire_binding(),
-                        layers.transmission.as_entire_binding(),
-                        layers.reflection.as_entire_binding(),
-                        layers.geometry.as_entire_binding(),
-                        layers.hit.as_entire_binding(),
-                        annotation.as_entire_binding(),
-                        grads.transmission.as_entire_binding(),
-                        grads.geometry.as_entire_binding(),
-                        partials.as_entire_binding(),
-                    ],
-                );
-                rec.dispatch("regularisers", &self.regularisers, &bind, groups);
-                Some(partials)
-            }
-            None => None,
-        };
+        rec.dispatch("loss_sums", &self.loss_sums, &bind, gpu::grid_1d(strips.div_ceil(64)));
         Ok(PendingLoss {
-            photometric,
-            regularisers,
-            groups: group_count,
+            partials,
+            regularisers: settings.regularisers.is_some(),
+            strips: strips as usize,
             lambda_dssim: settings.lambda_dssim,
             inv_samples: 1.0 / (3 * pixels).max(1) as f64,
             inv_pixels: 1.0 / pixels.max(1) as f64,
