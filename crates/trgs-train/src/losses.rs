@@ -15,7 +15,7 @@ use trgs_render::gpu::{self, BufferPool, Kernel, Recorder};
 use trgs_render::layout::{LOSS_STRIP, LossParams};
 use trgs_render::{Frame, GpuContext, LayerGrads};
 
-/// Side of the 16x16 workgroups of the per-pixel passes.
+/// Side of the square workgroups of the per-pixel passes.
 const BLOCK: u32 = 16;
 
 #[derive(Debug, thiserror::Error)]
@@ -102,7 +102,7 @@ pub struct LossSettings {
     pub regularisers: Option<RegulariserWeights>,
 }
 
-/// The values of a step's losses, from the workgroups' partial sums (f32 on the GPU, summed in
+/// The values of a step's losses, from the strips' sums (f32 on the GPU, summed in
 /// f64 here). The regularisers' values are unweighted; a zero weight leaves its value at zero.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct LossValues {

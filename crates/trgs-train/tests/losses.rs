@@ -1,5 +1,5 @@
 //! The GPU loss stages (`photometric_loss`, `regularisers`) against their f64 twins in
-//! `trgs_core::reference`, on random layers of sizes that do and do not fill the 16x16 blocks
+//! `trgs_core::reference`, on random layers of sizes that do and do not fill the 16x16 workgroups
 //! (one pixel included), with and without glass labels. Every gradient buffer starts
 //! poison-filled, so a pixel a kernel forgets to write fails the comparison.
 use trgs_core::Image;
