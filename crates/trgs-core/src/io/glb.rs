@@ -326,23 +326,31 @@ fn vec3(v: &Value, field: &str) -> Result<DVec3, String> {
     }
 }
 
-fn plane_of(index: usize, extras: &Value) -> Result<ReflectionPlane, String> {
-    let what = |m: String| format!("node {index} extras.trgs_plane: {m}");
+/// Plane number `plane` of the file, from the extras of node `node`.
+fn plane_of(node: usize, plane: usize, extras: &Value) -> Result<ReflectionPlane, String> {
+    let what = |m: String| format!("node {node} extras.trgs_plane: {m}");
     let number = |f: &str| extras[f].as_f64().ok_or_else(|| what(format!("no number {f:?}")));
     let material = match extras["material"].as_str() {
         Some("mirror") => Material::Mirror,
         Some("glass") | None => Material::Glass,
         Some(other) => return Err(what(format!("material {other:?}, expected glass or mirror"))),
     };
+    let normal = vec3(extras, "normal").map_err(what)?;
+    // Checked before the axis is orthogonalised against it, which a zero normal makes NaN.
+    if !(normal.length() > 0.0 && normal.is_finite()) {
+        return Err(what(format!("normal {normal} is zero or not finite")));
+    }
     let mut p = ReflectionPlane::new(
         vec3(extras, "centre").map_err(what)?,
-        vec3(extras, "normal").map_err(what)?,
+        normal,
         vec3(extras, "axis").map_err(what)?,
         number("width")?,
         number("height")?,
         material,
     );
     p.r0_logit = number("r0_logit")?;
+    // The same checks as planes.json's reader: finite, a usable normal and axis, a positive size.
+    p.validate(plane).map_err(|e| what(e.to_string()))?;
     Ok(p)
 }
 
@@ -458,7 +466,7 @@ fn parse(bytes: &[u8]) -> Result<(Gaussians<f32>, Vec<ReflectionPlane>), String>
     for (index, node) in doc["nodes"].as_array().into_iter().flatten().enumerate() {
         let extras = &node["extras"]["trgs_plane"];
         if !extras.is_null() {
-            planes.push(plane_of(index, extras)?);
+            planes.push(plane_of(index, planes.len(), extras)?);
         }
     }
     Ok((g, planes))

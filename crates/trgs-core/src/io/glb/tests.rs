@@ -267,6 +267,10 @@ fn malformed_files_get_named_errors() {
             rebuild(&good, |d| d["nodes"][2]["extras"]["trgs_plane"]["material"] = json!("chrome")),
             "chrome",
         ),
+        (
+            rebuild(&good, |d| d["nodes"][2]["extras"]["trgs_plane"]["normal"] = json!([0, 0, 0])),
+            "normal",
+        ),
     ];
     for (bytes, expected) in cases {
         let err = parse_glb(&bytes, path).expect_err(expected);
