@@ -76,41 +76,40 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     var sum = vec4<f32>(0.0);
-    {
-        let p = gid.y * params.width + gid.x;
-        let here = vec2<i32>(gid.xy);
-        var g_geometry = vec4<f32>(0.0);
-        if hit[p] != 0u {
-            sum.x = geometry[p].y;
-            g_geometry.y = params.weight_depth * params.inv_pixels;
-        }
-        if params.weight_mask > 0.0 {
-            let d = geometry[p].z - select(0.0, 1.0, annotation[p] > 0u);
-            sum.z = abs(d);
-            g_geometry.z = params.weight_mask * sign(d) * params.inv_pixels;
-        }
-        var g_t = vec3<f32>(0.0);
-        if params.weight_conflict > 0.0 {
-            if conflict_pixel(here) {
-                let s = sobel_at(here);
-                sum.y = dot(abs(s.tx * s.rx), vec3<f32>(1.0)) + dot(abs(s.ty * s.ry), vec3<f32>(1.0));
-            }
-            for (var dy = -1; dy <= 1; dy++) {
-                for (var dx = -1; dx <= 1; dx++) {
-                    // p = q + (dx, dy): q's tap at (dx, dy) reads p.
-                    let q = here - vec2<i32>(dx, dy);
-                    if !conflict_pixel(q) {
-                        continue;
-                    }
-                    let s = sobel_at(q);
-                    g_t += sobel_x(dx, dy) * sign(s.tx * s.rx) * s.rx;
-                    g_t += sobel_y(dx, dy) * sign(s.ty * s.ry) * s.ry;
-                }
-            }
-            g_t *= params.weight_conflict * params.inv_samples;
-        }
-        grad_transmission[p] = vec4<f32>(g_t, 0.0);
-        grad_geometry[p] = g_geometry;
-        stats[2u * p + 1u] = sum;
+    let p = gid.y * params.width + gid.x;
+    let here = vec2<i32>(gid.xy);
+    var g_geometry = vec4<f32>(0.0);
+    if hit[p] != 0u {
+        sum.x = geometry[p].y;
+        g_geometry.y = params.weight_depth * params.inv_pixels;
     }
+    if params.weight_mask > 0.0 {
+        let d = geometry[p].z - select(0.0, 1.0, annotation[p] > 0u);
+        sum.z = abs(d);
+        g_geometry.z = params.weight_mask * sign(d) * params.inv_pixels;
+    }
+    var g_t = vec3<f32>(0.0);
+    if params.weight_conflict > 0.0 {
+        for (var dy = -1; dy <= 1; dy++) {
+            for (var dx = -1; dx <= 1; dx++) {
+                // p = q + (dx, dy): q's tap at (dx, dy) reads p.
+                let q = here - vec2<i32>(dx, dy);
+                if !conflict_pixel(q) {
+                    continue;
+                }
+                let s = sobel_at(q);
+                if dx == 0 && dy == 0 {
+                    // q = p: this pixel's own term of L_c.
+                    let ones = vec3<f32>(1.0);
+                    sum.y = dot(abs(s.tx * s.rx), ones) + dot(abs(s.ty * s.ry), ones);
+                }
+                g_t += sobel_x(dx, dy) * sign(s.tx * s.rx) * s.rx;
+                g_t += sobel_y(dx, dy) * sign(s.ty * s.ry) * s.ry;
+            }
+        }
+        g_t *= params.weight_conflict * params.inv_samples;
+    }
+    grad_transmission[p] = vec4<f32>(g_t, 0.0);
+    grad_geometry[p] = g_geometry;
+    stats[2u * p + 1u] = sum;
 }
