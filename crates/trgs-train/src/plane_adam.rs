@@ -31,40 +31,20 @@ pub fn plane_adam(
     rates: &PlaneRates,
     t: u32,
 ) {
-    let settings = AdamSettings::default();
+    // Adam on the moment slots `slots` with rate `lr`.
+    let mut step = |values: &mut [f64], grads: &[f64], slots: std::ops::Range<usize>, lr: f64| {
+        let (m, v) = (&mut mom.m[slots.clone()], &mut mom.v[slots]);
+        adam(values, grads, m, v, &AdamRate::uniform(lr), t, &AdamSettings::default());
+    };
     let n = plane.unit_normal();
     let mut offset = [plane.centre.dot(n)];
-    adam(
-        &mut offset,
-        &[g.centre.dot(n)],
-        &mut mom.m[0..1],
-        &mut mom.v[0..1],
-        &AdamRate::uniform(rates.offset),
-        t,
-        &settings,
-    );
+    step(&mut offset, &[g.centre.dot(n)], 0..1, rates.offset);
     plane.centre += (offset[0] - plane.centre.dot(n)) * n;
     let mut normal = plane.normal.to_array();
-    adam(
-        &mut normal,
-        &g.normal.to_array(),
-        &mut mom.m[3..6],
-        &mut mom.v[3..6],
-        &AdamRate::uniform(rates.normal),
-        t,
-        &settings,
-    );
+    step(&mut normal, &g.normal.to_array(), 3..6, rates.normal);
     plane.normal = DVec3::from_array(normal);
     let mut r0 = [plane.r0_logit];
-    adam(
-        &mut r0,
-        &[g.r0_logit],
-        &mut mom.m[6..7],
-        &mut mom.v[6..7],
-        &AdamRate::uniform(rates.r0_logit),
-        t,
-        &settings,
-    );
+    step(&mut r0, &[g.r0_logit], 6..7, rates.r0_logit);
     plane.r0_logit = r0[0];
     plane.orthogonalise_axis();
 }
