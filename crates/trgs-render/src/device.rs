@@ -70,6 +70,50 @@ fn rank(info: &wgpu::AdapterInfo) -> u8 {
     }
 }
 
+/// The adapter named by `options.adapter_name` or `TRGS_ADAPTER` (a case-insensitive part of its
+/// name), else the best: discrete, integrated, virtual, other, then CPU.
+pub fn pick_adapter(
+    mut adapters: Vec<wgpu::Adapter>,
+    options: &DeviceOptions,
+) -> Result<wgpu::Adapter, DeviceError> {
+    if adapters.is_empty() {
+        return Err(DeviceError::NoAdapter);
+    }
+    adapters.sort_by_key(|a| rank(&a.get_info()));
+    let wanted = options.adapter_name.clone().or_else(|| std::env::var("TRGS_ADAPTER").ok());
+    let Some(w) = wanted else {
+        return Ok(adapters.swap_remove(0));
+    };
+    let names: Vec<String> = adapters.iter().map(|a| a.get_info().name).collect();
+    match names.iter().position(|n| n.to_lowercase().contains(&w.to_lowercase())) {
+        Some(p) => Ok(adapters.swap_remove(p)),
+        None => Err(DeviceError::NoMatchingAdapter { wanted: w, available: names.join(", ") }),
+    }
+}
+
+/// The device trgs asks `adapter` for: the optional features it has (unless disabled) and every
+/// limit it offers (storage bindings of 128 MiB and more matter for large scenes).
+pub fn device_descriptor(
+    adapter: &wgpu::Adapter,
+    options: &DeviceOptions,
+) -> wgpu::DeviceDescriptor<'static> {
+    let mut features = Features::empty();
+    if !options.disable_optional_features {
+        for (f, _) in OPTIONAL {
+            if adapter.features().contains(f) {
+                features |= f;
+            }
+        }
+    }
+    let limits: Limits = adapter.limits();
+    wgpu::DeviceDescriptor {
+        label: Some("trgs.device"),
+        required_features: features,
+        required_limits: limits,
+        ..Default::default()
+    }
+}
+
 impl GpuContext {
     /// The best adapter with default options (blocking).
     pub fn new() -> Result<Self, DeviceError> {
@@ -85,49 +129,25 @@ impl GpuContext {
             backends: wgpu::Backends::PRIMARY,
             ..wgpu::InstanceDescriptor::new_without_display_handle()
         });
-        let mut adapters = instance.enumerate_adapters(wgpu::Backends::PRIMARY).await;
-        if adapters.is_empty() {
-            return Err(DeviceError::NoAdapter);
-        }
-        adapters.sort_by_key(|a| rank(&a.get_info()));
-        let wanted = options.adapter_name.clone().or_else(|| std::env::var("TRGS_ADAPTER").ok());
-        let adapter = match wanted {
-            Some(w) => {
-                let names: Vec<String> = adapters.iter().map(|a| a.get_info().name).collect();
-                let pos = names.iter().position(|n| n.to_lowercase().contains(&w.to_lowercase()));
-                match pos {
-                    Some(p) => adapters.swap_remove(p),
-                    None => {
-                        return Err(DeviceError::NoMatchingAdapter {
-                            wanted: w,
-                            available: names.join(", "),
-                        });
-                    }
-                }
-            }
-            None => adapters.swap_remove(0),
-        };
+        let adapters = instance.enumerate_adapters(wgpu::Backends::PRIMARY).await;
+        let adapter = pick_adapter(adapters, options)?;
         let info = adapter.get_info();
-        let mut features = Features::empty();
-        if !options.disable_optional_features {
-            for (f, _) in OPTIONAL {
-                if adapter.features().contains(f) {
-                    features |= f;
-                }
-            }
-        }
-        // Ask for everything the adapter offers: storage bindings of 128 MiB and more matter for
-        // large scenes.
-        let limits: Limits = adapter.limits();
         let (device, queue) = adapter
-            .request_device(&wgpu::DeviceDescriptor {
-                label: Some("trgs.device"),
-                required_features: features,
-                required_limits: limits,
-                ..Default::default()
-            })
+            .request_device(&device_descriptor(&adapter, options))
             .await
             .map_err(|source| DeviceError::RequestDevice { adapter: info.name.clone(), source })?;
+        Ok(Self::from_device(adapter, device, queue, options))
+    }
+
+    /// A context on a device created elsewhere (e.g. by a UI toolkit that also presents to a
+    /// window), from [`device_descriptor`] so that it has the features trgs uses.
+    pub fn from_device(
+        adapter: wgpu::Adapter,
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+        options: &DeviceOptions,
+    ) -> Self {
+        let features = device.features();
         let capabilities = Capabilities {
             float_atomics: features.contains(Features::SHADER_FLOAT32_ATOMIC),
             subgroups: features.contains(Features::SUBGROUP),
@@ -135,7 +155,8 @@ impl GpuContext {
         };
         let poison_fresh_buffers = options.poison_fresh_buffers
             || std::env::var("TRGS_POISON_BUFFERS").is_ok_and(|v| v == "1");
-        Ok(Self { adapter, device, queue, info, capabilities, poison_fresh_buffers })
+        let info = adapter.get_info();
+        Self { adapter, device, queue, info, capabilities, poison_fresh_buffers }
     }
 
     /// One line for logs: adapter, backend and optional features.

@@ -17,6 +17,7 @@ pub struct Kernels {
     pub rasterize_reflection: Kernel,
     pub compose: Kernel,
     pub compose_bwd: Kernel,
+    pub display: Kernel,
     pub rasterize_bwd: Kernel,
     pub rasterize_reflection_bwd: Kernel,
     pub project_bwd: Kernel,
@@ -62,6 +63,7 @@ impl Kernels {
             ),
             compose: Kernel::new(ctx, "compose", "compose.wgsl", &[]),
             compose_bwd: Kernel::new(ctx, "compose_bwd", "compose_bwd.wgsl", &acc),
+            display: Kernel::new(ctx, "display", "display.wgsl", &[]),
             rasterize_bwd: Kernel::new(ctx, "rasterize_bwd", "rasterize_bwd.wgsl", &acc),
             rasterize_reflection_bwd: Kernel::new(
                 ctx,

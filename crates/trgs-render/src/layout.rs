@@ -301,6 +301,23 @@ pub const VIEW_GRAD_FLOATS: u32 = 16;
 pub const BWD_ADD: u32 = 1;
 pub const BWD_NO_GAUSSIANS: u32 = 2;
 pub const BWD_VIEW: u32 = 4;
+gpu_struct! {
+    /// Parameters of `display`: a layer to 8-bit RGBA (trgs_core::reference::DisplayMapping).
+    pub struct DisplayParams {
+        pub width: u32,
+        pub height: u32,
+        /// Words (pixels) from one output row to the next: the width padded to 256 bytes.
+        pub row_pixels: u32,
+        /// 0 RGB, 1 gray, 2 inverse depth, 3 black.
+        pub mode: u32,
+        /// The vec4 component read by modes 1 and 2.
+        pub channel: u32,
+        pub near: f32,
+        pub far: f32,
+        pub _pad: u32,
+    }
+}
+
 /// `ComposeParams::model` bits (trgs_core::reference::ReflectionModel).
 pub const MODEL_NO_FRESNEL: u32 = 1;
 pub const MODEL_NO_INTENSITY: u32 = 2;
@@ -338,6 +355,7 @@ pub fn all_structs() -> Vec<StructInfo> {
         entry::<RasterState>(),
         entry::<ReflectionState>(),
         entry::<ComposeParams>(),
+        entry::<DisplayParams>(),
         entry::<PlaneGpu>(),
         entry::<AdamParams>(),
         entry::<McmcParams>(),

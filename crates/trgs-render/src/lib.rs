@@ -31,6 +31,7 @@
 //! ```
 mod backward;
 mod device;
+mod display;
 mod frame;
 pub mod gpu;
 mod kernels;
@@ -42,7 +43,10 @@ pub mod shader;
 pub mod stages;
 
 pub use backward::{BackwardError, BackwardOptions, Gradients};
-pub use device::{Capabilities, DeviceError, DeviceOptions, GpuContext};
+pub use device::{
+    Capabilities, DeviceError, DeviceOptions, GpuContext, device_descriptor, pick_adapter,
+};
+pub use display::{DisplayError, DisplayTarget, layer_mapping};
 pub use frame::{
     Frame, FrameImages, Layer, LayerBuffers, PlaneImages, ViewBuffers, ViewIntermediates,
 };

@@ -12,7 +12,8 @@ pub mod exr_layers;
 pub mod init;
 pub mod losses;
 pub mod mcmc;
-pub mod model;
+/// Loading a trained model (moved to trgs-core so that the viewer reads models without training code).
+pub use trgs_core::io::model;
 pub mod perturb;
 pub mod plane_adam;
 pub mod plane_init;

@@ -9,13 +9,17 @@
 //! - [`planes_json`]: `planes.json` (plane annotations and trained planes);
 //! - [`ply`]: INRIA-layout 3DGS PLY with trgs's extra properties;
 //! - [`glb`]: binary glTF with `KHR_gaussian_splatting`, planes as nodes;
+//! - [`model`]: a trained model to render (a PLY and its planes.json, a run folder, or a .glb);
+//! - [`cameras_json`]: the INRIA output folder's `cameras.json` (a run's views);
 //! - [`dataset`]: a scene folder that puts the above together.
 mod bytes;
+pub mod cameras_json;
 pub mod colmap;
 pub mod dataset;
 mod error;
 pub mod glb;
 pub mod masks;
+pub mod model;
 pub mod planes_json;
 pub mod ply;
 pub mod png;
@@ -24,11 +28,13 @@ pub mod test_split;
 mod test_util;
 pub mod transforms;
 
+pub use cameras_json::{encode_cameras_json, parse_cameras_json, read_cameras_json, write_cameras_json};
 pub use colmap::{ColmapCamera, ColmapImage, ColmapModel, ColmapPoint};
 pub use dataset::{SceneFolder, ViewSpec};
 pub use error::{FormatError, write_atomic};
 pub use glb::{encode_glb, parse_glb, read_glb, write_glb};
 pub use masks::{mask_path, read_glass_mask, write_glass_mask};
+pub use model::{Model, find_ply, load_model};
 pub use planes_json::{PlaneSpec, read_planes_json, write_plane_materials, write_planes_json};
 pub use ply::{encode_ply, parse_ply, read_ply, write_ply};
 pub use png::{read_rgb_image, write_png_gray, write_png_rgb};

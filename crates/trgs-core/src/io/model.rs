@@ -1,9 +1,8 @@
 //! Loading a trained model: a Gaussian PLY (trgs or any INRIA-layout file) and its planes, or a
 //! `.glb` with `KHR_gaussian_splatting` (Gaussians and planes in one file).
-use anyhow::{Context, Result, bail};
+use super::{FormatError, read_glb, read_planes_json, read_ply};
+use crate::scene::{Gaussians, ReflectionPlane};
 use std::path::{Path, PathBuf};
-use trgs_core::io::{read_glb, read_planes_json, read_ply};
-use trgs_core::scene::{Gaussians, ReflectionPlane};
 
 /// A model to render.
 #[derive(Debug)]
@@ -16,12 +15,15 @@ pub struct Model {
 
 /// The PLY of `path`: the file itself, or in a folder `model.ply`, else the INRIA layout's
 /// `point_cloud/iteration_<largest>/point_cloud.ply`.
-pub fn find_ply(path: &Path) -> Result<PathBuf> {
+pub fn find_ply(path: &Path) -> Result<PathBuf, FormatError> {
     if path.is_file() {
         return Ok(path.to_path_buf());
     }
     if !path.is_dir() {
-        bail!("{}: no such file or folder (expected a .ply or a run folder)", path.display());
+        return Err(FormatError::new(
+            path,
+            "no such file or folder (expected a .ply, a .glb or a run folder)",
+        ));
     }
     let direct = path.join("model.ply");
     if direct.is_file() {
@@ -42,17 +44,17 @@ pub fn find_ply(path: &Path) -> Result<PathBuf> {
             }
         }
     }
-    best.map(|(_, p)| p).with_context(|| {
-        format!(
-            "{}: no model.ply and no point_cloud/iteration_*/point_cloud.ply in this folder",
-            path.display()
+    best.map(|(_, p)| p).ok_or_else(|| {
+        FormatError::new(
+            path,
+            "no model.ply and no point_cloud/iteration_*/point_cloud.ply in this folder",
         )
     })
 }
 
 /// Load the Gaussians of `path` and the planes of `planes` (or, when None, of a `planes.json`
 /// beside the PLY or in the run folder; none found means no planes: plain 3DGS).
-pub fn load_model(path: &Path, planes: Option<&Path>) -> Result<Model> {
+pub fn load_model(path: &Path, planes: Option<&Path>) -> Result<Model, FormatError> {
     if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("glb")) {
         let (gaussians, mut inside) = read_glb(path)?;
         if let Some(p) = planes {
@@ -76,17 +78,21 @@ pub fn load_model(path: &Path, planes: Option<&Path>) -> Result<Model> {
 }
 
 /// The trained planes of a planes.json (every plane must have its geometry).
-fn load_model_planes(path: &Path) -> Result<Vec<ReflectionPlane>> {
+fn load_model_planes(path: &Path) -> Result<Vec<ReflectionPlane>, FormatError> {
     let mut out = Vec::new();
     for (i, spec) in read_planes_json(path)?.into_iter().enumerate() {
         match spec.plane {
             Some(p) => out.push(p),
-            None => bail!(
-                "{}: plane {i} (label {}) has a material but no geometry; rendering needs \
-                 trained planes (centre, normal, axis, width, height)",
-                path.display(),
-                spec.label
-            ),
+            None => {
+                return Err(FormatError::new(
+                    path,
+                    format!(
+                        "plane {i} (label {}) has a material but no geometry; rendering needs \
+                         trained planes (centre, normal, axis, width, height)",
+                        spec.label
+                    ),
+                ));
+            }
         }
     }
     Ok(out)
