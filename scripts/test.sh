@@ -1,7 +1,11 @@
 #!/usr/bin/env bash
-# The test command of the README: installs what the tests need, then runs every test of the
-# workspace (CPU reference, formats, GPU stages on lavapipe or a real GPU).
+# The test command of the README: installs what the tests need (a Vulkan driver, Xvfb for the
+# viewer's window test), then runs every test of the workspace (CPU reference, formats, GPU
+# stages on lavapipe or a real GPU, the viewer in a virtual X window).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/ensure-vulkan.sh
+for setting in $(scripts/ensure-xvfb.sh); do
+    export "${setting?}"
+done
 cargo test --workspace --locked "$@"

@@ -132,10 +132,10 @@ impl GpuContext {
         let adapters = instance.enumerate_adapters(wgpu::Backends::PRIMARY).await;
         let adapter = pick_adapter(adapters, options)?;
         let info = adapter.get_info();
-        let (device, queue) = adapter
-            .request_device(&device_descriptor(&adapter, options))
-            .await
-            .map_err(|source| DeviceError::RequestDevice { adapter: info.name.clone(), source })?;
+        let (device, queue) =
+            adapter.request_device(&device_descriptor(&adapter, options)).await.map_err(
+                |source| DeviceError::RequestDevice { adapter: info.name.clone(), source },
+            )?;
         Ok(Self::from_device(adapter, device, queue, options))
     }
 

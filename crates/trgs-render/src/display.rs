@@ -143,11 +143,7 @@ impl Renderer {
                 origin: wgpu::Origin3d::ZERO,
                 aspect: wgpu::TextureAspect::All,
             },
-            wgpu::Extent3d {
-                width: target.width,
-                height: target.height,
-                depth_or_array_layers: 1,
-            },
+            wgpu::Extent3d { width: target.width, height: target.height, depth_or_array_layers: 1 },
         );
         rec.submit_and_wait(ctx);
         Ok(())

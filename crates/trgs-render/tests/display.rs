@@ -26,9 +26,8 @@ fn every_layer_matches_the_twin() {
         let scene = random_scene(&s);
         let gpu_scene =
             GpuScene::upload(&ctx, &scene.gaussians.cast::<f32>(), &scene.planes).expect("valid");
-        let frame = renderer
-            .render(&gpu_scene, &scene.camera, &RenderOptions::default())
-            .expect("renders");
+        let frame =
+            renderer.render(&gpu_scene, &scene.camera, &RenderOptions::default()).expect("renders");
         let (w, h) = (frame.width(), frame.height());
         let target = DisplayTarget::new(&ctx, w, h);
         for layer in Layer::ALL {

@@ -28,7 +28,9 @@ pub mod test_split;
 mod test_util;
 pub mod transforms;
 
-pub use cameras_json::{encode_cameras_json, parse_cameras_json, read_cameras_json, write_cameras_json};
+pub use cameras_json::{
+    encode_cameras_json, parse_cameras_json, read_cameras_json, write_cameras_json,
+};
 pub use colmap::{ColmapCamera, ColmapImage, ColmapModel, ColmapPoint};
 pub use dataset::{SceneFolder, ViewSpec};
 pub use error::{FormatError, write_atomic};

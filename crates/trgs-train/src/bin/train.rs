@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
-use trgs_core::io::{write_atomic, write_planes_json, write_ply};
+use trgs_core::io::{write_atomic, write_cameras_json, write_planes_json, write_ply};
 use trgs_core::rng::Rng;
 use trgs_core::synthetic::{SyntheticConfig, generate, write_dataset};
 use trgs_render::GpuContext;
@@ -23,6 +23,10 @@ use trgs_train::init::{SeedPoint, gaussians_from_points, random_points};
 use trgs_train::mcmc::McmcSettings;
 use trgs_train::plane_init::{PlaneInitSettings, initialise_planes};
 use trgs_train::trainer::{StepTimes, Trainer};
+use trgs_viewer::{LiveFeed, Snapshot, Source, ViewerOptions};
+
+/// The shortest time between two snapshots for the viewer (each is a readback of the scene).
+const SNAPSHOT_INTERVAL: Duration = Duration::from_millis(500);
 
 #[path = "train/args.rs"]
 mod args;
@@ -119,7 +123,8 @@ fn truncate_log(log: &Path, step: u32) -> Result<()> {
 }
 
 fn main() -> Result<()> {
-    let (args, resumed) = match parse_args()? {
+    let (command, viewer) = parse_args()?;
+    let (args, resumed) = match command {
         Command::Help => {
             print!("{HELP}");
             return Ok(());
@@ -142,6 +147,30 @@ fn main() -> Result<()> {
             (state.args.clone(), Some((ck, state)))
         }
     };
+    if !viewer {
+        return train(args, resumed, None);
+    }
+    // The window needs the main thread; training runs beside it and publishes snapshots.
+    let feed = LiveFeed::new();
+    let worker_feed = feed.clone();
+    let worker = std::thread::Builder::new()
+        .name("train".into())
+        .spawn(move || train(args, resumed, Some(&worker_feed)))
+        .context("starting the training thread")?;
+    let options = ViewerOptions { source: Source::Live(feed.clone()), ..Default::default() };
+    if let Err(e) = trgs_viewer::run(options) {
+        eprintln!("{e:#}; training goes on without the viewer");
+    }
+    feed.close();
+    worker.join().map_err(|_| anyhow::anyhow!("the training thread panicked"))?
+}
+
+/// A run from its start or from a checkpoint, publishing to `feed` when a viewer watches.
+fn train(
+    args: Args,
+    resumed: Option<(trgs_train::checkpoint::Checkpoint, RunState)>,
+    feed: Option<&LiveFeed>,
+) -> Result<()> {
     let data_dir = dataset_dir(&args)?;
     let data = load_data(&args, &data_dir)?;
     let ctx = GpuContext::new()?;
@@ -199,6 +228,13 @@ fn main() -> Result<()> {
     trainer.profile = args.profile;
     let cameras: Vec<_> = data.train.iter().map(|v| v.camera.clone()).collect();
     trainer.set_training_cameras(&cameras);
+    // Every view, as the INRIA code writes it: viewers snap to these.
+    let views: Vec<_> =
+        cameras.iter().cloned().chain(data.eval_views().iter().map(|v| v.camera.clone())).collect();
+    write_cameras_json(&args.out.join("cameras.json"), &views)?;
+    if let Some(feed) = feed {
+        feed.set_cameras(views);
+    }
     let mut log = std::fs::OpenOptions::new()
         .append(true)
         .open(&log_path)
@@ -257,6 +293,22 @@ fn main() -> Result<()> {
             stats.psnr,
             trainer.scene().len()
         ));
+        if let Some(feed) = feed
+            && feed.wants_snapshot(SNAPSHOT_INTERVAL)
+        {
+            feed.publish(Snapshot {
+                gaussians: trainer.gaussians(),
+                planes: trainer.planes().to_vec(),
+                status: format!(
+                    "training: step {} of {}, loss {:.4}, PSNR {:.2} dB, {} Gaussians",
+                    trainer.step,
+                    args.iterations,
+                    stats.loss,
+                    stats.psnr,
+                    trainer.scene().len()
+                ),
+            });
+        }
         if trainer.step % eval_every == 0 || trainer.step == args.iterations {
             let e = evaluate(&model_of(&trainer), &data, trainer.step, state.train_seconds)?;
             say(
@@ -279,7 +331,11 @@ fn main() -> Result<()> {
         }
     }
     bar.finish();
-    finish(&args, &trainer, &data, &data_dir, &state)
+    finish(&args, &trainer, &data, &data_dir, &state)?;
+    if let Some(feed) = feed {
+        feed.set_status(format!("training finished: results in {}", args.out.display()));
+    }
+    Ok(())
 }
 
 /// Initialise the planes from the glass masks (the end of stage 1).

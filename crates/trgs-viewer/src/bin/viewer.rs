@@ -1,1 +1,87 @@
-fn main() {}
+//! `viewer [MODEL] [OPTIONS]`: the trgs viewer (see `viewer --help`).
+use anyhow::{Context, Result, bail};
+use std::path::PathBuf;
+use trgs_render::Layer;
+use trgs_viewer::{Script, Source, ViewerOptions, load_for_viewer};
+
+const HELP: &str = "\
+trgs viewer: real-time rendering of trained TR-Gaussians and 3DGS models
+
+USAGE:
+    viewer [MODEL] [OPTIONS]
+
+MODEL is a run folder (model.ply, planes.json, cameras.json), a .ply (any INRIA-layout 3DGS
+file; planes.json and cameras.json beside it are used) or a .glb (KHR_gaussian_splatting).
+Without one, open a model from the window (Open…, or drop a file on it).
+
+OPTIONS:
+    --view N            start from dataset view N of cameras.json (default 0)
+    --layer NAME        color (default), transmission, reflection, strength, strength_raw, mask,
+                        depth or alpha
+    --size WxH          window size in points (default 1100x700)
+    --no-overlays       start with the plane overlays off
+    --screenshot PNG    save a screenshot (and PNG's .json: scene rectangle and camera) once drawn
+    --frames N          re-render every frame and print the mean render and frame times of N
+    --exit              close after --screenshot / --frames (scripts and tests)
+    -h, --help          this text
+
+CONTROLS:
+    orbit mode: left drag orbits, right or middle drag pans, the wheel zooms
+    fly mode: left drag looks around
+    both: W/A/S/D move, Q/E move down/up, shift moves faster; F12 saves a screenshot
+";
+
+fn parse() -> Result<Option<ViewerOptions>> {
+    let mut o = ViewerOptions::default();
+    let mut model: Option<PathBuf> = None;
+    let mut args = std::env::args().skip(1);
+    let mut script = Script::default();
+    while let Some(a) = args.next() {
+        let mut value = |name: &str| args.next().with_context(|| format!("{name} needs a value"));
+        match a.as_str() {
+            "-h" | "--help" => return Ok(None),
+            "--view" => o.view = Some(value("--view")?.parse().context("--view: a number")?),
+            "--layer" => {
+                let v = value("--layer")?;
+                o.layer = Layer::ALL.into_iter().find(|l| l.name() == v).with_context(|| {
+                    let names: Vec<_> = Layer::ALL.iter().map(|l| l.name()).collect();
+                    format!("--layer {v}: expected one of {}", names.join(", "))
+                })?;
+            }
+            "--size" => {
+                let v = value("--size")?;
+                let (w, h) = v.split_once('x').context("--size: expected WxH, e.g. 800x600")?;
+                o.window =
+                    [w.parse().context("--size: width")?, h.parse().context("--size: height")?];
+            }
+            "--no-overlays" => o.overlays = false,
+            "--screenshot" => script.screenshot = Some(value("--screenshot")?.into()),
+            "--frames" => {
+                script.frames = Some(value("--frames")?.parse().context("--frames: a number")?);
+            }
+            "--exit" => script.exit = true,
+            s if s.starts_with('-') => bail!("unknown option {s} (see --help)"),
+            s => {
+                if model.replace(PathBuf::from(s)).is_some() {
+                    bail!("one model at a time (got a second: {s})");
+                }
+            }
+        }
+    }
+    o.script = script;
+    o.source = match model {
+        Some(p) => Source::Model(Box::new(load_for_viewer(&p)?)),
+        None => Source::Nothing,
+    };
+    Ok(Some(o))
+}
+
+fn main() -> Result<()> {
+    match parse()? {
+        None => {
+            print!("{HELP}");
+            Ok(())
+        }
+        Some(options) => trgs_viewer::run(options),
+    }
+}

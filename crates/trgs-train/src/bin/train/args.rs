@@ -36,6 +36,8 @@ OPTIONS:
     --cap N             mcmc: the most Gaussians (default 300000)
     --seed S            order of the training views (default 0)
     --profile           time every GPU stage of every step (timestamp queries) into log.jsonl
+    --viewer            show training live in the viewer window (also with --resume); closing
+                        the window lets training go on
 
 ABLATIONS (the paper's table; each switches one component off):
     --no-multi-stage    no stage 2: joint optimisation right after stage 1
@@ -109,7 +111,9 @@ pub enum Command {
     Resume { out: PathBuf },
 }
 
-pub fn parse_args() -> Result<Command> {
+/// The command, and whether to show training in the viewer (not a setting of the run: a resumed
+/// run may be watched or not).
+pub fn parse_args() -> Result<(Command, bool)> {
     let mut args = Args {
         data: None,
         demo_no_glass: false,
@@ -128,6 +132,7 @@ pub fn parse_args() -> Result<Command> {
         ablations: Ablations::default(),
     };
     let mut resume = false;
+    let mut viewer = false;
     let mut others = Vec::new();
     let mut it = std::env::args().skip(1);
     while let Some(a) = it.next() {
@@ -135,12 +140,13 @@ pub fn parse_args() -> Result<Command> {
         fn num<T: std::str::FromStr>(name: &str, v: String) -> Result<T> {
             v.parse().map_err(|_| anyhow::anyhow!("{name} {v:?}: expected a number"))
         }
-        if !matches!(a.as_str(), "--out" | "--resume") {
+        if !matches!(a.as_str(), "--out" | "--resume" | "--viewer") {
             others.push(a.clone());
         }
         let ab = &mut args.ablations;
         match a.as_str() {
-            "-h" | "--help" => return Ok(Command::Help),
+            "-h" | "--help" => return Ok((Command::Help, false)),
+            "--viewer" => viewer = true,
             "--data" => args.data = Some(PathBuf::from(value("--data")?)),
             "--demo-scene" => {
                 args.demo_no_glass = match value("--demo-scene")?.as_str() {
@@ -193,7 +199,7 @@ pub fn parse_args() -> Result<Command> {
                 others.join(" ")
             );
         }
-        return Ok(Command::Resume { out: args.out });
+        return Ok((Command::Resume { out: args.out }, viewer));
     }
     if args.iterations == 0 {
         bail!("--iterations must be at least 1");
@@ -204,7 +210,7 @@ pub fn parse_args() -> Result<Command> {
     if args.checkpoint_every == Some(0) || args.eval_every == Some(0) {
         bail!("--eval-every and --checkpoint-every must be at least 1");
     }
-    Ok(Command::Train(args))
+    Ok((Command::Train(args), viewer))
 }
 
 /// The training settings `args` ask for.
