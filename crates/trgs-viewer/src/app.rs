@@ -5,7 +5,7 @@ use crate::browser::{Browser, is_model_file};
 use crate::camera::{ViewCamera, up_of};
 use crate::live::LiveFeed;
 use crate::overlay::plane_overlay;
-use crate::scene::{Extent, LoadedModel, load_for_viewer};
+use crate::scene::{Extent, LoadedModel, depth_range, load_for_viewer};
 use crate::screenshot::{ShotInfo, save_screenshot};
 use crate::{Script, Source, ViewerOptions};
 use eframe::egui;
@@ -44,6 +44,8 @@ struct Shown {
     enabled: Vec<bool>,
     cameras: Vec<Camera>,
     extent: Extent,
+    /// Gaussian centres, for the depth display's range.
+    means: Vec<[f32; 3]>,
     name: String,
 }
 
@@ -67,6 +69,8 @@ struct ScriptState {
     shot_requested: bool,
     bench: Vec<(f64, f64)>,
     last_ui: Option<Instant>,
+    /// Set by the screenshot callback once the file is written.
+    shot_saved: Arc<std::sync::atomic::AtomicBool>,
 }
 
 pub struct ViewerApp {
@@ -166,6 +170,7 @@ impl ViewerApp {
                     enabled: vec![true; n],
                     cameras: model.cameras,
                     extent,
+                    means: model.gaussians.means,
                     name: model.name,
                 });
                 let view = self.pending_view.take().unwrap_or(0);
@@ -226,6 +231,7 @@ impl ViewerApp {
                     s.scene = scene;
                     s.planes = model.planes;
                     s.cameras = model.cameras;
+                    s.means = model.gaussians.means;
                 }
                 self.dirty = true;
             }
@@ -304,7 +310,7 @@ impl ViewerApp {
         }
         ui.separator();
         if ui.button("Screenshot (F12)").clicked() {
-            self.screenshot(ui.ctx(), default_shot_path(), false);
+            self.screenshot(ui.ctx(), default_shot_path());
         }
         ui.separator();
         if let Some(ms) = self.render_ms.0 {
@@ -404,7 +410,11 @@ impl ViewerApp {
         if self.dirty || self.script.frames.is_some() {
             let camera = self.camera.camera(w, h);
             let options = RenderOptions { enabled_planes: s.enabled.clone(), ..Default::default() };
-            let range = s.extent.depth_range(self.camera.eye());
+            let range = if self.layer == Layer::Depth {
+                depth_range(&s.means, &camera)
+            } else {
+                [0.2, 100.0]
+            };
             let t = Instant::now();
             let drawn = self
                 .renderer
@@ -459,21 +469,20 @@ impl ViewerApp {
         }
     }
 
-    fn screenshot(&mut self, ctx: &egui::Context, path: PathBuf, exit: bool) {
+    fn screenshot(&mut self, ctx: &egui::Context, path: PathBuf) {
         let Some((camera, rect)) = self.last_view.clone() else {
             self.message = Some(("nothing rendered yet to screenshot".into(), true));
             return;
         };
         let info = ShotInfo { path, scene_rect: rect, camera, layer: self.layer };
         let result = Arc::clone(&self.shot_result);
+        let saved_flag = Arc::clone(&self.script_state.shot_saved);
         let repaint = ctx.clone();
         ctx.request_screenshot(move |image| {
             let saved = save_screenshot(&image, &info).map(|()| info.path.clone());
             *result.lock().unwrap_or_else(|p| p.into_inner()) =
                 Some(saved.map_err(|e| format!("{e:#}")));
-            if exit {
-                repaint.send_viewport_cmd(egui::ViewportCommand::Close);
-            }
+            saved_flag.store(true, std::sync::atomic::Ordering::SeqCst);
             repaint.request_repaint();
         });
         ctx.request_repaint();
@@ -489,7 +498,7 @@ impl ViewerApp {
             && self.script_state.shown >= WARMUP_FRAMES
         {
             self.script_state.shot_requested = true;
-            self.screenshot(ctx, path, self.script.exit);
+            self.screenshot(ctx, path);
         }
         if let Some(n) = self.script.frames {
             let bench = &self.script_state.bench;
@@ -507,10 +516,12 @@ impl ViewerApp {
                     1000.0 / frame
                 );
                 self.script.frames = None;
-                if self.script.exit {
-                    ctx.send_viewport_cmd(egui::ViewportCommand::Close);
-                }
             }
+        }
+        let shot_pending = self.script.screenshot.is_some()
+            && !self.script_state.shot_saved.load(std::sync::atomic::Ordering::SeqCst);
+        if self.script.exit && !shot_pending && self.script.frames.is_none() {
+            ctx.send_viewport_cmd(egui::ViewportCommand::Close);
         }
         if self.script.screenshot.is_some() || self.script.frames.is_some() {
             self.script_state.last_ui = Some(Instant::now());
@@ -552,7 +563,7 @@ impl eframe::App for ViewerApp {
             }
         }
         if ctx.input(|i| i.key_pressed(egui::Key::F12)) {
-            self.screenshot(&ctx, default_shot_path(), false);
+            self.screenshot(&ctx, default_shot_path());
         }
         if let Some(done) = self.shot_result.lock().unwrap_or_else(|p| p.into_inner()).take() {
             self.message = Some(match done {

@@ -53,14 +53,35 @@ impl Extent {
         let (_, r, _) = d.select_nth_unstable_by(k, f64::total_cmp);
         Self { centre, radius: r.max(1e-3) }
     }
+}
 
-    /// (near, far) of the inverse-depth display seen from `eye`.
-    pub fn depth_range(&self, eye: DVec3) -> [f32; 2] {
-        let d = (eye - self.centre).length();
-        let near = (d - self.radius).max(0.05 * self.radius).max(1e-3);
-        let far = (d + self.radius).max(near * 1.01);
-        [near as f32, far as f32]
+/// Samples of Gaussian centres kept on the CPU for the depth display's range.
+const DEPTH_SAMPLES: usize = 20_000;
+
+/// (near, far) for the depth display of `camera`: the 2nd and 98th percentiles of the depths of
+/// (a sample of) the centres inside its view, so that the gray levels go to what is on screen,
+/// whether the camera is inside a room or outside an object.
+pub fn depth_range(means: &[[f32; 3]], camera: &Camera) -> [f32; 2] {
+    let step = (means.len() / DEPTH_SAMPLES).max(1);
+    let k = &camera.intrinsics;
+    let (w, h) = (f64::from(k.width), f64::from(k.height));
+    let mut z: Vec<f64> = means
+        .iter()
+        .step_by(step)
+        .filter_map(|m| {
+            let p = DVec3::new(f64::from(m[0]), f64::from(m[1]), f64::from(m[2]));
+            let c = camera.pose.transform_point(p);
+            let (x, y) = (k.fx * c.x / c.z + k.cx, k.fy * c.y / c.z + k.cy);
+            (c.z > 0.2 && (0.0..w).contains(&x) && (0.0..h).contains(&y)).then_some(c.z)
+        })
+        .collect();
+    if z.len() < 2 {
+        return [0.2, 100.0];
     }
+    z.sort_by(f64::total_cmp);
+    let at = |q: f64| z[((z.len() - 1) as f64 * q) as usize];
+    let near = at(0.02).max(0.2);
+    [near as f32, at(0.98).max(near * 1.5) as f32]
 }
 
 /// Load `path` with the context a user needs when it fails.
@@ -80,8 +101,18 @@ mod tests {
         }
         let e = Extent::of(&g);
         assert!(e.radius < 100.0, "{e:?}");
-        let [near, far] = e.depth_range(e.centre + DVec3::new(0.0, 0.0, -10.0));
-        assert!(near > 0.0 && far > near);
+    }
+
+    #[test]
+    fn depth_range_spans_what_is_in_view() {
+        let k = trgs_core::scene::Intrinsics::from_fov_x(1.0, 100, 100);
+        let camera = Camera::new("c", k, trgs_core::scene::Pose::default());
+        // In view at depths 1..=100, plus points behind and off to the side.
+        let mut means: Vec<[f32; 3]> = (1..=100).map(|i| [0.0, 0.0, i as f32]).collect();
+        means.extend([[0.0, 0.0, -5.0], [500.0, 0.0, 1.0]]);
+        let [near, far] = depth_range(&means, &camera);
+        assert!((2.0..=4.0).contains(&near) && (97.0..=99.0).contains(&far), "{near} {far}");
+        assert_eq!(depth_range(&[], &camera), [0.2, 100.0]);
     }
 
     #[test]
