@@ -201,7 +201,10 @@ impl ViewerApp {
     fn open(&mut self, path: PathBuf) {
         match load_for_viewer(&path) {
             Ok(m) => {
-                self.live = None;
+                // Stop watching training: the trainer stops reading its scene back.
+                if let Some(feed) = self.live.take() {
+                    feed.close();
+                }
                 self.show_model(m);
             }
             Err(e) => self.message = Some((format!("{e:#}"), true)),
@@ -212,27 +215,23 @@ impl ViewerApp {
     fn poll_live(&mut self) {
         let Some(feed) = &self.live else { return };
         let Some(snap) = feed.take() else { return };
-        let first = self.shown.is_none();
         let model = LoadedModel {
             gaussians: snap.gaussians,
             planes: snap.planes,
             cameras: feed.cameras(),
             name: "training".into(),
         };
+        let Some(s) = &mut self.shown else {
+            self.show_model(model);
+            return;
+        };
         match GpuScene::upload(&self.ctx, &model.gaussians, &model.planes) {
-            Ok(scene) if first => {
-                drop(scene);
-                self.show_model(model);
-            }
             Ok(scene) => {
-                if let Some(s) = &mut self.shown {
-                    let n = model.planes.len();
-                    s.enabled.resize(n, true);
-                    s.scene = scene;
-                    s.planes = model.planes;
-                    s.cameras = model.cameras;
-                    s.means = model.gaussians.means;
-                }
+                s.enabled.resize(model.planes.len(), true);
+                s.scene = scene;
+                s.planes = model.planes;
+                s.cameras = model.cameras;
+                s.means = model.gaussians.means;
                 self.dirty = true;
             }
             Err(e) => self.message = Some((format!("training snapshot: {e}"), true)),
@@ -548,7 +547,8 @@ impl eframe::App for ViewerApp {
         if let Some(feed) = &self.live {
             ctx.request_repaint_after(std::time::Duration::from_millis(200));
             let status = feed.status();
-            if !status.is_empty() {
+            let showing_error = matches!(self.message, Some((_, true)));
+            if !status.is_empty() && !showing_error {
                 self.message = Some((status, false));
             }
         }
