@@ -82,6 +82,8 @@ pub struct ViewerApp {
     fly: bool,
     layer: Layer,
     overlays: bool,
+    /// Render at 1/`scale` of the window's pixels (faster on slow adapters), shown enlarged.
+    scale: u32,
     frame: Frame,
     target: Option<(DisplayTarget, egui::TextureId)>,
     dirty: bool,
@@ -120,6 +122,7 @@ impl ViewerApp {
             fly: false,
             layer: options.layer,
             overlays: options.overlays,
+            scale: 1,
             frame: Frame::default(),
             target: None,
             dirty: true,
@@ -283,6 +286,22 @@ impl ViewerApp {
         if ui.button("Reset view").clicked() {
             self.home(0);
         }
+        let before = self.scale;
+        egui::ComboBox::from_label("resolution")
+            .selected_text(if self.scale == 1 {
+                "full".into()
+            } else {
+                format!("1/{}", self.scale)
+            })
+            .show_ui(ui, |ui| {
+                for s in [1, 2, 4] {
+                    let label = if s == 1 { "full".into() } else { format!("1/{s}") };
+                    ui.selectable_value(&mut self.scale, s, label);
+                }
+            });
+        if self.scale != before {
+            self.dirty = true;
+        }
         ui.separator();
         ui.checkbox(&mut self.overlays, "plane overlays");
         let mut planes_changed = false;
@@ -375,6 +394,7 @@ impl ViewerApp {
         let (w, h) = ((max.x - min.x).max(1.0) as u32, (max.y - min.y).max(1.0) as u32);
         let shown_rect = Rect::from_min_max((min / ppp).to_pos2(), (max / ppp).to_pos2());
         let response = ui.allocate_rect(rect, Sense::click_and_drag());
+        let (rw, rh) = ((w / self.scale).max(1), (h / self.scale).max(1));
         if self.navigate(ui, &response, f64::from(h)) {
             self.dirty = true;
         }
@@ -383,8 +403,8 @@ impl ViewerApp {
             return;
         };
         let Some(rs) = frame.wgpu_render_state() else { return };
-        if self.target.as_ref().is_none_or(|(t, _)| t.size() != (w, h)) {
-            let target = DisplayTarget::new(&self.ctx, w, h);
+        if self.target.as_ref().is_none_or(|(t, _)| t.size() != (rw, rh)) {
+            let target = DisplayTarget::new(&self.ctx, rw, rh);
             let mut egui_renderer = rs.renderer.write();
             let id = match self.target.take() {
                 Some((_, id)) => {
@@ -407,7 +427,7 @@ impl ViewerApp {
         }
         let Some((target, texture)) = &self.target else { return };
         if self.dirty || self.script.frames.is_some() {
-            let camera = self.camera.camera(w, h);
+            let camera = self.camera.camera(rw, rh);
             let options = RenderOptions { enabled_planes: s.enabled.clone(), ..Default::default() };
             let range = if self.layer == Layer::Depth {
                 depth_range(&s.means, &camera)
@@ -447,8 +467,11 @@ impl ViewerApp {
         if self.overlays
             && let Some((camera, _)) = &self.last_view
         {
+            // Render pixels to points (the render may be smaller than the area it fills).
+            let sx = shown_rect.width() / camera.width() as f32;
+            let sy = shown_rect.height() / camera.height() as f32;
             let to_screen =
-                |p: glam::DVec2| shown_rect.min + Vec2::new(p.x as f32, p.y as f32) / ppp;
+                |p: glam::DVec2| shown_rect.min + Vec2::new(p.x as f32 * sx, p.y as f32 * sy);
             let painter = ui.painter().with_clip_rect(shown_rect);
             for (k, plane) in s.planes.iter().enumerate() {
                 let colour = PLANE_COLOURS[k % PLANE_COLOURS.len()];
