@@ -122,7 +122,7 @@ impl ViewerApp {
             fly: false,
             layer: options.layer,
             overlays: options.overlays,
-            scale: 1,
+            scale: options.scale,
             frame: Frame::default(),
             target: None,
             dirty: true,

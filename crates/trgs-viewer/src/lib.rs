@@ -51,6 +51,8 @@ pub struct ViewerOptions {
     pub view: Option<usize>,
     pub layer: Layer,
     pub overlays: bool,
+    /// Render at 1/scale of the window's pixels (1, 2 or 4).
+    pub scale: u32,
     pub script: Script,
 }
 
@@ -62,6 +64,7 @@ impl Default for ViewerOptions {
             view: None,
             layer: Layer::Color,
             overlays: true,
+            scale: 1,
             script: Script::default(),
         }
     }

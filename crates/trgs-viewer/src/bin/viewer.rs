@@ -20,6 +20,7 @@ OPTIONS:
                         depth or alpha
     --size WxH          window size in points (default 1100x700)
     --no-overlays       start with the plane overlays off
+    --scale N           render at 1/N of the window's pixels: 1 (default), 2 or 4
     --screenshot PNG    save a screenshot (and PNG's .json: scene rectangle and camera) once drawn
     --frames N          re-render every frame and print the mean render and frame times of N
     --exit              close after --screenshot / --frames (scripts and tests)
@@ -55,6 +56,15 @@ fn parse() -> Result<Option<ViewerOptions>> {
                     [w.parse().context("--size: width")?, h.parse().context("--size: height")?];
             }
             "--no-overlays" => o.overlays = false,
+            "--scale" => {
+                let v = value("--scale")?;
+                o.scale = match v.as_str() {
+                    "1" => 1,
+                    "2" => 2,
+                    "4" => 4,
+                    _ => bail!("--scale {v}: expected 1, 2 or 4"),
+                };
+            }
             "--screenshot" => script.screenshot = Some(value("--screenshot")?.into()),
             "--frames" => {
                 script.frames = Some(value("--frames")?.parse().context("--frames: a number")?);
