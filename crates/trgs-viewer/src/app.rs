@@ -1,6 +1,8 @@
 //! The eframe app: a control panel on the left, the render filling the rest of the window at its
 //! exact pixel size (the trgs renderer draws into a texture that egui samples 1:1, on the same
 //! device, with no copy through the CPU), plane overlays on top, a status line at the bottom.
+#[path = "app_script.rs"]
+mod script;
 use crate::browser::{Browser, is_model_file};
 use crate::camera::{ViewCamera, up_of};
 use crate::live::LiveFeed;
@@ -508,47 +510,6 @@ impl ViewerApp {
             repaint.request_repaint();
         });
         ctx.request_repaint();
-    }
-
-    /// Scripted runs: a screenshot after the warm-up frames, or a frame-time benchmark.
-    fn run_script(&mut self, ctx: &egui::Context) {
-        if self.last_view.is_some() {
-            self.script_state.shown += 1;
-        }
-        if let Some(path) = self.script.screenshot.clone()
-            && !self.script_state.shot_requested
-            && self.script_state.shown >= WARMUP_FRAMES
-        {
-            self.script_state.shot_requested = true;
-            self.screenshot(ctx, path);
-        }
-        if let Some(n) = self.script.frames {
-            let bench = &self.script_state.bench;
-            if bench.len() as u32 >= n {
-                let mean = |f: fn(&(f64, f64)) -> f64| {
-                    bench.iter().map(f).sum::<f64>() / bench.len() as f64
-                };
-                let (render, frame) = (mean(|b| b.0), mean(|b| b.1));
-                let (w, h) = self.target.as_ref().map_or((0, 0), |(t, _)| t.size());
-                let g = self.shown.as_ref().map_or(0, |s| s.scene.len());
-                println!(
-                    "viewer: {n} frames at {w}x{h}, {g} Gaussians, {}: render {render:.1} ms, \
-                     frame {frame:.1} ms ({:.1} fps)",
-                    self.ctx.info.name,
-                    1000.0 / frame
-                );
-                self.script.frames = None;
-            }
-        }
-        let shot_pending = self.script.screenshot.is_some()
-            && !self.script_state.shot_saved.load(std::sync::atomic::Ordering::SeqCst);
-        if self.script.exit && !shot_pending && self.script.frames.is_none() {
-            ctx.send_viewport_cmd(egui::ViewportCommand::Close);
-        }
-        if self.script.screenshot.is_some() || self.script.frames.is_some() {
-            self.script_state.last_ui = Some(Instant::now());
-            ctx.request_repaint();
-        }
     }
 }
 
