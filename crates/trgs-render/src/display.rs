@@ -81,31 +81,28 @@ impl DisplayTarget {
     }
 }
 
-/// The layer buffer `layer` is read from and how its values map to colours. `depth_range` is the
-/// (near, far) of the inverse-depth display of [`Layer::Depth`].
+/// The layer buffer `layer` is read from ([`Frame::layer_source`]) and how its values map to
+/// colours; a layer the frame does not have shows black. `depth_range` is the (near, far) of the
+/// inverse-depth display of [`Layer::Depth`]. None before the frame is rendered.
 pub fn layer_mapping(
     frame: &Frame,
     layer: Layer,
     depth_range: [f32; 2],
 ) -> Option<(&wgpu::Buffer, DisplayMapping)> {
     let l = frame.layer_buffers()?;
-    let composed = frame.composed();
-    let gray = |channel| DisplayMapping::Gray { channel };
-    Some(match layer {
-        Layer::Color if composed => (&l.color, DisplayMapping::Rgb),
-        Layer::Color | Layer::Transmission => (&l.transmission, DisplayMapping::Rgb),
-        Layer::Alpha => (&l.transmission, gray(3)),
+    let Some((buffer, range)) = frame.layer_source(layer) else {
+        return Some((&l.transmission, DisplayMapping::Black));
+    };
+    let channel = range.start as u32;
+    let mapping = match layer {
+        _ if range.len() == 3 => DisplayMapping::Rgb,
         Layer::Depth => {
             let [near, far] = depth_range;
-            (&l.geometry, DisplayMapping::InverseDepth { channel: 0, near, far })
+            DisplayMapping::InverseDepth { channel, near, far }
         }
-        Layer::DepthVariance => (&l.geometry, gray(1)),
-        Layer::Mask => (&l.geometry, gray(2)),
-        _ if !composed => (&l.transmission, DisplayMapping::Black),
-        Layer::Reflection => (&l.reflection, DisplayMapping::Rgb),
-        Layer::StrengthRaw => (&l.strength, gray(0)),
-        Layer::Strength => (&l.strength, gray(1)),
-    })
+        _ => DisplayMapping::Gray { channel },
+    };
+    Some((buffer, mapping))
 }
 
 impl Renderer {

@@ -321,26 +321,34 @@ impl Frame {
         img
     }
 
-    /// Read one layer back.
-    pub fn read_layer(&self, ctx: &GpuContext, layer: Layer) -> Image<f32> {
-        let Some(l) = &self.layers else {
-            return Image::new(0, 0, layer.channels());
-        };
+    /// Where `layer` lives: its buffer (one vec4 per pixel) and the components that hold it.
+    /// None when the frame does not have it (not rendered, or a reflection layer of a frame
+    /// that was not composed because no plane was in view).
+    pub fn layer_source(&self, layer: Layer) -> Option<(&wgpu::Buffer, std::ops::Range<usize>)> {
+        let l = self.layers.as_ref()?;
         let composed = self.composed();
-        let zeros = || Image::new(self.width(), self.height(), layer.channels());
-        match layer {
-            Layer::Color if composed => self.channel_image(&self.read_vec4(ctx, &l.color, 0), 0..3),
-            Layer::Color | Layer::Transmission => {
-                self.channel_image(&self.read_vec4(ctx, &l.transmission, 0), 0..3)
-            }
-            Layer::Alpha => self.channel_image(&self.read_vec4(ctx, &l.transmission, 0), 3..4),
-            Layer::Depth => self.channel_image(&self.read_vec4(ctx, &l.geometry, 0), 0..1),
-            Layer::DepthVariance => self.channel_image(&self.read_vec4(ctx, &l.geometry, 0), 1..2),
-            Layer::Mask => self.channel_image(&self.read_vec4(ctx, &l.geometry, 0), 2..3),
-            _ if !composed => zeros(),
-            Layer::Reflection => self.channel_image(&self.read_vec4(ctx, &l.reflection, 0), 0..3),
-            Layer::StrengthRaw => self.channel_image(&self.read_vec4(ctx, &l.strength, 0), 0..1),
-            Layer::Strength => self.channel_image(&self.read_vec4(ctx, &l.strength, 0), 1..2),
+        Some(match layer {
+            Layer::Color if composed => (&l.color, 0..3),
+            Layer::Color | Layer::Transmission => (&l.transmission, 0..3),
+            Layer::Alpha => (&l.transmission, 3..4),
+            Layer::Depth => (&l.geometry, 0..1),
+            Layer::DepthVariance => (&l.geometry, 1..2),
+            Layer::Mask => (&l.geometry, 2..3),
+            _ if !composed => return None,
+            Layer::Reflection => (&l.reflection, 0..3),
+            Layer::StrengthRaw => (&l.strength, 0..1),
+            Layer::Strength => (&l.strength, 1..2),
+        })
+    }
+
+    /// Read one layer back (zeros for a layer the frame does not have).
+    pub fn read_layer(&self, ctx: &GpuContext, layer: Layer) -> Image<f32> {
+        if self.layers.is_none() {
+            return Image::new(0, 0, layer.channels());
+        }
+        match self.layer_source(layer) {
+            Some((buffer, range)) => self.channel_image(&self.read_vec4(ctx, buffer, 0), range),
+            None => Image::new(self.width(), self.height(), layer.channels()),
         }
     }
 

@@ -43,4 +43,6 @@ fn bad_options_say_what_is_expected() {
     assert!(err.contains("--layer shiny") && err.contains("transmission"), "{err}");
     let (ok, err) = viewer(&["--size", "big"]);
     assert!(!ok && err.contains("WxH"), "{err}");
+    let (ok, err) = viewer(&["--view", "2"]);
+    assert!(!ok && err.contains("cameras.json"), "{err}");
 }

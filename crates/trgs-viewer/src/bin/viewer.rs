@@ -80,7 +80,20 @@ fn parse() -> Result<Option<ViewerOptions>> {
     }
     o.script = script;
     o.source = match model {
-        Some(p) => Source::Model(Box::new(load_for_viewer(&p)?)),
+        Some(p) => {
+            let m = load_for_viewer(&p)?;
+            if let Some(v) = o.view
+                && v >= m.cameras.len()
+            {
+                bail!(
+                    "--view {v}: {} has {} dataset views (cameras.json beside the model)",
+                    p.display(),
+                    m.cameras.len()
+                );
+            }
+            Source::Model(Box::new(m))
+        }
+        None if o.view.is_some() => bail!("--view needs a model with a cameras.json"),
         None => Source::Nothing,
     };
     Ok(Some(o))
