@@ -11,8 +11,7 @@ use trgs::core::synthetic::{SyntheticConfig, generate, write_dataset};
 fn synthetic_scene_round_trips_through_a_scene_folder() {
     let config = SyntheticConfig::small();
     let scene = generate(&config);
-    let dir = std::env::temp_dir().join(format!("trgs-demo-dataset-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+    let dir = trgs::core::scratch::ScratchDir::new("demo-dataset");
     write_dataset(&scene, &dir).expect("write dataset");
     let folder = SceneFolder::open(&dir).expect("open dataset");
     assert_eq!(folder.views.len(), scene.cameras.len());
@@ -33,7 +32,6 @@ fn synthetic_scene_round_trips_through_a_scene_folder() {
     assert_eq!(folder.plane_specs[0].material, Material::Glass);
     assert!(folder.plane_specs[0].plane.is_none(), "the input must not leak the truth geometry");
     assert!(folder.points.len() > 100);
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]

@@ -16,6 +16,7 @@ pub mod plane_math;
 pub mod reference;
 pub mod rng;
 pub mod scene;
+pub mod scratch;
 pub mod sh;
 pub mod synthetic;
 

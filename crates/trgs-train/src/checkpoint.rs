@@ -344,15 +344,16 @@ mod tests {
         }
     }
 
-    fn scratch(tag: &str) -> std::path::PathBuf {
-        let dir = std::env::temp_dir().join(format!("trgs-ckpt-{}-{tag}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("scratch dir");
-        dir.join(CHECKPOINT_FILE)
+    /// A checkpoint path in a scratch folder that lives as long as the returned guard.
+    fn scratch(tag: &str) -> (trgs_core::scratch::ScratchDir, std::path::PathBuf) {
+        let dir = trgs_core::scratch::ScratchDir::new(&format!("ckpt-{tag}"));
+        let path = dir.join(CHECKPOINT_FILE);
+        (dir, path)
     }
 
     #[test]
     fn round_trip_is_exact() {
-        let path = scratch("rt");
+        let (_dir, path) = scratch("rt");
         let ck = sample();
         write_checkpoint(&path, &ck).expect("write");
         let back = read_checkpoint(&path).expect("read");
@@ -369,7 +370,7 @@ mod tests {
 
     #[test]
     fn truncated_and_foreign_files_are_named_errors() {
-        let path = scratch("bad");
+        let (_dir, path) = scratch("bad");
         write_checkpoint(&path, &sample()).expect("write");
         let bytes = std::fs::read(&path).expect("read back");
         std::fs::write(&path, &bytes[..bytes.len() - 10]).expect("truncate");

@@ -4,12 +4,10 @@ use std::path::PathBuf;
 use std::process::Command;
 use trgs_core::fixtures::{SceneSpec, random_scene};
 use trgs_core::io::{TransformsFrame, write_planes_json, write_ply, write_transforms};
+use trgs_core::scratch::ScratchDir;
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("trgs-render-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).expect("temp dir");
-    d
+fn tmp(name: &str) -> ScratchDir {
+    ScratchDir::new(&format!("render-cli-{name}"))
 }
 
 #[test]

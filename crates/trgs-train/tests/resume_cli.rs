@@ -2,17 +2,15 @@
 //! count with its own settings, the log has every step once, and the checkpoint holds the planes
 //! that stage 1 initialised; `eval` of the result reproduces the run's own test PSNR. (That the resumed result matches an uninterrupted run within 0.1 dB
 //! is measured at full size in docs/training.md; GPU float atomics make runs differ slightly.)
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
+use trgs_core::scratch::ScratchDir;
 use trgs_core::synthetic::{SyntheticConfig, generate, write_dataset};
 use trgs_train::checkpoint::{CHECKPOINT_FILE, read_checkpoint};
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("trgs-resume-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).expect("temp dir");
-    d
+fn tmp(name: &str) -> ScratchDir {
+    ScratchDir::new(&format!("resume-{name}"))
 }
 
 fn logged_steps(log: &Path) -> Vec<u64> {

@@ -23,7 +23,7 @@ fn test_psnr(trainer: &Trainer, data: &data::TrainingData) -> f64 {
 
 #[test]
 fn small_scene_trains_and_finds_its_plane() {
-    let dir = std::env::temp_dir().join(format!("trgs_train_small_{}", std::process::id()));
+    let dir = trgs_core::scratch::ScratchDir::new("train-small");
     let scene = generate(&SyntheticConfig::small());
     write_dataset(&scene, &dir).expect("write the dataset");
     let data = data::load(&dir, Resolution::Original).expect("load the dataset");
@@ -90,5 +90,4 @@ fn small_scene_trains_and_finds_its_plane() {
     let after = test_psnr(&trainer, &data);
     eprintln!("test PSNR {after:.2} dB after {iterations} steps");
     assert!(after > before + 1.0);
-    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -21,8 +21,7 @@ fn a_missing_model_is_named() {
 
 #[test]
 fn a_malformed_model_is_named_with_what_was_expected() {
-    let dir = std::env::temp_dir().join(format!("trgs-viewer-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let dir = trgs_core::scratch::ScratchDir::new("viewer-cli");
     let ply = dir.join("broken.ply");
     std::fs::write(&ply, b"ply\nformat ascii 1.0\nelement vertex 2\nend_header\n").expect("write");
     let (ok, err) = viewer(&[ply.to_str().expect("utf-8 path")]);
@@ -33,7 +32,6 @@ fn a_malformed_model_is_named_with_what_was_expected() {
     let (ok, err) = viewer(&[glb.to_str().expect("utf-8 path")]);
     assert!(!ok);
     assert!(err.contains("broken.glb"), "{err}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]

@@ -88,8 +88,7 @@ fn screenshot_scene_region_matches_the_offscreen_render() {
         eprintln!("SKIPPED: no Xvfb on PATH (apt-get install xvfb); the viewer was not tested");
         return;
     };
-    let dir = std::env::temp_dir().join(format!("trgs-viewer-test-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let dir = trgs_core::scratch::ScratchDir::new("viewer-test");
     write_model(&dir);
     let shot = dir.join("shot.png");
     let (display, _xvfb) = start_xvfb(&bin);
@@ -149,5 +148,4 @@ fn screenshot_scene_region_matches_the_offscreen_render() {
     assert!(mad <= 1.0 / 255.0, "mean absolute difference {mad} > 1/255");
     // The region is not blank: the model is in view.
     assert!(offscreen.iter().any(|&v| v > 20), "offscreen render is black");
-    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -199,7 +199,7 @@ mod tests {
     use crate::io::{write_glass_mask, write_png_rgb};
     use crate::scene::{Intrinsics, Pose};
 
-    fn colmap_scene(tag: &str) -> PathBuf {
+    fn colmap_scene(tag: &str) -> crate::scratch::ScratchDir {
         let root = scratch_dir(tag);
         let image = |id, name: &str| ColmapImage {
             id,
@@ -267,7 +267,8 @@ mod tests {
 
     #[test]
     fn default_split_without_test_views() {
-        let scene = SceneFolder::open(&colmap_scene("ds-split")).expect("open");
+        let root = colmap_scene("ds-split");
+        let scene = SceneFolder::open(&root).expect("open");
         assert_eq!(scene.test_views, ["a.png"]);
     }
 

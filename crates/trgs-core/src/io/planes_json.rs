@@ -189,7 +189,8 @@ mod tests {
 
     #[test]
     fn materials_only_round_trip() {
-        let path = scratch_dir("planes-materials").join("planes.json");
+        let dir = scratch_dir("planes-materials");
+        let path = dir.join("planes.json");
         write_plane_materials(&path, &[Material::Glass, Material::Mirror]).expect("write");
         let specs = read_planes_json(&path).expect("read");
         assert_eq!(specs.len(), 2);
@@ -199,15 +200,17 @@ mod tests {
         );
     }
 
-    fn write(tag: &str, json: &str) -> std::path::PathBuf {
-        let path = scratch_dir(tag).join("planes.json");
+    /// `json` in a planes.json of its own folder (kept while the returned guard lives).
+    fn write(tag: &str, json: &str) -> (crate::scratch::ScratchDir, std::path::PathBuf) {
+        let dir = scratch_dir(tag);
+        let path = dir.join("planes.json");
         std::fs::write(&path, json).expect("write");
-        path
+        (dir, path)
     }
 
     #[test]
     fn annotation_without_geometry() {
-        let path = write(
+        let (_dir, path) = write(
             "planes-ann",
             r#"{"planes": [{"label": 2, "material": "mirror"}, {"label": 1}]}"#,
         );
@@ -235,7 +238,8 @@ mod tests {
             Material::Mirror,
         );
         b.r0_logit = 1.5;
-        let path = scratch_dir("planes-rt").join("planes.json");
+        let dir = scratch_dir("planes-rt");
+        let path = dir.join("planes.json");
         write_planes_json(&path, &[a, b]).expect("write");
         let specs = read_planes_json(&path).expect("read");
         assert_eq!(specs.iter().map(|s| s.label).collect::<Vec<_>>(), [1, 2]);
@@ -252,7 +256,7 @@ mod tests {
 
     #[test]
     fn mirror_r0_of_one_is_clamped() {
-        let path = write(
+        let (_dir, path) = write(
             "planes-r0",
             r#"{"planes": [{"label": 1, "material": "mirror", "center": [0,0,0], "normal": [0,0,1],
                 "axis": [2,0,0.5], "width": 1, "height": 1, "r0": 1.0}]}"#,
@@ -264,13 +268,13 @@ mod tests {
 
     #[test]
     fn missing_geometry_field_is_named() {
-        let path = write(
+        let (_dir, path) = write(
             "planes-partial",
             r#"{"planes": [{"label": 1, "centre": [0,0,0], "normal": [0,0,1], "width": 1, "height": 1}]}"#,
         );
         let err = read_planes_json(&path).expect_err("no axis");
         assert_mentions(&err, &["planes.json", "planes[0]", "axis missing"]);
-        let path = write("planes-nolabel", r#"{"planes": [{"material": "glass"}]}"#);
+        let (_dir, path) = write("planes-nolabel", r#"{"planes": [{"material": "glass"}]}"#);
         assert_mentions(
             &read_planes_json(&path).expect_err("no label"),
             &["planes.json", "missing field `label`", "line 1"],
@@ -280,7 +284,7 @@ mod tests {
     #[test]
     fn bad_planes_are_refused() {
         let geometry = r#""centre": [0,0,0], "normal": [0,0,1], "axis": [1,0,0], "height": 1"#;
-        let path = write(
+        let (_dir, path) = write(
             "planes-zero",
             &format!(r#"{{"planes": [{{"label": 1, {geometry}, "width": 0}}]}}"#),
         );
@@ -288,22 +292,23 @@ mod tests {
             &read_planes_json(&path).expect_err("zero area"),
             &["planes.json", "zero-area"],
         );
-        let path = write("planes-dup", r#"{"planes": [{"label": 1}, {"label": 1}]}"#);
+        let (_dir, path) = write("planes-dup", r#"{"planes": [{"label": 1}, {"label": 1}]}"#);
         assert_mentions(
             &read_planes_json(&path).expect_err("duplicate"),
             &["planes.json", "planes[1]", "more than once"],
         );
-        let path = write("planes-typo", r#"{"planes": [{"label": 1, "hieght": 2}]}"#);
+        let (_dir, path) = write("planes-typo", r#"{"planes": [{"label": 1, "hieght": 2}]}"#);
         assert_mentions(
             &read_planes_json(&path).expect_err("typo"),
             &["planes.json", "unknown field `hieght`"],
         );
-        let path = write("planes-wood", r#"{"planes": [{"label": 1, "material": "wood"}]}"#);
+        let (_dir, path) =
+            write("planes-wood", r#"{"planes": [{"label": 1, "material": "wood"}]}"#);
         assert_mentions(
             &read_planes_json(&path).expect_err("wood"),
             &["planes.json", "unknown variant `wood`"],
         );
-        let path = write(
+        let (_dir, path) = write(
             "planes-par",
             r#"{"planes": [{"label": 1, "centre": [0,0,0], "normal": [0,0,1], "axis": [0,0,3],
                 "width": 1, "height": 1}]}"#,
@@ -312,12 +317,12 @@ mod tests {
             &read_planes_json(&path).expect_err("parallel"),
             &["planes.json", "parallel"],
         );
-        let path = write(
+        let (_dir, path) = write(
             "planes-r0",
             &format!(r#"{{"planes": [{{"label": 1, {geometry}, "width": 1, "r0": 1.5}}]}}"#),
         );
         assert_mentions(&read_planes_json(&path).expect_err("r0"), &["planes.json", "r0 = 1.5"]);
-        let path = write("planes-syntax", "{\"planes\": [\n{\"label\": 1,}]}");
+        let (_dir, path) = write("planes-syntax", "{\"planes\": [\n{\"label\": 1,}]}");
         assert_mentions(&read_planes_json(&path).expect_err("syntax"), &["planes.json", "line 2"]);
     }
 }

@@ -136,8 +136,7 @@ mod tests {
     #[test]
     fn dataset_folder_has_every_file() {
         let scene = generate(&SyntheticConfig::small());
-        let dir = std::env::temp_dir().join(format!("trgs_synth_write_{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
+        let dir = crate::scratch::ScratchDir::new("synth-write");
         if let Err(e) = write_dataset(&scene, &dir) {
             panic!("write_dataset: {e}");
         }
@@ -152,6 +151,5 @@ mod tests {
             assert!(dir.join("gt/transmission").join(&cam.name).is_file());
             assert_eq!(dir.join("glass_masks").join(&cam.name).is_file(), mask.is_some());
         }
-        let _ = std::fs::remove_dir_all(&dir);
     }
 }
