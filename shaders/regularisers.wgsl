@@ -4,9 +4,11 @@
 // the geometry layer, dL/d(D_t, V, M, -) = (0, w_d dL_d/dV, w_m dL_m/dM, 0); and each pixel's
 // unweighted L_d, L_c and L_m terms for `loss_sums`.
 //
-// L_c's gradient at pixel p gathers, from every interior hit pixel q of its 3x3 neighbourhood,
-// the Sobel taps through which C_t(p) enters q's gradients:
-// dL_c/dC_t(p) = sum_q sum_{k = x, y} K_k(p - q) sign(g_k^t(q) g_k^r(q)) g_k^r(q) / samples,
+// L_c at an interior hit pixel q is, per channel, |g^t(q) . g^r(q)| with g = (g_x, g_y) the
+// Sobel derivative estimate (the kernel over 8: units per pixel). Its gradient at pixel p
+// gathers, from every such q of p's 3x3 neighbourhood, the taps through which C_t(p) enters q's
+// gradient:
+// dL_c/dC_t(p) = sum_q sign(g^t(q) . g^r(q)) (K_x(p - q) g_x^r(q) + K_y(p - q) g_y^r(q)) / samples,
 // with the reflection side stop-gradient.
 #include "shared/common.wgsl"
 
@@ -25,13 +27,14 @@
 // Per pixel at 2 p + 1: (H V, sum |g^t g^r|, |M - M_a|, 0); the photometric terms are at 2 p.
 @group(0) @binding(8) var<storage, read_write> stats: array<vec4<f32>>;
 
-// The Sobel kernels' tap at offset (dx, dy) in -1..1 (x: horizontal derivative).
+// The Sobel derivative kernels' tap at offset (dx, dy) in -1..1 (x: horizontal derivative),
+// over 8 so that a unit ramp per pixel gives 1.
 fn sobel_x(dx: i32, dy: i32) -> f32 {
-    return f32(dx) * select(1.0, 2.0, dy == 0);
+    return 0.125 * f32(dx) * select(1.0, 2.0, dy == 0);
 }
 
 fn sobel_y(dx: i32, dy: i32) -> f32 {
-    return f32(dy) * select(1.0, 2.0, dx == 0);
+    return 0.125 * f32(dy) * select(1.0, 2.0, dx == 0);
 }
 
 // Whether pixel q is interior (its 3x3 neighbourhood is in the image) and hits a plane.
@@ -98,13 +101,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
                     continue;
                 }
                 let s = sobel_at(q);
+                // Per channel, the dot product of the two images' gradients at q.
+                let conflict = s.tx * s.rx + s.ty * s.ry;
                 if dx == 0 && dy == 0 {
                     // q = p: this pixel's own term of L_c.
-                    let ones = vec3<f32>(1.0);
-                    sum.y = dot(abs(s.tx * s.rx), ones) + dot(abs(s.ty * s.ry), ones);
+                    sum.y = dot(abs(conflict), vec3<f32>(1.0));
                 }
-                g_t += sobel_x(dx, dy) * sign(s.tx * s.rx) * s.rx;
-                g_t += sobel_y(dx, dy) * sign(s.ty * s.ry) * s.ry;
+                g_t += sign(conflict) * (sobel_x(dx, dy) * s.rx + sobel_y(dx, dy) * s.ry);
             }
         }
         g_t *= params.weight_conflict * params.inv_samples;

@@ -2,8 +2,9 @@
 //! (section 3.3), each as its value and dL/d(layer):
 //! - `mask_loss`: L_m = mean |M - M_a| on annotated views;
 //! - `depth_variance_loss`: L_d = mean H V, with V = sum |z - D_t| w the renderer's layer;
-//! - `gradient_conflict_loss`: L_c = mean H |grad C_t * sg(grad C_r)| with Sobel gradients,
-//!   element-wise over channels and both directions, on interior pixels (no padding).
+//! - `gradient_conflict_loss`: L_c = mean H |grad C_t . sg(grad C_r)|, per channel the dot
+//!   product of the two images' Sobel derivative estimates (kernel / 8, units per pixel), on
+//!   interior pixels (no padding).
 //!
 //! [`regularisers`] weights and combines the three as the GPU stage does: it writes the direct
 //! gradients of the transmission layer (C_t, alpha) and of the geometry layer (D_t, V, M).
@@ -43,8 +44,11 @@ pub fn depth_variance_loss(v: &Image<f64>, hit: &Image<u32>) -> LayerLoss {
     LayerLoss { value: value / n, grad }
 }
 
-const SOBEL_X: [[f64; 3]; 3] = [[-1.0, 0.0, 1.0], [-2.0, 0.0, 2.0], [-1.0, 0.0, 1.0]];
-const SOBEL_Y: [[f64; 3]; 3] = [[-1.0, -2.0, -1.0], [0.0, 0.0, 0.0], [1.0, 2.0, 1.0]];
+// Sobel derivative estimates: the kernels over 8, so that a ramp of 1 per pixel gives 1. (With
+// the raw kernels, L_c would be 64 times stronger at the paper's weight 0.2; at that strength it
+// flattened the transmission's own edges wherever the reflection had any.)
+const SOBEL_X: [[f64; 3]; 3] = [[-0.125, 0.0, 0.125], [-0.25, 0.0, 0.25], [-0.125, 0.0, 0.125]];
+const SOBEL_Y: [[f64; 3]; 3] = [[-0.125, -0.25, -0.125], [0.0, 0.0, 0.0], [0.125, 0.25, 0.125]];
 
 fn sobel(im: &Image<f64>, k: &[[f64; 3]; 3], x: usize, y: usize, c: usize) -> f64 {
     let (w, ch) = (im.width as usize, im.channels as usize);
@@ -73,20 +77,19 @@ pub fn gradient_conflict_loss(ct: &Image<f64>, cr: &Image<f64>, hit: &Image<u32>
                 continue;
             }
             for c in 0..ch {
-                for k in [&SOBEL_X, &SOBEL_Y] {
-                    let gt = sobel(ct, k, x, y, c);
-                    let gr = sobel(cr, k, x, y, c);
-                    let prod = gt * gr;
-                    value += prod.abs();
-                    if prod == 0.0 {
-                        continue;
-                    }
-                    // d|gt gr|/d gt = sign(gt gr) gr, then the Sobel correlation's adjoint.
-                    let up = prod.signum() * gr / n;
-                    for (dy, row) in k.iter().enumerate() {
-                        for (dx, &kv) in row.iter().enumerate() {
-                            grad.data[((y + dy - 1) * w + x + dx - 1) * ch + c] += kv * up;
-                        }
+                let (gtx, gty) = (sobel(ct, &SOBEL_X, x, y, c), sobel(ct, &SOBEL_Y, x, y, c));
+                let (grx, gry) = (sobel(cr, &SOBEL_X, x, y, c), sobel(cr, &SOBEL_Y, x, y, c));
+                let dot = gtx * grx + gty * gry;
+                value += dot.abs();
+                if dot == 0.0 {
+                    continue;
+                }
+                // d|g^t . g^r|/d g^t_k = sign(dot) g^r_k, then the Sobel correlations' adjoints.
+                let (up_x, up_y) = (dot.signum() * grx / n, dot.signum() * gry / n);
+                for dy in 0..3 {
+                    for dx in 0..3 {
+                        grad.data[((y + dy - 1) * w + x + dx - 1) * ch + c] +=
+                            SOBEL_X[dy][dx] * up_x + SOBEL_Y[dy][dx] * up_y;
                     }
                 }
             }
