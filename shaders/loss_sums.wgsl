@@ -1,6 +1,6 @@
 // Stage `loss_sums`: the losses' per-pixel statistics summed over strips of LOSS_STRIP pixels,
 // one thread a strip, so that a step reads back a few kB. Slot 0 of a strip holds the
-// photometric sums (|x - y|, SSIM, (x - y)^2), slot 1 the regularisers' (H V, |g^t g^r|,
+// photometric sums (|x - y|, SSIM, (x - y)^2), slot 1 the regularisers' (H V, |g^t . g^r|,
 // |M - M_a|).
 #include "shared/common.wgsl"
 

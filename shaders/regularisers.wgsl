@@ -24,7 +24,8 @@
 @group(0) @binding(5) var<storage, read> annotation: array<u32>;
 @group(0) @binding(6) var<storage, read_write> grad_transmission: array<vec4<f32>>;
 @group(0) @binding(7) var<storage, read_write> grad_geometry: array<vec4<f32>>;
-// Per pixel at 2 p + 1: (H V, sum |g^t g^r|, |M - M_a|, 0); the photometric terms are at 2 p.
+// Per pixel at 2 p + 1: (H V, sum over channels |g^t . g^r|, |M - M_a|, 0); the photometric
+// terms are at 2 p.
 @group(0) @binding(8) var<storage, read_write> stats: array<vec4<f32>>;
 
 // The Sobel derivative kernels' tap at offset (dx, dy) in -1..1 (x: horizontal derivative),
