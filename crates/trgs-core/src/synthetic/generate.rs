@@ -29,9 +29,6 @@ const PANE_Y: f64 = 1.2;
 const PANE_H: f64 = 1.0;
 const FRAME_W: f64 = 0.07;
 
-/// Light level of the room behind the glass relative to the camera room.
-const BEHIND_GAIN: f64 = 0.55;
-
 /// The local scene frame in the world: `x_world = rotation * x_local + translation`.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Placement {
@@ -242,7 +239,8 @@ fn build_world(config: &SyntheticConfig) -> (World, Boxes, Vec<(f64, f64, f64)>)
     ];
     // The room behind the glass is lit more dimly, like a shop window seen from a bright room:
     // that is what makes real reflections stand out, and it keeps R0 = 0.2 clearly visible.
-    objects.extend(behind.into_iter().map(|o| Object { gain: BEHIND_GAIN, ..o }));
+    let gain = config.behind_gain;
+    objects.extend(behind.into_iter().map(|o| Object { gain, ..o }));
 
     let (w, xs) = pane_slots(config.panes.len());
     let mut panes = Vec::new();

@@ -82,7 +82,18 @@ pub struct SyntheticConfig {
     pub masked_views: usize,
     /// How many sparse "SfM" points to produce.
     pub sparse_points: usize,
+    /// Light level of the room behind the glass relative to the camera room:
+    /// [`DAY_BEHIND_GAIN`] by default, [`NIGHT_BEHIND_GAIN`] for [`SyntheticConfig::night`].
+    pub behind_gain: f64,
 }
+
+/// The room behind the glass in the default scene: a shop window seen from a brighter room,
+/// which keeps the reflection (R0 = 0.2) clearly visible over the transmitted view.
+pub const DAY_BEHIND_GAIN: f64 = 0.55;
+
+/// The room behind the glass in the night variant: dimmer, so that the reflection carries a
+/// larger share of each glass pixel, as a lit room's window at dusk.
+pub const NIGHT_BEHIND_GAIN: f64 = 0.3;
 
 impl Default for SyntheticConfig {
     fn default() -> Self {
@@ -95,6 +106,7 @@ impl Default for SyntheticConfig {
             panes: vec![PaneKind::Glass],
             masked_views: 6,
             sparse_points: 4000,
+            behind_gain: DAY_BEHIND_GAIN,
         }
     }
 }
@@ -117,6 +129,12 @@ impl SyntheticConfig {
     /// images equal the transmission, and there are no masks and no planes.
     pub fn without_glass(self) -> Self {
         Self { panes: Vec::new(), ..self }
+    }
+
+    /// The same scene with the room behind the glass lit at [`NIGHT_BEHIND_GAIN`]: every view
+    /// outside the panes is unchanged, and the reflection is a larger share of the glass pixels.
+    pub fn night(self) -> Self {
+        Self { behind_gain: NIGHT_BEHIND_GAIN, ..self }
     }
 }
 

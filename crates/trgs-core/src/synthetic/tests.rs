@@ -314,3 +314,44 @@ fn room_views_reconstruct_what_the_glass_reflects() {
         .count();
     assert!(on_poster_wall >= 10, "{on_poster_wall} sparse points on the poster wall");
 }
+
+/// The night variant changes only what the glass shows: every pixel outside the glass masks is
+/// the same as in the default scene, the transmitted room is darker, and the reflection is a
+/// larger share of the glass pixels.
+#[test]
+fn night_variant_dims_only_the_room_behind_the_glass() {
+    let day = generate(&SyntheticConfig::small());
+    let night = generate(&SyntheticConfig::small().night());
+    let (mut t_day, mut t_night, mut r_day, mut r_night, mut n) = (0.0, 0.0, 0.0, 0.0, 0usize);
+    for (i, mask) in day.masks.iter().enumerate() {
+        let Some(mask) = mask else { continue };
+        let (img_d, img_n) = (&day.images[i], &night.images[i]);
+        let (tr_d, tr_n) = (&day.transmission[i], &night.transmission[i]);
+        for y in 0..img_d.height {
+            for x in 0..img_d.width {
+                if mask.get(x, y, 0) == 0 {
+                    assert_eq!(
+                        max_abs_diff(img_d, img_n, x, y),
+                        0.0,
+                        "view {i} pixel ({x}, {y}) outside the glass differs at night"
+                    );
+                    continue;
+                }
+                n += 1;
+                for c in 0..3 {
+                    t_day += f64::from(tr_d.get(x, y, c));
+                    t_night += f64::from(tr_n.get(x, y, c));
+                    r_day += f64::from((img_d.get(x, y, c) - tr_d.get(x, y, c)).abs());
+                    r_night += f64::from((img_n.get(x, y, c) - tr_n.get(x, y, c)).abs());
+                }
+            }
+        }
+    }
+    assert!(n > 0);
+    let ratio = t_night / t_day;
+    println!(
+        "glass pixels {n}: transmission night/day {ratio:.3}, |C - C_t| {r_day:.1} -> {r_night:.1}"
+    );
+    assert!(ratio < 0.8, "the room behind the glass is not dimmer at night: ratio {ratio}");
+    assert!(r_night > r_day, "the reflection's share did not grow: {r_day} -> {r_night}");
+}

@@ -64,9 +64,16 @@ fn dataset_dir(args: &Args) -> Result<PathBuf> {
         if args.demo_no_glass {
             config.panes.clear();
         }
+        if args.demo_night {
+            config = config.night();
+        }
         write_dataset(&generate(&config), &dir)
             .with_context(|| format!("writing the demo scene to {}", dir.display()))?;
-        let kind = if args.demo_no_glass { "scene without glass" } else { "glass scene" };
+        let kind = match (args.demo_no_glass, args.demo_night) {
+            (true, _) => "scene without glass",
+            (false, true) => "glass scene at night",
+            (false, false) => "glass scene",
+        };
         println!("wrote the built-in synthetic {kind} to {}", dir.display());
     }
     Ok(dir)
