@@ -2,7 +2,7 @@
 //! synthetic glass scene and trains on it. Writes runs/<name>/: model.ply (INRIA layout),
 //! planes.json, metrics.json, renders of the test views and their decomposition, a JSONL log,
 //! and a checkpoint that `--resume` continues from.
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
 use std::io::Write as _;
@@ -54,28 +54,43 @@ fn say(bar: &ProgressBar, line: String) {
     bar.suspend(|| println!("{line}"));
 }
 
+/// The file that a complete demo dataset ends with: it names the built-in scene the folder holds
+/// (its `--demo-scene` value). It is written last, so a folder without it (a write cut short) is
+/// written again; a run that asks for another scene in the same `--out` is refused instead of
+/// training on a folder that mixes the two.
+const DEMO_SCENE_MARKER: &str = "demo_scene.txt";
+
 fn dataset_dir(args: &Args) -> Result<PathBuf> {
     if let Some(d) = &args.data {
         return Ok(d.clone());
     }
+    let (kind, description) = match (args.demo_no_glass, args.demo_night) {
+        (true, _) => ("no-glass", "scene without glass"),
+        (false, true) => ("night-glass", "glass scene at night"),
+        (false, false) => ("glass", "glass scene"),
+    };
     let dir = args.out.join("dataset");
-    if !dir.join("transforms.json").is_file() {
-        let mut config = SyntheticConfig::default();
-        if args.demo_no_glass {
-            config.panes.clear();
+    let marker = dir.join(DEMO_SCENE_MARKER);
+    if let Ok(found) = std::fs::read_to_string(&marker) {
+        if found.trim() != kind {
+            bail!(
+                "{} holds the built-in scene `--demo-scene {}`, not `{kind}`: choose another \
+                 --out, or remove that folder",
+                dir.display(),
+                found.trim()
+            );
         }
-        if args.demo_night {
-            config = config.night();
-        }
-        write_dataset(&generate(&config), &dir)
-            .with_context(|| format!("writing the demo scene to {}", dir.display()))?;
-        let kind = match (args.demo_no_glass, args.demo_night) {
-            (true, _) => "scene without glass",
-            (false, true) => "glass scene at night",
-            (false, false) => "glass scene",
-        };
-        println!("wrote the built-in synthetic {kind} to {}", dir.display());
+        return Ok(dir);
     }
+    let config = match kind {
+        "no-glass" => SyntheticConfig::default().without_glass(),
+        "night-glass" => SyntheticConfig::default().night(),
+        _ => SyntheticConfig::default(),
+    };
+    write_dataset(&generate(&config), &dir)
+        .with_context(|| format!("writing the demo scene to {}", dir.display()))?;
+    write_atomic(&marker, format!("{kind}\n").as_bytes())?;
+    println!("wrote the built-in synthetic {description} to {}", dir.display());
     Ok(dir)
 }
 
