@@ -301,16 +301,32 @@ fn read_accessor(
     if view["buffer"].as_u64() != Some(0) {
         return Err(what("data outside the GLB's own buffer".into()));
     }
-    let start = (view["byteOffset"].as_u64().unwrap_or(0) + acc["byteOffset"].as_u64().unwrap_or(0))
-        as usize;
-    let stride = view["byteStride"].as_u64().map_or(width * 4, |s| s as usize);
+    let elem = width as u64 * 4;
+    let stride = view["byteStride"].as_u64().unwrap_or(elem);
+    if stride < elem {
+        return Err(what(format!("byteStride {stride} is below the element's {elem} bytes")));
+    }
+    // The whole range is checked before anything is allocated, so that a corrupt count or
+    // offset gives this error instead of a huge allocation or an overflow.
+    let start = view["byteOffset"]
+        .as_u64()
+        .unwrap_or(0)
+        .checked_add(acc["byteOffset"].as_u64().unwrap_or(0));
+    let span = (n as u64)
+        .checked_sub(1)
+        .map_or(Some(0), |last| last.checked_mul(stride)?.checked_add(elem));
+    let in_bin = start
+        .zip(span)
+        .and_then(|(s, l)| s.checked_add(l))
+        .is_some_and(|end| end <= bin.len() as u64);
+    let (Some(start), true) = (start, in_bin) else {
+        return Err(what(format!("{n} elements lie past the BIN chunk ({} bytes)", bin.len())));
+    };
+    let (start, stride, elem) = (start as usize, stride as usize, elem as usize);
     let mut out = Vec::with_capacity(n * width);
     for e in 0..n {
-        for c in 0..width {
-            let at = start + e * stride + c * 4;
-            let b = bin.get(at..at + 4).ok_or_else(|| {
-                what(format!("element {e} lies past the BIN chunk ({} bytes)", bin.len()))
-            })?;
+        let at = start + e * stride;
+        for b in bin[at..at + elem].chunks_exact(4) {
             out.push(f32::from_le_bytes([b[0], b[1], b[2], b[3]]));
         }
     }
@@ -459,8 +475,13 @@ fn parse(bytes: &[u8]) -> Result<(Gaussians<f32>, Vec<ReflectionPlane>), String>
     if let Some(v) = get("_TRGS_POPULATION", &["SCALAR"], Some(n))? {
         g.populations = v
             .iter()
-            .map(|&p| if p == 1.0 { Population::Glass } else { Population::Primary })
-            .collect();
+            .enumerate()
+            .map(|(i, &p)| match p {
+                0.0 => Ok(Population::Primary),
+                1.0 => Ok(Population::Glass),
+                _ => Err(format!("Gaussian {i}: _TRGS_POPULATION {p}, expected 0 or 1")),
+            })
+            .collect::<Result<_, _>>()?;
     }
     let mut planes = Vec::new();
     for (index, node) in doc["nodes"].as_array().into_iter().flatten().enumerate() {

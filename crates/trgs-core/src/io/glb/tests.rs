@@ -263,6 +263,16 @@ fn malformed_files_get_named_errors() {
         ),
         (rebuild(&good, |d| d["accessors"][1]["componentType"] = json!(5122)), "float (5126)"),
         (rebuild(&good, |d| d["accessors"][2]["count"] = json!(9)), "9 elements"),
+        // Corrupt sizes are errors before anything is allocated or an offset overflows.
+        (
+            rebuild(&good, |d| d["accessors"][0]["count"] = json!(1_000_000_000_000_000u64)),
+            "past the BIN chunk",
+        ),
+        (
+            rebuild(&good, |d| d["bufferViews"][0]["byteOffset"] = json!(u64::MAX)),
+            "past the BIN chunk",
+        ),
+        (rebuild(&good, |d| d["bufferViews"][0]["byteStride"] = json!(0)), "byteStride 0"),
         (
             rebuild(&good, |d| d["nodes"][2]["extras"]["trgs_plane"]["material"] = json!("chrome")),
             "chrome",
@@ -276,6 +286,16 @@ fn malformed_files_get_named_errors() {
         let err = parse_glb(&bytes, path).expect_err(expected);
         assert_mentions(&err, &["scene/model.glb", expected]);
     }
+    // A population other than 0 (primary) or 1 (glass), written into the BIN chunk in place.
+    let (doc, bin) = split(&good);
+    let acc = &doc["meshes"][0]["primitives"][0]["attributes"]["_TRGS_POPULATION"];
+    let acc = &doc["accessors"][acc.as_u64().expect("population accessor") as usize];
+    let view = &doc["bufferViews"][acc["bufferView"].as_u64().expect("view") as usize];
+    let at = good.len() - bin.len() + view["byteOffset"].as_u64().unwrap_or(0) as usize;
+    let mut bad = good.clone();
+    bad[at..at + 4].copy_from_slice(&2.0f32.to_le_bytes());
+    let err = parse_glb(&bad, path).expect_err("population 2");
+    assert_mentions(&err, &["scene/model.glb", "Gaussian 0: _TRGS_POPULATION 2, expected 0 or 1"]);
     let empty = Gaussians::<f32>::zeros(0, 0);
     assert!(encode_glb(&empty, &[]).is_err(), "a point primitive needs a point");
 }
