@@ -5,7 +5,10 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/ensure-vulkan.sh
-for setting in $(scripts/ensure-xvfb.sh); do
+# On its own line so that `set -e` stops here when the set-up fails (a failure inside the
+# for-list's substitution would be ignored and the window test silently skipped).
+settings=$(scripts/ensure-xvfb.sh)
+for setting in $settings; do
     export "${setting?}"
 done
 cargo test --workspace --locked "$@"

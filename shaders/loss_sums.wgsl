@@ -1,7 +1,7 @@
 // Stage `loss_sums`: the losses' per-pixel statistics summed over strips of LOSS_STRIP pixels,
-// one thread a strip, so that a step reads back a few kB. Slot 0 of a strip holds the
-// photometric sums (|x - y|, SSIM, (x - y)^2), slot 1 the regularisers' (H V, |g^t . g^r|,
-// |M - M_a|).
+// one thread a strip, so that a step reads back 32 bytes per strip (32 KB at 256x256). Slot 0 of
+// a strip holds the photometric sums (|x - y|, SSIM, (x - y)^2), slot 1 the regularisers'
+// (H V, |g^t . g^r|, |M - M_a|).
 #include "shared/common.wgsl"
 
 @group(0) @binding(0) var<storage, read> params: LossParams;

@@ -16,7 +16,10 @@ use trgs_core::scene::{Gaussians, Material, Population, ReflectionPlane};
 pub const CHECKPOINT_FILE: &str = "checkpoint.trgs";
 const MAGIC: &str = "trgs-checkpoint 1";
 
-/// Adam state of one plane: centre, unnormalised normal, R0 logit.
+/// Adam state of one plane, in `plane_adam`'s slots: 0 the offset along the normal, 3..6 the
+/// unnormalised normal, 6 the R0 logit; 1 and 2 are unused, left from the per-coordinate centre
+/// of older versions (whose checkpoints still load: their centre-x moments then start the
+/// offset's, which Adam's bias-corrected averages forget within a few hundred steps).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct PlaneMoments {
     pub m: [f64; 7],

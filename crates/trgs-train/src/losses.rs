@@ -8,7 +8,8 @@
 //!
 //! The first two have their f64 twins of the same name in `trgs_core::reference`. A view's target
 //! image and glass labels are uploaded once ([`GpuTarget`]) and stay on the GPU; only the strips'
-//! sums (a few kB) come back, for the step's statistics.
+//! sums (32 bytes per strip of LOSS_STRIP pixels: 32 KB at 256x256) come back, for the step's
+//! statistics.
 use trgs_core::Image;
 use trgs_core::reference::RegulariserWeights;
 use trgs_render::gpu::{self, BufferPool, Kernel, Recorder};
@@ -28,7 +29,15 @@ pub enum LossError {
     FrameSize { name: String, got_w: u32, got_h: u32, want_w: u32, want_h: u32 },
     #[error("the frame has not been rendered")]
     NotRendered,
+    #[error(
+        "training at {width}x{height}: the loss's row buffer needs {bytes} bytes in one binding, \
+         the device allows {limit}; train at a lower resolution (--resolution or --downscale)"
+    )]
+    TooLarge { width: u32, height: u32, bytes: u64, limit: u64 },
 }
+
+/// Bytes per pixel of the loss's largest scratch buffer (`rows`: five RGB moments as vec4).
+const ROWS_BYTES_PER_PIXEL: u64 = 80;
 
 /// A view's target image and glass labels on the GPU. The image is stored as 8-bit RGBA (4 bytes
 /// a pixel, a quarter of f32 RGBA), as 3DGS keeps its 8-bit images: a dataset of a few hundred
@@ -129,7 +138,7 @@ pub struct PendingLoss {
 }
 
 impl PendingLoss {
-    /// Sum the strips' sums (blocking read of a few kB).
+    /// Sum the strips' sums (blocking read of 32 bytes per strip).
     pub fn read(&self, ctx: &GpuContext) -> LossValues {
         let partials = gpu::read_buffer::<[f32; 4]>(ctx, &self.partials, 0, 2 * self.strips);
         let total = |slot: usize| {
@@ -257,7 +266,15 @@ impl LossKernels {
         };
         let block = gpu::params(ctx, "trgs.photometric_loss.params", &params);
         let (rendered, image) = (layers.color, &target.image);
-        let rows = self.scratch.get(ctx, "trgs.photometric_loss.rows", pixels * 80);
+        // One binding holds every pixel's row moments; above the device's binding limit wgpu
+        // would fail validation, so that is an error here. (Splitting `rows` over two bindings
+        // would lift the limit; not done yet.)
+        let limit = ctx.device.limits().max_storage_buffer_binding_size;
+        let bytes = pixels * ROWS_BYTES_PER_PIXEL;
+        if bytes > limit {
+            return Err(LossError::TooLarge { width: w, height: h, bytes, limit });
+        }
+        let rows = self.scratch.get(ctx, "trgs.photometric_loss.rows", bytes);
         let terms = self.scratch.get(ctx, "trgs.photometric_loss.terms", pixels * 48);
         let stats = self.scratch.get(ctx, "trgs.loss_sums.stats", pixels * 32);
         let partials = self.scratch.get(ctx, "trgs.loss_sums.partials", u64::from(strips) * 32);

@@ -33,12 +33,12 @@ pub fn seen_through_planes(
     for plane in planes {
         let n = plane.unit_normal();
         let bitangent = plane.bitangent();
+        let margin = BEHIND_MARGIN * plane.width.min(plane.height);
         for &c in camera_centres {
             let side = (c - plane.centre).dot(n);
             if side <= 0.0 {
                 continue;
             }
-            let margin = BEHIND_MARGIN * plane.width.min(plane.height);
             for (i, m) in g.means.iter().enumerate() {
                 if selected[i] || g.populations[i] != Population::Primary {
                     continue;

@@ -53,7 +53,8 @@ pub fn markdown_table(curves: &[Curve]) -> String {
 }
 
 /// A `width x height` plot: PSNR (y) against seconds (x), both axes from the data's range, with a
-/// labelled grid (a round number of seconds that gives at most 8 intervals, and 1, 2 or 5 dB),
+/// labelled grid (a round number of seconds that gives at most 8 intervals, and 1, 2, 5 or 10 dB
+/// or more that gives at most 10),
 /// each curve as a polyline with square markers.
 pub fn plot(curves: &[Curve], width: u32, height: u32) -> Image<f32> {
     let mut im = Image::<f32>::new(width, height, 3);

@@ -43,4 +43,13 @@ fn bad_options_say_what_is_expected() {
     assert!(!ok && err.contains("WxH"), "{err}");
     let (ok, err) = viewer(&["--view", "2"]);
     assert!(!ok && err.contains("cameras.json"), "{err}");
+    let (ok, err) = viewer(&["--layer", "depth_variance"]);
+    assert!(!ok && err.contains("--layer depth_variance"), "{err}");
+    let (ok, err) = viewer(&["--size", "0x600"]);
+    assert!(!ok && err.contains("at least 1"), "{err}");
+    let (ok, err) = viewer(&["--frames", "0"]);
+    assert!(!ok && err.contains("--frames 0"), "{err}");
+    // A scripted run with nothing to draw would never exit.
+    let (ok, err) = viewer(&["--screenshot", "x.png", "--exit"]);
+    assert!(!ok && err.contains("need a model"), "{err}");
 }

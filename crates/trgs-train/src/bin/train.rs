@@ -250,9 +250,10 @@ fn train(
     trainer.profile = args.profile;
     let cameras: Vec<_> = data.train.iter().map(|v| v.camera.clone()).collect();
     trainer.set_training_cameras(&cameras);
-    // Every view, as the INRIA code writes it: viewers snap to these.
+    // Every view once, as the INRIA code writes it: viewers snap to these. (Not eval_views():
+    // without a test split it is the first training views, which are listed already.)
     let views: Vec<_> =
-        cameras.iter().cloned().chain(data.eval_views().iter().map(|v| v.camera.clone())).collect();
+        cameras.iter().cloned().chain(data.test.iter().map(|v| v.camera.clone())).collect();
     write_cameras_json(&args.out.join("cameras.json"), &views)?;
     if let Some(feed) = feed {
         feed.set_cameras(views);
@@ -355,7 +356,12 @@ fn train(
     bar.finish();
     finish(&args, &trainer, &data, &data_dir, &state)?;
     if let Some(feed) = feed {
-        feed.set_status(format!("training finished: results in {}", args.out.display()));
+        // The final model, whatever the snapshot interval left the viewer with.
+        feed.publish(Snapshot {
+            gaussians: trainer.gaussians(),
+            planes: trainer.planes().to_vec(),
+            status: format!("training finished: results in {}", args.out.display()),
+        });
     }
     Ok(())
 }

@@ -44,8 +44,10 @@ fn parse() -> Result<Option<ViewerOptions>> {
             "--view" => o.view = Some(value("--view")?.parse().context("--view: a number")?),
             "--layer" => {
                 let v = value("--layer")?;
-                o.layer = Layer::ALL.into_iter().find(|l| l.name() == v).with_context(|| {
-                    let names: Vec<_> = Layer::ALL.iter().map(|l| l.name()).collect();
+                // The viewer does not render the depth-variance layer (only L_d needs it).
+                let offered = || Layer::ALL.into_iter().filter(|&l| l != Layer::DepthVariance);
+                o.layer = offered().find(|l| l.name() == v).with_context(|| {
+                    let names: Vec<_> = offered().map(|l| l.name()).collect();
                     format!("--layer {v}: expected one of {}", names.join(", "))
                 })?;
             }
@@ -54,6 +56,9 @@ fn parse() -> Result<Option<ViewerOptions>> {
                 let (w, h) = v.split_once('x').context("--size: expected WxH, e.g. 800x600")?;
                 o.window =
                     [w.parse().context("--size: width")?, h.parse().context("--size: height")?];
+                if !o.window.iter().all(|&d| d.is_finite() && d >= 1.0) {
+                    bail!("--size {v}: width and height must be at least 1");
+                }
             }
             "--no-overlays" => o.overlays = false,
             "--scale" => {
@@ -67,7 +72,10 @@ fn parse() -> Result<Option<ViewerOptions>> {
             }
             "--screenshot" => script.screenshot = Some(value("--screenshot")?.into()),
             "--frames" => {
-                script.frames = Some(value("--frames")?.parse().context("--frames: a number")?);
+                let v = value("--frames")?;
+                let n = v.parse().ok().filter(|&n| n >= 1);
+                script.frames =
+                    Some(n.with_context(|| format!("--frames {v}: a count of 1 or more"))?);
             }
             "--exit" => script.exit = true,
             s if s.starts_with('-') => bail!("unknown option {s} (see --help)"),
@@ -94,6 +102,10 @@ fn parse() -> Result<Option<ViewerOptions>> {
             Source::Model(Box::new(m))
         }
         None if o.view.is_some() => bail!("--view needs a model with a cameras.json"),
+        // With nothing to draw, a scripted run would wait for a frame for ever.
+        None if o.script.screenshot.is_some() || o.script.frames.is_some() => {
+            bail!("--screenshot and --frames need a model")
+        }
         None => Source::Nothing,
     };
     Ok(Some(o))
