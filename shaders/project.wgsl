@@ -1,14 +1,15 @@
-// Stage `project` (twin: trgs_core::reference::project): EWA projection of every Gaussian for one
+// Stage `project` (twin: trgs_core::reference::project), second kernel: EWA projection for one
 // view, which is the real camera or the camera mirrored about a plane (a general 3x3 linear map
-// with determinant -1). Culls by depth, opacity, 2D determinant, for a mirrored view the plane's
-// front side, and the view's tile limit; writes the screen-space mean, conic, extent, SH colour
-// and flags. A culled Gaussian gets flags 0 and nothing else (later stages read no other field of
-// it). The tile-limit cull runs twice: first with a bound on the 2D extent from the largest scale,
-// before the covariance, then exactly, before the SH evaluation; most of a mirrored view's
-// Gaussians fall outside its footprint, and most of any view's outside the image.
+// with determinant -1), of the Gaussians that project_candidates.wgsl listed after the cheap
+// culls (depth, opacity, a mirrored view's front side, a bound on the extent against the view's
+// tile limit). Culls by the 2D determinant and the exact tile rectangle; writes the screen-space
+// mean, conic, extent, SH colour and flags. A culled Gaussian gets flags 0 and nothing else
+// (later stages read no other field of it). Most of a mirrored view's Gaussians fall outside its
+// footprint, and most of any view's outside the image: they never get here.
 #include "shared/common.wgsl"
 #include "shared/tiles.wgsl"
 #include "shared/sh.wgsl"
+#include "shared/project_cull.wgsl"
 
 @group(0) @binding(0) var<storage, read> view: ProjectParams;
 @group(0) @binding(1) var<storage, read> means: array<f32>;
@@ -20,6 +21,9 @@
 @group(0) @binding(7) var<storage, read> log_reflections: array<f32>;
 @group(0) @binding(8) var<storage, read> populations: array<u32>;
 @group(0) @binding(9) var<storage, read_write> projected: array<ProjectedGaussian>;
+// The list and its indirect dispatch (workgroups, 1, 1, list length) from project_candidates.
+@group(0) @binding(10) var<storage, read> candidates: array<u32>;
+@group(0) @binding(11) var<storage, read> work: array<u32, 4>;
 
 fn sh_coeff(i: u32, k: u32) -> vec3<f32> {
     let base = (i * view.sh_coeffs + k) * 3u;
@@ -62,67 +66,29 @@ fn cull(i: u32) {
     projected[i].flags = 0u;
 }
 
-// Upper bound on the 2D extent along one image axis: the 2D variance (f^2/z^2)(1 + (x/z)^2) of
-// the clamped Jacobian row times the largest 3D variance, plus the blur; the relative and absolute
-// margins absorb f32 rounding of the exact value computed later.
-fn extent_bound(focal: f32, t: f32, iz: f32, var_max: f32, reach: f32) -> f32 {
-    let jj = focal * focal * iz * iz * (1.0 + t * t);
-    return sqrt(reach * (jj * var_max + COV2D_BLUR)) * 1.001 + 0.01;
+// Every listed Gaussian passed the cheap culls; a stride loop covers lists longer than the
+// dispatch limit allows.
+@compute @workgroup_size(256)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let stride = work[0] * 256u;
+    for (var t = gid.x; t < work[3]; t += stride) {
+        project_one(candidates[t]);
+    }
 }
 
-@compute @workgroup_size(256)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let i = linear_index(gid, nwg, 256u);
-    if i >= view.count {
-        return;
-    }
+fn project_one(i: u32) {
     var out: ProjectedGaussian;
-    let mu = vec3<f32>(means[3u * i], means[3u * i + 1u], means[3u * i + 2u]);
-    let glass = populations[i] == POPULATION_GLASS;
-    if view.front_only != 0u {
-        if glass || !(dot(mu - view.plane_centre.xyz, view.plane_normal.xyz) > 0.0) {
-            cull(i);
-            return;
-        }
-    }
+    let v = view_point(i);
     let w = transpose(mat3x3<f32>(view.row0.xyz, view.row1.xyz, view.row2.xyz));
-    let p = w * mu + view.translation.xyz;
-    if !(p.z >= view.near) {
-        cull(i);
-        return;
-    }
-    let opacity = sigmoid(opacity_logits[i]);
-    // alpha = o G >= 1/255  <=>  the quadratic form is at most 2 ln(255 o).
-    let reach = 2.0 * log(opacity / MIN_ALPHA);
-    if !(reach > 0.0) {
-        cull(i);
-        return;
-    }
-    let log_s = vec3<f32>(log_scales[3u * i], log_scales[3u * i + 1u], log_scales[3u * i + 2u]);
+    let p = v.p;
     let iz = 1.0 / p.z;
-    let tx = clamp(p.x / p.z, view.tan_limits.x, view.tan_limits.y);
-    let ty = clamp(p.y / p.z, view.tan_limits.z, view.tan_limits.w);
-    let mean2d = vec2<f32>(view.focal.x * p.x / p.z + view.focal.z, view.focal.y * p.y / p.z + view.focal.w);
-    let var_max = exp(2.0 * max(log_s.x, max(log_s.y, log_s.z)));
-    let bound = vec2<f32>(
-        extent_bound(view.focal.x, tx, iz, var_max, reach),
-        extent_bound(view.focal.y, ty, iz, var_max, reach),
-    );
-    // Only a finite or infinite bound may cull (tile_rect_of treats NaN as empty).
-    if bound.x > 0.0 && bound.y > 0.0 {
-        let rough = tile_rect_of(mean2d, bound, view.width, view.height, view.limit);
-        if rough.x >= rough.z {
-            cull(i);
-            return;
-        }
-    }
     let r = quat_to_mat(rotations[i]);
-    let s = exp(log_s);
+    let s = exp(v.log_s);
     let l = mat3x3<f32>(r[0] * s.x, r[1] * s.y, r[2] * s.z);
     let sc = w * (l * transpose(l)) * transpose(w);
     // Jacobian with the mean clamped to the guard band.
-    let xc = tx * p.z;
-    let yc = ty * p.z;
+    let xc = v.tx * p.z;
+    let yc = v.ty * p.z;
     let r0 = vec3<f32>(view.focal.x * iz, 0.0, -view.focal.x * xc * iz * iz);
     let r1 = vec3<f32>(0.0, view.focal.y * iz, -view.focal.y * yc * iz * iz);
     let s0 = sc * r0;
@@ -136,13 +102,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         cull(i);
         return;
     }
-    let extent = vec2<f32>(sqrt(reach * a), sqrt(reach * c));
-    let rect = tile_rect_of(mean2d, extent, view.width, view.height, view.limit);
+    let extent = vec2<f32>(sqrt(v.reach * a), sqrt(v.reach * c));
+    let rect = tile_rect_of(v.mean2d, extent, view.width, view.height, view.limit);
     if rect.x >= rect.z {
         cull(i);
         return;
     }
-    let offset = mu - view.centre.xyz;
+    let offset = v.mu - view.centre.xyz;
     let len = length(offset);
     var dir = vec3<f32>(0.0);
     if len > 0.0 {
@@ -150,7 +116,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     }
     let raw = eval_sh(i, dir);
     var flags = FLAG_VISIBLE;
-    if glass {
+    if v.glass {
         flags |= FLAG_GLASS;
     }
     if raw.x < 0.0 {
@@ -162,11 +128,11 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     if raw.z < 0.0 {
         flags |= FLAG_CLAMPED_B;
     }
-    out.mean2d = mean2d;
+    out.mean2d = v.mean2d;
     out.extent = extent;
-    out.conic = vec4<f32>(c / det, -b / det, a / det, opacity);
+    out.conic = vec4<f32>(c / det, -b / det, a / det, v.opacity);
     out.color = vec4<f32>(max(raw, vec3<f32>(0.0)), p.z);
-    if glass {
+    if v.glass {
         out.mask = sigmoid(mask_logits[i]);
     }
     out.reflection = exp(log_reflections[i]);

@@ -174,8 +174,27 @@ pub fn range(buffer: &wgpu::Buffer, offset: u64, size: u64) -> wgpu::BindingReso
 /// Workgroup counts for `groups` workgroups of a 1D dispatch, split into 2D past the 65,535 limit
 /// (the kernels rebuild the linear index with `linear_index`).
 pub fn grid_1d(groups: u32) -> [u32; 3] {
-    const MAX: u32 = 65_535;
+    const MAX: u32 = crate::layout::MAX_WORKGROUPS;
     if groups <= MAX { [groups, 1, 1] } else { [MAX, groups.div_ceil(MAX), 1] }
+}
+
+/// The timestamp writes of the next pass, while the query set has room.
+fn timestamps<'a>(
+    profiler: &'a mut Option<Profiler>,
+    stage: &'static str,
+) -> Option<wgpu::ComputePassTimestampWrites<'a>> {
+    match profiler {
+        Some(p) if (p.labels.len() as u32 + 1) * 2 <= p.capacity => {
+            let i = p.labels.len() as u32;
+            p.labels.push(stage);
+            Some(wgpu::ComputePassTimestampWrites {
+                query_set: &p.queries,
+                beginning_of_pass_write_index: Some(2 * i),
+                end_of_pass_write_index: Some(2 * i + 1),
+            })
+        }
+        _ => None,
+    }
 }
 
 /// Timestamp queries around every pass, resolved per submission.
@@ -228,18 +247,7 @@ impl Recorder {
         if groups.contains(&0) {
             return;
         }
-        let timestamp_writes = match &mut self.profiler {
-            Some(p) if (p.labels.len() as u32 + 1) * 2 <= p.capacity => {
-                let i = p.labels.len() as u32;
-                p.labels.push(stage);
-                Some(wgpu::ComputePassTimestampWrites {
-                    query_set: &p.queries,
-                    beginning_of_pass_write_index: Some(2 * i),
-                    end_of_pass_write_index: Some(2 * i + 1),
-                })
-            }
-            _ => None,
-        };
+        let timestamp_writes = timestamps(&mut self.profiler, stage);
         let mut pass = self.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some(stage),
             timestamp_writes,
@@ -251,6 +259,26 @@ impl Recorder {
 
     /// Submit the recorded work and wait for it; with profiling, add this submission's stage
     /// times. Returns a fresh encoder for what follows.
+    /// Record one dispatch of `kernel` whose workgroup counts a kernel wrote into `args` at byte
+    /// `offset` (three u32), in its own pass, labelled and timed as `stage`.
+    pub fn dispatch_indirect(
+        &mut self,
+        stage: &'static str,
+        kernel: &Kernel,
+        bind: &wgpu::BindGroup,
+        args: &wgpu::Buffer,
+        offset: u64,
+    ) {
+        let timestamp_writes = timestamps(&mut self.profiler, stage);
+        let mut pass = self.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(stage),
+            timestamp_writes,
+        });
+        pass.set_pipeline(&kernel.pipeline);
+        pass.set_bind_group(0, bind, &[]);
+        pass.dispatch_workgroups_indirect(args, offset);
+    }
+
     pub fn submit_and_wait(&mut self, ctx: &GpuContext) {
         let resolve = self.profiler.as_ref().and_then(|p| {
             let n = p.labels.len() as u32 * 2;

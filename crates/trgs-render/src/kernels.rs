@@ -4,6 +4,7 @@ use crate::gpu::Kernel;
 
 #[derive(Debug)]
 pub struct Kernels {
+    pub project_candidates: Kernel,
     pub project: Kernel,
     pub tile_counts: Kernel,
     pub prefix_sum: Kernel,
@@ -40,6 +41,12 @@ impl Kernels {
     pub fn new(ctx: &GpuContext) -> Self {
         let acc = accumulation_defines(&ctx.capabilities);
         Self {
+            project_candidates: Kernel::new(
+                ctx,
+                "project_candidates",
+                "project_candidates.wgsl",
+                &[],
+            ),
             project: Kernel::new(ctx, "project", "project.wgsl", &[]),
             tile_counts: Kernel::new(ctx, "tile_counts", "tile_counts.wgsl", &[]),
             prefix_sum: Kernel::new(ctx, "prefix_sum", "prefix_sum.wgsl", &[]),

@@ -334,6 +334,8 @@ pub const SCAN_BLOCK: u32 = SCAN_THREADS * SCAN_ITEMS;
 /// the per-thread serial part is cheap everywhere. 16-bit packed counters need SORT_ITEMS and
 /// SORT_BLOCK below 65536.
 pub const SORT_THREADS: u32 = 64;
+/// The most workgroups along one dimension of a dispatch (WebGPU's and Vulkan's minimum limit).
+pub const MAX_WORKGROUPS: u32 = 65_535;
 pub const SORT_ITEMS: u32 = 64;
 pub const SORT_BLOCK: u32 = SORT_THREADS * SORT_ITEMS;
 
@@ -400,6 +402,7 @@ pub fn prelude() -> String {
         ("MODEL_NO_FRESNEL", MODEL_NO_FRESNEL),
         ("MODEL_NO_INTENSITY", MODEL_NO_INTENSITY),
         ("LOSS_STRIP", LOSS_STRIP),
+        ("MAX_WORKGROUPS", MAX_WORKGROUPS),
     ];
     for (name, v) in consts_u32 {
         s.push_str(&format!("const {name}: u32 = {v}u;\n"));

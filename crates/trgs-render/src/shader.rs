@@ -20,6 +20,8 @@ pub const SOURCES: &[(&str, &str)] = sources!(
     "shared/accumulate.wgsl",
     "shared/sh.wgsl",
     "shared/random.wgsl",
+    "shared/project_cull.wgsl",
+    "project_candidates.wgsl",
     "project.wgsl",
     "tile_counts.wgsl",
     "prefix_sum.wgsl",
@@ -50,6 +52,7 @@ pub const SOURCES: &[(&str, &str)] = sources!(
 
 /// Every (stage file, defines) combination the renderer compiles; a test validates each with naga.
 pub const VARIANTS: &[(&str, &[&str])] = &[
+    ("project_candidates.wgsl", &[]),
     ("project.wgsl", &[]),
     ("tile_counts.wgsl", &[]),
     ("prefix_sum.wgsl", &[]),

@@ -1,6 +1,8 @@
-//! Stage `project` (shaders/project.wgsl; twin `trgs_core::reference::project`).
+//! Stage `project` (shaders/project_candidates.wgsl then shaders/project.wgsl; twin
+//! `trgs_core::reference::project`): the cheap culls on every Gaussian, then the projection of the
+//! survivors only, dispatched indirectly over their list (see shared/project_cull.wgsl for why).
 use super::Stage;
-use crate::gpu::{self, Recorder, grid_1d, range};
+use crate::gpu::{self, BufferPool, Recorder, grid_1d, range};
 use crate::layout::{ProjectParams, ProjectedGaussian};
 use crate::scene::GpuScene;
 use trgs_core::reference::{GUARD_BAND, TileRect};
@@ -50,20 +52,62 @@ pub fn params(
     }
 }
 
+/// The list of the cheap culls' survivors and its indirect dispatch, reused by every view and
+/// chunk (their passes run in recording order).
+#[derive(Debug)]
+pub struct Scratch {
+    candidates: wgpu::Buffer,
+    work: wgpu::Buffer,
+}
+
+impl Scratch {
+    pub fn new(s: Stage<'_>, pool: &mut BufferPool, scene: &GpuScene) -> Self {
+        let most = scene.chunks().iter().map(|c| c.1).max().unwrap_or(0);
+        let candidates = pool.get(s.ctx, "trgs.project.candidates", u64::from(most.max(1)) * 4);
+        let work = s.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("trgs.project.work"),
+            size: 16,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::INDIRECT
+                | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Self { candidates, work }
+    }
+}
+
 /// Project every Gaussian of `scene` into `projected` (one record per Gaussian).
 pub fn record(
     s: Stage<'_>,
     rec: &mut Recorder,
     scene: &GpuScene,
     base: &ProjectParams,
+    scratch: &Scratch,
     projected: &wgpu::Buffer,
 ) {
-    let k = &s.kernels.project;
+    let (cull, k) = (&s.kernels.project_candidates, &s.kernels.project);
     let coeffs = u64::from(scene.sh_coeffs());
+    let list = scratch.candidates.as_entire_binding();
     for (first, count) in scene.chunks() {
         let p = ProjectParams { count, sh_coeffs: scene.sh_coeffs(), ..*base };
         let block = gpu::params(s.ctx, "trgs.project.params", &p);
         let (f, c) = (u64::from(first), u64::from(count));
+        let out = range(projected, f * PROJECTED, c * PROJECTED);
+        let bind = cull.bind(
+            s.ctx,
+            &[
+                block.as_entire_binding(),
+                range(&scene.means, f * 12, c * 12),
+                range(&scene.log_scales, f * 12, c * 12),
+                range(&scene.opacity_logits, f * 4, c * 4),
+                range(&scene.populations, f * 4, c * 4),
+                out.clone(),
+                list.clone(),
+                scratch.work.as_entire_binding(),
+            ],
+        );
+        rec.encoder.clear_buffer(&scratch.work, 0, None);
+        rec.dispatch("project", cull, &bind, grid_1d(count.div_ceil(256)));
         let bind = k.bind(
             s.ctx,
             &[
@@ -76,9 +120,11 @@ pub fn record(
                 range(&scene.mask_logits, f * 4, c * 4),
                 range(&scene.log_reflections, f * 4, c * 4),
                 range(&scene.populations, f * 4, c * 4),
-                range(projected, f * PROJECTED, c * PROJECTED),
+                out,
+                list.clone(),
+                scratch.work.as_entire_binding(),
             ],
         );
-        rec.dispatch("project", k, &bind, grid_1d(count.div_ceil(256)));
+        rec.dispatch_indirect("project", k, &bind, &scratch.work, 0);
     }
 }
