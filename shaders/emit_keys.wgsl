@@ -1,7 +1,9 @@
 // Stage `emit_keys` (twin: trgs_core::reference::emit_keys): one (tile, depth) key per Gaussian
-// and touched tile, written from the Gaussian's offset (the exclusive prefix sum of the counts).
-// The 64-bit key is split in two words: `keys_hi` the tile index, `keys_lo` the f32 bits of the
-// (positive) depth, which sort like the numbers.
+// and touched tile, written from the Gaussian's offset (the exclusive prefix sum of the counts)
+// after the view's `key_base`: every view of a frame writes into one list, sorted once. The
+// 64-bit key is split in two words: `keys_hi` the tile index, numbered from the view's
+// `tile_base` row by row within its tile limit, `keys_lo` the f32 bits of the (positive) depth,
+// which sort like the numbers.
 #include "shared/common.wgsl"
 #include "shared/tiles.wgsl"
 
@@ -24,10 +26,11 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     }
     let r = tile_rect(g, tiles);
     let depth_bits = bitcast<u32>(g.color.w);
-    var slot = offsets[i];
+    var slot = tiles.key_base + offsets[i];
+    let row = tiles.limit.z - tiles.limit.x;
     for (var ty = r.y; ty < r.w; ty++) {
         for (var tx = r.x; tx < r.z; tx++) {
-            keys_hi[slot] = ty * tiles.tiles_x + tx;
+            keys_hi[slot] = tiles.tile_base + (ty - tiles.limit.y) * row + (tx - tiles.limit.x);
             keys_lo[slot] = depth_bits;
             values[slot] = tiles.first + i;
             slot++;

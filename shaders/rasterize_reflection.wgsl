@@ -33,7 +33,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
     let y = ty * TILE_SIZE + lid / TILE_SIZE;
     let inside = x < params.width && y < params.height
         && rectangle_hit(planes[params.slot], camera.origin.xyz, camera_ray(camera, x, y)) >= 0.0;
-    let tile = ty * params.tiles_x + tx;
+    let tile = params.tile_base + wid.y * params.tiles_w + wid.x;
     let start = ranges[2u * tile];
     let end = max(ranges[2u * tile + 1u], start);
     let n = end - start;

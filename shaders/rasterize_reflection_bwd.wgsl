@@ -35,7 +35,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
     let x = tx * TILE_SIZE + lid % TILE_SIZE;
     let y = ty * TILE_SIZE + lid / TILE_SIZE;
     let inside = x < params.width && y < params.height;
-    let tile = ty * params.tiles_x + tx;
+    let tile = params.tile_base + wid.y * params.tiles_w + wid.x;
     let start = ranges[2u * tile];
     let end = max(ranges[2u * tile + 1u], start);
     if lid == 0u {

@@ -156,7 +156,16 @@ impl Renderer {
                 }
                 Some(k) => {
                     rasterize_reflection_bwd::record(
-                        s, &mut rec, &grid, k as u32, &v.limit, lists, layers, grads, pg,
+                        s,
+                        &mut rec,
+                        &grid,
+                        k as u32,
+                        &v.limit,
+                        v.tile_base,
+                        lists,
+                        layers,
+                        grads,
+                        pg,
                     );
                     let gaussians = if options.block_reflection_to_gaussians {
                         BWD_NO_GAUSSIANS

@@ -22,13 +22,26 @@ pub struct ViewBuffers {
     pub projected: wgpu::Buffer,
     /// The exclusive scan of the tile counts (each Gaussian's first key slot).
     pub offsets: wgpu::Buffer,
-    /// The sorted keys and values.
+    /// The sorted keys and values of every view of the frame (one list, sorted once): this
+    /// view's are the `num_keys` from `key_base`.
     pub keys: Option<Keys>,
-    /// (start, end) per tile.
+    /// (start, end) per sorted tile index, every view's (shared): this view's tiles are numbered
+    /// from `tile_base`, row by row within `limit`.
     pub ranges: Option<wgpu::Buffer>,
     pub num_keys: u32,
+    pub key_base: u32,
+    pub tile_base: u32,
     pub(crate) captured_counts: Option<wgpu::Buffer>,
     pub(crate) captured_keys: Option<Keys>,
+}
+
+impl ViewBuffers {
+    /// The whole grid's index of this view's sorted tile index `tile`.
+    fn grid_tile(&self, grid: &TileGrid, tile: u32) -> u32 {
+        let local = tile - self.tile_base;
+        let w = self.limit.x1 - self.limit.x0;
+        (self.limit.y0 + local / w) * grid.tiles_x + self.limit.x0 + local % w
+    }
 }
 
 /// Per-pixel layer buffers.
@@ -437,7 +450,9 @@ impl Frame {
         Some(gpu::read_buffer(ctx, &v.projected, 0, self.gaussian_count() as usize))
     }
 
-    /// The geometry stages' results of view `vi` (0 = camera, then mirrored passes).
+    /// The geometry stages' results of view `vi` (0 = camera, then mirrored passes), in the
+    /// twin's form of one view alone: its slice of the shared key list, with tile indices of the
+    /// whole grid and ranges counted from the slice's start.
     pub fn read_intermediates(
         &self,
         ctx: &GpuContext,
@@ -446,24 +461,34 @@ impl Frame {
     ) -> Option<ViewIntermediates> {
         let v = self.views.get(vi)?;
         let keys = v.keys.as_ref()?;
-        let n = v.num_keys as usize;
-        let tiles = self.grid?.tile_count() as usize;
-        let ranges: Vec<[u32; 2]> = gpu::read_buffer(ctx, v.ranges.as_ref()?, 0, tiles);
-        let emitted = v.captured_keys.as_ref().map(|k| {
-            let hi: Vec<u32> = gpu::read_buffer(ctx, &k.hi, 0, n);
-            let lo: Vec<u32> = gpu::read_buffer(ctx, &k.lo, 0, n);
-            (join_keys(&hi, &lo), gpu::read_buffer(ctx, &k.values, 0, n))
-        });
-        let hi: Vec<u32> = gpu::read_buffer(ctx, &keys.hi, 0, n);
-        let lo: Vec<u32> = gpu::read_buffer(ctx, &keys.lo, 0, n);
+        let grid = self.grid?;
+        let (n, base) = (v.num_keys as usize, u64::from(v.key_base) * 4);
+        let read_keys = |k: &Keys| {
+            let hi: Vec<u32> = gpu::read_buffer(ctx, &k.hi, base, n);
+            let lo: Vec<u32> = gpu::read_buffer(ctx, &k.lo, base, n);
+            let hi: Vec<u32> = hi.iter().map(|&t| v.grid_tile(&grid, t)).collect();
+            (join_keys(&hi, &lo), gpu::read_buffer(ctx, &k.values, base, n))
+        };
+        let emitted = v.captured_keys.as_ref().map(read_keys);
+        let (sorted_keys, sorted_values) = read_keys(keys);
+        let mut ranges = vec![(0, 0); grid.tile_count() as usize];
+        let own = u64::from(v.limit.count());
+        let read: Vec<[u32; 2]> =
+            gpu::read_buffer(ctx, v.ranges.as_ref()?, u64::from(v.tile_base) * 8, own as usize);
+        for (local, [a, b]) in read.into_iter().enumerate() {
+            if b > a {
+                let tile = v.grid_tile(&grid, v.tile_base + local as u32) as usize;
+                ranges[tile] = (a - v.key_base, b - v.key_base);
+            }
+        }
         Some(ViewIntermediates {
             projected: gpu::read_buffer(ctx, &v.projected, 0, gaussians),
             counts: v.captured_counts.as_ref().map(|c| gpu::read_buffer(ctx, c, 0, gaussians)),
             offsets: gpu::read_buffer(ctx, &v.offsets, 0, gaussians),
             emitted,
-            sorted_keys: join_keys(&hi, &lo),
-            sorted_values: gpu::read_buffer(ctx, &keys.values, 0, n),
-            ranges: ranges.into_iter().map(|[a, b]| (a, b)).collect(),
+            sorted_keys,
+            sorted_values,
+            ranges,
         })
     }
 }

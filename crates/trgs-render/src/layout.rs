@@ -121,7 +121,11 @@ gpu_struct! {
         /// Gaussians in this dispatch and the index of the first one.
         pub count: u32,
         pub first: u32,
-        pub pad: [u32; 2],
+        /// `emit_keys`: the view's first slot in the key list that every view shares, and the
+        /// sorted tile index of the limit's first tile (the views' tiles are numbered one after
+        /// the other, each row by row within its limit).
+        pub key_base: u32,
+        pub tile_base: u32,
     }
 }
 
@@ -162,6 +166,12 @@ gpu_struct! {
         /// `rasterize_bwd` only: 1 when the frame has the depth-variance layer (else dL/dV is
         /// ignored: V was never computed).
         pub depth_variance: u32,
+        /// The sorted tile index of the dispatch's first tile and the width of its tile rectangle
+        /// in tiles (TileParams::tile_base; the whole grid's width for pass 1).
+        pub tile_base: u32,
+        pub tiles_w: u32,
+        pub pad0: u32,
+        pub pad1: u32,
         /// Colour behind the last transmittance of C_t.
         pub background: [f32; 4],
     }

@@ -183,6 +183,8 @@ impl Renderer {
                 keys: None,
                 ranges: None,
                 num_keys: 0,
+                key_base: 0,
+                tile_base: 0,
                 captured_counts,
                 captured_keys: None,
             });
@@ -190,38 +192,47 @@ impl Renderer {
         rec.submit_and_wait(ctx);
         let totals: Vec<u32> = gpu::map_and_read(ctx, &totals_staging, 4 * specs.len());
 
-        // Phase 2: keys, sort, ranges per view; both rasterize passes; compose.
-        let tiles = grid.tile_count();
-        for (vi, v) in views.iter_mut().enumerate() {
-            let total = totals[vi];
-            let bytes = u64::from(total) * 4;
-            let keys = Keys {
-                hi: pool.get(ctx, &format!("trgs.emit_keys.hi.v{vi}"), bytes),
-                lo: pool.get(ctx, &format!("trgs.emit_keys.lo.v{vi}"), bytes),
-                values: pool.get(ctx, &format!("trgs.emit_keys.values.v{vi}"), bytes),
-            };
+        // Phase 2: every view's keys into one list, one sort and one pass of tile ranges (a
+        // view's tiles numbered after the previous view's: the camera's whole grid, then each
+        // footprint); both rasterize passes; compose.
+        let (mut key_base, mut tile_base) = (0u32, 0u32);
+        for (v, &total) in views.iter_mut().zip(&totals) {
+            (v.key_base, v.tile_base, v.num_keys) = (key_base, tile_base, total);
+            v.tile_params.key_base = key_base;
+            v.tile_params.tile_base = tile_base;
+            key_base += total;
+            tile_base += v.limit.count();
+        }
+        let (total, tiles) = (key_base, tile_base);
+        let bytes = u64::from(total) * 4;
+        let keys = Keys {
+            hi: pool.get(ctx, "trgs.emit_keys.hi", bytes),
+            lo: pool.get(ctx, "trgs.emit_keys.lo", bytes),
+            values: pool.get(ctx, "trgs.emit_keys.values", bytes),
+        };
+        for v in &views {
             emit_keys::record(s, &mut rec, scene, &v.tile_params, &v.projected, &v.offsets, &keys);
-            if options.capture_intermediates {
-                let mut copy = |name: &str, src: &wgpu::Buffer, pool: &mut gpu::BufferPool| {
-                    let c = pool.get(ctx, &format!("trgs.capture.{name}.v{vi}"), bytes);
-                    rec.encoder.copy_buffer_to_buffer(src, 0, &c, 0, bytes.max(16).min(src.size()));
-                    c
-                };
-                v.captured_keys = Some(Keys {
-                    hi: copy("keys_hi", &keys.hi, pool),
-                    lo: copy("keys_lo", &keys.lo, pool),
-                    values: copy("values", &keys.values, pool),
-                });
+        }
+        let captured_keys = options.capture_intermediates.then(|| {
+            let mut copy = |name: &str, src: &wgpu::Buffer, pool: &mut gpu::BufferPool| {
+                let c = pool.get(ctx, &format!("trgs.capture.{name}"), bytes);
+                rec.encoder.copy_buffer_to_buffer(src, 0, &c, 0, bytes.max(16).min(src.size()));
+                c
+            };
+            Keys {
+                hi: copy("keys_hi", &keys.hi, pool),
+                lo: copy("keys_lo", &keys.lo, pool),
+                values: copy("values", &keys.values, pool),
             }
-            let label = format!("trgs.sort.v{vi}");
-            let sorted =
-                sort::record(s, &mut rec, pool, &label, &keys, total, sort::tile_bits(tiles));
-            let ranges =
-                pool.get(ctx, &format!("trgs.tile_ranges.ranges.v{vi}"), u64::from(tiles) * 8);
-            tile_ranges::record(s, &mut rec, &sorted.hi, total, &ranges);
-            v.keys = Some(sorted);
-            v.ranges = Some(ranges);
-            v.num_keys = total;
+        });
+        let sorted =
+            sort::record(s, &mut rec, pool, "trgs.sort", &keys, total, sort::tile_bits(tiles));
+        let ranges = pool.get(ctx, "trgs.tile_ranges.ranges", u64::from(tiles) * 8);
+        tile_ranges::record(s, &mut rec, &sorted.hi, total, &ranges);
+        for v in &mut views {
+            v.keys = Some(sorted.clone());
+            v.ranges = Some(ranges.clone());
+            v.captured_keys = captured_keys.clone();
         }
         let layers = frame.layers(ctx, pixels);
         let primary = &views[0];
@@ -273,6 +284,7 @@ impl Renderer {
                     &grid,
                     slot,
                     &v.limit,
+                    v.tile_base,
                     &v.projected,
                     &keys.values,
                     ranges,

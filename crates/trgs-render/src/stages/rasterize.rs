@@ -22,6 +22,9 @@ pub fn params(grid: &TileGrid, background: [f32; 3]) -> RasterParams {
         height: grid.height,
         tiles_x: grid.tiles_x,
         tiles_y: grid.tiles_y,
+        // Pass 1 is view 0: its tiles are the first of the sorted list, numbered as the grid's.
+        tile_base: 0,
+        tiles_w: grid.tiles_x,
         background: [background[0], background[1], background[2], 0.0],
         ..Default::default()
     }

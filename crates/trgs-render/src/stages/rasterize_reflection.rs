@@ -8,12 +8,14 @@ use crate::layout::RasterParams;
 use trgs_core::reference::{TileGrid, TileRect};
 
 /// The parameter block of pass 2 (and of its adjoint): plane slot `slot`, dispatched over the tiles of
-/// `footprint`.
-pub fn params(grid: &TileGrid, slot: u32, footprint: &TileRect) -> RasterParams {
+/// `footprint`, whose first tile has sorted tile index `tile_base`.
+pub fn params(grid: &TileGrid, slot: u32, footprint: &TileRect, tile_base: u32) -> RasterParams {
     RasterParams {
         tile_x0: footprint.x0,
         tile_y0: footprint.y0,
         slot,
+        tile_base,
+        tiles_w: footprint.x1 - footprint.x0,
         ..super::rasterize::params(grid, [0.0; 3])
     }
 }
@@ -24,6 +26,7 @@ pub fn record(
     grid: &TileGrid,
     slot: u32,
     footprint: &TileRect,
+    tile_base: u32,
     projected: &wgpu::Buffer,
     values: &wgpu::Buffer,
     ranges: &wgpu::Buffer,
@@ -34,8 +37,11 @@ pub fn record(
     if footprint.is_empty() {
         return;
     }
-    let block =
-        gpu::params(s.ctx, "trgs.rasterize_reflection.params", &params(grid, slot, footprint));
+    let block = gpu::params(
+        s.ctx,
+        "trgs.rasterize_reflection.params",
+        &params(grid, slot, footprint, tile_base),
+    );
     let k = &s.kernels.rasterize_reflection;
     let bind = k.bind(
         s.ctx,

@@ -15,6 +15,7 @@ pub fn record(
     grid: &TileGrid,
     slot: u32,
     footprint: &TileRect,
+    tile_base: u32,
     lists: ViewLists<'_>,
     layers: &LayerBuffers,
     grads: &LayerGrads,
@@ -23,7 +24,7 @@ pub fn record(
     if footprint.is_empty() {
         return;
     }
-    let params = super::rasterize_reflection::params(grid, slot, footprint);
+    let params = super::rasterize_reflection::params(grid, slot, footprint, tile_base);
     let block = gpu::params(s.ctx, "trgs.rasterize_reflection_bwd.params", &params);
     let k = &s.kernels.rasterize_reflection_bwd;
     let bind = k.bind(
