@@ -66,13 +66,11 @@ fn cull(i: u32) {
     projected[i].flags = 0u;
 }
 
-// Every listed Gaussian passed the cheap culls; a stride loop covers lists longer than the
-// dispatch limit allows.
+// One thread per listed Gaussian (each passed the cheap culls).
 @compute @workgroup_size(256)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let stride = work[0] * 256u;
-    for (var t = gid.x; t < work[3]; t += stride) {
-        project_one(candidates[t]);
+    if gid.x < work[3] {
+        project_one(candidates[gid.x]);
     }
 }
 

@@ -1,9 +1,12 @@
 // Stage `project_bwd`, the adjoint of `project` (twin: trgs_core::reference::project_bwd): one
-// thread per Gaussian of one view, from its screen-space gradients (PROJECTED_GRAD_FLOATS per
+// thread per Gaussian of one view that passed the forward's cheap culls (its `candidates` list,
+// dispatched indirectly: no other Gaussian can be visible, and on CPU adapters a culled lane would
+// cost as much as a visible one), from its screen-space gradients (PROJECTED_GRAD_FLOATS per
 // Gaussian, summed by the rasterize adjoints) through the 2D conic and mean, the EWA Jacobian with
 // its guard-band clamp, the view's linear map and the SH view direction, to the mean, quaternion,
 // log-scales, opacity logit, SH coefficients, mask logit and log reflection intensity. view.bwd_mode
-// says how: the primary view writes every Gaussian's gradients (zero for culled ones), a mirrored
+// says how: the primary view writes every listed Gaussian's gradients (zero for culled ones; the
+// buffers are cleared before it, for the Gaussians it does not list), a mirrored
 // view adds to them (BWD_ADD) or leaves them alone (BWD_NO_GAUSSIANS, stage 2's stop-gradient),
 // and with BWD_VIEW the gradient of the view itself (linear map, translation, centre), through
 // which the plane learns, is summed over Gaussians into `view_grads`.
@@ -32,6 +35,9 @@
 #else
 @group(0) @binding(14) var<storage, read_write> grads: array<atomic<u32>>;
 #endif
+// The view's list from project_candidates.wgsl and its (workgroups, 1, 1, length).
+@group(0) @binding(15) var<storage, read> candidates: array<u32>;
+@group(0) @binding(16) var<storage, read> work: array<u32, 4>;
 
 // d(rotation matrix)/dq of a normalised quaternion q = (w, x, y, z), one matrix per component.
 fn quat_mat_partial(q: vec4<f32>, m: u32) -> mat3x3<f32> {
@@ -92,9 +98,12 @@ fn sh_term_bwd(
 }
 
 @compute @workgroup_size(256)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let i = linear_index(gid, nwg, 256u);
-    let in_range = i < view.count;
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let in_range = gid.x < work[3];
+    var i = 0u;
+    if in_range {
+        i = candidates[gid.x];
+    }
     let mode = view.bwd_mode;
     let add = (mode & BWD_ADD) != 0u;
     let write = (mode & BWD_NO_GAUSSIANS) == 0u;

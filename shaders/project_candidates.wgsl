@@ -31,8 +31,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     }
     let slot = atomicAdd(&work[3], 1u);
     candidates[slot] = i;
-    // One more workgroup per 256 listed; past the dispatch limit project.wgsl strides.
-    if slot % 256u == 0u && slot / 256u < MAX_WORKGROUPS {
+    // One more workgroup per 256 listed (a chunk has at most MAX_WORKGROUPS x 256 Gaussians).
+    if slot % 256u == 0u {
         atomicAdd(&work[0], 1u);
     }
 }

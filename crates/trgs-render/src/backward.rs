@@ -122,6 +122,7 @@ impl Renderer {
         }
         rec.encoder.clear_buffer(&bufs.view_grads, 0, None);
         rec.encoder.clear_buffer(&bufs.plane_grads, 0, None);
+        bufs.scene_grads.clear(&mut rec.encoder);
         compose_bwd::record(s, &mut rec, &grid, rays, layers, grads, &bufs.plane_grads);
         let views = frame.views();
         let view_slot = |vi: usize| {
@@ -182,6 +183,7 @@ impl Renderer {
                 &v.project_params,
                 mode,
                 &v.projected,
+                &v.candidates,
                 pg,
                 &bufs.scene_grads,
                 view_slot(vi),

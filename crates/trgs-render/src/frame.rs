@@ -20,6 +20,8 @@ pub struct ViewBuffers {
     /// The parameter block `project` ran with (its adjoint recomputes from the same view).
     pub(crate) project_params: ProjectParams,
     pub projected: wgpu::Buffer,
+    /// The Gaussians that passed project's cheap culls (project_bwd runs over them only).
+    pub(crate) candidates: crate::stages::project::Candidates,
     /// The exclusive scan of the tile counts (each Gaussian's first key slot).
     pub offsets: wgpu::Buffer,
     /// The sorted keys and values of every view of the frame (one list, sorted once): this

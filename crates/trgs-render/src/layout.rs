@@ -412,7 +412,6 @@ pub fn prelude() -> String {
         ("MODEL_NO_FRESNEL", MODEL_NO_FRESNEL),
         ("MODEL_NO_INTENSITY", MODEL_NO_INTENSITY),
         ("LOSS_STRIP", LOSS_STRIP),
-        ("MAX_WORKGROUPS", MAX_WORKGROUPS),
     ];
     for (name, v) in consts_u32 {
         s.push_str(&format!("const {name}: u32 = {v}u;\n"));

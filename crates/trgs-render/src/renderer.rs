@@ -154,14 +154,14 @@ impl Renderer {
         });
         let sh_degree = options.sh_degree.map_or(scene.sh_degree(), |d| d.min(scene.sh_degree()));
         let mut views = Vec::with_capacity(specs.len());
-        let scratch = project::Scratch::new(s, pool, scene);
         for (vi, spec) in specs.iter().enumerate() {
             let plane = spec.plane.map(|p| &planes[p]);
             let projected = pool.get(ctx, &format!("trgs.project.projected.v{vi}"), n * 64);
             let counts = pool.get(ctx, &format!("trgs.tile_counts.counts.v{vi}"), n * 4);
             let pparams =
                 project::params(&spec.view, k, plane, &spec.limit, options.near, sh_degree);
-            project::record(s, &mut rec, scene, &pparams, &scratch, &projected);
+            let candidates = project::Candidates::new(s, pool, scene, vi);
+            project::record(s, &mut rec, scene, &pparams, &candidates, &projected);
             let tparams = tile_counts::params(&grid, &spec.limit);
             tile_counts::record(s, &mut rec, scene, &tparams, &projected, &counts);
             let captured_counts = options.capture_intermediates.then(|| {
@@ -179,6 +179,7 @@ impl Renderer {
                 tile_params: tparams,
                 project_params: pparams,
                 projected,
+                candidates,
                 offsets: counts,
                 keys: None,
                 ranges: None,

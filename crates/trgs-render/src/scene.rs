@@ -44,8 +44,10 @@ impl GpuScene {
         let sh_coeffs = gaussians.sh_coeffs() as u32;
         let limit = ctx.device.limits().max_storage_buffer_binding_size;
         let widest = (u64::from(sh_coeffs) * 12).max(PROJECTED_STRIDE);
-        // Multiples of 256 Gaussians keep every range offset aligned for any stride.
-        let chunk = ((limit / widest) / 256 * 256).clamp(256, u64::from(u32::MAX / 2)) as u32;
+        // Multiples of 256 Gaussians keep every range offset aligned for any stride; a chunk's
+        // one-thread-per-Gaussian dispatches stay within the workgroup limit.
+        let most = u64::from(crate::layout::MAX_WORKGROUPS) * 256;
+        let chunk = ((limit / widest) / 256 * 256).clamp(256, most) as u32;
         Ok(Self {
             len,
             sh_degree: gaussians.sh_degree,
@@ -181,7 +183,22 @@ pub struct SceneGradBuffers {
 }
 
 impl SceneGradBuffers {
-    /// Buffers for `scene`'s Gaussians (uninitialised: the backward writes every value).
+    /// Zero every gradient (the camera's project_bwd writes only the Gaussians it lists).
+    pub(crate) fn clear(&self, encoder: &mut wgpu::CommandEncoder) {
+        for b in [
+            &self.means,
+            &self.rotations,
+            &self.log_scales,
+            &self.opacity_logits,
+            &self.sh,
+            &self.mask_logits,
+            &self.log_reflections,
+        ] {
+            encoder.clear_buffer(b, 0, None);
+        }
+    }
+
+    /// Buffers for `scene`'s Gaussians (uninitialised: the backward clears them first).
     pub(crate) fn new(ctx: &GpuContext, pool: &mut gpu::BufferPool, scene: &GpuScene) -> Self {
         let n = u64::from(scene.len);
         let coeffs = u64::from(scene.sh_coeffs);

@@ -52,27 +52,42 @@ pub fn params(
     }
 }
 
-/// The list of the cheap culls' survivors and its indirect dispatch, reused by every view and
-/// chunk (their passes run in recording order).
-#[derive(Debug)]
-pub struct Scratch {
-    candidates: wgpu::Buffer,
-    work: wgpu::Buffer,
+/// Per view, the list of the cheap culls' survivors (chunk by chunk, at the chunk's first
+/// Gaussian) and, per chunk, its indirect dispatch and length (`WORK_STRIDE` bytes apart, a
+/// binding offset's alignment): `project` and `project_bwd` run over it.
+#[derive(Clone, Debug)]
+pub struct Candidates {
+    pub list: wgpu::Buffer,
+    pub work: wgpu::Buffer,
 }
 
-impl Scratch {
-    pub fn new(s: Stage<'_>, pool: &mut BufferPool, scene: &GpuScene) -> Self {
-        let most = scene.chunks().iter().map(|c| c.1).max().unwrap_or(0);
-        let candidates = pool.get(s.ctx, "trgs.project.candidates", u64::from(most.max(1)) * 4);
+/// Bytes between two chunks' (workgroups, 1, 1, length) records.
+pub const WORK_STRIDE: u64 = 256;
+
+impl Candidates {
+    pub fn new(s: Stage<'_>, pool: &mut BufferPool, scene: &GpuScene, view: usize) -> Self {
+        let list = pool.get(
+            s.ctx,
+            &format!("trgs.project.candidates.v{view}"),
+            u64::from(scene.len()) * 4,
+        );
         let work = s.ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("trgs.project.work"),
-            size: 16,
+            label: Some(&format!("trgs.project.work.v{view}")),
+            size: scene.chunks().len().max(1) as u64 * WORK_STRIDE,
             usage: wgpu::BufferUsages::STORAGE
                 | wgpu::BufferUsages::INDIRECT
                 | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        Self { candidates, work }
+        Self { list, work }
+    }
+
+    /// The bindings of chunk `c` (first Gaussian `first`, `count` of them): its list and work.
+    pub fn chunk(&self, c: usize, first: u32, count: u32) -> [wgpu::BindingResource<'_>; 2] {
+        [
+            range(&self.list, u64::from(first) * 4, u64::from(count) * 4),
+            range(&self.work, c as u64 * WORK_STRIDE, 16),
+        ]
     }
 }
 
@@ -82,13 +97,13 @@ pub fn record(
     rec: &mut Recorder,
     scene: &GpuScene,
     base: &ProjectParams,
-    scratch: &Scratch,
+    candidates: &Candidates,
     projected: &wgpu::Buffer,
 ) {
     let (cull, k) = (&s.kernels.project_candidates, &s.kernels.project);
     let coeffs = u64::from(scene.sh_coeffs());
-    let list = scratch.candidates.as_entire_binding();
-    for (first, count) in scene.chunks() {
+    for (chunk, (first, count)) in scene.chunks().into_iter().enumerate() {
+        let [list, work] = candidates.chunk(chunk, first, count);
         let p = ProjectParams { count, sh_coeffs: scene.sh_coeffs(), ..*base };
         let block = gpu::params(s.ctx, "trgs.project.params", &p);
         let (f, c) = (u64::from(first), u64::from(count));
@@ -103,10 +118,11 @@ pub fn record(
                 range(&scene.populations, f * 4, c * 4),
                 out.clone(),
                 list.clone(),
-                scratch.work.as_entire_binding(),
+                work.clone(),
             ],
         );
-        rec.encoder.clear_buffer(&scratch.work, 0, None);
+        let at = chunk as u64 * WORK_STRIDE;
+        rec.encoder.clear_buffer(&candidates.work, at, Some(16));
         rec.dispatch("project", cull, &bind, grid_1d(count.div_ceil(256)));
         let bind = k.bind(
             s.ctx,
@@ -121,10 +137,10 @@ pub fn record(
                 range(&scene.log_reflections, f * 4, c * 4),
                 range(&scene.populations, f * 4, c * 4),
                 out,
-                list.clone(),
-                scratch.work.as_entire_binding(),
+                list,
+                work,
             ],
         );
-        rec.dispatch_indirect("project", k, &bind, &scratch.work, 0);
+        rec.dispatch_indirect("project", k, &bind, &candidates.work, at);
     }
 }

@@ -1,7 +1,8 @@
 //! Stage `project_bwd` (shaders/project_bwd.wgsl; twin `trgs_core::reference::project_bwd`):
 //! from one view's screen-space gradients to the Gaussians' parameters and to the view itself.
 use super::Stage;
-use crate::gpu::{self, Recorder, grid_1d, range};
+use super::project::{Candidates, WORK_STRIDE};
+use crate::gpu::{self, Recorder, range};
 use crate::layout::{PROJECTED_GRAD_FLOATS, ProjectParams, ProjectedGaussian};
 use crate::scene::{GpuScene, SceneGradBuffers};
 
@@ -17,13 +18,15 @@ pub fn record(
     base: &ProjectParams,
     mode: u32,
     projected: &wgpu::Buffer,
+    candidates: &Candidates,
     projected_grads: &wgpu::Buffer,
     out: &SceneGradBuffers,
     view_grads: wgpu::BindingResource<'_>,
 ) {
     let k = &s.kernels.project_bwd;
     let coeffs = u64::from(scene.sh_coeffs());
-    for (first, count) in scene.chunks() {
+    for (chunk, (first, count)) in scene.chunks().into_iter().enumerate() {
+        let [list, work] = candidates.chunk(chunk, first, count);
         let p = ProjectParams { count, sh_coeffs: scene.sh_coeffs(), bwd_mode: mode, ..*base };
         let block = gpu::params(s.ctx, "trgs.project_bwd.params", &p);
         let (f, c) = (u64::from(first), u64::from(count));
@@ -45,8 +48,11 @@ pub fn record(
                 range(&out.mask_logits, f * 4, c * 4),
                 range(&out.log_reflections, f * 4, c * 4),
                 view_grads.clone(),
+                list,
+                work,
             ],
         );
-        rec.dispatch("project_bwd", k, &bind, grid_1d(count.div_ceil(256)));
+        let at = chunk as u64 * WORK_STRIDE;
+        rec.dispatch_indirect("project_bwd", k, &bind, &candidates.work, at);
     }
 }
