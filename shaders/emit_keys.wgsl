@@ -3,7 +3,8 @@
 // after the view's `key_base`: every view of a frame writes into one list, sorted once. The
 // 64-bit key is split in two words: `keys_hi` the tile index, numbered from the view's
 // `tile_base` row by row within its tile limit, `keys_lo` the f32 bits of the (positive) depth,
-// which sort like the numbers.
+// which sort like the numbers. One thread per Gaussian of project's candidate list (dispatched
+// indirectly): no other Gaussian is visible.
 #include "shared/common.wgsl"
 #include "shared/tiles.wgsl"
 
@@ -13,13 +14,15 @@
 @group(0) @binding(3) var<storage, read_write> keys_hi: array<u32>;
 @group(0) @binding(4) var<storage, read_write> keys_lo: array<u32>;
 @group(0) @binding(5) var<storage, read_write> values: array<u32>;
+@group(0) @binding(6) var<storage, read> candidates: array<u32>;
+@group(0) @binding(7) var<storage, read> work: array<u32, 4>;
 
 @compute @workgroup_size(256)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let i = linear_index(gid, nwg, 256u);
-    if i >= tiles.count {
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= work[3] {
         return;
     }
+    let i = candidates[gid.x];
     let g = projected[i];
     if !is_visible(g) {
         return;

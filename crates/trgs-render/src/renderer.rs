@@ -163,7 +163,7 @@ impl Renderer {
             let candidates = project::Candidates::new(s, pool, scene, vi);
             project::record(s, &mut rec, scene, &pparams, &candidates, &projected);
             let tparams = tile_counts::params(&grid, &spec.limit);
-            tile_counts::record(s, &mut rec, scene, &tparams, &projected, &counts);
+            tile_counts::record(s, &mut rec, scene, &tparams, &projected, &candidates, &counts);
             let captured_counts = options.capture_intermediates.then(|| {
                 let c = pool.get(ctx, &format!("trgs.capture.counts.v{vi}"), n * 4);
                 rec.encoder.copy_buffer_to_buffer(&counts, 0, &c, 0, counts.size());
@@ -212,7 +212,8 @@ impl Renderer {
             values: pool.get(ctx, "trgs.emit_keys.values", bytes),
         };
         for v in &views {
-            emit_keys::record(s, &mut rec, scene, &v.tile_params, &v.projected, &v.offsets, &keys);
+            let (p, c) = (&v.projected, &v.candidates);
+            emit_keys::record(s, &mut rec, scene, &v.tile_params, p, c, &v.offsets, &keys);
         }
         let captured_keys = options.capture_intermediates.then(|| {
             let mut copy = |name: &str, src: &wgpu::Buffer, pool: &mut gpu::BufferPool| {

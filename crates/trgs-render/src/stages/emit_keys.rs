@@ -1,6 +1,7 @@
 //! Stage `emit_keys` (shaders/emit_keys.wgsl; twin `trgs_core::reference::emit_keys`).
 use super::Stage;
-use crate::gpu::{self, Recorder, grid_1d, range};
+use super::project::{Candidates, WORK_STRIDE};
+use crate::gpu::{self, Recorder, range};
 use crate::layout::{ProjectedGaussian, TileParams};
 use crate::scene::GpuScene;
 
@@ -20,11 +21,13 @@ pub fn record(
     scene: &GpuScene,
     base: &TileParams,
     projected: &wgpu::Buffer,
+    candidates: &Candidates,
     offsets: &wgpu::Buffer,
     keys: &Keys,
 ) {
     let k = &s.kernels.emit_keys;
-    for (first, count) in scene.chunks() {
+    for (chunk, (first, count)) in scene.chunks().into_iter().enumerate() {
+        let [list, work] = candidates.chunk(chunk, first, count);
         let p = TileParams { count, first, ..*base };
         let block = gpu::params(s.ctx, "trgs.emit_keys.params", &p);
         let (f, c) = (u64::from(first), u64::from(count));
@@ -37,8 +40,11 @@ pub fn record(
                 keys.hi.as_entire_binding(),
                 keys.lo.as_entire_binding(),
                 keys.values.as_entire_binding(),
+                list,
+                work,
             ],
         );
-        rec.dispatch("emit_keys", k, &bind, grid_1d(count.div_ceil(256)));
+        let at = chunk as u64 * WORK_STRIDE;
+        rec.dispatch_indirect("emit_keys", k, &bind, &candidates.work, at);
     }
 }

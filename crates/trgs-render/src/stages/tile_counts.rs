@@ -1,6 +1,7 @@
 //! Stage `tile_counts` (shaders/tile_counts.wgsl; twin `trgs_core::reference::tile_counts`).
 use super::Stage;
-use crate::gpu::{self, Recorder, grid_1d, range};
+use super::project::{Candidates, WORK_STRIDE};
+use crate::gpu::{self, Recorder, range};
 use crate::layout::{ProjectedGaussian, TileParams};
 use crate::scene::GpuScene;
 use trgs_core::reference::{TileGrid, TileRect};
@@ -25,10 +26,13 @@ pub fn record(
     scene: &GpuScene,
     base: &TileParams,
     projected: &wgpu::Buffer,
+    candidates: &Candidates,
     counts: &wgpu::Buffer,
 ) {
     let k = &s.kernels.tile_counts;
-    for (first, count) in scene.chunks() {
+    rec.encoder.clear_buffer(counts, 0, None);
+    for (chunk, (first, count)) in scene.chunks().into_iter().enumerate() {
+        let [list, work] = candidates.chunk(chunk, first, count);
         let p = TileParams { count, first, ..*base };
         let block = gpu::params(s.ctx, "trgs.tile_counts.params", &p);
         let (f, c) = (u64::from(first), u64::from(count));
@@ -38,8 +42,11 @@ pub fn record(
                 block.as_entire_binding(),
                 range(projected, f * PROJECTED, c * PROJECTED),
                 range(counts, f * 4, c * 4),
+                list,
+                work,
             ],
         );
-        rec.dispatch("tile_counts", k, &bind, grid_1d(count.div_ceil(256)));
+        let at = chunk as u64 * WORK_STRIDE;
+        rec.dispatch_indirect("tile_counts", k, &bind, &candidates.work, at);
     }
 }
