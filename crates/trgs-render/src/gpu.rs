@@ -247,18 +247,9 @@ impl Recorder {
         if groups.contains(&0) {
             return;
         }
-        let timestamp_writes = timestamps(&mut self.profiler, stage);
-        let mut pass = self.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(stage),
-            timestamp_writes,
-        });
-        pass.set_pipeline(&kernel.pipeline);
-        pass.set_bind_group(0, bind, &[]);
-        pass.dispatch_workgroups(groups[0], groups[1], groups[2]);
+        self.pass(stage, kernel, bind).dispatch_workgroups(groups[0], groups[1], groups[2]);
     }
 
-    /// Submit the recorded work and wait for it; with profiling, add this submission's stage
-    /// times. Returns a fresh encoder for what follows.
     /// Record one dispatch of `kernel` whose workgroup counts a kernel wrote into `args` at byte
     /// `offset` (three u32), in its own pass, labelled and timed as `stage`.
     pub fn dispatch_indirect(
@@ -269,6 +260,16 @@ impl Recorder {
         args: &wgpu::Buffer,
         offset: u64,
     ) {
+        self.pass(stage, kernel, bind).dispatch_workgroups_indirect(args, offset);
+    }
+
+    /// A new compute pass labelled and timed as `stage`, with `kernel` and `bind` set.
+    fn pass(
+        &mut self,
+        stage: &'static str,
+        kernel: &Kernel,
+        bind: &wgpu::BindGroup,
+    ) -> wgpu::ComputePass<'_> {
         let timestamp_writes = timestamps(&mut self.profiler, stage);
         let mut pass = self.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some(stage),
@@ -276,9 +277,11 @@ impl Recorder {
         });
         pass.set_pipeline(&kernel.pipeline);
         pass.set_bind_group(0, bind, &[]);
-        pass.dispatch_workgroups_indirect(args, offset);
+        pass
     }
 
+    /// Submit the recorded work and wait for it; with profiling, add this submission's stage
+    /// times. Returns a fresh encoder for what follows.
     pub fn submit_and_wait(&mut self, ctx: &GpuContext) {
         let resolve = self.profiler.as_ref().and_then(|p| {
             let n = p.labels.len() as u32 * 2;

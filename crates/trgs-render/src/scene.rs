@@ -185,15 +185,7 @@ pub struct SceneGradBuffers {
 impl SceneGradBuffers {
     /// Zero every gradient (the camera's project_bwd writes only the Gaussians it lists).
     pub(crate) fn clear(&self, encoder: &mut wgpu::CommandEncoder) {
-        for b in [
-            &self.means,
-            &self.rotations,
-            &self.log_scales,
-            &self.opacity_logits,
-            &self.sh,
-            &self.mask_logits,
-            &self.log_reflections,
-        ] {
+        for b in self.parameters() {
             encoder.clear_buffer(b, 0, None);
         }
     }
@@ -220,9 +212,7 @@ impl SceneGradBuffers {
     pub fn zeros(ctx: &GpuContext, scene: &GpuScene) -> Self {
         let g = Self::new(ctx, &mut gpu::BufferPool::default(), scene);
         let mut enc = ctx.device.create_command_encoder(&Default::default());
-        for b in g.parameters() {
-            enc.clear_buffer(b, 0, None);
-        }
+        g.clear(&mut enc);
         ctx.queue.submit([enc.finish()]);
         g
     }
