@@ -4,6 +4,7 @@ use crate::frame::{Frame, ViewBuffers};
 use crate::gpu::{self, Recorder};
 use crate::kernels::Kernels;
 use crate::layer_grads::LayerGrads;
+use crate::layout::TileParams;
 use crate::scene::GpuScene;
 use crate::stages::compose_bwd;
 use crate::stages::emit_keys::Keys;
@@ -199,8 +200,6 @@ impl Renderer {
         let (mut key_base, mut tile_base) = (0u32, 0u32);
         for (v, &total) in views.iter_mut().zip(&totals) {
             (v.key_base, v.tile_base, v.num_keys) = (key_base, tile_base, total);
-            v.tile_params.key_base = key_base;
-            v.tile_params.tile_base = tile_base;
             key_base += total;
             tile_base += v.limit.count();
         }
@@ -213,7 +212,8 @@ impl Renderer {
         };
         for v in &views {
             let (p, c) = (&v.projected, &v.candidates);
-            emit_keys::record(s, &mut rec, scene, &v.tile_params, p, c, &v.offsets, &keys);
+            let tp = TileParams { key_base: v.key_base, tile_base: v.tile_base, ..v.tile_params };
+            emit_keys::record(s, &mut rec, scene, &tp, p, c, &v.offsets, &keys);
         }
         let captured_keys = options.capture_intermediates.then(|| {
             let mut copy = |name: &str, src: &wgpu::Buffer, pool: &mut gpu::BufferPool| {
