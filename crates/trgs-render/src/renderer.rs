@@ -66,6 +66,36 @@ pub enum RenderError {
     Camera { name: String, source: CameraError },
     #[error("camera {name:?}: image size {width}x{height} must be at least 1x1")]
     EmptyImage { name: String, width: u32, height: u32 },
+    /// One of the frame's buffers would exceed what the adapter can bind at once.
+    #[error(
+        "camera {name:?}: the frame's {what} need {bytes} bytes in one binding, over the \
+         adapter's limit of {limit} bytes; render at a lower resolution or with fewer Gaussians"
+    )]
+    FrameTooLarge { name: String, what: &'static str, bytes: u64, limit: u64 },
+}
+
+/// The largest per-pixel buffer of a frame with `planes` reflection slots, in bytes per pixel
+/// (the layers are bound whole, unlike the scene's attributes, which are bound in chunks).
+fn bytes_per_pixel(planes: usize) -> u64 {
+    let slots = planes.max(1) as u64;
+    let state = std::mem::size_of::<crate::layout::RasterState>() as u64;
+    let reflection =
+        slots * (16u64).max(std::mem::size_of::<crate::layout::ReflectionState>() as u64);
+    state.max(16).max(reflection)
+}
+
+/// Fails when a buffer of `bytes` would not fit one binding.
+fn check_binding(
+    ctx: &GpuContext,
+    camera: &Camera,
+    what: &'static str,
+    bytes: u64,
+) -> Result<(), RenderError> {
+    let limit = ctx.device.limits().max_storage_buffer_binding_size;
+    if bytes > limit {
+        return Err(RenderError::FrameTooLarge { name: camera.name.clone(), what, bytes, limit });
+    }
+    Ok(())
 }
 
 /// Renders [`GpuScene`]s on one device. Compiles its pipelines once.
@@ -128,6 +158,7 @@ impl Renderer {
         let pixels = u64::from(k.width) * u64::from(k.height);
         let view = ViewTransform::from(&camera.pose);
         let planes = scene.planes();
+        check_binding(ctx, camera, "image layers", pixels * bytes_per_pixel(planes.len()))?;
         let mut specs = vec![ViewSpec { view, plane: None, limit: grid.full() }];
         for (i, plane) in planes.iter().enumerate() {
             if !options.enabled_planes.get(i).copied().unwrap_or(true) {
@@ -197,6 +228,9 @@ impl Renderer {
         // Phase 2: every view's keys into one list, one sort and one pass of tile ranges (a
         // view's tiles numbered after the previous view's: the camera's whole grid, then each
         // footprint); both rasterize passes; compose.
+        // Every view's keys share one list, bound whole: its size is the sum of the totals.
+        let all_keys: u64 = totals.iter().map(|&t| u64::from(t)).sum();
+        check_binding(ctx, camera, "tile keys (all views together)", all_keys * 4)?;
         let (mut key_base, mut tile_base) = (0u32, 0u32);
         for (v, &total) in views.iter_mut().zip(&totals) {
             (v.key_base, v.tile_base, v.num_keys) = (key_base, tile_base, total);

@@ -1,7 +1,10 @@
 //! Hard cases on the GPU path: outputs stay finite and bad input is refused before any kernel.
 use glam::DVec3;
 use trgs_core::fixtures::{RoomDensity, RoomSpec, SceneSpec, random_scene, room_scene};
-use trgs_core::scene::{Camera, Gaussians, Intrinsics, Material, Pose, ReflectionPlane};
+use trgs_core::reference::TILE_SIZE;
+use trgs_core::scene::{
+    Camera, Gaussians, Intrinsics, Material, Population, Pose, ReflectionPlane,
+};
 use trgs_render::{DeviceOptions, FrameImages, GpuContext, GpuScene, RenderOptions, Renderer};
 
 fn ctx() -> GpuContext {
@@ -135,4 +138,33 @@ fn half_a_million_gaussians_render() {
         (s.gaussians.sh.len() * 12) as f64 / 1048576.0
     );
     assert!(img.alpha.data.iter().filter(|&&a| a > 0.9).count() > 128 * 96 / 2);
+}
+
+#[test]
+fn frames_over_the_binding_limit_are_refused_with_a_clear_error() {
+    let ctx = GpuContext::new().unwrap_or_else(|e| panic!("{e}"));
+    let limit = ctx.device.limits().max_storage_buffer_binding_size;
+    let renderer = Renderer::new(&ctx);
+    let s = random_scene(&SceneSpec { planes: 0, gaussians: 1, ..SceneSpec::default() });
+    // An image whose per-pixel layers alone exceed one binding: refused before any kernel.
+    let side = ((limit / 16) as f64).sqrt() as u32 + 1;
+    let mut cam = s.camera.clone();
+    cam.intrinsics = Intrinsics::from_fov_x(1.0, side, side);
+    let scene = GpuScene::upload(&ctx, &s.gaussians.cast(), &[]).expect("valid");
+    let err = renderer.render(&scene, &cam, &RenderOptions::default()).expect_err("too large");
+    assert!(err.to_string().contains("image layers"), "{err}");
+    // A key list over the limit: Gaussians that each cover every tile of a 2048x2048 image.
+    let (w, h) = (2048u32, 2048u32);
+    let tiles = u64::from(w / TILE_SIZE) * u64::from(h / TILE_SIZE);
+    let n = (limit / 4 / tiles + 1) as usize;
+    let mut g = Gaussians::<f32>::empty(0);
+    for i in 0..n {
+        let mean = [0.0, 0.0, 5.0 + 1e-4 * i as f32];
+        g.push(mean, [1.0, 0.0, 0.0, 0.0], [3.0; 3], 4.0, &[[0.5; 3]], Population::Primary);
+    }
+    let scene = GpuScene::upload(&ctx, &g, &[]).expect("valid");
+    let cam = Camera::new("wide", Intrinsics::from_fov_x(1.0, w, h), Pose::default());
+    let err = renderer.render(&scene, &cam, &RenderOptions::default()).expect_err("too many keys");
+    let text = err.to_string();
+    assert!(text.contains("\"wide\"") && text.contains("tile keys"), "{text}");
 }
