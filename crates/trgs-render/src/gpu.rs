@@ -9,10 +9,12 @@ use wgpu::util::DeviceExt;
 /// The byte pattern fresh buffers get in poison mode: NaN as f32, 0xffffffff as u32.
 pub const POISON_BYTE: u8 = 0xff;
 
-/// Usage of every storage buffer: bound in kernels, copied to readback, cleared.
+/// Usage of every storage buffer: bound in kernels, copied to readback, cleared, and read as
+/// indirect dispatch arguments (the candidate lists' work records).
 pub const STORAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
     .union(wgpu::BufferUsages::COPY_SRC)
-    .union(wgpu::BufferUsages::COPY_DST);
+    .union(wgpu::BufferUsages::COPY_DST)
+    .union(wgpu::BufferUsages::INDIRECT);
 
 /// Bindings may not be empty nor smaller than one element of the largest struct (64 bytes):
 /// every size is at least this and a multiple of it.

@@ -71,14 +71,12 @@ impl Candidates {
             &format!("trgs.project.candidates.v{view}"),
             u64::from(scene.len()) * 4,
         );
-        let work = s.ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some(&format!("trgs.project.work.v{view}")),
-            size: scene.chunks().len().max(1) as u64 * WORK_STRIDE,
-            usage: wgpu::BufferUsages::STORAGE
-                | wgpu::BufferUsages::INDIRECT
-                | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        // Cleared chunk by chunk before its first kernel (see `record`).
+        let work = pool.get(
+            s.ctx,
+            &format!("trgs.project.work.v{view}"),
+            scene.chunks().len().max(1) as u64 * WORK_STRIDE,
+        );
         Self { list, work }
     }
 
