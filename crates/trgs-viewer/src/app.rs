@@ -550,6 +550,10 @@ impl eframe::App for ViewerApp {
             self.screenshot(&ctx, default_shot_path());
         }
         if let Some(done) = self.shot_result.lock().unwrap_or_else(|p| p.into_inner()).take() {
+            if let (Err(e), Some(_)) = (&done, &self.script.screenshot) {
+                *self.script.failure.lock().unwrap_or_else(|p| p.into_inner()) =
+                    Some(format!("screenshot: {e}"));
+            }
             self.message = Some(match done {
                 Ok(p) => (format!("screenshot saved to {}", p.display()), false),
                 Err(e) => (format!("screenshot: {e}"), true),

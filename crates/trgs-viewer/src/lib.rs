@@ -40,6 +40,9 @@ pub struct Script {
     pub frames: Option<u32>,
     /// Close the window when the above are done.
     pub exit: bool,
+    /// What went wrong in a scripted action (the screenshot could not be written): `run` returns
+    /// it as an error once the window is closed, so that a script sees a failing exit status.
+    pub failure: Arc<std::sync::Mutex<Option<String>>>,
 }
 
 #[derive(Debug)]
@@ -72,6 +75,7 @@ impl Default for ViewerOptions {
 
 /// Open the viewer window and run until it is closed.
 pub fn run(options: ViewerOptions) -> anyhow::Result<()> {
+    let failure = Arc::clone(&options.script.failure);
     let device_options = DeviceOptions::default();
     let setup = eframe::egui_wgpu::WgpuSetupCreateNew {
         instance_descriptor: wgpu::InstanceDescriptor {
@@ -115,5 +119,9 @@ pub fn run(options: ViewerOptions) -> anyhow::Result<()> {
         native,
         Box::new(|cc| Ok(Box::new(app::ViewerApp::new(cc, options)?))),
     )
-    .map_err(|e| anyhow::anyhow!("viewer: {e}"))
+    .map_err(|e| anyhow::anyhow!("viewer: {e}"))?;
+    match failure.lock().unwrap_or_else(|p| p.into_inner()).take() {
+        Some(e) => Err(anyhow::anyhow!("viewer: {e}")),
+        None => Ok(()),
+    }
 }

@@ -78,39 +78,51 @@ fn write_model(dir: &Path) {
     write_cameras_json(&dir.join("cameras.json"), &[scene.camera]).expect("cameras");
 }
 
-#[test]
-fn screenshot_scene_region_matches_the_offscreen_render() {
-    let Some(bin) = xvfb() else {
+/// Xvfb's binary, or None when the machine has none and the test may be skipped.
+fn xvfb_or_skip() -> Option<PathBuf> {
+    let bin = xvfb();
+    if bin.is_none() {
         assert!(
             !matches!(std::env::var("TRGS_REQUIRE_XVFB").as_deref(), Ok("1")),
             "TRGS_REQUIRE_XVFB=1 but there is no Xvfb on PATH (apt-get install xvfb)"
         );
         eprintln!("SKIPPED: no Xvfb on PATH (apt-get install xvfb); the viewer was not tested");
-        return;
-    };
-    let dir = trgs_core::scratch::ScratchDir::new("viewer-test");
-    write_model(&dir);
-    let shot = dir.join("shot.png");
-    let (display, _xvfb) = start_xvfb(&bin);
+    }
+    bin
+}
+
+/// Run the viewer on the model in `dir` at its first view with a scripted screenshot to `shot`
+/// under a fresh Xvfb; returns its exit status.
+fn scripted_screenshot(bin: &Path, dir: &Path, shot: &Path) -> std::process::ExitStatus {
+    let (display, _xvfb) = start_xvfb(bin);
     let mut viewer = Reaper(
         Command::new(env!("CARGO_BIN_EXE_viewer"))
-            .arg(&dir)
+            .arg(dir)
             .args(["--view", "0", "--no-overlays", "--size", "640x480", "--exit"])
             .arg("--screenshot")
-            .arg(&shot)
+            .arg(shot)
             .env("DISPLAY", &display)
             .env_remove("WAYLAND_DISPLAY")
             .spawn()
             .expect("viewer starts"),
     );
     let t = Instant::now();
-    let status = loop {
+    loop {
         if let Some(s) = viewer.0.try_wait().expect("viewer status") {
-            break s;
+            return s;
         }
         assert!(t.elapsed() < Duration::from_secs(600), "viewer did not exit within 10 minutes");
         std::thread::sleep(Duration::from_millis(100));
-    };
+    }
+}
+
+#[test]
+fn screenshot_scene_region_matches_the_offscreen_render() {
+    let Some(bin) = xvfb_or_skip() else { return };
+    let dir = trgs_core::scratch::ScratchDir::new("viewer-test");
+    write_model(&dir);
+    let shot = dir.join("shot.png");
+    let status = scripted_screenshot(&bin, &dir, &shot);
     assert!(status.success(), "viewer exited with {status}");
 
     let sidecar: serde_json::Value =
@@ -148,4 +160,9 @@ fn screenshot_scene_region_matches_the_offscreen_render() {
     assert!(mad <= 1.0 / 255.0, "mean absolute difference {mad} > 1/255");
     // The region is not blank: the model is in view.
     assert!(offscreen.iter().any(|&v| v > 20), "offscreen render is black");
+
+    // A screenshot that cannot be written (its folder would be a file) fails the scripted run
+    // (same test: one Xvfb at a time).
+    let status = scripted_screenshot(&bin, &dir, &dir.join("model.ply").join("shot.png"));
+    assert!(!status.success(), "the viewer exited with {status} though the screenshot failed");
 }
