@@ -448,13 +448,21 @@ fn parse(bytes: &[u8]) -> Result<(Gaussians<f32>, Vec<ReflectionPlane>), String>
     for i in 0..n {
         g.means[i] = [positions[3 * i], positions[3 * i + 1], positions[3 * i + 2]];
         let q = &rot[4 * i..4 * i + 4];
+        let norm2: f32 = q.iter().map(|v| v * v).sum();
+        if !(norm2.is_finite() && norm2 > 0.0) {
+            return Err(format!(
+                "Gaussian {i}: rotation {q:?} (expected a finite, non-zero quaternion)"
+            ));
+        }
         g.rotations[i] = [q[3], q[0], q[1], q[2]];
         for a in 0..3 {
             let s = scale[3 * i + a];
-            if s.is_nan() || s < 0.0 {
-                return Err(format!("Gaussian {i}: scale {s} (scales must not be negative)"));
+            if !(s >= 0.0 && s.is_finite()) {
+                return Err(format!("Gaussian {i}: scale {s} (expected finite and not negative)"));
             }
-            g.log_scales[i][a] = s.ln();
+            // A zero scale (a flat splat, or one below f32's range written out as 0) becomes the
+            // smallest normal f32: ln(0) would be an infinite log-scale, which the renderer refuses.
+            g.log_scales[i][a] = s.max(f32::MIN_POSITIVE).ln();
         }
         let o = opacity[i];
         if !(0.0..=1.0).contains(&o) {

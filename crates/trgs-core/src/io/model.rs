@@ -57,6 +57,7 @@ pub fn find_ply(path: &Path) -> Result<PathBuf, FormatError> {
 pub fn load_model(path: &Path, planes: Option<&Path>) -> Result<Model, FormatError> {
     if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("glb")) {
         let (gaussians, mut inside) = read_glb(path)?;
+        checked(path, &gaussians)?;
         if let Some(p) = planes {
             inside = load_model_planes(p)?;
         }
@@ -64,6 +65,7 @@ pub fn load_model(path: &Path, planes: Option<&Path>) -> Result<Model, FormatErr
     }
     let ply = find_ply(path)?;
     let gaussians = read_ply(&ply)?;
+    checked(&ply, &gaussians)?;
     let planes_path = match planes {
         Some(p) => Some(p.to_path_buf()),
         None => [ply.with_file_name("planes.json"), path.join("planes.json")]
@@ -75,6 +77,12 @@ pub fn load_model(path: &Path, planes: Option<&Path>) -> Result<Model, FormatErr
         None => Vec::new(),
     };
     Ok(Model { gaussians, planes, ply })
+}
+
+/// What the renderer would refuse at upload (a NaN, a zero quaternion), as an error that names
+/// the file, when it is read.
+fn checked(path: &Path, g: &crate::scene::Gaussians<f32>) -> Result<(), FormatError> {
+    crate::scene::validate_gaussians(g).map_err(|e| FormatError::new(path, e.to_string()))
 }
 
 /// The trained planes of a planes.json (every plane must have its geometry).
@@ -96,4 +104,35 @@ fn load_model_planes(path: &Path) -> Result<Vec<ReflectionPlane>, FormatError> {
         }
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::write_ply;
+    use crate::scene::{Gaussians, Population};
+
+    #[test]
+    fn a_model_the_renderer_would_refuse_is_an_error_naming_its_file() {
+        let dir = crate::scratch::ScratchDir::new("model-checked");
+        let mut g = Gaussians::<f32>::empty(0);
+        for i in 0..3 {
+            g.push(
+                [i as f32, 0.0, 2.0],
+                [1.0, 0.0, 0.0, 0.0],
+                [-2.0; 3],
+                0.0,
+                &[],
+                Population::Primary,
+            );
+        }
+        let ply = dir.join("model.ply");
+        write_ply(&ply, &g).expect("write");
+        assert_eq!(load_model(&dir, None).expect("valid").gaussians.len(), 3);
+        g.rotations[1] = [0.0; 4];
+        write_ply(&ply, &g).expect("write");
+        let err = load_model(&dir, None).expect_err("zero quaternion").to_string();
+        assert!(err.contains("model.ply") && err.contains("Gaussian 1"), "{err}");
+        assert!(err.contains("zero quaternion"), "{err}");
+    }
 }

@@ -69,6 +69,16 @@ fn rebuild(bytes: &[u8], edit: impl FnOnce(&mut Value)) -> Vec<u8> {
     out
 }
 
+/// Where the first value of a mesh attribute lies in the whole GLB's bytes.
+fn attribute_offset(bytes: &[u8], attribute: &str) -> usize {
+    let (doc, bin) = split(bytes);
+    let acc = &doc["meshes"][0]["primitives"][0]["attributes"][attribute];
+    let acc = &doc["accessors"][acc.as_u64().expect("accessor") as usize];
+    let view = &doc["bufferViews"][acc["bufferView"].as_u64().expect("view") as usize];
+    let in_view = acc["byteOffset"].as_u64().unwrap_or(0);
+    bytes.len() - bin.len() + (view["byteOffset"].as_u64().unwrap_or(0) + in_view) as usize
+}
+
 fn unit(q: [f32; 4]) -> [f32; 4] {
     let n = q.iter().map(|v| v * v).sum::<f32>().sqrt();
     let s = if q[0] < 0.0 { -1.0 } else { 1.0 };
@@ -286,16 +296,30 @@ fn malformed_files_get_named_errors() {
         let err = parse_glb(&bytes, path).expect_err(expected);
         assert_mentions(&err, &["scene/model.glb", expected]);
     }
-    // A population other than 0 (primary) or 1 (glass), written into the BIN chunk in place.
-    let (doc, bin) = split(&good);
-    let acc = &doc["meshes"][0]["primitives"][0]["attributes"]["_TRGS_POPULATION"];
-    let acc = &doc["accessors"][acc.as_u64().expect("population accessor") as usize];
-    let view = &doc["bufferViews"][acc["bufferView"].as_u64().expect("view") as usize];
-    let at = good.len() - bin.len() + view["byteOffset"].as_u64().unwrap_or(0) as usize;
-    let mut bad = good.clone();
-    bad[at..at + 4].copy_from_slice(&2.0f32.to_le_bytes());
-    let err = parse_glb(&bad, path).expect_err("population 2");
-    assert_mentions(&err, &["scene/model.glb", "Gaussian 0: _TRGS_POPULATION 2, expected 0 or 1"]);
+    // Values written into the BIN chunk in place: a population other than 0 (primary) or 1
+    // (glass), a zero quaternion, a negative or infinite scale.
+    let with = |attribute: &str, values: &[f32]| {
+        let mut bad = good.clone();
+        let at = attribute_offset(&good, attribute);
+        for (k, v) in values.iter().enumerate() {
+            bad[at + 4 * k..at + 4 * k + 4].copy_from_slice(&v.to_le_bytes());
+        }
+        bad
+    };
+    let cases = [
+        ("_TRGS_POPULATION", vec![2.0], "Gaussian 0: _TRGS_POPULATION 2, expected 0 or 1"),
+        ("KHR_gaussian_splatting:ROTATION", vec![0.0; 4], "Gaussian 0: rotation [0.0, 0.0"),
+        ("KHR_gaussian_splatting:SCALE", vec![-1.0], "Gaussian 0: scale -1"),
+        ("KHR_gaussian_splatting:SCALE", vec![f32::INFINITY], "Gaussian 0: scale inf"),
+    ];
+    for (attribute, values, expected) in cases {
+        let err = parse_glb(&with(attribute, &values), path).expect_err(expected);
+        assert_mentions(&err, &["scene/model.glb", expected]);
+    }
+    // A zero scale (a flat splat) reads as the smallest normal scale, not as ln(0).
+    let (flat, _) = parse_glb(&with("KHR_gaussian_splatting:SCALE", &[0.0]), path).expect("flat");
+    assert_eq!(flat.log_scales[0][0], f32::MIN_POSITIVE.ln());
+    assert!(flat.log_scales.iter().flatten().all(|v| v.is_finite()));
     let empty = Gaussians::<f32>::zeros(0, 0);
     assert!(encode_glb(&empty, &[]).is_err(), "a point primitive needs a point");
 }
