@@ -41,8 +41,10 @@ fn main() -> Result<()> {
         Some("glb") => write_glb(out, &m.gaussians, &m.planes)?,
         Some("ply") => {
             write_ply(out, &m.gaussians)?;
-            if !m.planes.is_empty() {
-                let json = out.with_file_name("planes.json");
+            // A planes.json already beside OUT would be read as this model's planes: a model
+            // without planes overwrites it with an empty list rather than inherit stale ones.
+            let json = out.with_file_name("planes.json");
+            if !m.planes.is_empty() || json.exists() {
                 write_planes_json(&json, &m.planes)?;
             }
         }
@@ -54,7 +56,10 @@ fn main() -> Result<()> {
         m.gaussians.sh_degree,
         m.planes.len(),
         m.ply.display(),
-        display_with_planes(out, !m.planes.is_empty())
+        display_with_planes(
+            out,
+            !m.planes.is_empty() || out.with_file_name("planes.json").exists()
+        )
     );
     Ok(())
 }
