@@ -6,7 +6,9 @@
 //!   dL/d(D_t, V, M);
 //! - stage `loss_sums`: their per-pixel values summed over strips of pixels.
 //!
-//! The first two have their f64 twins of the same name in `trgs_core::reference`. A view's target
+//! The first two have their f64 twins of the same name in `trgs_core::reference`; `loss_sums` is a
+//! plain sum, checked through the loss values those twins return (tests/losses.rs, at sizes with
+//! one and with several workgroups of strips). A view's target
 //! image and glass labels are uploaded once ([`GpuTarget`]) and stay on the GPU; only the strips'
 //! sums (32 bytes per strip of LOSS_STRIP pixels: 32 KB at 256x256) come back, for the step's
 //! statistics.
