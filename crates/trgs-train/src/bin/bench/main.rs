@@ -142,7 +142,7 @@ struct PlaneCost {
     with_ms: f64,
     ratio: f64,
     pairs: usize,
-    /// Median GPU ms per stage, without and with the plane.
+    /// Median GPU ms per stage, without and with the plane (profiled frames alternate too).
     stages: Vec<(&'static str, f64, f64)>,
 }
 
@@ -155,18 +155,39 @@ fn stage_medians(
     reps: usize,
     frame: &mut Frame,
 ) -> Result<Vec<(&'static str, f64)>> {
-    let profiled = RenderOptions { profile: true, ..options.clone() };
-    let mut samples: Vec<(&'static str, Vec<f64>)> = Vec::new();
-    for _ in 0..reps {
-        renderer.render_into(scene, camera, &profiled, frame)?;
-        for &(name, ms) in frame.stage_times().unwrap_or_default() {
-            match samples.iter_mut().find(|s| s.0 == name) {
-                Some(s) => s.1.push(ms),
-                None => samples.push((name, vec![ms])),
+    let mut all = stage_medians_alternating(renderer, scene, camera, &[options], reps, frame)?;
+    Ok(all.pop().unwrap_or_default())
+}
+
+/// Per-stage medians of each of `options`, profiled in turns (each rep renders every option once,
+/// starting from a different one each time), so that the machine's drift hits all alike.
+fn stage_medians_alternating(
+    renderer: &Renderer,
+    scene: &GpuScene,
+    camera: &trgs_core::scene::Camera,
+    options: &[&RenderOptions],
+    reps: usize,
+    frame: &mut Frame,
+) -> Result<Vec<Vec<(&'static str, f64)>>> {
+    type Samples = Vec<(&'static str, Vec<f64>)>;
+    let mut samples: Vec<Samples> = vec![Vec::new(); options.len()];
+    for rep in 0..reps {
+        for k in 0..options.len() {
+            let which = (rep + k) % options.len();
+            let profiled = RenderOptions { profile: true, ..options[which].clone() };
+            renderer.render_into(scene, camera, &profiled, frame)?;
+            for &(name, ms) in frame.stage_times().unwrap_or_default() {
+                match samples[which].iter_mut().find(|s| s.0 == name) {
+                    Some(s) => s.1.push(ms),
+                    None => samples[which].push((name, vec![ms])),
+                }
             }
         }
     }
-    Ok(samples.into_iter().map(|(n, v)| (n, median(v))).collect())
+    Ok(samples
+        .into_iter()
+        .map(|per| per.into_iter().map(|(n, v)| (n, median(v))).collect())
+        .collect())
 }
 
 /// The room at 256x192 with 100k Gaussians and SH degree 3: the configuration of the plane-cost,
@@ -204,8 +225,9 @@ fn plane_cost(
         with.push(t[1]);
         ratios.push(t[1] / t[0]);
     }
-    let base = stage_medians(renderer, &scene, &camera, &off, pairs, &mut frame)?;
-    let plane = stage_medians(renderer, &scene, &camera, &on, pairs, &mut frame)?;
+    let medians =
+        stage_medians_alternating(renderer, &scene, &camera, &[&off, &on], pairs, &mut frame)?;
+    let (base, plane) = (&medians[0], &medians[1]);
     let stages = plane
         .iter()
         .map(|&(n, w)| (n, base.iter().find(|b| b.0 == n).map_or(0.0, |b| b.1), w))
