@@ -61,25 +61,36 @@ impl DensifyStats {
         Self { grad_sum: vec![0.0; n], count: vec![0; n], max_radius: vec![0.0; n] }
     }
 
-    /// Add one view's screen-space gradients (the camera's pass) of an image `width x height`.
+    /// Add one step's screen-space gradients of an image `width x height`: the camera's pass, then
+    /// any mirrored passes (whose images are the camera's). A Gaussian seen in any pass counts as
+    /// one observation whose gradient is the sum of its passes' norms, as its mean's gradient is
+    /// the sum of theirs: averaged as separate views, the faint reflection would dilute what the
+    /// camera's pass measures, and a surface seen mostly in a reflection (the room behind the
+    /// cameras) would be densified only from the few views that see it directly.
     pub fn add(
         &mut self,
-        projected: &[ProjectedGaussian],
-        grads: &[[f32; PROJECTED_GRAD_FLOATS as usize]],
+        passes: &[(Vec<ProjectedGaussian>, Vec<[f32; PROJECTED_GRAD_FLOATS as usize]>)],
         width: u32,
         height: u32,
     ) {
         let (hw, hh) = (0.5 * f64::from(width), 0.5 * f64::from(height));
-        for (i, (p, g)) in projected.iter().zip(grads).enumerate().take(self.count.len()) {
-            if p.flags & FLAG_VISIBLE == 0 {
-                continue;
+        for i in 0..self.count.len() {
+            let mut seen = false;
+            for (projected, grads) in passes {
+                let (Some(p), Some(g)) = (projected.get(i), grads.get(i)) else { continue };
+                if p.flags & FLAG_VISIBLE == 0 {
+                    continue;
+                }
+                seen = true;
+                // 3DGS measures the gradient in NDC: d/d(ndc) = d/d(pixel) * size / 2.
+                let (gx, gy) = (f64::from(g[0]) * hw, f64::from(g[1]) * hh);
+                self.grad_sum[i] += (gx * gx + gy * gy).sqrt();
+                let r = f64::from(p.extent[0].max(p.extent[1]));
+                self.max_radius[i] = self.max_radius[i].max(r);
             }
-            // 3DGS measures the gradient in NDC: d/d(ndc) = d/d(pixel) * size / 2.
-            let (gx, gy) = (f64::from(g[0]) * hw, f64::from(g[1]) * hh);
-            self.grad_sum[i] += (gx * gx + gy * gy).sqrt();
-            self.count[i] += 1;
-            let r = f64::from(p.extent[0].max(p.extent[1]));
-            self.max_radius[i] = self.max_radius[i].max(r);
+            if seen {
+                self.count[i] += 1;
+            }
         }
     }
 }
@@ -263,6 +274,36 @@ mod tests {
         let m = (0..7).map(|a| vec![1.0; n * w[a]]).collect();
         let v = (0..7).map(|a| vec![2.0; n * w[a]]).collect();
         TrainState { gaussians: g, m, v }
+    }
+
+    #[test]
+    fn a_step_is_one_observation_summed_over_its_passes() {
+        let visible = |on: bool, extent: f32| ProjectedGaussian {
+            flags: if on { FLAG_VISIBLE } else { 0 },
+            extent: [extent, extent],
+            ..ProjectedGaussian::default()
+        };
+        let grad = |x: f32| {
+            let mut g = [0.0f32; PROJECTED_GRAD_FLOATS as usize];
+            g[0] = x;
+            g
+        };
+        // Gaussian 0 in both passes, 1 only in the mirrored one, 2 in neither.
+        let camera = (
+            vec![visible(true, 2.0), visible(false, 0.0), visible(false, 0.0)],
+            vec![grad(0.2), grad(0.0), grad(0.0)],
+        );
+        let mirrored = (
+            vec![visible(true, 5.0), visible(true, 3.0), visible(false, 0.0)],
+            vec![grad(0.1), grad(0.4), grad(9.0)],
+        );
+        let mut stats = DensifyStats::new(3);
+        stats.add(&[camera, mirrored], 2, 2);
+        assert_eq!(stats.count, vec![1, 1, 0]);
+        // NDC scale: half the width, 1 here.
+        assert!((stats.grad_sum[0] - 0.3).abs() < 1e-7 && (stats.grad_sum[1] - 0.4).abs() < 1e-7);
+        assert_eq!(stats.grad_sum[2], 0.0);
+        assert_eq!(stats.max_radius, vec![5.0, 3.0, 0.0]);
     }
 
     #[test]

@@ -430,9 +430,19 @@ impl Trainer {
         if let Some((settings, stats)) = &mut self.densify
             && t <= settings.until
         {
-            let projected = self.frame.read_projected(ctx, 0).unwrap_or_default();
-            let grads = g.read_projected_grads(ctx, 0).unwrap_or_default();
-            stats.add(&projected, &grads, self.frame.width(), self.frame.height());
+            // The camera's pass, and in the joint stage each plane's mirrored pass too (see
+            // `DensifyStats::add`). In stage 2 the reflection's gradient does not reach the
+            // Gaussians: its passes hold zeros.
+            let views = if stage == Stage::Joint { self.frame.views().len() } else { 1 };
+            let passes: Vec<_> = (0..views)
+                .map(|vi| {
+                    (
+                        self.frame.read_projected(ctx, vi).unwrap_or_default(),
+                        g.read_projected_grads(ctx, vi).unwrap_or_default(),
+                    )
+                })
+                .collect();
+            stats.add(&passes, self.frame.width(), self.frame.height());
         }
         rec.submit_and_wait(ctx);
         self.step_planes(&g.planes, t)?;
