@@ -1,14 +1,31 @@
 //! The Gaussians training starts from, as 3DGS makes them: one per sparse point, coloured by the
 //! point (SH DC; higher bands zero), isotropic with the scale of the root mean squared distance to
-//! its three nearest neighbours, identity rotation, opacity 0.1. Without points (transforms.json
-//! scenes) the points are drawn uniformly in a box around the cameras, with random colours.
+//! its three nearest neighbours, identity rotation, opacity 0.1. 3DGS-MCMC starts from the same
+//! points at opacity 0.5 and a tenth of that scale ([`InitialShape::MCMC`]). Without points
+//! (transforms.json scenes) the points are drawn uniformly in a box around the cameras, with
+//! random colours.
 use glam::DVec3;
 use trgs_core::rng::Rng;
 use trgs_core::scene::{Gaussians, Population};
 use trgs_core::sh::C0;
 
-/// Opacity of every initial Gaussian (3DGS: inverse_sigmoid(0.1)).
-pub const INITIAL_OPACITY: f64 = 0.1;
+/// The opacity and size of the initial Gaussians, which the densification strategy's paper sets.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct InitialShape {
+    pub opacity: f64,
+    /// Scale as a multiple of the root mean squared distance to the three nearest points.
+    pub scale_factor: f64,
+}
+
+impl InitialShape {
+    /// 3DGS: `inverse_sigmoid(0.1)` and the neighbour distance.
+    pub const CLASSIC: Self = Self { opacity: 0.1, scale_factor: 1.0 };
+    /// 3DGS-MCMC (its `create_from_pcd`): opacity 0.5 and a tenth of the neighbour distance. Its
+    /// growth copies Gaussians in proportion to opacity and splits the opacity among the copies;
+    /// from 0.1 a short run's Gaussians stayed semi-transparent (median opacity 0.11 after 600
+    /// steps, against 0.31 with classic densification).
+    pub const MCMC: Self = Self { opacity: 0.5, scale_factor: 1.0 };
+}
 
 /// A point with its colour in [0, 1].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -32,14 +49,19 @@ pub fn random_points(count: usize, lo: DVec3, hi: DVec3, rng: &mut Rng) -> Vec<S
 }
 
 /// One primary Gaussian per point (see the module text).
-pub fn gaussians_from_points(points: &[SeedPoint], sh_degree: u32) -> Gaussians<f32> {
+pub fn gaussians_from_points(
+    points: &[SeedPoint],
+    sh_degree: u32,
+    shape: InitialShape,
+) -> Gaussians<f32> {
     let mut g = Gaussians::<f32>::empty(sh_degree);
     let positions: Vec<DVec3> = points.iter().map(|p| p.position).collect();
     let dist2 = mean_sq_distance_to_neighbours(&positions, 3);
     let coeffs = g.sh_coeffs();
-    let logit = (INITIAL_OPACITY / (1.0 - INITIAL_OPACITY)).ln() as f32;
+    let logit = (shape.opacity / (1.0 - shape.opacity)).ln() as f32;
+    let ln_factor = shape.scale_factor.ln();
     for (p, d2) in points.iter().zip(dist2) {
-        let log_scale = (0.5 * d2.max(1e-14).ln()) as f32;
+        let log_scale = (0.5 * d2.max(1e-14).ln() + ln_factor) as f32;
         let mut sh = vec![[0.0f32; 3]; coeffs];
         sh[0] = p.color.map(|c| ((c - 0.5) / C0) as f32);
         g.means.push(p.position.to_array().map(|v| v as f32));
@@ -182,7 +204,7 @@ mod tests {
                 color: [1.0, 0.5, 0.0],
             })
             .collect();
-        let g = gaussians_from_points(&pts, 1);
+        let g = gaussians_from_points(&pts, 1, InitialShape::CLASSIC);
         assert_eq!(g.len(), 4);
         assert_eq!(g.sh.len(), 16);
         // DC back to colour: 0.5 + C0 * dc.
@@ -191,5 +213,11 @@ mod tests {
         // Point 0's neighbours at 1, 2, 3: mean squared distance 14/3.
         assert!((f64::from(g.log_scales[0][0]) - 0.5 * (14.0f64 / 3.0).ln()).abs() < 1e-6);
         assert_eq!(g.opacity_logits[0], (0.1f64 / 0.9).ln() as f32);
+        // MCMC's shape: opacity 0.5 (logit 0), its scale factor.
+        let m = gaussians_from_points(&pts, 1, InitialShape::MCMC);
+        assert_eq!(m.opacity_logits[0], 0.0);
+        let ln_factor = f64::from(m.log_scales[0][0] - g.log_scales[0][0]);
+        let want = InitialShape::MCMC.scale_factor.ln();
+        assert!((ln_factor - want).abs() < 1e-6, "{ln_factor} vs {want}");
     }
 }

@@ -6,7 +6,7 @@ use trgs_core::synthetic::{SyntheticConfig, generate, write_dataset};
 use trgs_render::{GpuContext, Layer};
 use trgs_train::data::{self, Resolution};
 use trgs_train::densify::ClassicSettings;
-use trgs_train::init::{SeedPoint, gaussians_from_points};
+use trgs_train::init::{InitialShape, SeedPoint, gaussians_from_points};
 use trgs_train::plane_init::{PlaneInitSettings, initialise_planes};
 use trgs_train::settings::TrainSettings;
 use trgs_train::trainer::Trainer;
@@ -30,7 +30,7 @@ fn small_scene_trains_and_finds_its_plane() {
     assert_eq!(data.materials.len(), 1, "one glass label");
     let seeds: Vec<SeedPoint> =
         data.points.iter().map(|&(position, color)| SeedPoint { position, color }).collect();
-    let gaussians = gaussians_from_points(&seeds, 1);
+    let gaussians = gaussians_from_points(&seeds, 1, InitialShape::CLASSIC);
     let ctx = GpuContext::new().expect("adapter");
     let iterations = 150;
     let mut settings = TrainSettings::scaled(iterations);

@@ -19,7 +19,7 @@ use trgs_train::eval::{
     Evaluation, Renderable, TruthComparison, compare_with_truth, evaluate, render_fps,
     write_renders,
 };
-use trgs_train::init::{SeedPoint, gaussians_from_points, random_points};
+use trgs_train::init::{InitialShape, SeedPoint, gaussians_from_points, random_points};
 use trgs_train::mcmc::McmcSettings;
 use trgs_train::plane_init::{PlaneInitSettings, initialise_planes};
 use trgs_train::trainer::{StepTimes, Trainer};
@@ -225,7 +225,8 @@ fn train(
             } else {
                 data.points.iter().map(|&(position, color)| SeedPoint { position, color }).collect()
             };
-            let gaussians = gaussians_from_points(&seeds, args.sh_degree);
+            let shape = if mcmc.is_some() { InitialShape::MCMC } else { InitialShape::CLASSIC };
+            let gaussians = gaussians_from_points(&seeds, args.sh_degree, shape);
             let mut trainer = Trainer::new(&ctx, &gaussians, &[], settings, data.extent)?;
             if let Some(d) = densify {
                 trainer.enable_densification(d);
