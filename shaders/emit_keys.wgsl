@@ -1,41 +1,39 @@
-// Stage `emit_keys` (twin: trgs_core::reference::emit_keys): one (tile, depth) key per Gaussian
-// and touched tile, written from the Gaussian's offset (the exclusive prefix sum of the counts)
-// after the view's `key_base`: every view of a frame writes into one list, sorted once. The
-// 64-bit key is split in two words: `keys_hi` the tile index, numbered from the view's
-// `tile_base` row by row within its tile limit, `keys_lo` the f32 bits of the (positive) depth,
-// which sort like the numbers. One thread per Gaussian of project's candidate list (dispatched
-// indirectly): no other Gaussian is visible.
+// Stage `emit_keys` (twin: trgs_core::reference::emit_keys): one key per entry and touched tile,
+// the tile's index in the key list that every view shares (a view's tiles numbered from its
+// `tile_base`, row by row within its limit), with the Gaussian's index as the value. One thread
+// per entry of the depth order, over every view at once, writing from the entry's offset (the
+// exclusive scan of the counts in that order): the list comes out front to back, so `sort`
+// orders it by tile alone and every tile's list stays front to back.
 #include "shared/common.wgsl"
-#include "shared/tiles.wgsl"
 
-@group(0) @binding(0) var<storage, read> tiles: TileParams;
-@group(0) @binding(1) var<storage, read> projected: array<ProjectedGaussian>;
-@group(0) @binding(2) var<storage, read> offsets: array<u32>;
-@group(0) @binding(3) var<storage, read_write> keys_hi: array<u32>;
-@group(0) @binding(4) var<storage, read_write> keys_lo: array<u32>;
-@group(0) @binding(5) var<storage, read_write> values: array<u32>;
-@group(0) @binding(6) var<storage, read> candidates: array<u32>;
-@group(0) @binding(7) var<storage, read> work: array<u32, 4>;
+@group(0) @binding(0) var<storage, read> params: EmitParams;
+@group(0) @binding(1) var<storage, read> order: array<u32>;
+@group(0) @binding(2) var<storage, read> rects: array<vec2<u32>>;
+@group(0) @binding(3) var<storage, read> offsets: array<u32>;
+@group(0) @binding(4) var<storage, read> views: array<ViewTiles>;
+@group(0) @binding(5) var<storage, read_write> keys: array<u32>;
+@group(0) @binding(6) var<storage, read_write> values: array<u32>;
 
 @compute @workgroup_size(256)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    if gid.x >= work[3] {
+fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let k = linear_index(gid, nwg, 256u);
+    if k >= params.entries {
         return;
     }
-    let i = candidates[gid.x];
-    let g = projected[i];
-    if !is_visible(g) {
-        return;
-    }
-    let r = tile_rect(g, tiles);
-    let depth_bits = bitcast<u32>(g.color.w);
-    var slot = tiles.key_base + offsets[i];
-    let row = tiles.limit.z - tiles.limit.x;
-    for (var ty = r.y; ty < r.w; ty++) {
-        for (var tx = r.x; tx < r.z; tx++) {
-            keys_hi[slot] = tiles.tile_base + (ty - tiles.limit.y) * row + (tx - tiles.limit.x);
-            keys_lo[slot] = depth_bits;
-            values[slot] = tiles.first + i;
+    let entry = order[k];
+    let view = entry / params.gaussians;
+    let gaussian = entry - view * params.gaussians;
+    let packed = rects[entry];
+    let x0 = packed.x & 0xffffu;
+    let y0 = packed.x >> 16u;
+    let x1 = packed.y & 0xffffu;
+    let y1 = packed.y >> 16u;
+    let t = views[view];
+    var slot = offsets[k];
+    for (var ty = y0; ty < y1; ty++) {
+        for (var tx = x0; tx < x1; tx++) {
+            keys[slot] = t.tile_base + (ty - t.y0) * t.row + (tx - t.x0);
+            values[slot] = gaussian;
             slot++;
         }
     }

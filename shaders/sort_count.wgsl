@@ -1,4 +1,4 @@
-// Stage `sort` (twin: trgs_core::reference::sort_keys), digit histogram of one LSD radix pass:
+// Stage `sort` (twins: trgs_core::reference::sort_keys, depth_order), digit histogram of one LSD radix pass:
 // for each block of SORT_BLOCK keys, how many have each 4-bit digit. The histogram is stored
 // digit-major (`hist[digit * num_blocks + block]`) so that its exclusive scan is every block's
 // first output slot per digit.
@@ -6,8 +6,8 @@
 #include "shared/sort_digit.wgsl"
 
 @group(0) @binding(0) var<storage, read> params: SortParams;
-@group(0) @binding(1) var<storage, read> keys_hi: array<u32>;
-@group(0) @binding(2) var<storage, read> keys_lo: array<u32>;
+@group(0) @binding(1) var<storage, read> keys: array<u32>;
+@group(0) @binding(2) var<storage, read> values: array<u32>;
 @group(0) @binding(3) var<storage, read_write> hist: array<u32>;
 
 var<workgroup> counts: array<atomic<u32>, 16>;
@@ -19,6 +19,14 @@ fn main(
     @builtin(num_workgroups) nwg: vec3<u32>,
 ) {
     let block = wid.x + wid.y * nwg.x;
+    // A block past the last key (the count may come from the GPU, the dispatch covers the
+    // capacity) has an empty histogram; returning before the barrier keeps it cheap.
+    if block * SORT_BLOCK >= params.count {
+        if lid < 16u && block < params.num_blocks {
+            hist[lid * params.num_blocks + block] = 0u;
+        }
+        return;
+    }
     if lid < 16u {
         atomicStore(&counts[lid], 0u);
     }

@@ -7,13 +7,11 @@
 #include "shared/sort_digit.wgsl"
 
 @group(0) @binding(0) var<storage, read> params: SortParams;
-@group(0) @binding(1) var<storage, read> keys_hi: array<u32>;
-@group(0) @binding(2) var<storage, read> keys_lo: array<u32>;
-@group(0) @binding(3) var<storage, read> values: array<u32>;
-@group(0) @binding(4) var<storage, read> hist: array<u32>;
-@group(0) @binding(5) var<storage, read_write> out_hi: array<u32>;
-@group(0) @binding(6) var<storage, read_write> out_lo: array<u32>;
-@group(0) @binding(7) var<storage, read_write> out_values: array<u32>;
+@group(0) @binding(1) var<storage, read> keys: array<u32>;
+@group(0) @binding(2) var<storage, read> values: array<u32>;
+@group(0) @binding(3) var<storage, read> hist: array<u32>;
+@group(0) @binding(4) var<storage, read_write> out_keys: array<u32>;
+@group(0) @binding(5) var<storage, read_write> out_values: array<u32>;
 
 // Packed per-digit counts of each thread: digits 0-7 in `lo` (two per component), 8-15 in `hi`.
 var<workgroup> scan_lo: array<vec4<u32>, SORT_THREADS>;
@@ -27,6 +25,10 @@ fn main(
     @builtin(num_workgroups) nwg: vec3<u32>,
 ) {
     let block = wid.x + wid.y * nwg.x;
+    // Nothing to move past the last key; returning before the scan's barriers keeps it cheap.
+    if block * SORT_BLOCK >= params.count {
+        return;
+    }
     if lid < 16u && block < params.num_blocks {
         block_base[lid] = hist[lid * params.num_blocks + block];
     }
@@ -76,8 +78,7 @@ fn main(
             let rank = (next[d >> 1u] >> shift) & 0xffffu;
             next[d >> 1u] += 1u << shift;
             let dest = block_base[d] + rank;
-            out_hi[dest] = keys_hi[slot];
-            out_lo[dest] = keys_lo[slot];
+            out_keys[dest] = keys[slot];
             out_values[dest] = values[slot];
         }
     }

@@ -2,6 +2,10 @@
 // tile limit (the whole image, or a plane's footprint) each projected Gaussian touches. One thread
 // per Gaussian of project's candidate list (dispatched indirectly); the counts of the others,
 // culled by project's cheap tests, stay at the zero they were cleared to.
+//
+// A Gaussian that touches a tile is also an entry of the frame's depth order (stage
+// `depth_order`), numbered `entry_base` + its index: its depth bits, tile rectangle and a
+// presence flag are kept per entry, and its count is added to the view's key total.
 #include "shared/common.wgsl"
 #include "shared/tiles.wgsl"
 
@@ -10,6 +14,13 @@
 @group(0) @binding(2) var<storage, read_write> counts: array<u32>;
 @group(0) @binding(3) var<storage, read> candidates: array<u32>;
 @group(0) @binding(4) var<storage, read> work: array<u32, 4>;
+// Per entry: the tile rectangle, (x0 | y0 << 16, x1 | y1 << 16); the f32 depth bits; 1 when
+// the Gaussian touches a tile (cleared to 0 before).
+@group(0) @binding(5) var<storage, read_write> rects: array<vec2<u32>>;
+@group(0) @binding(6) var<storage, read_write> depths: array<u32>;
+@group(0) @binding(7) var<storage, read_write> present: array<u32>;
+// Per view: its key total.
+@group(0) @binding(8) var<storage, read_write> key_totals: array<atomic<u32>>;
 
 @compute @workgroup_size(256)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -19,9 +30,18 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = candidates[gid.x];
     let g = projected[i];
     var n = 0u;
+    var r = vec4<u32>(0u);
     if is_visible(g) {
-        let r = tile_rect(g, tiles);
+        r = tile_rect(g, tiles);
         n = (r.z - r.x) * (r.w - r.y);
     }
     counts[i] = n;
+    if n == 0u {
+        return;
+    }
+    let entry = tiles.entry_base + tiles.first + i;
+    rects[entry] = vec2<u32>(r.x | (r.y << 16u), r.z | (r.w << 16u));
+    depths[entry] = bitcast<u32>(g.color.w);
+    present[entry] = 1u;
+    atomicAdd(&key_totals[tiles.view], n);
 }

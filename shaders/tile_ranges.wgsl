@@ -3,7 +3,7 @@
 #include "shared/common.wgsl"
 
 @group(0) @binding(0) var<storage, read> params: ScanParams;
-@group(0) @binding(1) var<storage, read> keys_hi: array<u32>;
+@group(0) @binding(1) var<storage, read> keys: array<u32>;
 @group(0) @binding(2) var<storage, read_write> ranges: array<u32>;
 
 @compute @workgroup_size(256)
@@ -13,11 +13,11 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     if slot >= n {
         return;
     }
-    let tile = keys_hi[slot];
-    if slot == 0u || keys_hi[slot - 1u] != tile {
+    let tile = keys[slot];
+    if slot == 0u || keys[slot - 1u] != tile {
         ranges[2u * tile] = slot;
     }
-    if slot + 1u == n || keys_hi[slot + 1u] != tile {
+    if slot + 1u == n || keys[slot + 1u] != tile {
         ranges[2u * tile + 1u] = slot + 1u;
     }
 }

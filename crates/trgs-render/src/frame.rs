@@ -2,8 +2,8 @@
 //! Gaussians, sorted lists, per-pixel states), and readback to images.
 use crate::GpuContext;
 use crate::gpu::{self, BufferPool};
-use crate::layout::{ProjectParams, ProjectedGaussian, RasterState, ReflectionState, TileParams};
-use crate::stages::emit_keys::Keys;
+use crate::layout::{ProjectParams, ProjectedGaussian, RasterState, ReflectionState};
+use crate::stages::sort::KeyList;
 use trgs_core::Image;
 use trgs_core::reference::{TileGrid, TileRect};
 use trgs_core::scene::ViewTransform;
@@ -16,25 +16,36 @@ pub struct ViewBuffers {
     pub plane: Option<usize>,
     /// The tiles binned (a plane's footprint, or the whole grid).
     pub limit: TileRect,
-    pub(crate) tile_params: TileParams,
     /// The parameter block `project` ran with (its adjoint recomputes from the same view).
     pub(crate) project_params: ProjectParams,
     pub projected: wgpu::Buffer,
     /// The Gaussians that passed project's cheap culls (project_bwd runs over them only).
     pub(crate) candidates: crate::stages::project::Candidates,
-    /// The exclusive scan of the tile counts (each Gaussian's first key slot).
-    pub offsets: wgpu::Buffer,
-    /// The sorted keys and values of every view of the frame (one list, sorted once): this
-    /// view's are the `num_keys` from `key_base`.
-    pub keys: Option<Keys>,
+    /// The tiles each Gaussian touches (zero for the culled).
+    pub counts: wgpu::Buffer,
+    /// The sorted keys (tile indices) and values (Gaussian indices) of every view of the frame
+    /// (one list, sorted once): this view's are the `num_keys` from `key_base`.
+    pub keys: Option<KeyList>,
     /// (start, end) per sorted tile index, every view's (shared): this view's tiles are numbered
     /// from `tile_base`, row by row within `limit`.
     pub ranges: Option<wgpu::Buffer>,
     pub num_keys: u32,
     pub key_base: u32,
     pub tile_base: u32,
-    pub(crate) captured_counts: Option<wgpu::Buffer>,
-    pub(crate) captured_keys: Option<Keys>,
+}
+
+/// The frame's depth order and key emission, every view's together.
+#[derive(Debug)]
+pub(crate) struct Binning {
+    /// The depth order (keys: depth bits, values: entry indices `view * Gaussians + index`).
+    pub order: KeyList,
+    /// The exclusive scan of the tile counts in depth order (each entry's first key slot).
+    pub offsets: wgpu::Buffer,
+    pub entries: u32,
+    /// Keys of all views.
+    pub total: u32,
+    /// The keys as emitted, before the sort (with `capture_intermediates`).
+    pub emitted: Option<KeyList>,
 }
 
 impl ViewBuffers {
@@ -79,6 +90,7 @@ pub struct Frame {
     /// The camera rays and planes compose read (kept for compose_bwd).
     rays: Option<crate::stages::compose::RayBuffers>,
     views: Vec<ViewBuffers>,
+    binning: Option<Binning>,
     has_pass: Vec<bool>,
     stage_times: Option<Vec<(&'static str, f64)>>,
 }
@@ -170,18 +182,30 @@ pub struct PlaneImages {
 #[derive(Clone, Debug)]
 pub struct ViewIntermediates {
     pub projected: Vec<ProjectedGaussian>,
-    /// Tile counts (with `capture_intermediates`).
-    pub counts: Option<Vec<u32>>,
-    pub offsets: Vec<u32>,
-    /// 64-bit keys and values as emitted (with `capture_intermediates`).
-    pub emitted: Option<(Vec<u64>, Vec<u32>)>,
-    pub sorted_keys: Vec<u64>,
+    /// Tile counts per Gaussian.
+    pub counts: Vec<u32>,
+    /// This view's Gaussians in the frame's depth order.
+    pub order: Vec<u32>,
+    /// This view's keys (tile indices of the whole grid) and values as emitted, in emission
+    /// order (with `capture_intermediates`).
+    pub emitted: Option<(Vec<u32>, Vec<u32>)>,
+    /// This view's sorted keys (tile indices of the whole grid) and values.
+    pub sorted_keys: Vec<u32>,
     pub sorted_values: Vec<u32>,
     pub ranges: Vec<(u32, u32)>,
 }
 
-fn join_keys(hi: &[u32], lo: &[u32]) -> Vec<u64> {
-    hi.iter().zip(lo).map(|(&h, &l)| u64::from(h) << 32 | u64::from(l)).collect()
+/// The frame's depth order, read back (for stage-by-stage tests).
+#[derive(Clone, Debug)]
+pub struct DepthOrderIntermediates {
+    /// Entry indices (`view * Gaussians + index`), front to back.
+    pub entries: Vec<u32>,
+    /// Their depth bits.
+    pub depths: Vec<u32>,
+    /// The exclusive scan of their tile counts.
+    pub offsets: Vec<u32>,
+    /// Keys of all views.
+    pub total: u32,
 }
 
 impl Frame {
@@ -198,6 +222,7 @@ impl Frame {
         self.depth_variance = options.depth_variance;
         self.background = options.background;
         self.views.clear();
+        self.binning = None;
         self.stage_times = None;
     }
 
@@ -228,11 +253,13 @@ impl Frame {
     pub(crate) fn finish(
         &mut self,
         views: Vec<ViewBuffers>,
+        binning: Binning,
         has_pass: Vec<bool>,
         rays: Option<crate::stages::compose::RayBuffers>,
         stage_times: Option<Vec<(&'static str, f64)>>,
     ) {
         self.views = views;
+        self.binning = Some(binning);
         self.rays = rays;
         self.has_pass = has_pass;
         self.stage_times = stage_times;
@@ -464,19 +491,41 @@ impl Frame {
         let v = self.views.get(vi)?;
         let keys = v.keys.as_ref()?;
         let grid = self.grid?;
+        let binning = self.binning.as_ref()?;
         let (n, base) = (v.num_keys as usize, u64::from(v.key_base) * 4);
-        let read_keys = |k: &Keys| {
-            let hi: Vec<u32> = gpu::read_buffer(ctx, &k.hi, base, n);
-            let lo: Vec<u32> = gpu::read_buffer(ctx, &k.lo, base, n);
-            let hi: Vec<u32> = hi.iter().map(|&t| v.grid_tile(&grid, t)).collect();
-            (join_keys(&hi, &lo), gpu::read_buffer(ctx, &k.values, base, n))
-        };
-        let emitted = v.captured_keys.as_ref().map(read_keys);
-        let (sorted_keys, sorted_values) = read_keys(keys);
+        let (sorted, sorted_values) = (
+            gpu::read_buffer::<u32>(ctx, &keys.keys, base, n),
+            gpu::read_buffer::<u32>(ctx, &keys.values, base, n),
+        );
+        let sorted_keys = sorted.iter().map(|&t| v.grid_tile(&grid, t)).collect();
+        let own = v.tile_base..v.tile_base + v.limit.count();
+        // The emitted list interleaves the views: this view's keys are those in its tiles.
+        let emitted = binning.emitted.as_ref().map(|k| {
+            let all = binning.total as usize;
+            let tiles: Vec<u32> = gpu::read_buffer(ctx, &k.keys, 0, all);
+            let values: Vec<u32> = gpu::read_buffer(ctx, &k.values, 0, all);
+            tiles
+                .into_iter()
+                .zip(values)
+                .filter(|(t, _)| own.contains(t))
+                .map(|(t, value)| (v.grid_tile(&grid, t), value))
+                .unzip()
+        });
+        let entries: Vec<u32> =
+            gpu::read_buffer(ctx, &binning.order.values, 0, binning.entries as usize);
+        let first = vi as u32 * self.gaussian_count;
+        let order = entries
+            .into_iter()
+            .filter(|e| (first..first + self.gaussian_count).contains(e))
+            .map(|e| e - first)
+            .collect();
         let mut ranges = vec![(0, 0); grid.tile_count() as usize];
-        let own = u64::from(v.limit.count());
-        let read: Vec<[u32; 2]> =
-            gpu::read_buffer(ctx, v.ranges.as_ref()?, u64::from(v.tile_base) * 8, own as usize);
+        let read: Vec<[u32; 2]> = gpu::read_buffer(
+            ctx,
+            v.ranges.as_ref()?,
+            u64::from(v.tile_base) * 8,
+            v.limit.count() as usize,
+        );
         for (local, [a, b]) in read.into_iter().enumerate() {
             if b > a {
                 let tile = v.grid_tile(&grid, v.tile_base + local as u32) as usize;
@@ -485,12 +534,24 @@ impl Frame {
         }
         Some(ViewIntermediates {
             projected: gpu::read_buffer(ctx, &v.projected, 0, gaussians),
-            counts: v.captured_counts.as_ref().map(|c| gpu::read_buffer(ctx, c, 0, gaussians)),
-            offsets: gpu::read_buffer(ctx, &v.offsets, 0, gaussians),
+            counts: gpu::read_buffer(ctx, &v.counts, 0, gaussians),
+            order,
             emitted,
             sorted_keys,
             sorted_values,
             ranges,
+        })
+    }
+
+    /// The frame's depth order, every view's together.
+    pub fn read_depth_order(&self, ctx: &GpuContext) -> Option<DepthOrderIntermediates> {
+        let b = self.binning.as_ref()?;
+        let n = b.entries as usize;
+        Some(DepthOrderIntermediates {
+            entries: gpu::read_buffer(ctx, &b.order.values, 0, n),
+            depths: gpu::read_buffer(ctx, &b.order.keys, 0, n),
+            offsets: gpu::read_buffer(ctx, &b.offsets, 0, n),
+            total: b.total,
         })
     }
 }

@@ -64,7 +64,8 @@ pub fn params<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, value: &T) -> wgp
     ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some(label),
         contents: bytemuck::bytes_of(value),
-        usage: wgpu::BufferUsages::STORAGE,
+        // COPY_DST: a field may come from the GPU (the depth order's entry count, copied in).
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
     })
 }
 

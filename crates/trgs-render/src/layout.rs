@@ -110,7 +110,7 @@ gpu_struct! {
 }
 
 gpu_struct! {
-    /// Parameters of `tile_counts` and `emit_keys`.
+    /// Parameters of `tile_counts` (one view, one chunk of the scene).
     pub struct TileParams {
         pub width: u32,
         pub height: u32,
@@ -121,11 +121,34 @@ gpu_struct! {
         /// Gaussians in this dispatch and the index of the first one.
         pub count: u32,
         pub first: u32,
-        /// `emit_keys`: the view's first slot in the key list that every view shares, and the
-        /// sorted tile index of the limit's first tile (the views' tiles are numbered one after
-        /// the other, each row by row within its limit).
-        pub key_base: u32,
+        /// The frame numbers every (view, Gaussian) pair `entry_base + Gaussian index`, with
+        /// `entry_base = view * Gaussians`: the entries of the one depth order of all views.
+        pub entry_base: u32,
+        /// Index of the view (its key total is counter `1 + view`).
+        pub view: u32,
+    }
+}
+
+gpu_struct! {
+    /// Parameters of `emit_keys`: the entries in depth order, over every view at once.
+    pub struct EmitParams {
+        /// Entries in the depth order.
+        pub entries: u32,
+        /// Gaussians in the scene (an entry's view is entry / gaussians).
+        pub gaussians: u32,
+        pub pad0: u32,
+        pub pad1: u32,
+    }
+}
+
+gpu_struct! {
+    /// How `emit_keys` numbers one view's tiles in the shared key list: row by row within its
+    /// limit (x0, y0, row length), from `tile_base`.
+    pub struct ViewTiles {
         pub tile_base: u32,
+        pub x0: u32,
+        pub y0: u32,
+        pub row: u32,
     }
 }
 
@@ -145,8 +168,9 @@ gpu_struct! {
         pub count: u32,
         /// Bit offset of the 4-bit digit in the key word.
         pub shift: u32,
-        /// 1: the digit is in the high word (tile), 0: in the low word (depth bits).
-        pub use_hi: u32,
+        /// 1: the digit is in the key word, 0: in the value word (the depth order breaks ties
+        /// in depth by the entry index, its value).
+        pub from_keys: u32,
         pub num_blocks: u32,
     }
 }
@@ -167,7 +191,7 @@ gpu_struct! {
         /// ignored: V was never computed).
         pub depth_variance: u32,
         /// The sorted tile index of the dispatch's first tile and the width of its tile rectangle
-        /// in tiles (TileParams::tile_base; the whole grid's width for pass 1).
+        /// in tiles (ViewTiles::tile_base; the whole grid's width for pass 1).
         pub tile_base: u32,
         pub tiles_w: u32,
         pub pad0: u32,
@@ -361,6 +385,8 @@ pub fn all_structs() -> Vec<StructInfo> {
         entry::<ProjectParams>(),
         entry::<ProjectedGaussian>(),
         entry::<TileParams>(),
+        entry::<EmitParams>(),
+        entry::<ViewTiles>(),
         entry::<ScanParams>(),
         entry::<SortParams>(),
         entry::<RasterParams>(),

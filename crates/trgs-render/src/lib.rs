@@ -48,7 +48,8 @@ pub use device::{
 };
 pub use display::{DisplayError, DisplayTarget, layer_mapping};
 pub use frame::{
-    Frame, FrameImages, Layer, LayerBuffers, PlaneImages, ViewBuffers, ViewIntermediates,
+    DepthOrderIntermediates, Frame, FrameImages, Layer, LayerBuffers, PlaneImages, ViewBuffers,
+    ViewIntermediates,
 };
 pub use layer_grads::{LayerGrads, LayerGradsError};
 pub use renderer::{RenderError, RenderOptions, Renderer};

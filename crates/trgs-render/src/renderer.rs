@@ -1,17 +1,18 @@
 //! The forward renderer: the stages of DESIGN.md's data flow for one camera, into a [`Frame`].
 use crate::GpuContext;
-use crate::frame::{Frame, ViewBuffers};
+use crate::frame::{Binning, Frame, ViewBuffers};
 use crate::gpu::{self, Recorder};
 use crate::kernels::Kernels;
 use crate::layer_grads::LayerGrads;
-use crate::layout::TileParams;
+use crate::layout::{EmitParams, TileParams, ViewTiles};
 use crate::scene::GpuScene;
 use crate::stages::compose_bwd;
-use crate::stages::emit_keys::Keys;
 use crate::stages::rasterize::Pass1Outputs;
+use crate::stages::sort::{KeyList, SortCount};
+use crate::stages::tile_counts::DepthEntries;
 use crate::stages::{
-    Stage, compose, emit_keys, prefix_sum, project, rasterize, rasterize_reflection, sort,
-    tile_counts, tile_ranges,
+    Stage, compose, depth_order, emit_keys, prefix_sum, project, rasterize, rasterize_reflection,
+    sort, tile_counts, tile_ranges,
 };
 use trgs_core::plane_math::mirrored_view;
 use trgs_core::reference::ReflectionModel;
@@ -173,17 +174,24 @@ impl Renderer {
             }
         }
         frame.reset(grid, planes.len(), scene.len(), options);
+        // Entry indices (view x Gaussian) and the keys' u32 totals must not wrap.
+        let capacity = specs.len() as u64 * u64::from(scene.len());
+        if capacity > u64::from(u32::MAX) {
+            return Err(RenderError::FrameTooLarge {
+                name: camera.name.clone(),
+                what: "depth-order entries (views x Gaussians)",
+                bytes: capacity * 4,
+                limit: u64::from(u32::MAX) * 4,
+            });
+        }
+        check_binding(ctx, camera, "depth-order tile rectangles", capacity * 8)?;
         let pool = &mut frame.pool;
         let n = u64::from(scene.len());
         let mut rec = Recorder::new(ctx, "trgs.render", options.profile);
 
-        // Phase 1: project, count tiles and scan, for every view; then one readback of the totals.
-        let totals_staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("trgs.prefix_sum.totals"),
-            size: 4 * specs.len() as u64,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        // Phase 1: for every view, project and count tiles, appending the touching Gaussians to
+        // one depth order; sort it, scan its counts; then one readback of the totals.
+        let entries = DepthEntries::new(s, &mut rec, pool, specs.len(), scene.len());
         let sh_degree = options.sh_degree.map_or(scene.sh_degree(), |d| d.min(scene.sh_degree()));
         let mut views = Vec::with_capacity(specs.len());
         for (vi, spec) in specs.iter().enumerate() {
@@ -194,82 +202,112 @@ impl Renderer {
                 project::params(&spec.view, k, plane, &spec.limit, options.near, sh_degree);
             let candidates = project::Candidates::new(s, pool, scene, vi);
             project::record(s, &mut rec, scene, &pparams, &candidates, &projected);
-            let tparams = tile_counts::params(&grid, &spec.limit);
-            tile_counts::record(s, &mut rec, scene, &tparams, &projected, &candidates, &counts);
-            let captured_counts = options.capture_intermediates.then(|| {
-                let c = pool.get(ctx, &format!("trgs.capture.counts.v{vi}"), n * 4);
-                rec.encoder.copy_buffer_to_buffer(&counts, 0, &c, 0, counts.size());
-                c
-            });
-            let label = format!("trgs.prefix_sum.v{vi}");
-            let total = prefix_sum::record(s, &mut rec, pool, &label, &counts, scene.len());
-            rec.encoder.copy_buffer_to_buffer(&total, 0, &totals_staging, 4 * vi as u64, 4);
+            let tparams = TileParams {
+                entry_base: vi as u32 * scene.len(),
+                view: vi as u32,
+                ..tile_counts::params(&grid, &spec.limit)
+            };
+            let c = &candidates;
+            tile_counts::record(s, &mut rec, scene, &tparams, &projected, c, &counts, &entries);
             views.push(ViewBuffers {
                 view: spec.view,
                 plane: spec.plane,
                 limit: spec.limit,
-                tile_params: tparams,
                 project_params: pparams,
                 projected,
                 candidates,
-                offsets: counts,
+                counts,
                 keys: None,
                 ranges: None,
                 num_keys: 0,
                 key_base: 0,
                 tile_base: 0,
-                captured_counts,
-                captured_keys: None,
             });
         }
+        let offsets = pool.get(ctx, "trgs.depth_order.offsets", u64::from(entries.capacity) * 4);
+        let order = depth_order::record(s, &mut rec, pool, &entries, &offsets);
+        let total =
+            prefix_sum::record(s, &mut rec, pool, "trgs.prefix_sum", &offsets, entries.capacity);
+        // [entries, key total of each view, key total]
+        let words = specs.len() + 2;
+        let totals_staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("trgs.prefix_sum.totals"),
+            size: 4 * words as u64,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let views_bytes = 4 * specs.len() as u64;
+        rec.encoder.copy_buffer_to_buffer(&order.entries, 0, &totals_staging, 0, 4);
+        rec.encoder.copy_buffer_to_buffer(&entries.key_totals, 0, &totals_staging, 4, views_bytes);
+        rec.encoder.copy_buffer_to_buffer(&total, 0, &totals_staging, 4 + views_bytes, 4);
         rec.submit_and_wait(ctx);
-        let totals: Vec<u32> = gpu::map_and_read(ctx, &totals_staging, 4 * specs.len());
+        let totals: Vec<u32> = gpu::map_and_read(ctx, &totals_staging, 4 * words);
+        let (num_entries, total) = (totals[0], totals[words - 1]);
 
-        // Phase 2: every view's keys into one list, one sort and one pass of tile ranges (a
-        // view's tiles numbered after the previous view's: the camera's whole grid, then each
-        // footprint); both rasterize passes; compose.
-        // Every view's keys share one list, bound whole: its size is the sum of the totals.
-        let all_keys: u64 = totals.iter().map(|&t| u64::from(t)).sum();
+        // Phase 2: every view's keys into one list (a view's tiles numbered after the previous
+        // view's: the camera's whole grid, then each footprint), one sort by tile, one pass of
+        // tile ranges; both rasterize passes; compose.
+        let all_keys: u64 = totals[1..words - 1].iter().map(|&t| u64::from(t)).sum();
+        debug_assert_eq!(all_keys, u64::from(total), "the views' key totals add up to the scan's");
         check_binding(ctx, camera, "tile keys (all views together)", all_keys * 4)?;
         let (mut key_base, mut tile_base) = (0u32, 0u32);
-        for (v, &total) in views.iter_mut().zip(&totals) {
-            (v.key_base, v.tile_base, v.num_keys) = (key_base, tile_base, total);
-            key_base += total;
+        let mut tables = Vec::with_capacity(views.len());
+        for (v, &keys) in views.iter_mut().zip(&totals[1..]) {
+            (v.key_base, v.tile_base, v.num_keys) = (key_base, tile_base, keys);
+            tables.push(ViewTiles {
+                tile_base,
+                x0: v.limit.x0,
+                y0: v.limit.y0,
+                row: v.limit.x1 - v.limit.x0,
+            });
+            key_base += keys;
             tile_base += v.limit.count();
         }
-        let (total, tiles) = (key_base, tile_base);
+        let tiles = tile_base;
         let bytes = u64::from(total) * 4;
-        let keys = Keys {
-            hi: pool.get(ctx, "trgs.emit_keys.hi", bytes),
-            lo: pool.get(ctx, "trgs.emit_keys.lo", bytes),
+        let keys = KeyList {
+            keys: pool.get(ctx, "trgs.emit_keys.keys", bytes),
             values: pool.get(ctx, "trgs.emit_keys.values", bytes),
         };
-        for v in &views {
-            let (p, c) = (&v.projected, &v.candidates);
-            let tp = TileParams { key_base: v.key_base, tile_base: v.tile_base, ..v.tile_params };
-            emit_keys::record(s, &mut rec, scene, &tp, p, c, &v.offsets, &keys);
-        }
+        let emit =
+            EmitParams { entries: num_entries, gaussians: scene.len(), ..Default::default() };
+        let o = &order.list.values;
+        emit_keys::record(s, &mut rec, &emit, o, &entries, &offsets, &tables, &keys);
         let captured_keys = options.capture_intermediates.then(|| {
             let mut copy = |name: &str, src: &wgpu::Buffer, pool: &mut gpu::BufferPool| {
                 let c = pool.get(ctx, &format!("trgs.capture.{name}"), bytes);
                 rec.encoder.copy_buffer_to_buffer(src, 0, &c, 0, bytes.max(16).min(src.size()));
                 c
             };
-            Keys {
-                hi: copy("keys_hi", &keys.hi, pool),
-                lo: copy("keys_lo", &keys.lo, pool),
+            KeyList {
+                keys: copy("keys", &keys.keys, pool),
                 values: copy("values", &keys.values, pool),
             }
         });
-        let sorted =
-            sort::record(s, &mut rec, pool, "trgs.sort", &keys, total, sort::tile_bits(tiles));
+        let tile_digits: Vec<_> = sort::digits(sort::bits_below(tiles), true).collect();
+        let sorted = sort::record(
+            s,
+            &mut rec,
+            "sort",
+            pool,
+            "trgs.sort",
+            &keys,
+            SortCount::Known(total),
+            &tile_digits,
+        );
         let ranges = pool.get(ctx, "trgs.tile_ranges.ranges", u64::from(tiles) * 8);
-        tile_ranges::record(s, &mut rec, &sorted.hi, total, &ranges);
+        tile_ranges::record(s, &mut rec, &sorted.keys, total, &ranges);
         for v in &mut views {
             v.keys = Some(sorted.clone());
             v.ranges = Some(ranges.clone());
-            v.captured_keys = captured_keys.clone();
         }
+        let binning = Binning {
+            order: order.list,
+            offsets,
+            entries: num_entries,
+            total,
+            emitted: captured_keys,
+        };
         let layers = frame.layers(ctx, pixels);
         let primary = &views[0];
         #[allow(clippy::expect_used)]
@@ -346,7 +384,7 @@ impl Renderer {
             );
         }
         rec.submit_and_wait(ctx);
-        frame.finish(views, has_pass, Some(rays), rec.stage_times());
+        frame.finish(views, binning, has_pass, Some(rays), rec.stage_times());
         Ok(())
     }
 

@@ -7,8 +7,8 @@ use glam::DVec2;
 use trgs_core::Image;
 use trgs_core::fixtures::{SceneSpec, random_scene};
 use trgs_core::reference::{
-    self, Projected, ProjectionFilter, ReflectionModel, RenderSettings, TileGrid, emit_keys,
-    prefix_sum, rasterize, rasterize_reflection, sort_keys, tile_counts, tile_ranges,
+    self, Projected, ProjectionFilter, ReflectionModel, RenderSettings, TileGrid, depth_order,
+    emit_keys, prefix_sum, rasterize, rasterize_reflection, sort_keys, tile_counts, tile_ranges,
 };
 use trgs_core::scene::Gaussians;
 use trgs_render::layout::{
@@ -80,6 +80,7 @@ fn check_scene(name: &str, spec: SceneSpec, chunk: Option<u32>) {
     let images = frame.read_images(&ctx);
     let n = g.len();
     let mut bad = 0;
+    let mut all_counts = Vec::new();
     for (vi, view) in frame.views().iter().enumerate() {
         let what = format!("{name} view {vi}");
         let inter = frame.read_intermediates(&ctx, vi, n).expect("intermediates");
@@ -127,18 +128,21 @@ fn check_scene(name: &str, spec: SceneSpec, chunk: Option<u32>) {
             }
         }
         assert_eq!(proj_bad, 0, "{what}: project");
-        // Binning, keys, sort, ranges: exact, from the GPU's projected values.
+        // Binning, depth order, scan, keys, sort, ranges: exact, from the GPU's projected values.
         let counts = tile_counts(&gpu, &grid, &view.limit);
-        assert_eq!(inter.counts.as_deref(), Some(&counts[..]), "{what}: tile_counts");
-        let (offsets, total) = prefix_sum(&counts);
-        assert_eq!(inter.offsets, offsets, "{what}: prefix_sum");
+        assert_eq!(inter.counts, counts, "{what}: tile_counts");
+        let order = depth_order(&gpu, &counts);
+        assert_eq!(inter.order, order, "{what}: depth_order");
+        let ordered: Vec<u32> = order.iter().map(|&i| counts[i as usize]).collect();
+        let (offsets, total) = prefix_sum(&ordered);
         assert_eq!(view.num_keys, total, "{what}: key total");
-        let (mut keys, mut values) = emit_keys(&gpu, &grid, &view.limit, &offsets, total);
+        let (mut keys, mut values) = emit_keys(&gpu, &grid, &view.limit, &order, &offsets, total);
         let (ek, ev) = inter.emitted.as_ref().expect("captured");
         assert_eq!((ek, ev), (&keys, &values), "{what}: emit_keys");
         sort_keys(&mut keys, &mut values);
         assert_eq!(inter.sorted_keys, keys, "{what}: sort keys");
         assert_eq!(inter.sorted_values, values, "{what}: sort values");
+        all_counts.push(counts);
         let ranges = tile_ranges(&keys, grid.tile_count());
         assert_eq!(inter.ranges, ranges, "{what}: tile_ranges");
         eprintln!("{what}: {} visible, {total} keys", gpu.visible.iter().filter(|&&v| v).count());
@@ -176,6 +180,26 @@ fn check_scene(name: &str, spec: SceneSpec, chunk: Option<u32>) {
             }
         }
     }
+    // The depth order of all views together, and the scan of its counts: exact.
+    let depth = frame.read_depth_order(&ctx).expect("depth order");
+    let mut expected: Vec<(u32, u32, u32)> = Vec::new();
+    for (vi, counts) in all_counts.iter().enumerate() {
+        let projected = frame.read_projected(&ctx, vi).expect("projected");
+        for (i, &c) in counts.iter().enumerate() {
+            if c > 0 {
+                let entry = (vi * n + i) as u32;
+                expected.push((projected[i].color[3].to_bits(), entry, c));
+            }
+        }
+    }
+    expected.sort_unstable();
+    let entries: Vec<u32> = expected.iter().map(|e| e.1).collect();
+    let depths: Vec<u32> = expected.iter().map(|e| e.0).collect();
+    assert_eq!(depth.entries, entries, "{name}: depth_order entries");
+    assert_eq!(depth.depths, depths, "{name}: depth_order depths");
+    let (offsets, total) = prefix_sum(&expected.iter().map(|e| e.2).collect::<Vec<_>>());
+    assert_eq!(depth.offsets, offsets, "{name}: prefix_sum of the ordered counts");
+    assert_eq!(depth.total, total, "{name}: key total");
     // Compose from the GPU's own pass outputs.
     if frame.composed() {
         let f64img = |i: &Image<f32>| i.map(f64::from);

@@ -1,29 +1,28 @@
-//! Stage `emit_keys`: one (tile, depth) key per Gaussian and touched tile. The key is
-//! `tile << 32 | bits(depth as f32)`: depths are positive, so their IEEE bits sort like the
-//! numbers, and a radix sort of the u64 orders by tile, then front to back.
+//! Stage `emit_keys`: one key per Gaussian and touched tile, the tile's index, with the
+//! Gaussian's index as its value. Gaussians are taken in `depth_order`, each writing from its
+//! offset (the exclusive prefix sum of the tile counts in that order), so the emitted list is
+//! front to back and a stable sort by tile alone yields every tile's list front to back.
 use super::{Projected, TileGrid, TileRect, tile_rect};
 
-/// Keys and values (Gaussian indices), written at each Gaussian's offset from `prefix_sum`.
+/// Keys (tile indices of the whole grid) and values (Gaussian indices); `order` is the depth
+/// order and `offsets[k]` the first slot of `order[k]`.
 pub fn emit_keys(
     p: &Projected,
     grid: &TileGrid,
     limit: &TileRect,
+    order: &[u32],
     offsets: &[u32],
     total: u32,
-) -> (Vec<u64>, Vec<u32>) {
-    let mut keys = vec![0u64; total as usize];
+) -> (Vec<u32>, Vec<u32>) {
+    let mut keys = vec![0u32; total as usize];
     let mut values = vec![0u32; total as usize];
-    for i in 0..p.len() {
-        if !p.visible[i] {
-            continue;
-        }
+    for (&i, &offset) in order.iter().zip(offsets) {
+        let i = i as usize;
         let r = tile_rect(p.mean2d[i], p.extent[i], grid, limit);
-        let depth_bits = u64::from((p.depth[i] as f32).to_bits());
-        let mut slot = offsets[i] as usize;
+        let mut slot = offset as usize;
         for ty in r.y0..r.y1 {
             for tx in r.x0..r.x1 {
-                let tile = u64::from(ty * grid.tiles_x + tx);
-                keys[slot] = tile << 32 | depth_bits;
+                keys[slot] = ty * grid.tiles_x + tx;
                 values[slot] = i as u32;
                 slot += 1;
             }

@@ -1,5 +1,5 @@
 //! The CPU reference renderer: one module per GPU stage, named as the WGSL stage it mirrors
-//! (`project`, `tile_counts`, `prefix_sum`, `emit_keys`, `sort`, `tile_ranges`, `footprint`,
+//! (`project`, `tile_counts`, `depth_order`, `prefix_sum`, `emit_keys`, `sort`, `tile_ranges`, `footprint`,
 //! `rasterize`, `rasterize_reflection`, `compose`, `display`) and its adjoint (`*_bwd`). It runs in f64 so
 //! that its gradients can be checked against central finite differences, and it is the oracle of
 //! every GPU stage.
@@ -11,6 +11,7 @@ mod adam;
 mod backward;
 mod compose;
 mod compose_bwd;
+mod depth_order;
 mod display;
 mod emit_keys;
 mod footprint;
@@ -36,6 +37,7 @@ pub use backward::{
 };
 pub use compose::{ComposeOutput, ReflectionModel, compose};
 pub use compose_bwd::{ComposeGrads, compose_bwd};
+pub use depth_order::depth_order;
 pub use display::{DisplayMapping, display, display_pixel, pack4x8unorm};
 pub use emit_keys::emit_keys;
 pub use footprint::{TileRect, footprint};

@@ -1,5 +1,5 @@
-//! Stage `prefix_sum`: exclusive scan of the per-Gaussian tile counts (each Gaussian's first slot
-//! in the key list) and the total.
+//! Stage `prefix_sum`: exclusive scan of the tile counts taken in depth order (each Gaussian's first
+//! slot in the key list) and the total.
 pub fn prefix_sum(counts: &[u32]) -> (Vec<u32>, u32) {
     let mut offsets = Vec::with_capacity(counts.len());
     let mut total = 0u32;

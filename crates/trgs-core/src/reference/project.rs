@@ -41,7 +41,7 @@ pub struct Projected {
 }
 
 impl Projected {
-    fn with_len(n: usize) -> Self {
+    pub(crate) fn with_len(n: usize) -> Self {
         Self {
             visible: vec![false; n],
             mean2d: vec![DVec2::ZERO; n],

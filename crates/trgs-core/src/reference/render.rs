@@ -1,11 +1,11 @@
-//! The forward pipeline of one view: validate -> project -> tile_counts -> prefix_sum ->
-//! emit_keys -> sort -> tile_ranges -> rasterize; per plane in front of the camera: footprint and
+//! The forward pipeline of one view: validate -> project -> tile_counts -> depth_order ->
+//! prefix_sum -> emit_keys -> sort -> tile_ranges -> rasterize; per plane in front of the camera: footprint and
 //! the same geometry stages with the mirrored camera -> rasterize_reflection; then compose.
 use super::compose::{ReflectionModel, compose};
 use super::frame::{Frame, PlaneLayers};
 use super::{
-    Projected, ProjectionFilter, TileGrid, TileRect, emit_keys, footprint, prefix_sum, project,
-    rasterize, rasterize_reflection, sort_keys, tile_counts, tile_ranges,
+    Projected, ProjectionFilter, TileGrid, TileRect, depth_order, emit_keys, footprint, prefix_sum,
+    project, rasterize, rasterize_reflection, sort_keys, tile_counts, tile_ranges,
 };
 use crate::plane_math::mirrored_view;
 use crate::scene::{
@@ -34,7 +34,8 @@ impl Default for RenderSettings {
 pub struct ViewPass {
     pub view: ViewTransform,
     pub projected: Projected,
-    pub keys: Vec<u64>,
+    /// Sorted tile indices, one per key.
+    pub keys: Vec<u32>,
     pub values: Vec<u32>,
     pub ranges: Vec<(u32, u32)>,
 }
@@ -51,8 +52,10 @@ pub fn render_view(
     let grid = TileGrid::new(k.width, k.height);
     let projected = project(g, view, k, filter, limit, near);
     let counts = tile_counts(&projected, &grid, limit);
-    let (offsets, total) = prefix_sum(&counts);
-    let (mut keys, mut values) = emit_keys(&projected, &grid, limit, &offsets, total);
+    let order = depth_order(&projected, &counts);
+    let ordered: Vec<u32> = order.iter().map(|&i| counts[i as usize]).collect();
+    let (offsets, total) = prefix_sum(&ordered);
+    let (mut keys, mut values) = emit_keys(&projected, &grid, limit, &order, &offsets, total);
     sort_keys(&mut keys, &mut values);
     let ranges = tile_ranges(&keys, grid.tile_count());
     ViewPass { view: *view, projected, keys, values, ranges }

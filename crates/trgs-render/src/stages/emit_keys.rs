@@ -1,50 +1,42 @@
-//! Stage `emit_keys` (shaders/emit_keys.wgsl; twin `trgs_core::reference::emit_keys`).
+//! Stage `emit_keys` (shaders/emit_keys.wgsl; twin `trgs_core::reference::emit_keys`): every
+//! view's keys at once, entry by entry of the depth order.
 use super::Stage;
-use super::project::{Candidates, WORK_STRIDE};
-use crate::gpu::{self, Recorder, range};
-use crate::layout::{ProjectedGaussian, TileParams};
-use crate::scene::GpuScene;
+use super::sort::KeyList;
+use super::tile_counts::DepthEntries;
+use crate::gpu::{self, Recorder, grid_1d};
+use crate::layout::{EmitParams, ViewTiles};
 
-const PROJECTED: u64 = std::mem::size_of::<ProjectedGaussian>() as u64;
-
-/// The split 64-bit keys (tile, depth bits) and their values (Gaussian indices).
-#[derive(Clone, Debug)]
-pub struct Keys {
-    pub hi: wgpu::Buffer,
-    pub lo: wgpu::Buffer,
-    pub values: wgpu::Buffer,
-}
-
+/// Write the keys (tile indices) and values (Gaussian indices) of the first `count` entries of
+/// `order` into `keys`; `offsets` is the scan of their tile counts, `views` numbers each view's
+/// tiles in the shared list.
+#[allow(clippy::too_many_arguments)]
 pub fn record(
     s: Stage<'_>,
     rec: &mut Recorder,
-    scene: &GpuScene,
-    base: &TileParams,
-    projected: &wgpu::Buffer,
-    candidates: &Candidates,
+    params: &EmitParams,
+    order: &wgpu::Buffer,
+    entries: &DepthEntries,
     offsets: &wgpu::Buffer,
-    keys: &Keys,
+    views: &[ViewTiles],
+    keys: &KeyList,
 ) {
-    let k = &s.kernels.emit_keys;
-    for (chunk, (first, count)) in scene.chunks().into_iter().enumerate() {
-        let [list, work] = candidates.chunk(chunk, first, count);
-        let p = TileParams { count, first, ..*base };
-        let block = gpu::params(s.ctx, "trgs.emit_keys.params", &p);
-        let (f, c) = (u64::from(first), u64::from(count));
-        let bind = k.bind(
-            s.ctx,
-            &[
-                block.as_entire_binding(),
-                range(projected, f * PROJECTED, c * PROJECTED),
-                range(offsets, f * 4, c * 4),
-                keys.hi.as_entire_binding(),
-                keys.lo.as_entire_binding(),
-                keys.values.as_entire_binding(),
-                list,
-                work,
-            ],
-        );
-        let at = chunk as u64 * WORK_STRIDE;
-        rec.dispatch_indirect("emit_keys", k, &bind, &candidates.work, at);
+    if params.entries == 0 {
+        return;
     }
+    let k = &s.kernels.emit_keys;
+    let block = gpu::params(s.ctx, "trgs.emit_keys.params", params);
+    let table = gpu::storage_init(s.ctx, "trgs.emit_keys.views", views);
+    let bind = k.bind(
+        s.ctx,
+        &[
+            block.as_entire_binding(),
+            order.as_entire_binding(),
+            entries.rects.as_entire_binding(),
+            offsets.as_entire_binding(),
+            table.as_entire_binding(),
+            keys.keys.as_entire_binding(),
+            keys.values.as_entire_binding(),
+        ],
+    );
+    rec.dispatch("emit_keys", k, &bind, grid_1d(params.entries.div_ceil(256)));
 }

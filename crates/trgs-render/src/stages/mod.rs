@@ -2,6 +2,7 @@
 //! `trgs_core::reference`. Each records its dispatches into a [`crate::gpu::Recorder`].
 pub mod compose;
 pub mod compose_bwd;
+pub mod depth_order;
 pub mod display;
 pub mod emit_keys;
 pub mod prefix_sum;

@@ -1,72 +1,113 @@
-//! Stage `sort` (shaders/sort_count.wgsl and sort_scatter.wgsl; twin
-//! `trgs_core::reference::sort_keys`): a stable LSD radix sort of the (tile, depth) keys with
-//! 4-bit digits. Only the bits that can be set are sorted: the 32 depth bits and as many tile bits
-//! as the grid needs. Each pass counts digits per block, scans the digit-major histogram with
-//! `prefix_sum`, and scatters stably.
-use super::emit_keys::Keys;
+//! Stage `sort` (shaders/sort_count.wgsl and sort_scatter.wgsl; twins
+//! `trgs_core::reference::sort_keys` and `depth_order`): a stable LSD radix sort of 32-bit keys
+//! with their 32-bit values, 4-bit digits. The caller names the digits: the key list sorts by
+//! the bits a tile index can have; the depth order by its values' bits (the tie-break) and then
+//! the 32 depth bits of its keys. Each pass counts digits per block, scans the digit-major
+//! histogram with `prefix_sum`, and scatters stably.
 use super::{Stage, prefix_sum};
 use crate::gpu::{self, BufferPool, Recorder, grid_1d};
 use crate::layout::{SORT_BLOCK, SortParams};
 
-/// Bits needed to hold tile indices below `tiles`.
-pub fn tile_bits(tiles: u32) -> u32 {
-    32 - tiles.saturating_sub(1).leading_zeros()
+/// Keys and their values, sorted together.
+#[derive(Clone, Debug)]
+pub struct KeyList {
+    pub keys: wgpu::Buffer,
+    pub values: wgpu::Buffer,
 }
 
-/// Sort `count` keys; returns the buffers holding the result (`keys` or the pool's alternates).
+/// How many pairs to sort.
+#[derive(Clone, Copy, Debug)]
+pub enum SortCount<'a> {
+    Known(u32),
+    /// The first u32 of `counter`, known on the GPU only; the dispatches cover `capacity`.
+    OnGpu {
+        counter: &'a wgpu::Buffer,
+        capacity: u32,
+    },
+}
+
+/// One radix pass: the digit's bit offset, and whether it is in the key (or the value) word.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Digit {
+    pub shift: u32,
+    pub from_keys: bool,
+}
+
+/// The passes over the low `bits` bits of the key (or value) word.
+pub fn digits(bits: u32, from_keys: bool) -> impl Iterator<Item = Digit> {
+    (0..bits.div_ceil(4)).map(move |d| Digit { shift: d * 4, from_keys })
+}
+
+/// Bits needed to hold values below `n`.
+pub fn bits_below(n: u32) -> u32 {
+    32 - n.saturating_sub(1).leading_zeros()
+}
+
+/// Sort the pairs of `list`; returns the buffers holding the result (`list`'s or the pool's
+/// alternates, named after `label`). `stage` names the dispatches in the stage timings.
+#[allow(clippy::too_many_arguments)]
 pub fn record(
     s: Stage<'_>,
     rec: &mut Recorder,
+    stage: &'static str,
     pool: &mut BufferPool,
     label: &str,
-    keys: &Keys,
-    count: u32,
-    tile_bits: u32,
-) -> Keys {
-    if count <= 1 {
-        return keys.clone();
+    list: &KeyList,
+    count: SortCount<'_>,
+    passes: &[Digit],
+) -> KeyList {
+    let capacity = match count {
+        SortCount::Known(n) => n,
+        SortCount::OnGpu { capacity, .. } => capacity,
+    };
+    if capacity <= 1 || passes.is_empty() {
+        return list.clone();
     }
-    let bytes = u64::from(count) * 4;
-    let alt = Keys {
-        hi: pool.get(s.ctx, &format!("{label}.alt_hi"), bytes),
-        lo: pool.get(s.ctx, &format!("{label}.alt_lo"), bytes),
+    let bytes = u64::from(capacity) * 4;
+    let alt = KeyList {
+        keys: pool.get(s.ctx, &format!("{label}.alt_keys"), bytes),
         values: pool.get(s.ctx, &format!("{label}.alt_values"), bytes),
     };
-    let num_blocks = count.div_ceil(SORT_BLOCK);
+    let num_blocks = capacity.div_ceil(SORT_BLOCK);
     let hist = pool.get(s.ctx, &format!("{label}.hist"), u64::from(num_blocks) * 16 * 4);
-    let mut passes: Vec<(u32, u32)> = (0..8).map(|d| (d * 4, 0)).collect();
-    passes.extend((0..tile_bits.div_ceil(4)).map(|d| (d * 4, 1)));
-    let (mut src, mut dst) = (keys.clone(), alt);
-    for (shift, use_hi) in passes {
-        let params = SortParams { count, shift, use_hi, num_blocks };
+    let (mut src, mut dst) = (list.clone(), alt);
+    for d in passes {
+        let params = SortParams {
+            count: capacity,
+            shift: d.shift,
+            from_keys: u32::from(d.from_keys),
+            num_blocks,
+        };
         let block = gpu::params(s.ctx, "trgs.sort.params", &params);
+        if let SortCount::OnGpu { counter, .. } = count {
+            // SortParams::count is the block's first word.
+            rec.encoder.copy_buffer_to_buffer(counter, 0, &block, 0, 4);
+        }
         let count_k = &s.kernels.sort_count;
         let bind = count_k.bind(
             s.ctx,
             &[
                 block.as_entire_binding(),
-                src.hi.as_entire_binding(),
-                src.lo.as_entire_binding(),
+                src.keys.as_entire_binding(),
+                src.values.as_entire_binding(),
                 hist.as_entire_binding(),
             ],
         );
-        rec.dispatch("sort", count_k, &bind, grid_1d(num_blocks));
+        rec.dispatch(stage, count_k, &bind, grid_1d(num_blocks));
         prefix_sum::record(s, rec, pool, &format!("{label}.hist_scan"), &hist, num_blocks * 16);
         let scatter = &s.kernels.sort_scatter;
         let bind = scatter.bind(
             s.ctx,
             &[
                 block.as_entire_binding(),
-                src.hi.as_entire_binding(),
-                src.lo.as_entire_binding(),
+                src.keys.as_entire_binding(),
                 src.values.as_entire_binding(),
                 hist.as_entire_binding(),
-                dst.hi.as_entire_binding(),
-                dst.lo.as_entire_binding(),
+                dst.keys.as_entire_binding(),
                 dst.values.as_entire_binding(),
             ],
         );
-        rec.dispatch("sort", scatter, &bind, grid_1d(num_blocks));
+        rec.dispatch(stage, scatter, &bind, grid_1d(num_blocks));
         std::mem::swap(&mut src, &mut dst);
     }
     src

@@ -1,7 +1,9 @@
-//! Stage `tile_counts` (shaders/tile_counts.wgsl; twin `trgs_core::reference::tile_counts`).
+//! Stage `tile_counts` (shaders/tile_counts.wgsl; twin `trgs_core::reference::tile_counts`): the
+//! tiles each Gaussian of a view touches; the touching ones become entries of the frame's depth
+//! order (see [`DepthEntries`]).
 use super::Stage;
 use super::project::{Candidates, WORK_STRIDE};
-use crate::gpu::{self, Recorder, range};
+use crate::gpu::{self, BufferPool, Recorder, range};
 use crate::layout::{ProjectedGaussian, TileParams};
 use crate::scene::GpuScene;
 use trgs_core::reference::{TileGrid, TileRect};
@@ -20,6 +22,44 @@ pub fn params(grid: &TileGrid, limit: &TileRect) -> TileParams {
     }
 }
 
+/// What `tile_counts` keeps per entry of the frame's depth order (one entry per view and
+/// Gaussian, `view * gaussians + index`) for `depth_order` and `emit_keys`.
+#[derive(Clone, Debug)]
+pub struct DepthEntries {
+    /// Per entry: 1 when the Gaussian touches a tile of the view, else 0.
+    pub present: wgpu::Buffer,
+    /// Per entry: the f32 bits of its depth.
+    pub depths: wgpu::Buffer,
+    /// Per entry: the tile rectangle, two u32 (x0 | y0 << 16, x1 | y1 << 16).
+    pub rects: wgpu::Buffer,
+    /// Per view: its key total.
+    pub key_totals: wgpu::Buffer,
+    /// Entries: views x Gaussians.
+    pub capacity: u32,
+}
+
+impl DepthEntries {
+    /// Buffers for `views` views of `gaussians` Gaussians, flags and totals cleared.
+    pub fn new(
+        s: Stage<'_>,
+        rec: &mut Recorder,
+        pool: &mut BufferPool,
+        views: usize,
+        gaussians: u32,
+    ) -> Self {
+        let capacity = views as u32 * gaussians;
+        let bytes = u64::from(capacity.max(1)) * 4;
+        let present = pool.get(s.ctx, "trgs.tile_counts.present", bytes);
+        let depths = pool.get(s.ctx, "trgs.tile_counts.depths", bytes);
+        let rects = pool.get(s.ctx, "trgs.tile_counts.rects", bytes * 2);
+        let key_totals = pool.get(s.ctx, "trgs.tile_counts.key_totals", views as u64 * 4);
+        rec.encoder.clear_buffer(&present, 0, None);
+        rec.encoder.clear_buffer(&key_totals, 0, None);
+        Self { present, depths, rects, key_totals, capacity }
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
 pub fn record(
     s: Stage<'_>,
     rec: &mut Recorder,
@@ -28,6 +68,7 @@ pub fn record(
     projected: &wgpu::Buffer,
     candidates: &Candidates,
     counts: &wgpu::Buffer,
+    entries: &DepthEntries,
 ) {
     let k = &s.kernels.tile_counts;
     rec.encoder.clear_buffer(counts, 0, None);
@@ -44,6 +85,10 @@ pub fn record(
                 range(counts, f * 4, c * 4),
                 list,
                 work,
+                entries.rects.as_entire_binding(),
+                entries.depths.as_entire_binding(),
+                entries.present.as_entire_binding(),
+                entries.key_totals.as_entire_binding(),
             ],
         );
         let at = chunk as u64 * WORK_STRIDE;

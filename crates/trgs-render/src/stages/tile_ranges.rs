@@ -7,7 +7,7 @@ use crate::layout::ScanParams;
 pub fn record(
     s: Stage<'_>,
     rec: &mut Recorder,
-    keys_hi: &wgpu::Buffer,
+    sorted_tiles: &wgpu::Buffer,
     count: u32,
     ranges: &wgpu::Buffer,
 ) {
@@ -17,7 +17,7 @@ pub fn record(
         gpu::params(s.ctx, "trgs.tile_ranges.params", &ScanParams { count, ..Default::default() });
     let bind = k.bind(
         s.ctx,
-        &[block.as_entire_binding(), keys_hi.as_entire_binding(), ranges.as_entire_binding()],
+        &[block.as_entire_binding(), sorted_tiles.as_entire_binding(), ranges.as_entire_binding()],
     );
     rec.dispatch("tile_ranges", k, &bind, grid_1d(count.div_ceil(256)));
 }

@@ -1,0 +1,80 @@
+//! Stage `depth_order` (shaders/depth_order_compact.wgsl, the `sort` kernels, then
+//! shaders/depth_order_counts.wgsl; twin `trgs_core::reference::depth_order`): the entries that
+//! `tile_counts` marked present, every view's together, listed in entry order (a scan of the
+//! flags), sorted front to back by their f32 depth bits, and their tile counts in that order.
+//!
+//! Why: sorting every key by (tile, depth) costs eight 4-bit passes of depth per key, and a
+//! Gaussian has one key per tile it touches (about 3.5 on the room benchmark). Sorting the
+//! Gaussians by depth once, emitting their keys in that order and sorting the keys by tile alone
+//! (stably) gives the same lists with the depth passes run over the Gaussians instead. The list
+//! starts in entry order, so the stable sort leaves depth ties in index order as the twin does
+//! (an atomic append would be cheaper but would order ties differently from run to run). The
+//! entry count is known on the GPU only: the passes read it there and cover the capacity.
+use super::sort::{self, KeyList, SortCount, digits};
+use super::tile_counts::DepthEntries;
+use super::{Stage, prefix_sum};
+use crate::gpu::{self, BufferPool, Recorder, grid_1d};
+use crate::layout::ScanParams;
+
+/// The sorted entries and their count.
+#[derive(Debug)]
+pub struct DepthOrder {
+    /// Keys: depth bits; values: entry indices, front to back.
+    pub list: KeyList,
+    /// First u32: how many entries the list holds.
+    pub entries: wgpu::Buffer,
+}
+
+/// Lists the present entries, sorts them and writes each sorted entry's tile count into
+/// `ordered_counts` (zero past the last entry, up to the capacity).
+pub fn record(
+    s: Stage<'_>,
+    rec: &mut Recorder,
+    pool: &mut BufferPool,
+    entries: &DepthEntries,
+    ordered_counts: &wgpu::Buffer,
+) -> DepthOrder {
+    let capacity = entries.capacity;
+    let label = "trgs.depth_order.slots";
+    let total = prefix_sum::record(s, rec, pool, label, &entries.present, capacity);
+    let bytes = u64::from(capacity.max(1)) * 4;
+    let list = KeyList {
+        keys: pool.get(s.ctx, "trgs.depth_order.keys", bytes),
+        values: pool.get(s.ctx, "trgs.depth_order.values", bytes),
+    };
+    let block = gpu::params(
+        s.ctx,
+        "trgs.depth_order.params",
+        &ScanParams { count: capacity, ..Default::default() },
+    );
+    let k = &s.kernels.depth_order_compact;
+    let bind = k.bind(
+        s.ctx,
+        &[
+            block.as_entire_binding(),
+            entries.present.as_entire_binding(),
+            total.as_entire_binding(),
+            entries.depths.as_entire_binding(),
+            list.keys.as_entire_binding(),
+            list.values.as_entire_binding(),
+        ],
+    );
+    let groups = grid_1d(capacity.div_ceil(256));
+    rec.dispatch("depth_order", k, &bind, groups);
+    let passes: Vec<_> = digits(32, true).collect();
+    let count = SortCount::OnGpu { counter: &total, capacity };
+    let list = sort::record(s, rec, "depth_order", pool, "trgs.depth_order", &list, count, &passes);
+    let k = &s.kernels.depth_order_counts;
+    let bind = k.bind(
+        s.ctx,
+        &[
+            block.as_entire_binding(),
+            total.as_entire_binding(),
+            list.values.as_entire_binding(),
+            entries.rects.as_entire_binding(),
+            ordered_counts.as_entire_binding(),
+        ],
+    );
+    rec.dispatch("depth_order", k, &bind, groups);
+    DepthOrder { list, entries: total }
+}
