@@ -331,6 +331,20 @@ impl Trainer {
 
     /// One optimisation step on `view`.
     pub fn train_step(&mut self, view: &View) -> Result<StepStats> {
+        self.train_step_then(view, |_| Ok(()))
+    }
+
+    /// One optimisation step on `view`, calling `before_maintenance` with the updated parameters
+    /// (and `step` already advanced) before the step's densification, opacity reset and
+    /// perturbation, as 3DGS reports its test views there: an evaluation then measures the
+    /// model the step made, not the moment an opacity reset or perturbation knocked it back
+    /// (the training recovers from those within a few steps). Its time is not in the step's
+    /// phase times.
+    pub fn train_step_then(
+        &mut self,
+        view: &View,
+        before_maintenance: impl FnOnce(&Trainer) -> Result<()>,
+    ) -> Result<StepStats> {
         let ctx = &self.ctx;
         let stage = self.settings.stage(self.step);
         let has_planes = !self.scene.planes().is_empty();
@@ -447,6 +461,8 @@ impl Trainer {
         rec.submit_and_wait(ctx);
         self.step_planes(&g.planes, t)?;
         times.adam = clock.lap(&self.ctx);
+        before_maintenance(self)?;
+        clock.lap(&self.ctx);
         self.densify_step()?;
         let perturbed = self.perturb_step()?;
         times.densify = clock.lap(&self.ctx);

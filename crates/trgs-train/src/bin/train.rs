@@ -292,8 +292,21 @@ fn train(
             init_planes(&mut trainer, &data, &mut rng, &bar)?;
         }
         let ts = Instant::now();
-        let stats = trainer.train_step(&data.train[vi])?;
-        state.train_seconds += ts.elapsed().as_secs_f64();
+        let next = trainer.step + 1;
+        let eval_now = next % eval_every == 0 || next == args.iterations;
+        let (mut evaluation, mut eval_time) = (None, Duration::ZERO);
+        let before = state.train_seconds;
+        let stats = trainer.train_step_then(&data.train[vi], |t| {
+            // Before the step's densification, reset or perturbation (see train_step_then).
+            if eval_now {
+                let te = Instant::now();
+                let seconds = before + ts.elapsed().as_secs_f64();
+                evaluation = Some(evaluate(&model_of(t), &data, t.step, seconds)?);
+                eval_time = te.elapsed();
+            }
+            Ok(())
+        })?;
+        state.train_seconds += ts.elapsed().saturating_sub(eval_time).as_secs_f64();
         state.phase_ms.accumulate(&stats.times);
         let phases: serde_json::Map<_, _> = stats
             .times
@@ -333,8 +346,7 @@ fn train(
                 ),
             });
         }
-        if trainer.step % eval_every == 0 || trainer.step == args.iterations {
-            let e = evaluate(&model_of(&trainer), &data, trainer.step, state.train_seconds)?;
+        if let Some(e) = evaluation {
             say(
                 &bar,
                 format!(

@@ -1,0 +1,47 @@
+//! `Trainer::train_step_then` calls its hook after the step's update and before the step's
+//! maintenance: an evaluation there sees the model the step made, not an opacity reset.
+use trgs_core::synthetic::{SyntheticConfig, generate, write_dataset};
+use trgs_render::GpuContext;
+use trgs_train::data::{self, Resolution};
+use trgs_train::densify::ClassicSettings;
+use trgs_train::init::{InitialShape, SeedPoint, gaussians_from_points};
+use trgs_train::settings::TrainSettings;
+use trgs_train::trainer::Trainer;
+
+#[test]
+fn hook_runs_after_the_update_and_before_the_opacity_reset() {
+    let dir = trgs_core::scratch::ScratchDir::new("evaluation-point");
+    let scene = generate(&SyntheticConfig::small());
+    write_dataset(&scene, &dir).expect("write the dataset");
+    let data = data::load(&dir, Resolution::Original).expect("load the dataset");
+    let seeds: Vec<SeedPoint> =
+        data.points.iter().map(|&(position, color)| SeedPoint { position, color }).collect();
+    let gaussians = gaussians_from_points(&seeds, 0, InitialShape::CLASSIC);
+    let ctx = GpuContext::new().expect("adapter");
+    let mut settings = TrainSettings::scaled(100);
+    settings.sh_degree = 0;
+    let mut trainer = Trainer::new(&ctx, &gaussians, &[], settings, data.extent).expect("trainer");
+    // An opacity reset at step 3 and no densification before the end.
+    let mut densify = ClassicSettings::scaled(100);
+    (densify.from, densify.until, densify.every, densify.opacity_reset_every) = (50, 60, 50, 3);
+    trainer.enable_densification(densify);
+    let cap = (0.01f32 / 0.99).ln();
+    let max_logit =
+        |t: &Trainer| t.gaussians().opacity_logits.iter().copied().fold(f32::MIN, f32::max);
+    for v in &data.train[..2] {
+        trainer.train_step(v).expect("step");
+    }
+    let before = trainer.gaussians().means;
+    let mut seen = None;
+    trainer
+        .train_step_then(&data.train[2], |t| {
+            seen = Some((t.step, max_logit(t), t.gaussians().means != before));
+            Ok(())
+        })
+        .expect("step");
+    let (step, logit, moved) = seen.expect("the hook ran");
+    assert_eq!(step, 3, "the hook sees the step advanced");
+    assert!(moved, "the hook sees the step's update");
+    assert!(logit > cap + 1.0, "the hook ran after the reset: largest logit {logit}");
+    assert!(max_logit(&trainer) <= cap, "the reset did not follow the hook");
+}
