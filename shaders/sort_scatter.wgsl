@@ -9,9 +9,11 @@
 @group(0) @binding(0) var<storage, read> params: SortParams;
 @group(0) @binding(1) var<storage, read> keys: array<u32>;
 @group(0) @binding(2) var<storage, read> values: array<u32>;
-@group(0) @binding(3) var<storage, read> hist: array<u32>;
-@group(0) @binding(4) var<storage, read_write> out_keys: array<u32>;
-@group(0) @binding(5) var<storage, read_write> out_values: array<u32>;
+// `keys` or `values` again, whichever holds this pass's digit (see shared/sort_digit.wgsl).
+@group(0) @binding(3) var<storage, read> digit_words: array<u32>;
+@group(0) @binding(4) var<storage, read> hist: array<u32>;
+@group(0) @binding(5) var<storage, read_write> out_keys: array<u32>;
+@group(0) @binding(6) var<storage, read_write> out_values: array<u32>;
 
 // Packed per-digit counts of each thread: digits 0-7 in `lo` (two per component), 8-15 in `hi`.
 var<workgroup> scan_lo: array<vec4<u32>, SORT_THREADS>;
@@ -37,7 +39,7 @@ fn main(
     for (var k = 0u; k < SORT_ITEMS; k++) {
         let slot = base + k;
         if slot < params.count {
-            let d = digit_of(slot);
+            let d = digit_in(digit_words[slot]);
             packed[d >> 1u] += 1u << ((d & 1u) * 16u);
         }
     }
@@ -73,13 +75,16 @@ fn main(
     for (var k = 0u; k < SORT_ITEMS; k++) {
         let slot = base + k;
         if slot < params.count {
-            let d = digit_of(slot);
+            // Both words are moved anyway: the digit comes from the one loaded.
+            let key = keys[slot];
+            let value = values[slot];
+            let d = digit_in(select(value, key, params.from_keys != 0u));
             let shift = (d & 1u) * 16u;
             let rank = (next[d >> 1u] >> shift) & 0xffffu;
             next[d >> 1u] += 1u << shift;
             let dest = block_base[d] + rank;
-            out_keys[dest] = keys[slot];
-            out_values[dest] = values[slot];
+            out_keys[dest] = key;
+            out_values[dest] = value;
         }
     }
 }

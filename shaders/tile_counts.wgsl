@@ -19,7 +19,8 @@
 @group(0) @binding(5) var<storage, read_write> rects: array<vec2<u32>>;
 @group(0) @binding(6) var<storage, read_write> depths: array<u32>;
 @group(0) @binding(7) var<storage, read_write> present: array<u32>;
-// Per view: its key total.
+// Per view: its key total as two words, the low 32 bits and the carries out of them (a total
+// of 2^32 keys or more is refused, not wrapped).
 @group(0) @binding(8) var<storage, read_write> key_totals: array<atomic<u32>>;
 
 @compute @workgroup_size(256)
@@ -43,5 +44,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     rects[entry] = vec2<u32>(r.x | (r.y << 16u), r.z | (r.w << 16u));
     depths[entry] = bitcast<u32>(g.color.w);
     present[entry] = 1u;
-    atomicAdd(&key_totals[tiles.view], n);
+    let before = atomicAdd(&key_totals[2u * tiles.view], n);
+    if before > 0xffffffffu - n {
+        atomicAdd(&key_totals[2u * tiles.view + 1u], 1u);
+    }
 }

@@ -228,31 +228,39 @@ impl Renderer {
         let order = depth_order::record(s, &mut rec, pool, &entries, &offsets);
         let total =
             prefix_sum::record(s, &mut rec, pool, "trgs.prefix_sum", &offsets, entries.capacity);
-        // [entries, key total of each view, key total]
-        let words = specs.len() + 2;
+        // [entries, (low word, carries) of each view's key total, key total]
+        let words = 2 * specs.len() + 2;
         let totals_staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("trgs.prefix_sum.totals"),
             size: 4 * words as u64,
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let views_bytes = 4 * specs.len() as u64;
+        let views_bytes = 8 * specs.len() as u64;
         rec.encoder.copy_buffer_to_buffer(&order.entries, 0, &totals_staging, 0, 4);
         rec.encoder.copy_buffer_to_buffer(&entries.key_totals, 0, &totals_staging, 4, views_bytes);
         rec.encoder.copy_buffer_to_buffer(&total, 0, &totals_staging, 4 + views_bytes, 4);
         rec.submit_and_wait(ctx);
         let totals: Vec<u32> = gpu::map_and_read(ctx, &totals_staging, 4 * words);
         let (num_entries, total) = (totals[0], totals[words - 1]);
+        let view_keys: Vec<u64> = totals[1..words - 1]
+            .chunks_exact(2)
+            .map(|w| u64::from(w[0]) | u64::from(w[1]) << 32)
+            .collect();
 
         // Phase 2: every view's keys into one list (a view's tiles numbered after the previous
         // view's: the camera's whole grid, then each footprint), one sort by tile, one pass of
         // tile ranges; both rasterize passes; compose.
-        let all_keys: u64 = totals[1..words - 1].iter().map(|&t| u64::from(t)).sum();
-        debug_assert_eq!(all_keys, u64::from(total), "the views' key totals add up to the scan's");
+        let all_keys: u64 = view_keys.iter().sum();
+        // Checked before the u32 scan's total is trusted: a frame of 2^32 keys or more is far
+        // over any binding, and its total would have wrapped.
         check_binding(ctx, camera, "tile keys (all views together)", all_keys * 4)?;
+        debug_assert_eq!(all_keys, u64::from(total), "the views' key totals add up to the scan's");
         let (mut key_base, mut tile_base) = (0u32, 0u32);
         let mut tables = Vec::with_capacity(views.len());
-        for (v, &keys) in views.iter_mut().zip(&totals[1..]) {
+        for (v, &keys) in views.iter_mut().zip(&view_keys) {
+            // Below 2^32 together: checked above against a binding limit of at most 4 GiB.
+            let keys = keys as u32;
             (v.key_base, v.tile_base, v.num_keys) = (key_base, tile_base, keys);
             tables.push(ViewTiles {
                 tile_base,

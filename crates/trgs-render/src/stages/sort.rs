@@ -83,15 +83,11 @@ pub fn record(
             // SortParams::count is the block's first word.
             rec.encoder.copy_buffer_to_buffer(counter, 0, &block, 0, 4);
         }
+        let digit_words = if d.from_keys { &src.keys } else { &src.values };
         let count_k = &s.kernels.sort_count;
         let bind = count_k.bind(
             s.ctx,
-            &[
-                block.as_entire_binding(),
-                src.keys.as_entire_binding(),
-                src.values.as_entire_binding(),
-                hist.as_entire_binding(),
-            ],
+            &[block.as_entire_binding(), digit_words.as_entire_binding(), hist.as_entire_binding()],
         );
         rec.dispatch(stage, count_k, &bind, grid_1d(num_blocks));
         prefix_sum::record(s, rec, pool, &format!("{label}.hist_scan"), &hist, num_blocks * 16);
@@ -102,6 +98,7 @@ pub fn record(
                 block.as_entire_binding(),
                 src.keys.as_entire_binding(),
                 src.values.as_entire_binding(),
+                digit_words.as_entire_binding(),
                 hist.as_entire_binding(),
                 dst.keys.as_entire_binding(),
                 dst.values.as_entire_binding(),

@@ -32,7 +32,7 @@ pub struct DepthEntries {
     pub depths: wgpu::Buffer,
     /// Per entry: the tile rectangle, two u32 (x0 | y0 << 16, x1 | y1 << 16).
     pub rects: wgpu::Buffer,
-    /// Per view: its key total.
+    /// Per view: its key total, two u32: the low 32 bits and the carries out of them.
     pub key_totals: wgpu::Buffer,
     /// Entries: views x Gaussians.
     pub capacity: u32,
@@ -52,7 +52,7 @@ impl DepthEntries {
         let present = pool.get(s.ctx, "trgs.tile_counts.present", bytes);
         let depths = pool.get(s.ctx, "trgs.tile_counts.depths", bytes);
         let rects = pool.get(s.ctx, "trgs.tile_counts.rects", bytes * 2);
-        let key_totals = pool.get(s.ctx, "trgs.tile_counts.key_totals", views as u64 * 4);
+        let key_totals = pool.get(s.ctx, "trgs.tile_counts.key_totals", views as u64 * 8);
         rec.encoder.clear_buffer(&present, 0, None);
         rec.encoder.clear_buffer(&key_totals, 0, None);
         Self { present, depths, rects, key_totals, capacity }
