@@ -1,5 +1,5 @@
 // Stage `sort` (twins: trgs_core::reference::sort_keys, depth_order), digit histogram of one LSD radix pass:
-// for each block of SORT_BLOCK keys, how many have each 4-bit digit. The histogram is stored
+// for each block of SORT_BLOCK keys, how many have each digit. The histogram is stored
 // digit-major (`hist[digit * num_blocks + block]`) so that its exclusive scan is every block's
 // first output slot per digit.
 #include "shared/common.wgsl"
@@ -10,7 +10,7 @@
 @group(0) @binding(1) var<storage, read> digit_words: array<u32>;
 @group(0) @binding(2) var<storage, read_write> hist: array<u32>;
 
-var<workgroup> counts: array<atomic<u32>, 16>;
+var<workgroup> counts: array<atomic<u32>, SORT_RADIX>;
 
 @compute @workgroup_size(SORT_THREADS)
 fn main(
@@ -22,13 +22,14 @@ fn main(
     // A block past the last key (the count may come from the GPU, the dispatch covers the
     // capacity) has an empty histogram; returning before the barrier keeps it cheap.
     if block * SORT_BLOCK >= params.count {
-        if lid < 16u && block < params.num_blocks {
-            hist[lid * params.num_blocks + block] = 0u;
+        // (A 2D grid's padding blocks are past num_blocks: they have no histogram column.)
+        for (var d = lid; d < SORT_RADIX && block < params.num_blocks; d += SORT_THREADS) {
+            hist[d * params.num_blocks + block] = 0u;
         }
         return;
     }
-    if lid < 16u {
-        atomicStore(&counts[lid], 0u);
+    for (var d = lid; d < SORT_RADIX; d += SORT_THREADS) {
+        atomicStore(&counts[d], 0u);
     }
     workgroupBarrier();
     let base = block * SORT_BLOCK + lid * SORT_ITEMS;
@@ -39,7 +40,7 @@ fn main(
         }
     }
     workgroupBarrier();
-    if lid < 16u && block < params.num_blocks {
-        hist[lid * params.num_blocks + block] = atomicLoad(&counts[lid]);
+    for (var d = lid; d < SORT_RADIX; d += SORT_THREADS) {
+        hist[d * params.num_blocks + block] = atomicLoad(&counts[d]);
     }
 }

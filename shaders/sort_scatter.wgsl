@@ -15,10 +15,10 @@
 @group(0) @binding(5) var<storage, read_write> out_keys: array<u32>;
 @group(0) @binding(6) var<storage, read_write> out_values: array<u32>;
 
-// Packed per-digit counts of each thread: digits 0-7 in `lo` (two per component), 8-15 in `hi`.
-var<workgroup> scan_lo: array<vec4<u32>, SORT_THREADS>;
-var<workgroup> scan_hi: array<vec4<u32>, SORT_THREADS>;
-var<workgroup> block_base: array<u32, 16>;
+// Packed per-digit counts of each thread: 16-bit fields, two digits per u32, SORT_PACKED_VECS
+// vec4s per thread.
+var<workgroup> scan: array<array<vec4<u32>, SORT_PACKED_VECS>, SORT_THREADS>;
+var<workgroup> block_base: array<u32, SORT_RADIX>;
 
 @compute @workgroup_size(SORT_THREADS)
 fn main(
@@ -31,11 +31,11 @@ fn main(
     if block * SORT_BLOCK >= params.count {
         return;
     }
-    if lid < 16u && block < params.num_blocks {
-        block_base[lid] = hist[lid * params.num_blocks + block];
+    for (var d = lid; d < SORT_RADIX; d += SORT_THREADS) {
+        block_base[d] = hist[d * params.num_blocks + block];
     }
     let base = block * SORT_BLOCK + lid * SORT_ITEMS;
-    var packed: array<u32, 8>;
+    var packed: array<u32, SORT_PACKED>;
     for (var k = 0u; k < SORT_ITEMS; k++) {
         let slot = base + k;
         if slot < params.count {
@@ -43,35 +43,34 @@ fn main(
             packed[d >> 1u] += 1u << ((d & 1u) * 16u);
         }
     }
-    scan_lo[lid] = vec4<u32>(packed[0], packed[1], packed[2], packed[3]);
-    scan_hi[lid] = vec4<u32>(packed[4], packed[5], packed[6], packed[7]);
+    for (var v = 0u; v < SORT_PACKED_VECS; v++) {
+        let w = 4u * v;
+        scan[lid][v] = vec4<u32>(packed[w], packed[w + 1u], packed[w + 2u], packed[w + 3u]);
+    }
     workgroupBarrier();
     // Hillis-Steele inclusive scan over threads (16-bit fields cannot overflow: a block holds
     // at most SORT_BLOCK < 65536 keys).
     for (var offset = 1u; offset < SORT_THREADS; offset <<= 1u) {
-        var lo = scan_lo[lid];
-        var hi = scan_hi[lid];
+        var mine = scan[lid];
         if lid >= offset {
-            lo += scan_lo[lid - offset];
-            hi += scan_hi[lid - offset];
+            for (var v = 0u; v < SORT_PACKED_VECS; v++) {
+                mine[v] += scan[lid - offset][v];
+            }
         }
         workgroupBarrier();
-        scan_lo[lid] = lo;
-        scan_hi[lid] = hi;
+        scan[lid] = mine;
         workgroupBarrier();
     }
     // Exclusive prefix of this thread = inclusive - own counts.
-    let incl_lo = scan_lo[lid];
-    let incl_hi = scan_hi[lid];
-    var next: array<u32, 8>;
-    next[0] = incl_lo.x - packed[0];
-    next[1] = incl_lo.y - packed[1];
-    next[2] = incl_lo.z - packed[2];
-    next[3] = incl_lo.w - packed[3];
-    next[4] = incl_hi.x - packed[4];
-    next[5] = incl_hi.y - packed[5];
-    next[6] = incl_hi.z - packed[6];
-    next[7] = incl_hi.w - packed[7];
+    var next: array<u32, SORT_PACKED>;
+    for (var v = 0u; v < SORT_PACKED_VECS; v++) {
+        let incl = scan[lid][v];
+        let w = 4u * v;
+        next[w] = incl.x - packed[w];
+        next[w + 1u] = incl.y - packed[w + 1u];
+        next[w + 2u] = incl.z - packed[w + 2u];
+        next[w + 3u] = incl.w - packed[w + 3u];
+    }
     for (var k = 0u; k < SORT_ITEMS; k++) {
         let slot = base + k;
         if slot < params.count {

@@ -269,3 +269,10 @@ fn chunked_bindings_match_reference() {
     // 700 Gaussians bound 256 at a time: the split that scenes above the binding limit use.
     check_scene("chunked", spec(106, 700, 1, 40.0), Some(256));
 }
+
+#[test]
+fn many_gaussians_match_reference() {
+    // Enough Gaussians that the depth order spans several sort blocks (4096 entries each) with
+    // its count known on the GPU only, and the key list several blocks of every pass.
+    check_scene("many", spec(107, 12_000, 1, 30.0), None);
+}

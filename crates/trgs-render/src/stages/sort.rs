@@ -1,12 +1,12 @@
 //! Stage `sort` (shaders/sort_count.wgsl and sort_scatter.wgsl; twins
 //! `trgs_core::reference::sort_keys` and `depth_order`): a stable LSD radix sort of 32-bit keys
-//! with their 32-bit values, 4-bit digits. The caller names the digits: the key list sorts by
+//! with their 32-bit values, SORT_RADIX_BITS-bit digits. The caller names the digits: the key list sorts by
 //! the bits a tile index can have; the depth order by its values' bits (the tie-break) and then
 //! the 32 depth bits of its keys. Each pass counts digits per block, scans the digit-major
 //! histogram with `prefix_sum`, and scatters stably.
 use super::{Stage, prefix_sum};
 use crate::gpu::{self, BufferPool, Recorder, grid_1d};
-use crate::layout::{SORT_BLOCK, SortParams};
+use crate::layout::{SORT_BLOCK, SORT_RADIX, SORT_RADIX_BITS, SortParams};
 
 /// Keys and their values, sorted together.
 #[derive(Clone, Debug)]
@@ -35,7 +35,8 @@ pub struct Digit {
 
 /// The passes over the low `bits` bits of the key (or value) word.
 pub fn digits(bits: u32, from_keys: bool) -> impl Iterator<Item = Digit> {
-    (0..bits.div_ceil(4)).map(move |d| Digit { shift: d * 4, from_keys })
+    (0..bits.div_ceil(SORT_RADIX_BITS))
+        .map(move |d| Digit { shift: d * SORT_RADIX_BITS, from_keys })
 }
 
 /// Bits needed to hold values below `n`.
@@ -69,7 +70,7 @@ pub fn record(
         values: pool.get(s.ctx, &format!("{label}.alt_values"), bytes),
     };
     let num_blocks = capacity.div_ceil(SORT_BLOCK);
-    let hist = pool.get(s.ctx, &format!("{label}.hist"), u64::from(num_blocks) * 16 * 4);
+    let hist = pool.get(s.ctx, &format!("{label}.hist"), u64::from(num_blocks * SORT_RADIX) * 4);
     let (mut src, mut dst) = (list.clone(), alt);
     for d in passes {
         let params = SortParams {
@@ -90,7 +91,8 @@ pub fn record(
             &[block.as_entire_binding(), digit_words.as_entire_binding(), hist.as_entire_binding()],
         );
         rec.dispatch(stage, count_k, &bind, grid_1d(num_blocks));
-        prefix_sum::record(s, rec, pool, &format!("{label}.hist_scan"), &hist, num_blocks * 16);
+        let columns = num_blocks * SORT_RADIX;
+        prefix_sum::record(s, rec, pool, &format!("{label}.hist_scan"), &hist, columns);
         let scatter = &s.kernels.sort_scatter;
         let bind = scatter.bind(
             s.ctx,
