@@ -189,8 +189,9 @@ impl Renderer {
         let n = u64::from(scene.len());
         let mut rec = Recorder::new(ctx, "trgs.render", options.profile);
 
-        // Phase 1: for every view, project and count tiles, appending the touching Gaussians to
-        // one depth order; sort it, scan its counts; then one readback of the totals.
+        // Phase 1: for every view, project and count tiles (the touching Gaussians become entries
+        // of the frame's depth order); list and sort the entries by depth, scan their tile
+        // counts in that order; then one readback of the totals.
         let entries = DepthEntries::new(s, &mut rec, pool, specs.len(), scene.len());
         let sh_degree = options.sh_degree.map_or(scene.sh_degree(), |d| d.min(scene.sh_degree()));
         let mut views = Vec::with_capacity(specs.len());
@@ -224,6 +225,7 @@ impl Renderer {
                 tile_base: 0,
             });
         }
+        // The entries' tile counts in depth order, scanned in place into their first key slots.
         let offsets = pool.get(ctx, "trgs.depth_order.offsets", u64::from(entries.capacity) * 4);
         let order = depth_order::record(s, &mut rec, pool, &entries, &offsets);
         let total =
