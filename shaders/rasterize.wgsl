@@ -25,6 +25,7 @@ var<workgroup> s_conic: array<vec4<f32>, TILE_PIXELS>;
 var<workgroup> s_color: array<vec4<f32>, TILE_PIXELS>;
 var<workgroup> num_done: atomic<u32>;
 var<workgroup> max_last: atomic<u32>;
+var<workgroup> num_walked: atomic<u32>;
 
 fn load_batch(start: u32, end: u32, round: u32, lid: u32) {
     let idx = start + round * TILE_PIXELS + lid;
@@ -117,20 +118,39 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
     var variance = 0.0;
     var sign_sum = 0.0;
 #ifdef DEPTH_VARIANCE
-    // Second walk: the spread of the blended depths around D_t, over entries [0, last_t).
+    // Second walk: the spread of the blended depths around D_t. The list is sorted by the depth
+    // z that is blended, so the entries nearer than D_t come first, and since D_t is the
+    // weighted mean, sum_{z > D} w (z - D) = sum_{z < D} w (D - z): V = 2 sum_{z < D} w (D - z)
+    // and sum w sign(z - D) = W - W_{z = D} - 2 W_{z < D}. A pixel's walk ends at its first
+    // entry deeper than D_t (or at last_t), often long before last_t on an opaque surface.
+    if lid == 0u {
+        atomicStore(&num_walked, 0u);
+    }
     if inside {
         atomicMax(&max_last, last_t);
     }
     let walk = workgroupUniformLoad(&max_last);
     let walk_rounds = (walk + TILE_PIXELS - 1u) / TILE_PIXELS;
+    var walked = !inside || wsum == 0.0;
+    if walked {
+        atomicAdd(&num_walked, 1u);
+    }
     var tv = 1.0;
+    var below = 0.0;
+    var w_below = 0.0;
+    var w_equal = 0.0;
     for (var r = 0u; r < walk_rounds; r++) {
-        workgroupBarrier();
+        if workgroupUniformLoad(&num_walked) == TILE_PIXELS {
+            break;
+        }
         load_batch(start, end, r, lid);
         workgroupBarrier();
         let batch = min(TILE_PIXELS, n - r * TILE_PIXELS);
-        for (var j = 0u; j < batch; j++) {
-            if !inside || r * TILE_PIXELS + j >= last_t {
+        for (var j = 0u; j < batch && !walked; j++) {
+            let z = s_color[j].w;
+            if r * TILE_PIXELS + j >= last_t || z > depth {
+                walked = true;
+                atomicAdd(&num_walked, 1u);
                 break;
             }
             let mean = s_mean[j];
@@ -142,11 +162,18 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
                 continue;
             }
             let wgt = alpha * tv;
-            let dz = s_color[j].w - depth;
-            variance += wgt * abs(dz);
-            sign_sum += wgt * sign(dz);
+            if z < depth {
+                below += wgt * (depth - z);
+                w_below += wgt;
+            } else {
+                w_equal += wgt;
+            }
             tv *= 1.0 - alpha;
         }
+    }
+    if wsum > 0.0 {
+        variance = 2.0 * below;
+        sign_sum = wsum - w_equal - 2.0 * w_below;
     }
 #endif
     if inside {

@@ -3,7 +3,9 @@
 //! T_m (the glass mask M, which they occlude but never paint); glass Gaussians advance only T_m.
 //! A Gaussian that would bring T_t below 1e-4 stops the pixel; one that would bring T_m below it
 //! stops M only. A second walk over the blended Gaussians gives the depth variance
-//! V = sum_i w_i |z_i - D_t|, which needs D_t first.
+//! V = sum_i w_i |z_i - D_t|, which needs D_t first. (The GPU's walk sums the near side only
+//! and doubles it, the same number since D_t is the weighted mean; this twin keeps the
+//! definition.)
 use super::{MAX_ALPHA, MIN_ALPHA, MIN_TRANSMITTANCE, Projected, TILE_SIZE, TileGrid};
 use crate::image::Image;
 
