@@ -1,9 +1,9 @@
 //! Stage `sort` (shaders/sort_count.wgsl and sort_scatter.wgsl; twins
 //! `trgs_core::reference::sort_keys` and `depth_order`): a stable LSD radix sort of 32-bit keys
-//! with their 32-bit values, SORT_RADIX_BITS-bit digits. The caller names the digits: the key list sorts by
-//! the bits a tile index can have; the depth order by its values' bits (the tie-break) and then
-//! the 32 depth bits of its keys. Each pass counts digits per block, scans the digit-major
-//! histogram with `prefix_sum`, and scatters stably.
+//! with their 32-bit values, in digits of SORT_RADIX_BITS bits. The caller names the digits: the
+//! key list sorts by the bits a tile index can have, the depth order by the 32 depth bits. Each
+//! pass counts digits per block, scans the digit-major histogram with `prefix_sum`, and scatters
+//! stably.
 use super::{Stage, prefix_sum};
 use crate::gpu::{self, BufferPool, Recorder, grid_1d};
 use crate::layout::{SORT_BLOCK, SORT_RADIX, SORT_RADIX_BITS, SortParams};
