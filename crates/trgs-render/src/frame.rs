@@ -2,11 +2,14 @@
 //! Gaussians, sorted lists, per-pixel states), and readback to images.
 use crate::GpuContext;
 use crate::gpu::{self, BufferPool};
-use crate::layout::{ProjectParams, ProjectedGaussian, RasterState, ReflectionState};
+use crate::layout::{ProjectParams, RasterState, ReflectionState};
 use crate::stages::sort::KeyList;
 use trgs_core::Image;
 use trgs_core::reference::{TileGrid, TileRect};
 use trgs_core::scene::ViewTransform;
+
+mod intermediates;
+pub use intermediates::{DepthOrderIntermediates, ViewIntermediates};
 
 /// The geometry stages of one view (the real camera is view 0, then one per mirrored pass).
 #[derive(Debug)]
@@ -176,36 +179,6 @@ pub struct PlaneImages {
     pub raw_color: Image<f32>,
     pub intensity: Image<f32>,
     pub footprint: TileRect,
-}
-
-/// Intermediate results of one view's geometry stages (for stage-by-stage tests).
-#[derive(Clone, Debug)]
-pub struct ViewIntermediates {
-    pub projected: Vec<ProjectedGaussian>,
-    /// Tile counts per Gaussian.
-    pub counts: Vec<u32>,
-    /// This view's Gaussians in the frame's depth order.
-    pub order: Vec<u32>,
-    /// This view's keys (tile indices of the whole grid) and values as emitted, in emission
-    /// order (with `capture_intermediates`).
-    pub emitted: Option<(Vec<u32>, Vec<u32>)>,
-    /// This view's sorted keys (tile indices of the whole grid) and values.
-    pub sorted_keys: Vec<u32>,
-    pub sorted_values: Vec<u32>,
-    pub ranges: Vec<(u32, u32)>,
-}
-
-/// The frame's depth order, read back (for stage-by-stage tests).
-#[derive(Clone, Debug)]
-pub struct DepthOrderIntermediates {
-    /// Entry indices (`view * Gaussians + index`), front to back.
-    pub entries: Vec<u32>,
-    /// Their depth bits.
-    pub depths: Vec<u32>,
-    /// The exclusive scan of their tile counts.
-    pub offsets: Vec<u32>,
-    /// Keys of all views.
-    pub total: u32,
 }
 
 impl Frame {
@@ -477,82 +450,6 @@ impl Frame {
     ) -> Option<Vec<crate::layout::ProjectedGaussian>> {
         let v = self.views.get(vi)?;
         Some(gpu::read_buffer(ctx, &v.projected, 0, self.gaussian_count() as usize))
-    }
-
-    /// The geometry stages' results of view `vi` (0 = camera, then mirrored passes), in the
-    /// twin's form of one view alone: its slice of the shared key list, with tile indices of the
-    /// whole grid and ranges counted from the slice's start.
-    pub fn read_intermediates(
-        &self,
-        ctx: &GpuContext,
-        vi: usize,
-        gaussians: usize,
-    ) -> Option<ViewIntermediates> {
-        let v = self.views.get(vi)?;
-        let keys = v.keys.as_ref()?;
-        let grid = self.grid?;
-        let binning = self.binning.as_ref()?;
-        let (n, base) = (v.num_keys as usize, u64::from(v.key_base) * 4);
-        let (sorted, sorted_values) = (
-            gpu::read_buffer::<u32>(ctx, &keys.keys, base, n),
-            gpu::read_buffer::<u32>(ctx, &keys.values, base, n),
-        );
-        let sorted_keys = sorted.iter().map(|&t| v.grid_tile(&grid, t)).collect();
-        let own = v.tile_base..v.tile_base + v.limit.count();
-        // The emitted list interleaves the views: this view's keys are those in its tiles.
-        let emitted = binning.emitted.as_ref().map(|k| {
-            let all = binning.total as usize;
-            let tiles: Vec<u32> = gpu::read_buffer(ctx, &k.keys, 0, all);
-            let values: Vec<u32> = gpu::read_buffer(ctx, &k.values, 0, all);
-            tiles
-                .into_iter()
-                .zip(values)
-                .filter(|(t, _)| own.contains(t))
-                .map(|(t, value)| (v.grid_tile(&grid, t), value))
-                .unzip()
-        });
-        let entries: Vec<u32> =
-            gpu::read_buffer(ctx, &binning.order.values, 0, binning.entries as usize);
-        let first = vi as u32 * self.gaussian_count;
-        let order = entries
-            .into_iter()
-            .filter(|e| (first..first + self.gaussian_count).contains(e))
-            .map(|e| e - first)
-            .collect();
-        let mut ranges = vec![(0, 0); grid.tile_count() as usize];
-        let read: Vec<[u32; 2]> = gpu::read_buffer(
-            ctx,
-            v.ranges.as_ref()?,
-            u64::from(v.tile_base) * 8,
-            v.limit.count() as usize,
-        );
-        for (local, [a, b]) in read.into_iter().enumerate() {
-            if b > a {
-                let tile = v.grid_tile(&grid, v.tile_base + local as u32) as usize;
-                ranges[tile] = (a - v.key_base, b - v.key_base);
-            }
-        }
-        Some(ViewIntermediates {
-            projected: gpu::read_buffer(ctx, &v.projected, 0, gaussians),
-            counts: gpu::read_buffer(ctx, &v.counts, 0, gaussians),
-            order,
-            emitted,
-            sorted_keys,
-            sorted_values,
-            ranges,
-        })
-    }
-
-    /// The frame's depth order, every view's together.
-    pub fn read_depth_order(&self, ctx: &GpuContext) -> Option<DepthOrderIntermediates> {
-        let b = self.binning.as_ref()?;
-        let n = b.entries as usize;
-        Some(DepthOrderIntermediates {
-            entries: gpu::read_buffer(ctx, &b.order.values, 0, n),
-            depths: gpu::read_buffer(ctx, &b.order.keys, 0, n),
-            offsets: gpu::read_buffer(ctx, &b.offsets, 0, n),
-            total: b.total,
-        })
     }
 }
 
