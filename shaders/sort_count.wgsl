@@ -6,8 +6,8 @@
 #include "shared/sort_digit.wgsl"
 
 @group(0) @binding(0) var<storage, read> params: SortParams;
-// The key or the value words, whichever holds this pass's digit.
-@group(0) @binding(1) var<storage, read> digit_words: array<u32>;
+// Only the keys: counting needs no values.
+@group(0) @binding(1) var<storage, read> keys: array<u32>;
 @group(0) @binding(2) var<storage, read_write> hist: array<u32>;
 
 var<workgroup> counts: array<atomic<u32>, SORT_RADIX>;
@@ -36,7 +36,7 @@ fn main(
     for (var k = 0u; k < SORT_ITEMS; k++) {
         let slot = base + k;
         if slot < params.count {
-            atomicAdd(&counts[digit_in(digit_words[slot])], 1u);
+            atomicAdd(&counts[digit_in(keys[slot])], 1u);
         }
     }
     workgroupBarrier();

@@ -9,11 +9,9 @@
 @group(0) @binding(0) var<storage, read> params: SortParams;
 @group(0) @binding(1) var<storage, read> keys: array<u32>;
 @group(0) @binding(2) var<storage, read> values: array<u32>;
-// `keys` or `values` again, whichever holds this pass's digit (see shared/sort_digit.wgsl).
-@group(0) @binding(3) var<storage, read> digit_words: array<u32>;
-@group(0) @binding(4) var<storage, read> hist: array<u32>;
-@group(0) @binding(5) var<storage, read_write> out_keys: array<u32>;
-@group(0) @binding(6) var<storage, read_write> out_values: array<u32>;
+@group(0) @binding(3) var<storage, read> hist: array<u32>;
+@group(0) @binding(4) var<storage, read_write> out_keys: array<u32>;
+@group(0) @binding(5) var<storage, read_write> out_values: array<u32>;
 
 // Packed per-digit counts of each thread: 16-bit fields, two digits per u32, SORT_PACKED_VECS
 // vec4s per thread.
@@ -39,7 +37,7 @@ fn main(
     for (var k = 0u; k < SORT_ITEMS; k++) {
         let slot = base + k;
         if slot < params.count {
-            let d = digit_in(digit_words[slot]);
+            let d = digit_in(keys[slot]);
             packed[d >> 1u] += 1u << ((d & 1u) * 16u);
         }
     }
@@ -74,10 +72,9 @@ fn main(
     for (var k = 0u; k < SORT_ITEMS; k++) {
         let slot = base + k;
         if slot < params.count {
-            // Both words are moved anyway: the digit comes from the one loaded.
             let key = keys[slot];
             let value = values[slot];
-            let d = digit_in(select(value, key, params.from_keys != 0u));
+            let d = digit_in(key);
             let shift = (d & 1u) * 16u;
             let rank = (next[d >> 1u] >> shift) & 0xffffu;
             next[d >> 1u] += 1u << shift;

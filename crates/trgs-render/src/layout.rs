@@ -124,7 +124,7 @@ gpu_struct! {
         /// The frame numbers every (view, Gaussian) pair `entry_base + Gaussian index`, with
         /// `entry_base = view * Gaussians`: the entries of the one depth order of all views.
         pub entry_base: u32,
-        /// Index of the view (its key total is counter `1 + view`).
+        /// Index of the view (its key total is `key_totals[2 view]`, with its carries after).
         pub view: u32,
     }
 }
@@ -168,9 +168,7 @@ gpu_struct! {
         pub count: u32,
         /// Bit offset of the digit (SORT_RADIX_BITS wide) in its word.
         pub shift: u32,
-        /// 1: the digit is in the key word, 0: in the value word (the depth order breaks ties
-        /// in depth by the entry index, its value).
-        pub from_keys: u32,
+        pub pad0: u32,
         pub num_blocks: u32,
     }
 }

@@ -174,7 +174,7 @@ impl Renderer {
             }
         }
         frame.reset(grid, planes.len(), scene.len(), options);
-        // Entry indices (view x Gaussian) and the keys' u32 totals must not wrap.
+        // Entry indices (view x Gaussian) are u32 (the key totals carry, see tile_counts).
         let capacity = specs.len() as u64 * u64::from(scene.len());
         if capacity > u64::from(u32::MAX) {
             return Err(RenderError::FrameTooLarge {
@@ -294,7 +294,7 @@ impl Renderer {
                 values: copy("values", &keys.values, pool),
             }
         });
-        let tile_digits: Vec<_> = sort::digits(sort::bits_below(tiles), true).collect();
+        let tile_digits: Vec<_> = sort::digits(sort::bits_below(tiles)).collect();
         let sorted = sort::record(
             s,
             &mut rec,

@@ -1,8 +1,8 @@
 //! Stage `depth_order`: the Gaussians that touch at least one tile, front to back. Keys are
 //! emitted in this order and then sorted by tile alone, stably, so every tile's list comes out
 //! front to back without sorting the depth bits of every key: a Gaussian's depth is sorted once,
-//! however many tiles it touches. Ties in depth go to the lower index, as the GPU's sort breaks
-//! them (its 64-bit key is the depth's f32 bits, then the index).
+//! however many tiles it touches. Ties in depth go to the lower index, as on the GPU (it lists
+//! the entries in index order, then sorts them stably by depth).
 use super::Projected;
 
 /// Indices of the Gaussians with a non-zero tile count, sorted by (f32 depth bits, index).

@@ -61,7 +61,7 @@ pub fn record(
     );
     let groups = grid_1d(capacity.div_ceil(256));
     rec.dispatch("depth_order", k, &bind, groups);
-    let passes: Vec<_> = digits(32, true).collect();
+    let passes: Vec<_> = digits(32).collect();
     let count = SortCount::OnGpu { counter: &total, capacity };
     let list = sort::record(s, rec, "depth_order", pool, "trgs.depth_order", &list, count, &passes);
     let k = &s.kernels.depth_order_counts;

@@ -6,9 +6,9 @@ use super::tile_counts::DepthEntries;
 use crate::gpu::{self, Recorder, grid_1d};
 use crate::layout::{EmitParams, ViewTiles};
 
-/// Write the keys (tile indices) and values (Gaussian indices) of the first `count` entries of
-/// `order` into `keys`; `offsets` is the scan of their tile counts, `views` numbers each view's
-/// tiles in the shared list.
+/// Write the keys (tile indices) and values (Gaussian indices) of the first `params.entries`
+/// entries of `order` into `keys`; `offsets` is the scan of their tile counts, `views` numbers
+/// each view's tiles in the shared list.
 #[allow(clippy::too_many_arguments)]
 pub fn record(
     s: Stage<'_>,

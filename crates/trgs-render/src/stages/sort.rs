@@ -1,7 +1,7 @@
 //! Stage `sort` (shaders/sort_count.wgsl and sort_scatter.wgsl; twins
 //! `trgs_core::reference::sort_keys` and `depth_order`): a stable LSD radix sort of 32-bit keys
-//! with their 32-bit values, in digits of SORT_RADIX_BITS bits. The caller names the digits: the
-//! key list sorts by the bits a tile index can have, the depth order by the 32 depth bits. Each
+//! with their 32-bit values, in digits of SORT_RADIX_BITS bits. The caller names the key bits
+//! to sort: the key list the bits a tile index can have, the depth order the 32 depth bits. Each
 //! pass counts digits per block, scans the digit-major histogram with `prefix_sum`, and scatters
 //! stably.
 use super::{Stage, prefix_sum};
@@ -26,17 +26,9 @@ pub enum SortCount<'a> {
     },
 }
 
-/// One radix pass: the digit's bit offset, and whether it is in the key (or the value) word.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Digit {
-    pub shift: u32,
-    pub from_keys: bool,
-}
-
-/// The passes over the low `bits` bits of the key (or value) word.
-pub fn digits(bits: u32, from_keys: bool) -> impl Iterator<Item = Digit> {
-    (0..bits.div_ceil(SORT_RADIX_BITS))
-        .map(move |d| Digit { shift: d * SORT_RADIX_BITS, from_keys })
+/// The bit offsets of the passes over the low `bits` bits of the keys.
+pub fn digits(bits: u32) -> impl Iterator<Item = u32> {
+    (0..bits.div_ceil(SORT_RADIX_BITS)).map(|d| d * SORT_RADIX_BITS)
 }
 
 /// Bits needed to hold values below `n`.
@@ -55,13 +47,13 @@ pub fn record(
     label: &str,
     list: &KeyList,
     count: SortCount<'_>,
-    passes: &[Digit],
+    shifts: &[u32],
 ) -> KeyList {
     let capacity = match count {
         SortCount::Known(n) => n,
         SortCount::OnGpu { capacity, .. } => capacity,
     };
-    if capacity <= 1 || passes.is_empty() {
+    if capacity <= 1 || shifts.is_empty() {
         return list.clone();
     }
     let bytes = u64::from(capacity) * 4;
@@ -72,23 +64,17 @@ pub fn record(
     let num_blocks = capacity.div_ceil(SORT_BLOCK);
     let hist = pool.get(s.ctx, &format!("{label}.hist"), u64::from(num_blocks * SORT_RADIX) * 4);
     let (mut src, mut dst) = (list.clone(), alt);
-    for d in passes {
-        let params = SortParams {
-            count: capacity,
-            shift: d.shift,
-            from_keys: u32::from(d.from_keys),
-            num_blocks,
-        };
+    for &shift in shifts {
+        let params = SortParams { count: capacity, shift, num_blocks, ..Default::default() };
         let block = gpu::params(s.ctx, "trgs.sort.params", &params);
         if let SortCount::OnGpu { counter, .. } = count {
             // SortParams::count is the block's first word.
             rec.encoder.copy_buffer_to_buffer(counter, 0, &block, 0, 4);
         }
-        let digit_words = if d.from_keys { &src.keys } else { &src.values };
         let count_k = &s.kernels.sort_count;
         let bind = count_k.bind(
             s.ctx,
-            &[block.as_entire_binding(), digit_words.as_entire_binding(), hist.as_entire_binding()],
+            &[block.as_entire_binding(), src.keys.as_entire_binding(), hist.as_entire_binding()],
         );
         rec.dispatch(stage, count_k, &bind, grid_1d(num_blocks));
         let columns = num_blocks * SORT_RADIX;
@@ -100,7 +86,6 @@ pub fn record(
                 block.as_entire_binding(),
                 src.keys.as_entire_binding(),
                 src.values.as_entire_binding(),
-                digit_words.as_entire_binding(),
                 hist.as_entire_binding(),
                 dst.keys.as_entire_binding(),
                 dst.values.as_entire_binding(),
