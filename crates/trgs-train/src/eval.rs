@@ -85,6 +85,17 @@ pub struct TruthComparison {
     pub planes: Vec<(f64, f64)>,
     /// PSNR of the transmission layer against the true transmission, mean over the test views.
     pub transmission_psnr: Option<f64>,
+    /// PSNR of the final image against the test images where the glass shows a reflection
+    /// (the image differs from the true transmission) and everywhere else, each over the pooled
+    /// pixels of all test views: where TR-Gaussians and plain 3DGS differ, and where they should
+    /// not. None without true transmission images or without such pixels.
+    #[serde(default)]
+    pub reflection_region_psnr: Option<f64>,
+    #[serde(default)]
+    pub elsewhere_psnr: Option<f64>,
+    /// Share of the test pixels in the reflection region.
+    #[serde(default)]
+    pub reflection_region_share: Option<f64>,
 }
 
 impl std::fmt::Display for TruthComparison {
@@ -103,8 +114,63 @@ impl std::fmt::Display for TruthComparison {
         match self.transmission_psnr {
             Some(p) => write!(f, "transmission PSNR {p:.2} dB"),
             None => write!(f, "no true transmission images"),
+        }?;
+        if let (Some(r), Some(e), Some(share)) =
+            (self.reflection_region_psnr, self.elsewhere_psnr, self.reflection_region_share)
+        {
+            write!(
+                f,
+                "; final image {r:.2} dB where the glass reflects ({:.0}% of the pixels), \
+                 {e:.2} dB elsewhere",
+                100.0 * share
+            )?;
         }
+        Ok(())
     }
+}
+
+/// A pixel belongs to the reflection region when the image and the true transmission differ by
+/// more than this in some channel (a level of an 8-bit image is 1/255; resampling blends levels).
+pub const REFLECTION_REGION_THRESHOLD: f32 = 0.5 / 255.0;
+
+/// Squared error of `render` against `image`, summed per region: [reflection region, elsewhere],
+/// each as (sum over the samples, number of samples). The reflection region is where `image`
+/// differs from the true transmission `truth`.
+pub fn region_errors(
+    render: &trgs_core::Image<f32>,
+    image: &trgs_core::Image<f32>,
+    truth: &trgs_core::Image<f32>,
+) -> Result<[(f64, usize); 2]> {
+    let same = |a: &trgs_core::Image<f32>| {
+        (a.width, a.height, a.channels) == (image.width, image.height, image.channels)
+    };
+    anyhow::ensure!(
+        same(render) && same(truth),
+        "region errors need images of one size: render {}x{}x{}, image {}x{}x{}, truth {}x{}x{}",
+        render.width,
+        render.height,
+        render.channels,
+        image.width,
+        image.height,
+        image.channels,
+        truth.width,
+        truth.height,
+        truth.channels
+    );
+    let c = image.channels.max(1) as usize;
+    let mut out = [(0.0, 0usize); 2];
+    for ((r, i), t) in render.data.chunks(c).zip(image.data.chunks(c)).zip(truth.data.chunks(c)) {
+        let reflects = i.iter().zip(t).any(|(a, b)| (a - b).abs() > REFLECTION_REGION_THRESHOLD);
+        let e: f64 = r.iter().zip(i).map(|(&a, &b)| (f64::from(a) - f64::from(b)).powi(2)).sum();
+        let slot = &mut out[usize::from(!reflects)];
+        slot.0 += e;
+        slot.1 += c;
+    }
+    Ok(out)
+}
+
+fn psnr_of(sum: f64, samples: usize) -> Option<f64> {
+    (samples > 0).then(|| 10.0 * (samples as f64 / sum.max(f64::MIN_POSITIVE)).log10())
 }
 
 /// Compare with `<root>/gt` when the dataset has one (None otherwise).
@@ -135,6 +201,7 @@ pub fn compare_with_truth(
         }
     }
     let mut psnrs = Vec::new();
+    let mut regions = [(0.0, 0usize); 2];
     for v in &data.test {
         let path = gt.join("transmission").join(&v.camera.name);
         if !path.is_file() {
@@ -144,10 +211,24 @@ pub fn compare_with_truth(
         let truth = resize_area(&truth, v.camera.width(), v.camera.height());
         let t = model.layer(v, Layer::Transmission)?;
         psnrs.push(psnr(&t, &truth)?);
+        let color = model.layer(v, Layer::Color)?;
+        let split = region_errors(&color, &v.image, &truth)
+            .with_context(|| format!("comparing {} with {}", v.camera.name, path.display()))?;
+        for (total, part) in regions.iter_mut().zip(split) {
+            total.0 += part.0;
+            total.1 += part.1;
+        }
     }
     let transmission_psnr =
         (!psnrs.is_empty()).then(|| psnrs.iter().sum::<f64>() / psnrs.len() as f64);
-    Ok(Some(TruthComparison { planes: errors, transmission_psnr }))
+    let samples = regions[0].1 + regions[1].1;
+    Ok(Some(TruthComparison {
+        planes: errors,
+        transmission_psnr,
+        reflection_region_psnr: psnr_of(regions[0].0, regions[0].1),
+        elsewhere_psnr: psnr_of(regions[1].0, regions[1].1),
+        reflection_region_share: (samples > 0).then(|| regions[0].1 as f64 / samples as f64),
+    }))
 }
 
 /// Write each evaluation view's render `<dir>/<stem>.png` and, with planes, its decomposition
@@ -186,4 +267,42 @@ pub fn write_renders(model: &Renderable, data: &TrainingData, dir: &Path) -> Res
         write_png_rgb(&layers.join(format!("{stem}_weighted_reflection.png")), &weighted)?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use trgs_core::Image;
+
+    fn rgb(pixels: &[[f32; 3]]) -> Image<f32> {
+        Image { width: pixels.len() as u32, height: 1, channels: 3, data: pixels.concat() }
+    }
+
+    #[test]
+    fn regions_split_where_the_image_leaves_the_transmission() {
+        // Pixel 0: the glass adds a reflection; pixel 1: one 8-bit level of resampling noise
+        // below the threshold; pixel 2: no glass.
+        let truth = rgb(&[[0.2, 0.2, 0.2], [0.5, 0.5, 0.5], [0.9, 0.1, 0.3]]);
+        let image = rgb(&[[0.3, 0.25, 0.2], [0.5, 0.5, 0.5 + 0.4 / 255.0], [0.9, 0.1, 0.3]]);
+        let render = rgb(&[[0.3, 0.15, 0.2], [0.6, 0.5, 0.5], [0.9, 0.1, 0.0]]);
+        let [inside, outside] = region_errors(&render, &image, &truth).expect("same sizes");
+        assert_eq!(inside.1, 3);
+        assert!((inside.0 - 0.01).abs() < 1e-7, "{inside:?}");
+        assert_eq!(outside.1, 6);
+        let want = 0.01 + (0.4f64 / 255.0).powi(2) + 0.09;
+        assert!((outside.0 - want).abs() < 1e-6, "{outside:?} against {want}");
+        assert!(
+            (psnr_of(inside.0, inside.1).expect("pixels") - 10.0 * (3.0f64 / 0.01).log10()).abs()
+                < 1e-6
+        );
+        assert_eq!(psnr_of(0.0, 0), None);
+    }
+
+    #[test]
+    fn region_errors_refuse_images_of_different_sizes() {
+        let a = rgb(&[[0.0; 3], [0.0; 3]]);
+        let b = rgb(&[[0.0; 3]]);
+        let err = region_errors(&a, &a, &b).expect_err("sizes differ").to_string();
+        assert!(err.contains("truth 1x1x3"), "{err}");
+    }
 }

@@ -104,6 +104,17 @@ fn killed_run_resumes_to_the_end() {
         a.zip(b).is_some_and(|(a, b)| (a - b).abs() < 1e-3),
         "eval PSNR {a:?} against the run's {b:?}"
     );
+    // The synthetic scene has true transmission images: both split the final image's error
+    // into where the glass reflects and elsewhere, and agree.
+    for key in ["reflection_region_psnr", "elsewhere_psnr", "reflection_region_share"] {
+        let (a, b) = (evaluated["truth"][key].as_f64(), metrics["truth"][key].as_f64());
+        assert!(
+            a.zip(b).is_some_and(|(a, b)| a.is_finite() && (a - b).abs() < 1e-3),
+            "{key}: eval {a:?} against the run's {b:?}"
+        );
+    }
+    let share = evaluated["truth"]["reflection_region_share"].as_f64().unwrap_or(0.0);
+    assert!(share > 0.01 && share < 0.9, "reflection region share {share}");
 
     // Settings come from the checkpoint: changing them on resume is refused.
     let refused = Command::new(env!("CARGO_BIN_EXE_train"))
