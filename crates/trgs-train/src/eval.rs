@@ -8,7 +8,7 @@ use std::time::Instant;
 use trgs_core::io::{read_planes_json, read_rgb_image};
 use trgs_core::metrics::{psnr, ssim};
 use trgs_core::scene::ReflectionPlane;
-use trgs_render::{GpuContext, GpuScene, Layer, RenderOptions, Renderer};
+use trgs_render::{Frame, GpuContext, GpuScene, Layer, RenderOptions, Renderer};
 
 /// A model as evaluation sees it: scene, renderer and options.
 #[derive(Debug)]
@@ -20,12 +20,16 @@ pub struct Renderable<'a> {
 }
 
 impl Renderable<'_> {
-    pub fn layer(&self, view: &View, layer: Layer) -> Result<trgs_core::Image<f32>> {
-        let frame = self
-            .renderer
+    /// One render of `view`, every layer in it (read several layers from one frame rather than
+    /// rendering once per layer).
+    pub fn frame(&self, view: &View) -> Result<Frame> {
+        self.renderer
             .render(self.scene, &view.camera, &self.options)
-            .with_context(|| format!("rendering view {}", view.camera.name))?;
-        Ok(frame.read_layer(self.ctx, layer))
+            .with_context(|| format!("rendering view {}", view.camera.name))
+    }
+
+    pub fn layer(&self, view: &View, layer: Layer) -> Result<trgs_core::Image<f32>> {
+        Ok(self.frame(view)?.read_layer(self.ctx, layer))
     }
 }
 
@@ -209,9 +213,10 @@ pub fn compare_with_truth(
         }
         let truth = read_rgb_image(&path)?;
         let truth = resize_area(&truth, v.camera.width(), v.camera.height());
-        let t = model.layer(v, Layer::Transmission)?;
+        let frame = model.frame(v)?;
+        let t = frame.read_layer(model.ctx, Layer::Transmission);
         psnrs.push(psnr(&t, &truth)?);
-        let color = model.layer(v, Layer::Color)?;
+        let color = frame.read_layer(model.ctx, Layer::Color);
         let split = region_errors(&color, &v.image, &truth)
             .with_context(|| format!("comparing {} with {}", v.camera.name, path.display()))?;
         for (total, part) in regions.iter_mut().zip(split) {
@@ -240,10 +245,7 @@ pub fn write_renders(model: &Renderable, data: &TrainingData, dir: &Path) -> Res
         let stem = Path::new(&v.camera.name)
             .file_stem()
             .map_or_else(|| v.camera.name.clone(), |s| s.to_string_lossy().into_owned());
-        let frame = model
-            .renderer
-            .render(model.scene, &v.camera, &model.options)
-            .with_context(|| format!("rendering view {}", v.camera.name))?;
+        let frame = model.frame(v)?;
         write_png_rgb(
             &dir.join(format!("{stem}.png")),
             &frame.read_layer(model.ctx, Layer::Color),
@@ -280,7 +282,7 @@ mod tests {
 
     #[test]
     fn regions_split_where_the_image_leaves_the_transmission() {
-        // Pixel 0: the glass adds a reflection; pixel 1: one 8-bit level of resampling noise
+        // Pixel 0: the glass adds a reflection; pixel 1: resampling noise of 0.4 of an 8-bit level,
         // below the threshold; pixel 2: no glass.
         let truth = rgb(&[[0.2, 0.2, 0.2], [0.5, 0.5, 0.5], [0.9, 0.1, 0.3]]);
         let image = rgb(&[[0.3, 0.25, 0.2], [0.5, 0.5, 0.5 + 0.4 / 255.0], [0.9, 0.1, 0.3]]);
