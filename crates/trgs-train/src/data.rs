@@ -5,7 +5,7 @@ use anyhow::{Context, Result, bail};
 use glam::DVec3;
 use std::path::Path;
 use trgs_core::Image;
-use trgs_core::io::SceneFolder;
+use trgs_core::io::{SceneFolder, Split};
 use trgs_core::scene::{Camera, Material};
 
 /// How large the training images are.
@@ -93,6 +93,23 @@ impl TrainingData {
     /// scene without one.
     pub fn eval_views(&self) -> &[View] {
         if self.test.is_empty() { &self.train[..self.train.len().min(4)] } else { &self.test }
+    }
+
+    /// Evaluate on `split` rather than the test views: `eval_views` (and with it `eval`'s
+    /// metrics and ground-truth comparison) then holds the training views, to see how well a
+    /// model fits what it was trained on, or every view in name order. Training never calls this.
+    pub fn evaluate_on(mut self, split: Split) -> Self {
+        match split {
+            Split::Test => {}
+            Split::Train => self.test = self.train.clone(),
+            Split::All => {
+                let mut all = self.train.clone();
+                all.append(&mut self.test);
+                all.sort_by(|a, b| a.camera.name.cmp(&b.camera.name));
+                self.test = all;
+            }
+        }
+        self
     }
 
     /// The glass-mask labels some training view uses, ascending.

@@ -87,7 +87,8 @@ pub struct TruthComparison {
     /// Per true plane: the angle in degrees between its normal and the nearest trained plane's,
     /// and the centre distance as a fraction of the true plane's diagonal (NaN with no plane).
     pub planes: Vec<(f64, f64)>,
-    /// PSNR of the transmission layer against the true transmission, mean over the test views.
+    /// PSNR of the transmission layer against the true transmission, mean over the evaluation
+    /// views (the test views unless `eval --split` says otherwise).
     pub transmission_psnr: Option<f64>,
     /// PSNR of the final image against the test images where the glass shows a reflection
     /// (the image differs from the true transmission) and everywhere else, each over the pooled
@@ -206,7 +207,7 @@ pub fn compare_with_truth(
     }
     let mut psnrs = Vec::new();
     let mut regions = [(0.0, 0usize); 2];
-    for v in &data.test {
+    for v in data.eval_views() {
         let path = gt.join("transmission").join(&v.camera.name);
         if !path.is_file() {
             continue;

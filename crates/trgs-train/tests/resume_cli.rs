@@ -116,6 +116,53 @@ fn killed_run_resumes_to_the_end() {
     let share = evaluated["truth"]["reflection_region_share"].as_f64().unwrap_or(0.0);
     assert!(share > 0.01 && share < 0.9, "reflection region share {share}");
 
+    // `eval --split train` measures the views the run trained on, writes them beside eval.json
+    // without replacing it, and `--renders` writes each one's render and layers.
+    let renders = dir.join("train_renders");
+    let eval = Command::new(env!("CARGO_BIN_EXE_eval"))
+        .arg("--model")
+        .arg(&out)
+        .arg("--data")
+        .arg(&data)
+        .args(["--split", "train", "--renders"])
+        .arg(&renders)
+        .output()
+        .expect("eval --split train");
+    assert!(eval.status.success(), "{}", String::from_utf8_lossy(&eval.stderr));
+    let on_train: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(out.join("eval_train.json")).expect("eval_train.json"),
+    )
+    .expect("eval JSON");
+    assert_eq!(on_train["split"], "train");
+    let test_names: Vec<String> = std::fs::read_to_string(data.join("test_views.txt"))
+        .expect("test_views.txt")
+        .lines()
+        .map(|l| l.trim().to_string())
+        .filter(|l| !l.is_empty() && !l.starts_with('#'))
+        .collect();
+    let mut train_names: Vec<String> = std::fs::read_dir(data.join("images"))
+        .expect("images")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .filter(|n| !test_names.contains(n))
+        .collect();
+    train_names.sort();
+    let measured: Vec<String> = on_train["views"]
+        .as_array()
+        .expect("views")
+        .iter()
+        .map(|v| v["name"].as_str().expect("name").to_string())
+        .collect();
+    assert_eq!(measured, train_names, "the training views, and only those");
+    for name in &train_names {
+        let stem = name.trim_end_matches(".png");
+        assert!(renders.join(name).is_file(), "render of {name}");
+        assert!(renders.join(format!("layers/{stem}_transmission.png")).is_file(), "{stem}");
+    }
+    let again: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("eval.json")).expect("eval.json"))
+            .expect("eval JSON");
+    assert_eq!(again, evaluated, "eval.json (the test views) is left as it was");
+
     // Settings come from the checkpoint: changing them on resume is refused.
     let refused = Command::new(env!("CARGO_BIN_EXE_train"))
         .arg("--out")

@@ -23,6 +23,51 @@ pub struct ViewSpec {
     pub mask_path: Option<PathBuf>,
 }
 
+/// Which of a scene folder's views a command works on, by its test split.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Split {
+    /// The test views (`test_views.txt`, or every 8th image).
+    #[default]
+    Test,
+    /// The views training uses: every view outside the test split.
+    Train,
+    All,
+}
+
+impl Split {
+    pub const NAMES: &'static str = "test, train or all";
+
+    /// Whether a view whose test membership is `is_test` belongs to this split.
+    pub fn holds(self, is_test: bool) -> bool {
+        match self {
+            Split::Test => is_test,
+            Split::Train => !is_test,
+            Split::All => true,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Split::Test => "test",
+            Split::Train => "train",
+            Split::All => "all",
+        }
+    }
+}
+
+impl std::str::FromStr for Split {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "test" => Ok(Split::Test),
+            "train" => Ok(Split::Train),
+            "all" => Ok(Split::All),
+            _ => Err(format!("{s:?}: expected {}", Split::NAMES)),
+        }
+    }
+}
+
 /// An opened scene folder. Views are sorted by image name.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SceneFolder {
@@ -198,6 +243,18 @@ mod tests {
     use crate::io::transforms::{TransformsFrame, write_transforms};
     use crate::io::{write_glass_mask, write_png_rgb};
     use crate::scene::{Intrinsics, Pose};
+
+    #[test]
+    fn splits_parse_and_hold_their_views() {
+        for split in [Split::Test, Split::Train, Split::All] {
+            assert_eq!(split.name().parse::<Split>(), Ok(split));
+        }
+        let err = "val".parse::<Split>().expect_err("no such split");
+        assert!(err.contains("\"val\"") && err.contains(Split::NAMES), "{err}");
+        assert!(Split::Test.holds(true) && !Split::Test.holds(false));
+        assert!(Split::Train.holds(false) && !Split::Train.holds(true));
+        assert!(Split::All.holds(true) && Split::All.holds(false));
+    }
 
     fn colmap_scene(tag: &str) -> crate::scratch::ScratchDir {
         let root = scratch_dir(tag);

@@ -1,16 +1,17 @@
-//! `eval`: the metrics of a trained model on a dataset's test views (PSNR and SSIM per view and
-//! mean, render FPS, and for a synthetic scene the plane and transmission errors against its
-//! ground truth), printed and written as JSON.
-use anyhow::{Context, Result, bail};
+//! `eval`: the metrics of a trained model on a dataset's test views, or its training views
+//! (PSNR and SSIM per view and mean, render FPS, and for a synthetic scene the plane and
+//! transmission errors against its ground truth), printed and written as JSON; optionally the
+//! renders and decomposition layers of those views.
+use anyhow::{Context, Result, anyhow, bail};
 use std::path::{Path, PathBuf};
-use trgs_core::io::write_atomic;
+use trgs_core::io::{Split, write_atomic};
 use trgs_render::{GpuContext, GpuScene, RenderOptions, Renderer};
 use trgs_train::data::{self, Resolution};
-use trgs_train::eval::{Renderable, compare_with_truth, evaluate, render_fps};
+use trgs_train::eval::{Renderable, compare_with_truth, evaluate, render_fps, write_renders};
 use trgs_train::model::load_model;
 
 const HELP: &str = "\
-trgs eval: metrics of a trained model on a dataset's test views
+trgs eval: metrics of a trained model on a dataset's test (or training) views
 
 USAGE:
     eval --model PATH [--data DIR] [OPTIONS]
@@ -24,8 +25,13 @@ OPTIONS:
                         writes the built-in scene)
     --resolution W      evaluate at width W (default: the images' size)
     --downscale F       evaluate at 1/F of the image size
-    --out FILE          write the metrics here (default: <run folder>/eval.json when --model is
-                        a folder; otherwise only printed)
+    --split SPLIT       the views to measure: test (default), train (how well the model fits
+                        the views it was trained on) or all
+    --out FILE          write the metrics here (default: <run folder>/eval.json, or
+                        eval_<split>.json for another split, when --model is a folder;
+                        otherwise only printed)
+    --renders DIR       also write each view's render, and with planes its layers (C_t, C_r,
+                        R, R C_r), as PNG under DIR
     -h, --help          this text
 ";
 
@@ -34,7 +40,9 @@ struct Args {
     planes: Option<PathBuf>,
     data: Option<PathBuf>,
     resolution: Resolution,
+    split: Split,
     out: Option<PathBuf>,
+    renders: Option<PathBuf>,
 }
 
 fn parse_args() -> Result<Option<Args>> {
@@ -44,7 +52,9 @@ fn parse_args() -> Result<Option<Args>> {
         planes: None,
         data: None,
         resolution: Resolution::Original,
+        split: Split::Test,
         out: None,
+        renders: None,
     };
     let mut it = std::env::args().skip(1);
     while let Some(a) = it.next() {
@@ -63,7 +73,11 @@ fn parse_args() -> Result<Option<Args>> {
             "--downscale" => {
                 args.resolution = Resolution::Downscale(num("--downscale", value("--downscale")?)?)
             }
+            "--split" => {
+                args.split = value("--split")?.parse().map_err(|e| anyhow!("--split {e}"))?
+            }
             "--out" => args.out = Some(PathBuf::from(value("--out")?)),
+            "--renders" => args.renders = Some(PathBuf::from(value("--renders")?)),
             other => bail!("unknown argument {other:?}\n\n{HELP}"),
         }
     }
@@ -94,7 +108,7 @@ fn main() -> Result<()> {
         _ => bail!("--data is required: {} has no dataset/ folder", args.model.display()),
     };
     let model = load_model(&args.model, args.planes.as_deref())?;
-    let data = data::load(&data_dir, args.resolution)?;
+    let data = data::load(&data_dir, args.resolution)?.evaluate_on(args.split);
     let ctx = GpuContext::new()?;
     let scene = GpuScene::upload(&ctx, &model.gaussians, &model.planes)
         .with_context(|| format!("uploading {}", model.ply.display()))?;
@@ -111,8 +125,9 @@ fn main() -> Result<()> {
     let fps = render_fps(&subject, &data)?;
     let (w, h) = data.size();
     println!(
-        "mean over {} views: PSNR {:.2} dB, SSIM {:.4}; {} Gaussians, {} planes, {fps:.1} FPS at {w}x{h}",
+        "mean over {} {} views: PSNR {:.2} dB, SSIM {:.4}; {} Gaussians, {} planes, {fps:.1} FPS at {w}x{h}",
         e.views.len(),
+        args.split.name(),
         e.psnr,
         e.ssim,
         model.gaussians.len(),
@@ -125,6 +140,7 @@ fn main() -> Result<()> {
     let json = serde_json::json!({
         "model": model.ply,
         "data": data_dir,
+        "split": args.split.name(),
         "psnr": e.psnr,
         "ssim": e.ssim,
         "views": e.views.iter().map(|(n, p, s)| serde_json::json!({"name": n, "psnr": p, "ssim": s})).collect::<Vec<_>>(),
@@ -134,7 +150,15 @@ fn main() -> Result<()> {
         "resolution": [w, h],
         "truth": truth,
     });
-    let out = args.out.or_else(|| run_dir.map(|r| r.join("eval.json")));
+    if let Some(dir) = &args.renders {
+        write_renders(&subject, &data, dir)?;
+        println!("renders written to {}", dir.display());
+    }
+    let default_name = match args.split {
+        Split::Test => "eval.json".to_string(),
+        other => format!("eval_{}.json", other.name()),
+    };
+    let out = args.out.or_else(|| run_dir.map(|r| r.join(default_name)));
     if let Some(out) = out {
         write_atomic(&out, serde_json::to_string_pretty(&json)?.as_bytes())?;
         println!("metrics written to {}", out.display());

@@ -1,11 +1,11 @@
 //! `render`: render a model from the cameras of a dataset folder or a camera path, writing a PNG
 //! of the final image per view and an OpenEXR of its linear layers (depth, strength,
 //! transmission, reflection, mask), with a progress bar.
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result, anyhow, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use trgs_core::io::{SceneFolder, read_transforms, write_png_rgb};
+use trgs_core::io::{SceneFolder, Split, read_transforms, write_png_rgb};
 use trgs_core::scene::Camera;
 use trgs_render::{GpuContext, GpuScene, Layer, RenderOptions, Renderer};
 use trgs_train::exr_layers::write_exr;
@@ -35,7 +35,7 @@ struct Args {
     model: PathBuf,
     planes: Option<PathBuf>,
     cameras: PathBuf,
-    split: String,
+    split: Split,
     out: PathBuf,
     background: [f32; 3],
     exr: bool,
@@ -47,7 +47,7 @@ fn parse_args() -> Result<Option<Args>> {
         model: PathBuf::new(),
         planes: None,
         cameras: PathBuf::new(),
-        split: "test".into(),
+        split: Split::Test,
         out: PathBuf::from("renders"),
         background: [0.0; 3],
         exr: true,
@@ -60,7 +60,9 @@ fn parse_args() -> Result<Option<Args>> {
             "--model" => model = Some(PathBuf::from(value("--model")?)),
             "--planes" => args.planes = Some(PathBuf::from(value("--planes")?)),
             "--cameras" => cameras = Some(PathBuf::from(value("--cameras")?)),
-            "--split" => args.split = value("--split")?,
+            "--split" => {
+                args.split = value("--split")?.parse().map_err(|e| anyhow!("--split {e}"))?
+            }
             "--out" => args.out = PathBuf::from(value("--out")?),
             "--background" => {
                 let v = value("--background")?;
@@ -76,23 +78,16 @@ fn parse_args() -> Result<Option<Args>> {
     }
     args.model = model.with_context(|| format!("--model is required\n\n{HELP}"))?;
     args.cameras = cameras.with_context(|| format!("--cameras is required\n\n{HELP}"))?;
-    if !["test", "train", "all"].contains(&args.split.as_str()) {
-        bail!("--split {:?}: expected test, train or all", args.split);
-    }
     Ok(Some(args))
 }
 
 /// The cameras to render and their output names.
-fn cameras(path: &Path, split: &str) -> Result<Vec<Camera>> {
+fn cameras(path: &Path, split: Split) -> Result<Vec<Camera>> {
     if path.is_file() {
         return Ok(read_transforms(path)?.into_iter().map(|f| f.camera).collect());
     }
     let folder = SceneFolder::open(path)?;
-    let views = folder.views.iter().filter(|v| match split {
-        "test" => folder.is_test(&v.camera.name),
-        "train" => !folder.is_test(&v.camera.name),
-        _ => true,
-    });
+    let views = folder.views.iter().filter(|v| split.holds(folder.is_test(&v.camera.name)));
     Ok(views.map(|v| v.camera.clone()).collect())
 }
 
@@ -108,9 +103,9 @@ fn main() -> Result<()> {
         return Ok(());
     };
     let model = load_model(&args.model, args.planes.as_deref())?;
-    let cams = cameras(&args.cameras, &args.split)?;
+    let cams = cameras(&args.cameras, args.split)?;
     if cams.is_empty() {
-        bail!("{}: no cameras in the {} split", args.cameras.display(), args.split);
+        bail!("{}: no cameras in the {} split", args.cameras.display(), args.split.name());
     }
     let ctx = GpuContext::new()?;
     println!(
