@@ -1,7 +1,8 @@
 //! Reflection-plane math: the Householder map and what it does to points, directions,
 //! covariances and cameras; ray-rectangle hits with the front-side test; nearest-plane selection;
 //! Schlick's Fresnel approximation. Every function takes the plane as stored (unnormalised normal).
-use crate::scene::{ReflectionPlane, ViewTransform};
+use crate::image::Image;
+use crate::scene::{Camera, Gaussians, Population, Pose, ReflectionPlane, Scalar, ViewTransform};
 use glam::{DMat3, DVec3};
 
 /// The linear part `I - 2 n n^T` of the reflection about a plane with unit normal `n`.
@@ -42,6 +43,50 @@ pub fn mirrored_view(plane: &ReflectionPlane, view: &ViewTransform) -> ViewTrans
         translation: view.translation + 2.0 * plane.centre.dot(n) * (view.linear * n),
         centre: reflect_point(plane, view.centre),
     }
+}
+
+/// What the mirrored pass of `plane` sees from `camera`, as an ordinary camera: the mirrored
+/// camera `W Hm` with its x axis flipped (a proper rotation again, with `cx` mirrored to match).
+/// Rendering [`mirrored_pass_gaussians`] with it over the whole image and applying
+/// [`flip_horizontal`] lines the result up with `camera`'s pixels, and where the camera's rays hit
+/// the plane it equals the pass's raw reflection C_raw (a twin test checks this); elsewhere it
+/// shows the mirrored world that a larger rectangle would show. `render --mirror` uses it to show
+/// why a reflection comes out wrong.
+pub fn mirror_camera(plane: &ReflectionPlane, camera: &Camera) -> Camera {
+    let flip = DMat3::from_diagonal(DVec3::new(-1.0, 1.0, 1.0));
+    let n = plane.unit_normal();
+    let r = camera.pose.rotation;
+    let pose = Pose {
+        rotation: flip * r * householder(n),
+        translation: flip * (camera.pose.translation + 2.0 * plane.centre.dot(n) * (r * n)),
+    };
+    let mut intrinsics = camera.intrinsics;
+    intrinsics.cx = f64::from(intrinsics.width) - intrinsics.cx;
+    Camera::new(format!("{} (mirrored)", camera.name), intrinsics, pose)
+}
+
+/// The Gaussians that `plane`'s mirrored pass renders: primaries strictly on its front side.
+pub fn mirrored_pass_gaussians<F: Scalar>(
+    plane: &ReflectionPlane,
+    gaussians: &Gaussians<F>,
+) -> Gaussians<F> {
+    gaussians.subset(|i| {
+        let m = gaussians.means[i];
+        let mu = DVec3::new(m[0].to_f64(), m[1].to_f64(), m[2].to_f64());
+        gaussians.populations[i] == Population::Primary && plane.signed_distance(mu) > 0.0
+    })
+}
+
+/// `image` mirrored left-right (undoes the flip of [`mirror_camera`]).
+pub fn flip_horizontal<F: Copy>(image: &Image<F>) -> Image<F> {
+    let (w, c) = (image.width as usize, image.channels as usize);
+    let mut out = image.clone();
+    for (src, dst) in image.data.chunks_exact(w * c).zip(out.data.chunks_exact_mut(w * c)) {
+        for x in 0..w {
+            dst[x * c..(x + 1) * c].copy_from_slice(&src[(w - 1 - x) * c..(w - x) * c]);
+        }
+    }
+    out
 }
 
 /// Distance along the ray `origin + s dir` (dir unit) to the plane's rectangle, when the origin is

@@ -4,8 +4,8 @@
 use glam::{DMat3, DQuat, DVec3};
 use trgs_core::fixtures::{SceneSpec, random_scene};
 use trgs_core::plane_math::{
-    householder, mirrored_view, ray_rectangle_hit, reflect_covariance, reflect_direction,
-    reflect_point,
+    flip_horizontal, householder, mirror_camera, mirrored_pass_gaussians, mirrored_view,
+    ray_rectangle_hit, reflect_covariance, reflect_direction, reflect_point,
 };
 use trgs_core::reference::{
     ProjectionFilter, RenderSettings, TileGrid, rasterize, render, render_view,
@@ -155,6 +155,45 @@ fn mirrored_pass_of_the_renderer_equals_rendering_mirrored_front_gaussians() {
     assert!(d < 1e-9, "max difference {d:e}");
     assert!(hits > 0, "the plane must be seen");
     assert!(layers.raw_color.data.iter().any(|&v| v > 0.05), "the reflection must be visible");
+}
+
+/// `mirror_camera` (the `render --mirror` view): the front primaries rendered over the whole
+/// image by an ordinary camera, flipped back, are the mirrored pass's C_raw where the rays hit
+/// the plane: with SH of degree 3, glass Gaussians in the scene, and at a grazing angle.
+#[test]
+fn mirror_view_as_an_ordinary_camera_equals_the_mirrored_pass() {
+    for (seed, angle) in [(41, 20.0), (42, 75.0)] {
+        let spec = SceneSpec { seed, gaussians: 60, view_angle_deg: angle, ..Default::default() };
+        let scene = random_scene(&spec);
+        let plane = scene.planes[0];
+        let settings = RenderSettings::default();
+        let frame =
+            render(&scene.gaussians, &scene.planes, &scene.camera, &settings).expect("valid");
+        let layers = frame.planes[0].as_ref().expect("camera in front of the plane");
+        let camera = mirror_camera(&plane, &scene.camera);
+        let front = mirrored_pass_gaussians(&plane, &scene.gaussians);
+        assert!(camera.pose.rotation.determinant() > 0.0, "a proper rotation");
+        assert!(front.len() < scene.gaussians.len(), "glass and back-side Gaussians are left out");
+        let mirrored = render(&front, &[], &camera, &settings).expect("valid");
+        let seen = flip_horizontal(&mirrored.transmission);
+        let k = scene.camera.intrinsics;
+        let origin = scene.camera.pose.centre();
+        let (mut d, mut hits) = (0.0f64, 0);
+        for y in 0..k.height {
+            for x in 0..k.width {
+                if ray_rectangle_hit(&plane, origin, scene.camera.pixel_ray(x, y)).is_none() {
+                    continue;
+                }
+                hits += 1;
+                for c in 0..3 {
+                    d = d.max((seen.get(x, y, c) - layers.raw_color.get(x, y, c)).abs());
+                }
+            }
+        }
+        println!("seed {seed}, {angle} deg: max difference {d:.2e} over {hits} hit pixels");
+        assert!(d < 1e-9, "seed {seed}: max difference {d:e}");
+        assert!(hits > 0 && layers.raw_color.data.iter().any(|&v| v > 0.05), "seed {seed}");
+    }
 }
 
 #[test]

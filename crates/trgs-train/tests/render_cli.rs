@@ -68,3 +68,73 @@ fn missing_model_names_the_path() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("/nonexistent/model.ply"), "{err}");
 }
+
+/// `render --mirror 1`: the camera's mirrored view, flipped back into its pixels, is the
+/// reflection pass's raw colour C_raw of the CPU twin wherever the camera's rays hit the plane;
+/// a camera behind the plane is skipped; a plane the model lacks is refused.
+#[test]
+fn mirror_view_is_the_raw_reflection_inside_the_rectangle() {
+    use trgs_core::plane_math::{mirror_camera, ray_rectangle_hit};
+    use trgs_core::reference::{RenderSettings, render};
+    let dir = tmp("mirror");
+    let s = random_scene(&SceneSpec {
+        planes: 1,
+        gaussians: 300,
+        width: 64,
+        height: 48,
+        ..SceneSpec::default()
+    });
+    let g = s.gaussians.cast::<f32>();
+    write_ply(&dir.join("model.ply"), &g).expect("ply");
+    write_planes_json(&dir.join("planes.json"), &s.planes).expect("planes");
+    let mut front = s.camera.clone();
+    front.name = "front.png".into();
+    // The mirrored camera stands behind the plane: it sees no reflection.
+    let mut behind = mirror_camera(&s.planes[0], &s.camera);
+    behind.name = "behind.png".into();
+    let frames: Vec<TransformsFrame> = [front.clone(), behind]
+        .into_iter()
+        .map(|camera| TransformsFrame { image_path: PathBuf::from(&camera.name), camera })
+        .collect();
+    write_transforms(&dir.join("path.json"), &frames).expect("transforms");
+    let out = dir.join("out");
+    let run = |plane: &str| {
+        Command::new(env!("CARGO_BIN_EXE_render"))
+            .args(["--model", dir.to_str().expect("utf-8"), "--cameras"])
+            .arg(dir.join("path.json"))
+            .arg("--out")
+            .arg(&out)
+            .args(["--mirror", plane])
+            .output()
+            .expect("run render")
+    };
+    let done = run("1");
+    let stdout = String::from_utf8_lossy(&done.stdout);
+    assert!(done.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&done.stderr));
+    assert!(stdout.contains("skipped (behind the plane, no reflection): behind"), "{stdout}");
+    assert!(!out.join("behind_mirror1.png").exists());
+    let png = image::open(out.join("front_mirror1.png")).expect("png").to_rgb8();
+    let twin = render(&g.cast(), &s.planes, &front, &RenderSettings::default()).expect("valid");
+    let raw = &twin.planes[0].as_ref().expect("the camera sees the plane").raw_color;
+    let (mut hits, mut worst) = (0, 0.0f64);
+    for y in 0..48 {
+        for x in 0..64 {
+            if ray_rectangle_hit(&s.planes[0], front.pose.centre(), front.pixel_ray(x, y)).is_none()
+            {
+                continue;
+            }
+            hits += 1;
+            for c in 0..3 {
+                let want = raw.get(x, y, c).clamp(0.0, 1.0) * 255.0;
+                let got = f64::from(png.get_pixel(x, y)[c as usize]);
+                worst = worst.max((got - want).abs());
+            }
+        }
+    }
+    assert!(hits > 50, "{hits} hit pixels");
+    assert!(worst <= 1.0, "8-bit mirror view against the twin's C_raw: off by {worst} levels");
+    let refused = run("2");
+    assert!(!refused.status.success());
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert!(err.contains("--mirror 2") && err.contains("has 1 planes"), "{err}");
+}

@@ -151,6 +151,23 @@ impl<F: Scalar> Gaussians<F> {
         }
     }
 
+    /// The Gaussians `i` with `keep(i)`, in their order (indices renumbered).
+    pub fn subset(&self, keep: impl Fn(usize) -> bool) -> Self {
+        let k = self.sh_coeffs();
+        let mut out = Self::empty(self.sh_degree);
+        for i in (0..self.len()).filter(|&i| keep(i)) {
+            out.means.push(self.means[i]);
+            out.rotations.push(self.rotations[i]);
+            out.log_scales.push(self.log_scales[i]);
+            out.opacity_logits.push(self.opacity_logits[i]);
+            out.sh.extend_from_slice(&self.sh[i * k..(i + 1) * k]);
+            out.mask_logits.push(self.mask_logits[i]);
+            out.log_reflections.push(self.log_reflections[i]);
+            out.populations.push(self.populations[i]);
+        }
+        out
+    }
+
     /// Keep only the first `sh_coeff_count(degree)` coefficients (or pad with zeros).
     pub fn with_sh_degree(&self, degree: u32) -> Self {
         let (old, new) = (self.sh_coeffs(), sh_coeff_count(degree));

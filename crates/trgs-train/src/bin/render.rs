@@ -6,10 +6,11 @@ use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 use trgs_core::io::{SceneFolder, Split, read_transforms, write_png_rgb};
+use trgs_core::plane_math::{flip_horizontal, mirror_camera, mirrored_pass_gaussians};
 use trgs_core::scene::Camera;
 use trgs_render::{GpuContext, GpuScene, Layer, RenderOptions, Renderer};
 use trgs_train::exr_layers::write_exr;
-use trgs_train::model::load_model;
+use trgs_train::model::{Model, load_model};
 
 const HELP: &str = "\
 trgs render: render a model from a dataset's cameras or a camera path
@@ -28,6 +29,10 @@ OPTIONS:
     --out DIR           output folder (default: renders)
     --background R,G,B  background colour in [0, 1] (default 0,0,0)
     --no-exr            only the PNGs
+    --mirror N          instead, what plane N (1 = the first in planes.json) reflects: each
+                        camera's mirrored view over the whole image, aligned with the camera's
+                        pixels (inside the plane's rectangle it is the raw reflection C_raw),
+                        written as <view>_mirror<N>.png; cameras behind the plane are skipped
     -h, --help          this text
 ";
 
@@ -39,6 +44,7 @@ struct Args {
     out: PathBuf,
     background: [f32; 3],
     exr: bool,
+    mirror: Option<usize>,
 }
 
 fn parse_args() -> Result<Option<Args>> {
@@ -51,6 +57,7 @@ fn parse_args() -> Result<Option<Args>> {
         out: PathBuf::from("renders"),
         background: [0.0; 3],
         exr: true,
+        mirror: None,
     };
     let mut it = std::env::args().skip(1);
     while let Some(a) = it.next() {
@@ -73,6 +80,13 @@ fn parse_args() -> Result<Option<Args>> {
                 args.background = [r, g, b];
             }
             "--no-exr" => args.exr = false,
+            "--mirror" => {
+                let v = value("--mirror")?;
+                let n = v.parse().ok().filter(|&n: &usize| n >= 1);
+                args.mirror = Some(n.with_context(|| {
+                    format!("--mirror {v:?}: expected a plane number, 1 or more")
+                })?);
+            }
             other => bail!("unknown argument {other:?}\n\n{HELP}"),
         }
     }
@@ -97,6 +111,69 @@ fn stem(name: &str, index: usize) -> String {
     base.filter(|s| !s.is_empty()).unwrap_or_else(|| format!("view_{index:04}"))
 }
 
+fn progress_bar(len: usize) -> ProgressBar {
+    let bar = ProgressBar::new(len as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} views  {per_sec}  eta {eta}  {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    bar
+}
+
+/// `--mirror N`: every camera's view of what plane N reflects (`mirror_camera`), from the
+/// Gaussians its mirrored pass renders, flipped back into the camera's pixel grid.
+fn render_mirror(
+    args: &Args,
+    model: &Model,
+    cams: &[Camera],
+    renderer: &Renderer,
+    options: &RenderOptions,
+    n: usize,
+) -> Result<()> {
+    let Some(plane) = model.planes.get(n - 1) else {
+        bail!(
+            "--mirror {n}: {} has {} planes (planes are numbered from 1 in planes.json order)",
+            model.ply.display(),
+            model.planes.len()
+        );
+    };
+    let ctx = renderer.context();
+    let front = mirrored_pass_gaussians(plane, &model.gaussians);
+    let scene = GpuScene::upload(ctx, &front, &[])
+        .with_context(|| format!("{}: invalid model", model.ply.display()))?;
+    let bar = progress_bar(cams.len());
+    let (mut written, mut behind) = (0, Vec::new());
+    let mut frame = trgs_render::Frame::default();
+    for (i, cam) in cams.iter().enumerate() {
+        let name = stem(&cam.name, i);
+        bar.inc(1);
+        // From behind the plane there is no reflection to show.
+        if !(plane.signed_distance(cam.pose.centre()) > 0.0) {
+            behind.push(name);
+            continue;
+        }
+        let mirrored = mirror_camera(plane, cam);
+        renderer
+            .render_into(&scene, &mirrored, options, &mut frame)
+            .with_context(|| format!("rendering the mirrored view of {:?}", cam.name))?;
+        let color = flip_horizontal(&frame.read_layer(ctx, Layer::Color));
+        write_png_rgb(&args.out.join(format!("{name}_mirror{n}.png")), &color)?;
+        written += 1;
+        bar.set_message(name);
+    }
+    bar.finish_and_clear();
+    println!(
+        "plane {n}: {} front-side primary Gaussians; mirrored views of {written} cameras \
+         written to {}",
+        front.len(),
+        args.out.display()
+    );
+    if !behind.is_empty() {
+        println!("skipped (behind the plane, no reflection): {}", behind.join(", "));
+    }
+    Ok(())
+}
+
 fn main() -> Result<()> {
     let Some(args) = parse_args()? else {
         print!("{HELP}");
@@ -117,17 +194,16 @@ fn main() -> Result<()> {
         cams.len(),
         ctx.describe()
     );
-    let scene = GpuScene::upload(&ctx, &model.gaussians, &model.planes)
-        .with_context(|| format!("{}: invalid model", model.ply.display()))?;
     let renderer = Renderer::new(&ctx);
     let options = RenderOptions { background: args.background, ..Default::default() };
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating the output folder {}", args.out.display()))?;
-    let bar = ProgressBar::new(cams.len() as u64);
-    bar.set_style(
-        ProgressStyle::with_template("{bar:40} {pos}/{len} views  {per_sec}  eta {eta}  {msg}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
+    if let Some(n) = args.mirror {
+        return render_mirror(&args, &model, &cams, &renderer, &options, n);
+    }
+    let scene = GpuScene::upload(&ctx, &model.gaussians, &model.planes)
+        .with_context(|| format!("{}: invalid model", model.ply.display()))?;
+    let bar = progress_bar(cams.len());
     let t = Instant::now();
     let mut frame = trgs_render::Frame::default();
     for (i, cam) in cams.iter().enumerate() {
