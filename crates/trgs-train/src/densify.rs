@@ -120,18 +120,7 @@ pub(crate) fn widths(g: &Gaussians<f32>) -> [usize; 7] {
 /// `keep_moments` entries and zero for the others.
 pub(crate) fn gather(state: &TrainState, sources: &[(usize, bool)]) -> TrainState {
     let g = &state.gaussians;
-    let coeffs = g.sh_coeffs();
-    let mut out = Gaussians::<f32>::empty(g.sh_degree);
-    for &(i, _) in sources {
-        out.means.push(g.means[i]);
-        out.rotations.push(g.rotations[i]);
-        out.log_scales.push(g.log_scales[i]);
-        out.opacity_logits.push(g.opacity_logits[i]);
-        out.sh.extend_from_slice(&g.sh[i * coeffs..(i + 1) * coeffs]);
-        out.mask_logits.push(g.mask_logits[i]);
-        out.log_reflections.push(g.log_reflections[i]);
-        out.populations.push(g.populations[i]);
-    }
+    let out = g.gather(sources.iter().map(|&(i, _)| i));
     let w = widths(g);
     let moments = |src: &[Vec<f32>]| -> Vec<Vec<f32>> {
         (0..7)

@@ -2,7 +2,7 @@
 //! (transforms.json) give one PNG and one EXR per view; bad input names the file.
 use std::path::PathBuf;
 use std::process::Command;
-use trgs_core::fixtures::{SceneSpec, random_scene};
+use trgs_core::fixtures::{Scene, SceneSpec, random_scene};
 use trgs_core::io::{TransformsFrame, write_planes_json, write_ply, write_transforms};
 use trgs_core::scratch::ScratchDir;
 
@@ -10,9 +10,9 @@ fn tmp(name: &str) -> ScratchDir {
     ScratchDir::new(&format!("render-cli-{name}"))
 }
 
-#[test]
-fn renders_pngs_and_exrs_from_a_camera_path() {
-    let dir = tmp("ok");
+/// A folder with a random one-plane scene's model.ply and planes.json (64x48 camera).
+fn model_folder(name: &str) -> (ScratchDir, Scene) {
+    let dir = tmp(name);
     let s = random_scene(&SceneSpec {
         planes: 1,
         gaussians: 300,
@@ -22,6 +22,12 @@ fn renders_pngs_and_exrs_from_a_camera_path() {
     });
     write_ply(&dir.join("model.ply"), &s.gaussians.cast()).expect("ply");
     write_planes_json(&dir.join("planes.json"), &s.planes).expect("planes");
+    (dir, s)
+}
+
+#[test]
+fn renders_pngs_and_exrs_from_a_camera_path() {
+    let (dir, s) = model_folder("ok");
     let mut second = s.camera.clone();
     second.name = "second.png".into();
     let frames: Vec<TransformsFrame> = [s.camera.clone(), second]
@@ -76,17 +82,9 @@ fn missing_model_names_the_path() {
 fn mirror_view_is_the_raw_reflection_inside_the_rectangle() {
     use trgs_core::plane_math::{mirror_camera, ray_rectangle_hit};
     use trgs_core::reference::{RenderSettings, render};
-    let dir = tmp("mirror");
-    let s = random_scene(&SceneSpec {
-        planes: 1,
-        gaussians: 300,
-        width: 64,
-        height: 48,
-        ..SceneSpec::default()
-    });
+    let (dir, s) = model_folder("mirror");
+    // The model as the PLY holds it (f32).
     let g = s.gaussians.cast::<f32>();
-    write_ply(&dir.join("model.ply"), &g).expect("ply");
-    write_planes_json(&dir.join("planes.json"), &s.planes).expect("planes");
     let mut front = s.camera.clone();
     front.name = "front.png".into();
     // The mirrored camera stands behind the plane: it sees no reflection.

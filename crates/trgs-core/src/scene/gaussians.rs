@@ -151,11 +151,11 @@ impl<F: Scalar> Gaussians<F> {
         }
     }
 
-    /// The Gaussians `i` with `keep(i)`, in their order (indices renumbered).
-    pub fn subset(&self, keep: impl Fn(usize) -> bool) -> Self {
+    /// The Gaussians at `indices`, in that order (an index may repeat).
+    pub fn gather(&self, indices: impl IntoIterator<Item = usize>) -> Self {
         let k = self.sh_coeffs();
         let mut out = Self::empty(self.sh_degree);
-        for i in (0..self.len()).filter(|&i| keep(i)) {
+        for i in indices {
             out.means.push(self.means[i]);
             out.rotations.push(self.rotations[i]);
             out.log_scales.push(self.log_scales[i]);
@@ -166,6 +166,11 @@ impl<F: Scalar> Gaussians<F> {
             out.populations.push(self.populations[i]);
         }
         out
+    }
+
+    /// The Gaussians `i` with `keep(i)`, in their order (indices renumbered).
+    pub fn subset(&self, keep: impl Fn(usize) -> bool) -> Self {
+        self.gather((0..self.len()).filter(|&i| keep(i)))
     }
 
     /// Keep only the first `sh_coeff_count(degree)` coefficients (or pad with zeros).
