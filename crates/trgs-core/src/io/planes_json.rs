@@ -59,8 +59,11 @@ const MAX_R0: f64 = 0.999;
 /// every plane passes [`ReflectionPlane::validate`], `r0` is in (0, 1].
 pub fn read_planes_json(path: &Path) -> Result<Vec<PlaneSpec>, FormatError> {
     let text = read_text(path)?;
-    let file: PlanesFile =
-        serde_json::from_str(&text).map_err(|e| FormatError::new(path, e.to_string()))?;
+    let file: PlanesFile = serde_json::from_str(&text).map_err(|e| {
+        let expected =
+            r#"expected planes.json: {"planes": [{"label": 1, "material": "glass", ...}]}"#;
+        FormatError::new(path, format!("{e}; {expected}"))
+    })?;
     let mut labels = HashSet::new();
     let mut out = Vec::with_capacity(file.planes.len());
     for (index, entry) in file.planes.iter().enumerate() {
@@ -278,6 +281,12 @@ mod tests {
         assert_mentions(
             &read_planes_json(&path).expect_err("no label"),
             &["planes.json", "missing field `label`", "line 1"],
+        );
+        // An empty file (e.g. `--planes /dev/null`) says what the file should hold.
+        let (_dir, path) = write("planes-empty", "");
+        assert_mentions(
+            &read_planes_json(&path).expect_err("empty"),
+            &["planes.json", "EOF", r#"expected planes.json: {"planes": ["#],
         );
     }
 
