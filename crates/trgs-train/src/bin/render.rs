@@ -31,7 +31,8 @@ OPTIONS:
     --no-exr            only the PNGs
     --mirror N          instead, what plane N (1 = the first in planes.json) reflects: each
                         camera's mirrored view over the whole image, aligned with the camera's
-                        pixels (inside the plane's rectangle it is the raw reflection C_raw),
+                        pixels (inside the plane's rectangle it is the raw reflection C_raw
+                        on the default black background),
                         written as <view>_mirror<N>.png; cameras behind the plane are skipped
     -h, --help          this text
 ";
