@@ -98,6 +98,11 @@ pub struct TruthComparison {
     pub reflection_region_psnr: Option<f64>,
     #[serde(default)]
     pub elsewhere_psnr: Option<f64>,
+    /// PSNR of the transmission layer against the true transmission in that reflection region:
+    /// how clean the separation is where it matters (outside it, C_t is the image). For a model
+    /// without planes, its final image.
+    #[serde(default)]
+    pub transmission_region_psnr: Option<f64>,
     /// Share of the test pixels in the reflection region.
     #[serde(default)]
     pub reflection_region_share: Option<f64>,
@@ -130,6 +135,9 @@ impl std::fmt::Display for TruthComparison {
                 100.0 * share
             )?;
         }
+        if let Some(t) = self.transmission_region_psnr {
+            write!(f, "; transmission {t:.2} dB from the truth where the glass reflects")?;
+        }
         Ok(())
     }
 }
@@ -138,11 +146,13 @@ impl std::fmt::Display for TruthComparison {
 /// more than this in some channel (a level of an 8-bit image is 1/255; resampling blends levels).
 pub const REFLECTION_REGION_THRESHOLD: f32 = 0.5 / 255.0;
 
-/// Squared error of `render` against `image`, summed per region: [reflection region, elsewhere],
-/// each as (sum over the samples, number of samples). The reflection region is where `image`
-/// differs from the true transmission `truth`.
+/// Squared error of `render` against `target`, summed per region: [reflection region,
+/// elsewhere], each as (sum over the samples, number of samples). The reflection region is where
+/// the dataset's `image` differs from the true transmission `truth`; `target` is the image for the
+/// final render and the truth for the transmission layer.
 pub fn region_errors(
     render: &trgs_core::Image<f32>,
+    target: &trgs_core::Image<f32>,
     image: &trgs_core::Image<f32>,
     truth: &trgs_core::Image<f32>,
 ) -> Result<[(f64, usize); 2]> {
@@ -150,11 +160,15 @@ pub fn region_errors(
         (a.width, a.height, a.channels) == (image.width, image.height, image.channels)
     };
     anyhow::ensure!(
-        same(render) && same(truth),
-        "region errors need images of one size: render {}x{}x{}, image {}x{}x{}, truth {}x{}x{}",
+        same(render) && same(target) && same(truth),
+        "region errors need images of one size: render {}x{}x{}, target {}x{}x{}, \
+         image {}x{}x{}, truth {}x{}x{}",
         render.width,
         render.height,
         render.channels,
+        target.width,
+        target.height,
+        target.channels,
         image.width,
         image.height,
         image.channels,
@@ -164,9 +178,10 @@ pub fn region_errors(
     );
     let c = image.channels.max(1) as usize;
     let mut out = [(0.0, 0usize); 2];
-    for ((r, i), t) in render.data.chunks(c).zip(image.data.chunks(c)).zip(truth.data.chunks(c)) {
+    let pixels = render.data.chunks(c).zip(target.data.chunks(c));
+    for ((r, g), (i, t)) in pixels.zip(image.data.chunks(c).zip(truth.data.chunks(c))) {
         let reflects = i.iter().zip(t).any(|(a, b)| (a - b).abs() > REFLECTION_REGION_THRESHOLD);
-        let e: f64 = r.iter().zip(i).map(|(&a, &b)| (f64::from(a) - f64::from(b)).powi(2)).sum();
+        let e: f64 = r.iter().zip(g).map(|(&a, &b)| (f64::from(a) - f64::from(b)).powi(2)).sum();
         let slot = &mut out[usize::from(!reflects)];
         slot.0 += e;
         slot.1 += c;
@@ -206,7 +221,8 @@ pub fn compare_with_truth(
         }
     }
     let mut psnrs = Vec::new();
-    let mut regions = [(0.0, 0usize); 2];
+    // [final image, transmission layer] x [reflection region, elsewhere]
+    let mut regions = [[(0.0, 0usize); 2]; 2];
     for v in data.eval_views() {
         let path = gt.join("transmission").join(&v.camera.name);
         if !path.is_file() {
@@ -218,13 +234,19 @@ pub fn compare_with_truth(
         let t = frame.read_layer(model.ctx, Layer::Transmission);
         psnrs.push(psnr(&t, &truth)?);
         let color = frame.read_layer(model.ctx, Layer::Color);
-        let split = region_errors(&color, &v.image, &truth)
-            .with_context(|| format!("comparing {} with {}", v.camera.name, path.display()))?;
-        for (total, part) in regions.iter_mut().zip(split) {
-            total.0 += part.0;
-            total.1 += part.1;
+        let context = || format!("comparing {} with {}", v.camera.name, path.display());
+        let splits = [
+            region_errors(&color, &v.image, &v.image, &truth).with_context(context)?,
+            region_errors(&t, &truth, &v.image, &truth).with_context(context)?,
+        ];
+        for (totals, split) in regions.iter_mut().zip(splits) {
+            for (total, part) in totals.iter_mut().zip(split) {
+                total.0 += part.0;
+                total.1 += part.1;
+            }
         }
     }
+    let [regions, transmission_regions] = regions;
     let transmission_psnr =
         (!psnrs.is_empty()).then(|| psnrs.iter().sum::<f64>() / psnrs.len() as f64);
     let samples = regions[0].1 + regions[1].1;
@@ -233,6 +255,7 @@ pub fn compare_with_truth(
         transmission_psnr,
         reflection_region_psnr: psnr_of(regions[0].0, regions[0].1),
         elsewhere_psnr: psnr_of(regions[1].0, regions[1].1),
+        transmission_region_psnr: psnr_of(transmission_regions[0].0, transmission_regions[0].1),
         reflection_region_share: (samples > 0).then(|| regions[0].1 as f64 / samples as f64),
     }))
 }
@@ -288,7 +311,7 @@ mod tests {
         let truth = rgb(&[[0.2, 0.2, 0.2], [0.5, 0.5, 0.5], [0.9, 0.1, 0.3]]);
         let image = rgb(&[[0.3, 0.25, 0.2], [0.5, 0.5, 0.5 + 0.4 / 255.0], [0.9, 0.1, 0.3]]);
         let render = rgb(&[[0.3, 0.15, 0.2], [0.6, 0.5, 0.5], [0.9, 0.1, 0.0]]);
-        let [inside, outside] = region_errors(&render, &image, &truth).expect("same sizes");
+        let [inside, outside] = region_errors(&render, &image, &image, &truth).expect("same sizes");
         assert_eq!(inside.1, 3);
         assert!((inside.0 - 0.01).abs() < 1e-7, "{inside:?}");
         assert_eq!(outside.1, 6);
@@ -302,10 +325,25 @@ mod tests {
     }
 
     #[test]
+    fn the_transmission_is_scored_against_the_truth_in_the_same_regions() {
+        // The region still comes from image against truth; the error is the layer's against the
+        // truth: pixel 0 reflects (layer 0.1 off the truth in red), pixel 1 does not (0.2 off).
+        let truth = rgb(&[[0.2, 0.2, 0.2], [0.5, 0.5, 0.5]]);
+        let image = rgb(&[[0.3, 0.25, 0.2], [0.5, 0.5, 0.5]]);
+        let layer = rgb(&[[0.3, 0.2, 0.2], [0.5, 0.7, 0.5]]);
+        let [inside, outside] = region_errors(&layer, &truth, &image, &truth).expect("sizes");
+        assert_eq!((inside.1, outside.1), (3, 3));
+        assert!((inside.0 - 0.01).abs() < 1e-7, "{inside:?}");
+        assert!((outside.0 - 0.04).abs() < 1e-7, "{outside:?}");
+    }
+
+    #[test]
     fn region_errors_refuse_images_of_different_sizes() {
         let a = rgb(&[[0.0; 3], [0.0; 3]]);
         let b = rgb(&[[0.0; 3]]);
-        let err = region_errors(&a, &a, &b).expect_err("sizes differ").to_string();
+        let err = region_errors(&a, &a, &a, &b).expect_err("sizes differ").to_string();
         assert!(err.contains("truth 1x1x3"), "{err}");
+        let err = region_errors(&a, &b, &a, &a).expect_err("sizes differ").to_string();
+        assert!(err.contains("target 1x1x3"), "{err}");
     }
 }

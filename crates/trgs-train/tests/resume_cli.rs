@@ -105,8 +105,14 @@ fn killed_run_resumes_to_the_end() {
         "eval PSNR {a:?} against the run's {b:?}"
     );
     // The synthetic scene has true transmission images: both split the final image's error
-    // into where the glass reflects and elsewhere, and agree.
-    for key in ["reflection_region_psnr", "elsewhere_psnr", "reflection_region_share"] {
+    // into where the glass reflects and elsewhere, score the transmission layer in the first,
+    // and agree.
+    for key in [
+        "reflection_region_psnr",
+        "elsewhere_psnr",
+        "reflection_region_share",
+        "transmission_region_psnr",
+    ] {
         let (a, b) = (evaluated["truth"][key].as_f64(), metrics["truth"][key].as_f64());
         assert!(
             a.zip(b).is_some_and(|(a, b)| a.is_finite() && (a - b).abs() < 1e-3),
