@@ -261,14 +261,14 @@ pub fn compare_with_truth(
 }
 
 /// Write each evaluation view's render `<dir>/<stem>.png` and, with planes, its decomposition
-/// (the paper's figure: C_t, C_r, R, R C_r) as `<dir>/layers/<stem>_<layer>.png`.
+/// (the paper's figure: C_t, C_r, R, R C_r) as `<dir>/layers/<stem>_<layer>.png`, where the stem
+/// is the view's name without extension, folders kept (`view_output_stem`).
 pub fn write_renders(model: &Renderable, data: &TrainingData, dir: &Path) -> Result<()> {
     use trgs_core::io::{write_png_gray, write_png_rgb};
     let has_planes = !model.scene.planes().is_empty();
-    for v in data.eval_views() {
-        let stem = Path::new(&v.camera.name)
-            .file_stem()
-            .map_or_else(|| v.camera.name.clone(), |s| s.to_string_lossy().into_owned());
+    for (i, v) in data.eval_views().iter().enumerate() {
+        let stem = trgs_core::io::view_output_stem(&v.camera.name)
+            .unwrap_or_else(|| format!("view_{i:04}"));
         let frame = model.frame(v)?;
         write_png_rgb(
             &dir.join(format!("{stem}.png")),

@@ -11,7 +11,7 @@ use super::masks::{mask_path, read_glass_mask};
 use super::planes_json::{PlaneSpec, read_planes_json};
 use super::png::read_rgb_image;
 use super::test_split::{default_test_views, read_test_views};
-use super::transforms::read_transforms;
+use super::transforms::{TransformsFrame, name_by_relative_path_if_needed, read_transforms};
 use crate::image::Image;
 use crate::scene::{Camera, Material};
 
@@ -85,25 +85,23 @@ impl SceneFolder {
         if !root.is_dir() {
             return Err(FormatError::new(root, "not a folder (expected a scene folder)"));
         }
+        // The test views a Blender scene's split files name (None: the folder's own rule).
+        let mut split_file_tests: Option<Vec<String>> = None;
         let (cameras, points) = if let Some(sparse) = colmap_dir(root) {
             open_colmap(root, &sparse)?
         } else if root.join("transforms.json").is_file() {
             let frames = read_transforms(&root.join("transforms.json"))?;
             (frames.into_iter().map(|f| (f.camera, f.image_path)).collect(), Vec::new())
+        } else if root.join("transforms_train.json").is_file() {
+            let (frames, tests) = read_blender_split_files(root)?;
+            split_file_tests = Some(tests);
+            (frames.into_iter().map(|f| (f.camera, f.image_path)).collect(), Vec::new())
         } else {
-            // NeRF-synthetic folders split their frames over transforms_{train,val,test}.json.
-            let hint = if root.join("transforms_train.json").is_file() {
-                "; transforms_train.json is here, but Blender's split files are not read: merge \
-                 their frames into transforms.json and list the test images in test_views.txt"
-            } else {
-                ""
-            };
             return Err(FormatError::new(
                 root,
-                format!(
-                    "not a scene folder: found neither a COLMAP model (sparse/0/cameras.bin or \
-                     sparse/0/cameras.txt, with images/) nor transforms.json{hint}"
-                ),
+                "not a scene folder: found neither a COLMAP model (sparse/0/cameras.bin or \
+                 sparse/0/cameras.txt, with images/) nor transforms.json (or Blender's \
+                 transforms_train.json and transforms_test.json)",
             ));
         };
         if cameras.is_empty() {
@@ -143,6 +141,8 @@ impl SceneFolder {
         let split_path = root.join("test_views.txt");
         let test_views = if split_path.is_file() {
             read_test_views(&split_path, &names)?
+        } else if let Some(tests) = split_file_tests {
+            tests
         } else {
             default_test_views(&names)
         };
@@ -233,6 +233,45 @@ fn open_colmap(root: &Path, sparse: &Path) -> Result<(Cameras, Points), FormatEr
     }
     let points = model.points.iter().map(|p| (p.xyz, p.rgb)).collect();
     Ok((cameras, points))
+}
+
+/// A NeRF-synthetic (Blender) folder's `transforms_train.json` and `transforms_test.json`: every
+/// frame of both (validation frames are left out, as 3DGS does), named by their paths
+/// (`train/r_0.png`, `test/r_0.png`: the two files reuse file names), and the test frames' names,
+/// which are the test split unless `test_views.txt` says otherwise.
+fn read_blender_split_files(
+    root: &Path,
+) -> Result<(Vec<TransformsFrame>, Vec<String>), FormatError> {
+    let mut frames = read_transforms(&root.join("transforms_train.json"))?;
+    let train = frames.len();
+    let test_file = root.join("transforms_test.json");
+    if test_file.is_file() {
+        frames.extend(read_transforms(&test_file)?);
+    }
+    name_by_relative_path_if_needed(&mut frames, root);
+    let tests = frames[train..].iter().map(|f| f.camera.name.clone()).collect();
+    Ok((frames, tests))
+}
+
+/// The file stem under which outputs of view `name` are written (renders, layers): the name
+/// without its extension, keeping its folders (`train/r_0.png` -> `train/r_0`, so that views of
+/// the same file name in two folders stay apart) and dropping any `..`, root or `.` component
+/// (an output never lands outside its folder). None when nothing is left.
+pub fn view_output_stem(name: &str) -> Option<String> {
+    use std::path::Component;
+    let path = Path::new(name);
+    let parts: Vec<String> = path
+        .components()
+        .filter_map(|c| match c {
+            Component::Normal(s) => Some(s.to_string_lossy().into_owned()),
+            _ => None,
+        })
+        .collect();
+    let (last, folders) = parts.split_last()?;
+    let stem = Path::new(last).file_stem().map(|s| s.to_string_lossy().into_owned())?;
+    let mut out: Vec<String> = folders.to_vec();
+    out.push(stem);
+    Some(out.join("/"))
 }
 
 #[cfg(test)]
@@ -339,7 +378,7 @@ mod tests {
         );
         std::fs::write(root.join("transforms_train.json"), "{}").expect("write");
         let err = SceneFolder::open(&root).expect_err("blender split");
-        assert_mentions(&err, &["transforms_train.json", "merge"]);
+        assert_mentions(&err, &["transforms_train.json", "frames"]);
         std::fs::write(root.join("transforms.json"), r#"{"frames": []}"#).expect("write");
         assert_mentions(&SceneFolder::open(&root).expect_err("no frames"), &["no views"]);
         let err = SceneFolder::open(&root.join("nope")).expect_err("missing");
@@ -360,6 +399,17 @@ mod tests {
         write_png_rgb(&root.join("images/a.png"), &Image::new(5, 3, 3)).expect("image");
         let scene = SceneFolder::open(&root).expect("open");
         assert_mentions(&scene.load_image(0).expect_err("size"), &["images/a.png", "5x3", "4x3"]);
+    }
+
+    #[test]
+    fn output_stems_keep_folders_and_stay_inside() {
+        assert_eq!(view_output_stem("0001.png").as_deref(), Some("0001"));
+        assert_eq!(view_output_stem("./train/r_0.png").as_deref(), Some("train/r_0"));
+        assert_eq!(view_output_stem("test/r_0").as_deref(), Some("test/r_0"));
+        assert_eq!(view_output_stem("../../etc/x.png").as_deref(), Some("etc/x"));
+        assert_eq!(view_output_stem("/abs/a.b.png").as_deref(), Some("abs/a.b"));
+        assert_eq!(view_output_stem(""), None);
+        assert_eq!(view_output_stem(".."), None);
     }
 
     #[test]
@@ -393,5 +443,44 @@ mod tests {
         assert_eq!(scene.views[1].mask_path, Some(root.join("glass_masks/z.png.png")));
         assert!(scene.points.is_empty());
         assert_eq!(scene.mask_labels().expect("labels"), Vec::<u32>::new());
+    }
+
+    #[test]
+    fn blender_split_files_are_read_with_their_test_split() {
+        let root = scratch_dir("ds-blender");
+        let k = Intrinsics { fx: 5.0, fy: 5.0, cx: 2.0, cy: 1.5, width: 4, height: 3 };
+        // NeRF-synthetic reuses file names across its splits: train/r_0 and test/r_0.
+        for (file, folder, names) in [
+            ("transforms_train.json", "train", &["r_0.png", "r_1.png"][..]),
+            ("transforms_test.json", "test", &["r_0.png"][..]),
+            ("transforms_val.json", "val", &["r_0.png"][..]),
+        ] {
+            let frames: Vec<TransformsFrame> = names
+                .iter()
+                .map(|n| {
+                    let image_path = root.join(folder).join(n);
+                    write_png_rgb(&image_path, &Image::new(4, 3, 3)).expect("image");
+                    TransformsFrame { camera: Camera::new(*n, k, Pose::default()), image_path }
+                })
+                .collect();
+            write_transforms(&root.join(file), &frames).expect("json");
+        }
+        write_glass_mask(&root.join("glass_masks/test/r_0.png"), &Image::new(4, 3, 1))
+            .expect("mask");
+        let scene = SceneFolder::open(&root).expect("open");
+        let names: Vec<&str> = scene.views.iter().map(|v| v.camera.name.as_str()).collect();
+        assert_eq!(names, ["test/r_0.png", "train/r_0.png", "train/r_1.png"], "no val frames");
+        assert_eq!(scene.test_views, ["test/r_0.png"]);
+        assert_eq!(scene.views[0].mask_path, Some(root.join("glass_masks/test/r_0.png")));
+        assert_eq!(scene.views[1].mask_path, None);
+        // The same frames merged into one transforms.json get the same names.
+        let mut merged =
+            crate::io::read_transforms(&root.join("transforms_train.json")).expect("train");
+        merged
+            .extend(crate::io::read_transforms(&root.join("transforms_test.json")).expect("test"));
+        write_transforms(&root.join("transforms.json"), &merged).expect("merged");
+        let scene = SceneFolder::open(&root).expect("open merged");
+        let names: Vec<&str> = scene.views.iter().map(|v| v.camera.name.as_str()).collect();
+        assert_eq!(names, ["test/r_0.png", "train/r_0.png", "train/r_1.png"]);
     }
 }

@@ -32,7 +32,7 @@ pub use cameras_json::{
     encode_cameras_json, parse_cameras_json, read_cameras_json, write_cameras_json,
 };
 pub use colmap::{ColmapCamera, ColmapImage, ColmapModel, ColmapPoint};
-pub use dataset::{SceneFolder, Split, ViewSpec};
+pub use dataset::{SceneFolder, Split, ViewSpec, view_output_stem};
 pub use error::{FormatError, write_atomic};
 pub use glb::{encode_glb, parse_glb, read_glb, write_glb};
 pub use masks::{mask_path, read_glass_mask, write_glass_mask};

@@ -73,6 +73,9 @@ pub fn read_planes_json(path: &Path) -> Result<Vec<PlaneSpec>, FormatError> {
         if entry.label == 0 {
             return Err(fail("label 0 means \"no plane\" in the masks; labels start at 1".into()));
         }
+        if entry.label > 255 {
+            return Err(fail("masks hold 8-bit labels: a label must be 1 to 255".into()));
+        }
         if !labels.insert(entry.label) {
             return Err(fail(format!("label {} appears more than once", entry.label)));
         }
@@ -305,6 +308,11 @@ mod tests {
         assert_mentions(
             &read_planes_json(&path).expect_err("duplicate"),
             &["planes.json", "planes[1]", "more than once"],
+        );
+        let (_dir, path) = write("planes-big", r#"{"planes": [{"label": 256}]}"#);
+        assert_mentions(
+            &read_planes_json(&path).expect_err("label 256"),
+            &["planes.json", "planes[0]", "1 to 255"],
         );
         let (_dir, path) = write("planes-typo", r#"{"planes": [{"label": 1, "hieght": 2}]}"#);
         assert_mentions(

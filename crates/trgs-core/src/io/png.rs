@@ -13,11 +13,6 @@ use crate::image::Image;
 const PHOTO_FORMATS: &[ImageFormat] = &[ImageFormat::Png, ImageFormat::Jpeg];
 const LABEL_FORMATS: &[ImageFormat] = &[ImageFormat::Png];
 
-/// Decode a PNG file; any other format is an error naming it.
-pub(crate) fn decode_png(path: &Path) -> Result<DynamicImage, FormatError> {
-    decode(path, LABEL_FORMATS)
-}
-
 fn decode(path: &Path, allowed: &[ImageFormat]) -> Result<DynamicImage, FormatError> {
     let bytes = read_bytes(path)?;
     let reader = ImageReader::new(Cursor::new(&bytes))
@@ -27,6 +22,74 @@ fn decode(path: &Path, allowed: &[ImageFormat]) -> Result<DynamicImage, FormatEr
     reader
         .decode()
         .map_err(|e| FormatError::new(path, format!("cannot decode the {format:?} image: {e}")))
+}
+
+/// Decode a PNG of labels (a glass mask) to one u8 label a pixel, from the stored samples: a
+/// palette PNG's indices (what PIL's mode "P" and VOC-style tools write), a gray PNG's values at
+/// any bit depth (1, 2 and 4-bit values are not scaled up; 16-bit ones must be below 256), or an
+/// RGB(A) PNG whose three channels are equal. Colours that are not labels are an error: taking one
+/// channel of them would silently merge or drop planes.
+pub(crate) fn decode_label_png(path: &Path) -> Result<Image<u8>, FormatError> {
+    let bytes = read_bytes(path)?;
+    let format = ImageReader::new(Cursor::new(&bytes))
+        .with_guessed_format()
+        .map_err(|e| FormatError::io(path, &e))?
+        .format();
+    check_format(path, format, LABEL_FORMATS)?;
+    let bad =
+        |e: &dyn std::fmt::Display| FormatError::new(path, format!("cannot decode the PNG: {e}"));
+    let mut decoder = png::Decoder::new(Cursor::new(&bytes));
+    // No expansion: palette indices and low-bit values are the labels themselves.
+    decoder.set_transformations(png::Transformations::IDENTITY);
+    let mut reader = decoder.read_info().map_err(|e| bad(&e))?;
+    let size = reader.output_buffer_size().ok_or_else(|| bad(&"the image is too large"))?;
+    let mut buf = vec![0u8; size];
+    let info = reader.next_frame(&mut buf).map_err(|e| bad(&e))?;
+    let channels = match info.color_type {
+        png::ColorType::Grayscale | png::ColorType::Indexed => 1,
+        png::ColorType::GrayscaleAlpha => 2,
+        png::ColorType::Rgb => 3,
+        png::ColorType::Rgba => 4,
+    };
+    let bits = info.bit_depth as usize;
+    let (w, h) = (info.width as usize, info.height as usize);
+    // Sample `c` of pixel `x` in `row`, at any bit depth (big-endian, most significant bits first).
+    let sample = |row: &[u8], x: usize, c: usize| -> u32 {
+        let i = x * channels + c;
+        match bits {
+            16 => u32::from(u16::from_be_bytes([row[2 * i], row[2 * i + 1]])),
+            8 => u32::from(row[i]),
+            _ => {
+                let bit = i * bits;
+                u32::from(row[bit / 8] >> (8 - bits - bit % 8)) & ((1 << bits) - 1)
+            }
+        }
+    };
+    let mut data = Vec::with_capacity(w * h);
+    for y in 0..h {
+        let row = &buf[y * info.line_size..(y + 1) * info.line_size];
+        for x in 0..w {
+            let v = sample(row, x, 0);
+            if channels >= 3 && (sample(row, x, 1) != v || sample(row, x, 2) != v) {
+                let rgb = [v, sample(row, x, 1), sample(row, x, 2)];
+                return Err(FormatError::new(
+                    path,
+                    format!(
+                        "pixel ({x}, {y}) is the colour {rgb:?}: a mask holds labels (gray values, \
+                         RGB with equal channels, or a palette PNG whose indices are the labels)"
+                    ),
+                ));
+            }
+            let label = u8::try_from(v).map_err(|_| {
+                FormatError::new(
+                    path,
+                    format!("pixel ({x}, {y}) has the label {v}; labels must be below 256"),
+                )
+            })?;
+            data.push(label);
+        }
+    }
+    Ok(Image { width: info.width, height: info.height, channels: 1, data })
 }
 
 /// The size of a photo from its header alone (PNG or JPEG).
@@ -62,8 +125,10 @@ fn check_format(
     }
 }
 
-/// An RGB image in [0, 1] from a PNG or JPEG: gray is repeated into three channels, alpha is dropped
-/// (not composited: trgs trains on the stored colour), 16-bit samples are divided by 65535.
+/// An RGB image in [0, 1] from a PNG or JPEG: gray is repeated into three channels, 16-bit
+/// samples are divided by 65535, and an alpha channel is composited over black, the background
+/// training renders against (Blender scenes store their transparent background with alpha 0
+/// over arbitrary colour, and their edges unpremultiplied; 3DGS composites them the same way).
 pub fn read_rgb_image(path: &Path) -> Result<Image<f32>, FormatError> {
     let img = decode(path, PHOTO_FORMATS)?;
     let (width, height) = (img.width(), img.height());
@@ -91,7 +156,9 @@ fn rgb_of<T: Copy>(raw: &[T], channels: usize, scale: impl Fn(T) -> f32) -> Vec<
     let mut out = Vec::with_capacity(raw.len() / channels * 3);
     for px in raw.chunks_exact(channels) {
         let rgb = if channels < 3 { [px[0]; 3] } else { [px[0], px[1], px[2]] };
-        out.extend(rgb.map(&scale));
+        // Gray+alpha and RGBA carry alpha last.
+        let alpha = if channels.is_multiple_of(2) { scale(px[channels - 1]) } else { 1.0 };
+        out.extend(rgb.map(|v| scale(v) * alpha));
     }
     out
 }
@@ -171,9 +238,18 @@ mod tests {
             .expect("write");
         let img = read_rgb_image(&path).expect("read");
         assert_eq!(img.data, [0.0, 0.0, 0.0, 1.0, 1.0, 1.0]);
+        // Alpha composites over black: transparent is black whatever colour it stores, opaque
+        // keeps its colour, and half keeps half.
         let path = dir.join("rgba.png");
-        encode(&path, &[10, 20, 30, 0], 1, 1, ExtendedColorType::Rgba8).expect("write");
-        assert_eq!(read_rgb_image(&path).expect("read").to_u8(), [10, 20, 30]);
+        let pixels = [10, 20, 30, 0, 10, 20, 30, 255, 200, 100, 50, 128];
+        encode(&path, &pixels, 3, 1, ExtendedColorType::Rgba8).expect("write");
+        assert_eq!(
+            read_rgb_image(&path).expect("read").to_u8(),
+            [0, 0, 0, 10, 20, 30, 100, 50, 25]
+        );
+        let path = dir.join("ga.png");
+        encode(&path, &[200, 0, 200, 255], 2, 1, ExtendedColorType::La8).expect("write");
+        assert_eq!(read_rgb_image(&path).expect("read").to_u8(), [0, 0, 0, 200, 200, 200]);
     }
 
     #[test]
@@ -203,7 +279,7 @@ mod tests {
         // A truncated JPEG is recognised and fails to decode, naming the file.
         assert_mentions(&read_rgb_image(&path).expect_err("jpeg"), &["a.jpg", "Jpeg"]);
         // A JPEG is not accepted as a label image.
-        assert_mentions(&decode_png(&path).expect_err("jpeg mask"), &["a.jpg", "only PNG"]);
+        assert_mentions(&decode_label_png(&path).expect_err("jpeg mask"), &["a.jpg", "only PNG"]);
         std::fs::write(&path, b"hello").expect("write");
         assert_mentions(&read_rgb_image(&path).expect_err("junk"), &["a.jpg", "not a PNG"]);
         let missing = dir.join("missing.png");

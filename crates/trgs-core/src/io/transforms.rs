@@ -37,13 +37,40 @@ pub fn read_transforms(path: &Path) -> Result<Vec<TransformsFrame>, FormatError>
         .as_array()
         .ok_or_else(|| fail("`frames` must be an array".into()))?;
     let dir = path.parent().unwrap_or(Path::new("."));
-    frames
+    let mut out = frames
         .iter()
         .enumerate()
         .map(|(i, frame)| {
             read_frame(global, frame, dir).map_err(|m| fail(format!("frames[{i}]: {m}")))
         })
-        .collect()
+        .collect::<Result<Vec<_>, _>>()?;
+    name_by_relative_path_if_needed(&mut out, dir);
+    Ok(out)
+}
+
+/// Views are named by their image's file name, as COLMAP names them, unless two share one (the
+/// Blender scenes' `train/r_0` and `test/r_0` in one merged file): then every view is named by
+/// its image's path relative to the JSON's folder (`train/r_0.png`), which masks, the test split
+/// and the outputs use in the same way.
+pub(crate) fn name_by_relative_path_if_needed(frames: &mut [TransformsFrame], dir: &Path) {
+    let mut names: Vec<&str> = frames.iter().map(|f| f.camera.name.as_str()).collect();
+    names.sort_unstable();
+    if names.windows(2).all(|w| w[0] != w[1]) {
+        return;
+    }
+    for f in frames {
+        let rel = f.image_path.strip_prefix(dir).unwrap_or(&f.image_path);
+        let parts: Vec<String> = rel
+            .components()
+            .filter_map(|c| match c {
+                std::path::Component::Normal(s) => Some(s.to_string_lossy().into_owned()),
+                _ => None,
+            })
+            .collect();
+        if !parts.is_empty() {
+            f.camera.name = parts.join("/");
+        }
+    }
 }
 
 fn read_frame(

@@ -149,6 +149,16 @@ impl ColmapModel {
         let (fx, fy, cx, cy) = match (cam.model.as_str(), cam.params.as_slice()) {
             ("PINHOLE", &[fx, fy, cx, cy]) => (fx, fy, cx, cy),
             ("SIMPLE_PINHOLE", &[f, cx, cy]) => (f, f, cx, cy),
+            // Lens models whose distortion is exactly zero are pinholes (some pipelines write
+            // them after undistorting); the transforms.json reader accepts the same.
+            ("SIMPLE_RADIAL", &[f, cx, cy, 0.0]) | ("RADIAL", &[f, cx, cy, 0.0, 0.0]) => {
+                (f, f, cx, cy)
+            }
+            ("OPENCV", &[fx, fy, cx, cy, ref d @ ..])
+                if d.len() == 4 && d.iter().all(|&v| v == 0.0) =>
+            {
+                (fx, fy, cx, cy)
+            }
             ("PINHOLE" | "SIMPLE_PINHOLE", p) => {
                 return Err(fail(format!(
                     "camera {}: {} needs its parameters, found {}",
@@ -159,8 +169,9 @@ impl ColmapModel {
             }
             (other, _) => {
                 return Err(fail(format!(
-                    "camera {} uses the COLMAP model {other}, which has lens distortion; trgs supports \
-                     only PINHOLE and SIMPLE_PINHOLE: undistort the images first (e.g. with \
+                    "camera {} uses the COLMAP model {other} with lens distortion (or the wrong \
+                     number of parameters); trgs supports PINHOLE and SIMPLE_PINHOLE (and lens \
+                     models whose distortion is zero): undistort the images first (e.g. with \
                      `colmap image_undistorter`) and use the undistorted model",
                     cam.id
                 )));

@@ -100,6 +100,28 @@ fn distorted_camera_model_says_undistort() {
 }
 
 #[test]
+fn lens_models_with_zero_distortion_are_pinholes() {
+    let mut model = sample_model();
+    let cases: [(&str, Vec<f64>, [f64; 4]); 3] = [
+        ("SIMPLE_RADIAL", vec![6.0, 5.0, 4.0, 0.0], [6.0, 6.0, 5.0, 4.0]),
+        ("RADIAL", vec![6.0, 5.0, 4.0, 0.0, 0.0], [6.0, 6.0, 5.0, 4.0]),
+        ("OPENCV", vec![6.0, 7.0, 5.0, 4.0, 0.0, 0.0, 0.0, 0.0], [6.0, 7.0, 5.0, 4.0]),
+    ];
+    for (name, params, want) in cases {
+        model.cameras[2].model = name.into();
+        model.cameras[2].params = params.clone();
+        let k = model.camera(&model.images[2]).expect(name).intrinsics;
+        assert_eq!([k.fx, k.fy, k.cx, k.cy], want, "{name}");
+        // Any distortion at all is still refused.
+        let mut distorted = params;
+        *distorted.last_mut().expect("a coefficient") = 1e-6;
+        model.cameras[2].params = distorted;
+        let err = model.camera(&model.images[2]).expect_err(name);
+        assert_mentions(&err, &[name, "undistort"]);
+    }
+}
+
+#[test]
 fn missing_folder_names_both_layouts() {
     let dir = scratch_dir("colmap-none");
     let err = ColmapModel::read(&dir).expect_err("empty folder");
