@@ -95,6 +95,12 @@ impl TrainingData {
         if self.test.is_empty() { &self.train[..self.train.len().min(4)] } else { &self.test }
     }
 
+    /// What `eval_views` holds, for reports: "test", or a scene without test views says that
+    /// its scores are on training views.
+    pub fn eval_views_name(&self) -> &'static str {
+        if self.test.is_empty() { "training (the scene has no test views)" } else { "test" }
+    }
+
     /// Evaluate on `split` rather than the test views: `eval_views` (and with it `eval`'s
     /// metrics and ground-truth comparison) then holds the training views, to see how well a
     /// model fits what it was trained on, or every view in name order. Training never calls this.

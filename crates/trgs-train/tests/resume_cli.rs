@@ -64,6 +64,9 @@ fn killed_run_resumes_to_the_end() {
     assert_eq!(ck.planes.len(), 1, "the checkpoint holds the initialised plane");
     assert!(!out.join("metrics.json").exists(), "the killed run did not finish");
 
+    // What a kill during a checkpoint write leaves behind is removed when the run resumes.
+    let stale = out.join(format!(".{CHECKPOINT_FILE}.999.0.tmp"));
+    std::fs::write(&stale, b"half a checkpoint").expect("stale temporary");
     let resumed = Command::new(env!("CARGO_BIN_EXE_train"))
         .arg("--out")
         .arg(&out)
@@ -77,6 +80,7 @@ fn killed_run_resumes_to_the_end() {
         String::from_utf8_lossy(&resumed.stderr)
     );
     assert!(stdout.contains(&format!("at step {} of {iterations}", ck.step)), "{stdout}");
+    assert!(!stale.exists(), "the stale temporary file was removed");
     let metrics: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(out.join("metrics.json")).expect("metrics.json"),
     )
@@ -178,4 +182,57 @@ fn killed_run_resumes_to_the_end() {
         .expect("run");
     assert!(!refused.status.success());
     assert!(String::from_utf8_lossy(&refused.stderr).contains("drop --iterations"));
+
+    // The finished run left its final state: `--resume` writes the same results again instead
+    // of training on from the last intermediate checkpoint.
+    assert_eq!(read_checkpoint(&ckpt).expect("final checkpoint").step, iterations);
+    let again = Command::new(env!("CARGO_BIN_EXE_train"))
+        .arg("--out")
+        .arg(&out)
+        .arg("--resume")
+        .output()
+        .expect("resume a finished run");
+    let stdout = String::from_utf8_lossy(&again.stdout);
+    assert!(again.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&again.stderr));
+    assert!(stdout.contains(&format!("finished at step {iterations}")), "{stdout}");
+    assert_eq!(logged_steps(&out.join("log.jsonl")).len(), iterations as usize, "no step rerun");
+    let rewritten: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(out.join("metrics.json")).expect("metrics.json"),
+    )
+    .expect("metrics JSON");
+    let (a, b) = (rewritten["psnr"].as_f64(), metrics["psnr"].as_f64());
+    assert!(a.zip(b).is_some_and(|(a, b)| (a - b).abs() < 1e-3), "{a:?} against {b:?}");
+
+    // A dataset whose training views changed is refused by name, not indexed out of bounds.
+    let split = data.join("test_views.txt");
+    let original = std::fs::read_to_string(&split).expect("test_views.txt");
+    std::fs::write(&split, format!("{original}\n{}\n", train_names[0])).expect("edit split");
+    let refused = Command::new(env!("CARGO_BIN_EXE_train"))
+        .arg("--out")
+        .arg(&out)
+        .arg("--resume")
+        .output()
+        .expect("resume on changed data");
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert!(!refused.status.success());
+    assert!(
+        stderr.contains("training views") && stderr.contains(&data.display().to_string()),
+        "{stderr}"
+    );
+    std::fs::write(&split, original).expect("restore split");
+
+    // A new run in the same folder drops the finished run's checkpoint first, so that a
+    // `--resume` after the new run stopped early cannot continue the old one.
+    let fresh = Command::new(env!("CARGO_BIN_EXE_train"))
+        .arg("--data")
+        .arg(&data)
+        .arg("--out")
+        .arg(&out)
+        .args(["--iterations", "2", "--sh-degree", "0"])
+        .output()
+        .expect("a new run");
+    let stdout = String::from_utf8_lossy(&fresh.stdout);
+    assert!(fresh.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&fresh.stderr));
+    assert!(stdout.contains("removed the previous run's checkpoint"), "{stdout}");
+    assert_eq!(read_checkpoint(&ckpt).expect("the new run's checkpoint").step, 2);
 }

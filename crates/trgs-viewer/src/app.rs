@@ -16,6 +16,7 @@ use glam::DVec3;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
+use trgs_core::reference::ReflectionModel;
 use trgs_core::scene::{Camera, ReflectionPlane};
 use trgs_render::{DisplayTarget, Frame, GpuContext, GpuScene, Layer, RenderOptions, Renderer};
 
@@ -44,6 +45,7 @@ struct Shown {
     scene: GpuScene,
     planes: Vec<ReflectionPlane>,
     enabled: Vec<bool>,
+    reflection: ReflectionModel,
     cameras: Vec<Camera>,
     extent: Extent,
     /// Gaussian centres, for the depth display's range.
@@ -173,6 +175,7 @@ impl ViewerApp {
                     scene,
                     planes: model.planes,
                     enabled: vec![true; n],
+                    reflection: model.reflection,
                     cameras: model.cameras,
                     extent,
                     means: model.gaussians.means,
@@ -223,6 +226,7 @@ impl ViewerApp {
         let model = LoadedModel {
             gaussians: snap.gaussians,
             planes: snap.planes,
+            reflection: snap.reflection,
             cameras: feed.cameras(),
             name: "training".into(),
         };
@@ -235,6 +239,7 @@ impl ViewerApp {
                 s.enabled.resize(model.planes.len(), true);
                 s.scene = scene;
                 s.planes = model.planes;
+                s.reflection = model.reflection;
                 s.cameras = model.cameras;
                 s.means = model.gaussians.means;
                 self.dirty = true;
@@ -430,7 +435,11 @@ impl ViewerApp {
         let Some((target, texture)) = &self.target else { return };
         if self.dirty || self.script.frames.is_some() {
             let camera = self.camera.camera(rw, rh);
-            let options = RenderOptions { enabled_planes: s.enabled.clone(), ..Default::default() };
+            let options = RenderOptions {
+                enabled_planes: s.enabled.clone(),
+                reflection: s.reflection,
+                ..Default::default()
+            };
             let range = if self.layer == Layer::Depth {
                 depth_range(&s.means, &camera)
             } else {

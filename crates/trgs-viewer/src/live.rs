@@ -4,6 +4,7 @@
 //! never slows training by more than one readback per interval.
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
+use trgs_core::reference::ReflectionModel;
 use trgs_core::scene::{Camera, Gaussians, ReflectionPlane};
 
 /// The model at one point of training.
@@ -11,6 +12,8 @@ use trgs_core::scene::{Camera, Gaussians, ReflectionPlane};
 pub struct Snapshot {
     pub gaussians: Gaussians<f32>,
     pub planes: Vec<ReflectionPlane>,
+    /// The reflection model training uses (its ablations).
+    pub reflection: ReflectionModel,
     /// A line for the viewer, e.g. "step 1200 of 2000, loss 0.031, 81k Gaussians".
     pub status: String,
 }
@@ -95,7 +98,12 @@ mod tests {
     use super::*;
 
     fn snap(status: &str) -> Snapshot {
-        Snapshot { gaussians: Gaussians::empty(0), planes: Vec::new(), status: status.into() }
+        Snapshot {
+            gaussians: Gaussians::empty(0),
+            planes: Vec::new(),
+            reflection: ReflectionModel::default(),
+            status: status.into(),
+        }
     }
 
     #[test]

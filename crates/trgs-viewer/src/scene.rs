@@ -5,6 +5,7 @@ use anyhow::{Context, Result};
 use glam::DVec3;
 use std::path::{Path, PathBuf};
 use trgs_core::io::{load_model, read_cameras_json};
+use trgs_core::reference::ReflectionModel;
 use trgs_core::scene::{Camera, Gaussians, ReflectionPlane};
 
 /// A model read from disk.
@@ -12,6 +13,8 @@ use trgs_core::scene::{Camera, Gaussians, ReflectionPlane};
 pub struct LoadedModel {
     pub gaussians: Gaussians<f32>,
     pub planes: Vec<ReflectionPlane>,
+    /// The reflection model the model was trained with (its ablations).
+    pub reflection: ReflectionModel,
     /// The views of `cameras.json` in the run folder or beside the model file (none without).
     pub cameras: Vec<Camera>,
     /// What the title bar says.
@@ -26,7 +29,13 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
     let cameras =
         if cameras_path.is_file() { read_cameras_json(&cameras_path)? } else { Vec::new() };
     let name = path.display().to_string();
-    Ok(LoadedModel { gaussians: model.gaussians, planes: model.planes, cameras, name })
+    Ok(LoadedModel {
+        gaussians: model.gaussians,
+        planes: model.planes,
+        reflection: model.reflection,
+        cameras,
+        name,
+    })
 }
 
 fn parent(p: &Path) -> PathBuf {

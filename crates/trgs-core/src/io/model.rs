@@ -1,6 +1,7 @@
 //! Loading a trained model: a Gaussian PLY (trgs or any INRIA-layout file) and its planes, or a
 //! `.glb` with `KHR_gaussian_splatting` (Gaussians and planes in one file).
 use super::{FormatError, read_glb, read_planes_json, read_ply};
+use crate::reference::ReflectionModel;
 use crate::scene::{Gaussians, ReflectionPlane};
 use std::path::{Path, PathBuf};
 
@@ -11,6 +12,24 @@ pub struct Model {
     pub planes: Vec<ReflectionPlane>,
     /// The file the Gaussians came from (.ply or .glb).
     pub ply: PathBuf,
+    /// The reflection model the run trained with: its ablations, from the `metrics.json` that
+    /// `train` writes beside the model (the full model when there is none).
+    pub reflection: ReflectionModel,
+}
+
+/// The reflection model recorded in the `metrics.json` beside `ply` or in the folder `path`.
+/// A file without the record (another tool's) gives the full model.
+fn trained_reflection_model(path: &Path, ply: &Path) -> ReflectionModel {
+    let mut model = ReflectionModel::default();
+    let candidates = [ply.with_file_name("metrics.json"), path.join("metrics.json")];
+    let Some(text) = candidates.iter().find_map(|p| std::fs::read_to_string(p).ok()) else {
+        return model;
+    };
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap_or_default();
+    let flag = |name: &str| v["reflection_model"][name].as_bool();
+    model.fresnel = flag("fresnel").unwrap_or(true);
+    model.intensity = flag("intensity").unwrap_or(true);
+    model
 }
 
 /// The PLY of `path`: the file itself, or in a folder `model.ply`, else the INRIA layout's
@@ -61,7 +80,8 @@ pub fn load_model(path: &Path, planes: Option<&Path>) -> Result<Model, FormatErr
         if let Some(p) = planes {
             inside = load_model_planes(p)?;
         }
-        return Ok(Model { gaussians, planes: inside, ply: path.to_path_buf() });
+        let reflection = trained_reflection_model(path, path);
+        return Ok(Model { gaussians, planes: inside, ply: path.to_path_buf(), reflection });
     }
     let ply = find_ply(path)?;
     let gaussians = read_ply(&ply)?;
@@ -76,7 +96,8 @@ pub fn load_model(path: &Path, planes: Option<&Path>) -> Result<Model, FormatErr
         Some(pp) => load_model_planes(&pp)?,
         None => Vec::new(),
     };
-    Ok(Model { gaussians, planes, ply })
+    let reflection = trained_reflection_model(path, &ply);
+    Ok(Model { gaussians, planes, ply, reflection })
 }
 
 /// What the renderer would refuse at upload (a NaN, a zero quaternion), as an error that names
@@ -134,5 +155,26 @@ mod tests {
         let err = load_model(&dir, None).expect_err("zero quaternion").to_string();
         assert!(err.contains("model.ply") && err.contains("Gaussian 1"), "{err}");
         assert!(err.contains("zero quaternion"), "{err}");
+    }
+
+    #[test]
+    fn the_reflection_model_of_an_ablation_run_comes_from_its_metrics() {
+        let dir = crate::scratch::ScratchDir::new("model-reflection");
+        let mut g = Gaussians::<f32>::empty(0);
+        g.push([0.0, 0.0, 2.0], [1.0, 0.0, 0.0, 0.0], [-2.0; 3], 0.0, &[], Population::Primary);
+        let ply = dir.join("model.ply");
+        write_ply(&ply, &g).expect("write");
+        // No metrics.json (another tool's model): the full model.
+        assert_eq!(load_model(&dir, None).expect("load").reflection, ReflectionModel::default());
+        let metrics =
+            r#"{"psnr": 30.0, "reflection_model": {"fresnel": false, "intensity": true}}"#;
+        std::fs::write(dir.join("metrics.json"), metrics).expect("metrics");
+        let want = ReflectionModel { fresnel: false, intensity: true };
+        // From the run folder, and from the PLY beside it.
+        assert_eq!(load_model(&dir, None).expect("load").reflection, want);
+        assert_eq!(load_model(&ply, None).expect("load").reflection, want);
+        // Another tool's metrics.json (no record, or not JSON) leaves the full model.
+        std::fs::write(dir.join("metrics.json"), "PSNR 30").expect("metrics");
+        assert_eq!(load_model(&ply, None).expect("load").reflection, ReflectionModel::default());
     }
 }

@@ -3,7 +3,7 @@
 //! transmission errors against its ground truth), printed and written as JSON; optionally the
 //! renders and decomposition layers of those views.
 use anyhow::{Context, Result, anyhow, bail};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use trgs_core::io::{Split, write_atomic};
 use trgs_render::{GpuContext, GpuScene, RenderOptions, Renderer};
 use trgs_train::data::{self, Resolution};
@@ -85,17 +85,6 @@ fn parse_args() -> Result<Option<Args>> {
     Ok(Some(args))
 }
 
-/// The reflection model a run trained with (its ablations), from its metrics.json.
-fn reflection_model(run: &Path) -> trgs_render::ReflectionModel {
-    let mut model = trgs_render::ReflectionModel::default();
-    let Ok(text) = std::fs::read_to_string(run.join("metrics.json")) else { return model };
-    let v: serde_json::Value = serde_json::from_str(&text).unwrap_or_default();
-    let flag = |name: &str| v["reflection_model"][name].as_bool();
-    model.fresnel = flag("fresnel").unwrap_or(true);
-    model.intensity = flag("intensity").unwrap_or(true);
-    model
-}
-
 fn main() -> Result<()> {
     let Some(args) = parse_args()? else {
         print!("{HELP}");
@@ -113,10 +102,7 @@ fn main() -> Result<()> {
     let scene = GpuScene::upload(&ctx, &model.gaussians, &model.planes)
         .with_context(|| format!("uploading {}", model.ply.display()))?;
     let renderer = Renderer::new(&ctx);
-    let options = RenderOptions {
-        reflection: run_dir.as_deref().map(reflection_model).unwrap_or_default(),
-        ..RenderOptions::default()
-    };
+    let options = RenderOptions { reflection: model.reflection, ..RenderOptions::default() };
     let subject = Renderable { ctx: &ctx, renderer: &renderer, scene: &scene, options };
     let e = evaluate(&subject, &data, 0, 0.0)?;
     for (name, p, s) in &e.views {

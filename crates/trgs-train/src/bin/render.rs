@@ -74,9 +74,12 @@ fn parse_args() -> Result<Option<Args>> {
             "--out" => args.out = PathBuf::from(value("--out")?),
             "--background" => {
                 let v = value("--background")?;
-                let parts: Vec<f32> = v.split(',').filter_map(|p| p.trim().parse().ok()).collect();
-                let [r, g, b] = parts[..] else {
-                    bail!("--background {v:?}: expected three numbers, e.g. 1,1,1");
+                let parts: Vec<Option<f32>> = v
+                    .split(',')
+                    .map(|p| p.trim().parse().ok().filter(|x: &f32| (0.0..=1.0).contains(x)))
+                    .collect();
+                let [Some(r), Some(g), Some(b)] = parts[..] else {
+                    bail!("--background {v:?}: expected three numbers in [0, 1], e.g. 1,1,1");
                 };
                 args.background = [r, g, b];
             }
@@ -106,10 +109,9 @@ fn cameras(path: &Path, split: Split) -> Result<Vec<Camera>> {
     Ok(views.map(|v| v.camera.clone()).collect())
 }
 
-/// A file-name stem for a camera name (image names may carry folders and extensions).
+/// The output stem of a camera (its name without extension, folders kept), or its index.
 fn stem(name: &str, index: usize) -> String {
-    let base = Path::new(name).file_stem().map(|s| s.to_string_lossy().into_owned());
-    base.filter(|s| !s.is_empty()).unwrap_or_else(|| format!("view_{index:04}"))
+    trgs_core::io::view_output_stem(name).unwrap_or_else(|| format!("view_{index:04}"))
 }
 
 fn progress_bar(len: usize) -> ProgressBar {
@@ -196,7 +198,11 @@ fn main() -> Result<()> {
         ctx.describe()
     );
     let renderer = Renderer::new(&ctx);
-    let options = RenderOptions { background: args.background, ..Default::default() };
+    let options = RenderOptions {
+        background: args.background,
+        reflection: model.reflection,
+        ..Default::default()
+    };
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating the output folder {}", args.out.display()))?;
     if let Some(n) = args.mirror {

@@ -46,6 +46,10 @@ struct RunState {
     seconds: f64,
     /// Summed milliseconds of each step phase.
     phase_ms: StepTimes,
+    /// The training views' names, in the order `order` indexes them: a resumed run refuses a
+    /// dataset whose views changed (empty in checkpoints that predate it).
+    #[serde(default)]
+    train_views: Vec<String>,
 }
 
 /// A line above the progress bar (`ProgressBar::println` prints nothing when the bar is hidden,
@@ -160,12 +164,20 @@ fn main() -> Result<()> {
             let mut state: RunState = serde_json::from_value(ck.extra.clone())
                 .with_context(|| format!("{}: the run state is not readable", path.display()))?;
             state.args.out = out;
-            println!(
-                "resuming {} at step {} of {}",
-                path.display(),
-                ck.step,
-                state.args.iterations
-            );
+            if ck.step >= state.args.iterations {
+                println!(
+                    "{}: the run finished at step {}; writing its results again",
+                    path.display(),
+                    ck.step
+                );
+            } else {
+                println!(
+                    "resuming {} at step {} of {}",
+                    path.display(),
+                    ck.step,
+                    state.args.iterations
+                );
+            }
             (state.args.clone(), Some((ck, state)))
         }
     };
@@ -177,7 +189,15 @@ fn main() -> Result<()> {
     let worker_feed = feed.clone();
     let worker = std::thread::Builder::new()
         .name("train".into())
-        .spawn(move || train(args, resumed, Some(&worker_feed)))
+        .spawn(move || {
+            let result = train(args, resumed, Some(&worker_feed));
+            if let Err(e) = &result {
+                // Said at once: the window stays open until the user closes it.
+                eprintln!("error: {e:#}");
+                worker_feed.set_status(format!("training failed: {e:#}"));
+            }
+            result
+        })
         .context("starting the training thread")?;
     let options = ViewerOptions { source: Source::Live(feed.clone()), ..Default::default() };
     if let Err(e) = trgs_viewer::run(options) {
@@ -204,8 +224,11 @@ fn train(
     let log_path = args.out.join("log.jsonl");
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating the output folder {}", args.out.display()))?;
+    let was_finished = resumed.as_ref().is_some_and(|(ck, _)| ck.step >= args.iterations);
+    remove_stale_temporaries(&args.out);
     let (mut trainer, mut state) = match resumed {
         Some((ck, state)) => {
+            check_same_views(&state, &data, &data_dir)?;
             truncate_log(&log_path, ck.step)?;
             let mut trainer = Trainer::from_checkpoint(&ctx, &ck, settings, data.extent, densify)?;
             if let Some(m) = mcmc.clone() {
@@ -234,6 +257,17 @@ fn train(
             if let Some(m) = mcmc {
                 trainer.enable_mcmc(m);
             }
+            // A previous run's checkpoint in this folder would be what `--resume` continues if
+            // this run stopped before its own first one.
+            let old = args.out.join(CHECKPOINT_FILE);
+            if old.is_file() {
+                std::fs::remove_file(&old)
+                    .with_context(|| format!("removing the previous run's {}", old.display()))?;
+                println!(
+                    "a new run in {}: removed the previous run's checkpoint",
+                    args.out.display()
+                );
+            }
             std::fs::File::create(&log_path)
                 .with_context(|| format!("creating {}", log_path.display()))?;
             let state = RunState {
@@ -244,6 +278,7 @@ fn train(
                 train_seconds: 0.0,
                 seconds: 0.0,
                 phase_ms: StepTimes::default(),
+                train_views: data.train.iter().map(|v| v.camera.name.clone()).collect(),
             };
             (trainer, state)
         }
@@ -260,6 +295,7 @@ fn train(
         feed.set_cameras(views);
     }
     let mut log = std::fs::OpenOptions::new()
+        .create(true)
         .append(true)
         .open(&log_path)
         .with_context(|| format!("opening {}", log_path.display()))?;
@@ -289,7 +325,10 @@ fn train(
             && !data.materials.is_empty()
             && trainer.planes().is_empty()
         {
+            // Part of training: it counts in the time that PSNR is reported against.
+            let ti = Instant::now();
             init_planes(&mut trainer, &data, &mut rng, &bar)?;
+            state.train_seconds += ti.elapsed().as_secs_f64();
         }
         let ts = Instant::now();
         let next = trainer.step + 1;
@@ -336,6 +375,7 @@ fn train(
             feed.publish(Snapshot {
                 gaussians: trainer.gaussians(),
                 planes: trainer.planes().to_vec(),
+                reflection: trainer.render_options().reflection,
                 status: format!(
                     "training: step {} of {}, loss {:.4}, PSNR {:.2} dB, {} Gaussians",
                     trainer.step,
@@ -367,14 +407,64 @@ fn train(
         }
     }
     bar.finish();
+    // The finished state, so that `--resume` after the end writes the same results again
+    // instead of training on from the last intermediate checkpoint.
+    if !was_finished {
+        state.rng_state = rng.state();
+        state.seconds = t0.elapsed().as_secs_f64();
+        let extra = serde_json::to_value(&state)?;
+        write_checkpoint(&args.out.join(CHECKPOINT_FILE), &trainer.checkpoint(extra))?;
+    }
     finish(&args, &trainer, &data, &data_dir, &state)?;
     if let Some(feed) = feed {
         // The final model, whatever the snapshot interval left the viewer with.
         feed.publish(Snapshot {
             gaussians: trainer.gaussians(),
             planes: trainer.planes().to_vec(),
+            reflection: trainer.render_options().reflection,
             status: format!("training finished: results in {}", args.out.display()),
         });
+    }
+    Ok(())
+}
+
+/// Remove the temporary files of writes a killed run left in `out` (`write_atomic` names them
+/// `.<file>.<pid>.<n>.tmp`; a checkpoint's is as large as the checkpoint). Only this folder's own
+/// outputs: the dataset and renders folders are left alone.
+fn remove_stale_temporaries(out: &Path) {
+    let Ok(entries) = std::fs::read_dir(out) else { return };
+    for e in entries.flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        let ours = [CHECKPOINT_FILE, "log.jsonl", "metrics.json", "model.ply", "planes.json"]
+            .iter()
+            .any(|f| name.starts_with(&format!(".{f}.")));
+        if ours && name.ends_with(".tmp") {
+            let _ = std::fs::remove_file(e.path());
+        }
+    }
+}
+
+/// Refuse to resume on a dataset whose training views are not those the run started with
+/// (`state.order` indexes them).
+fn check_same_views(state: &RunState, data: &TrainingData, data_dir: &Path) -> Result<()> {
+    let now: Vec<&str> = data.train.iter().map(|v| v.camera.name.as_str()).collect();
+    let changed = if state.train_views.is_empty() {
+        state.order.iter().any(|&i| i >= now.len())
+    } else {
+        state.train_views.iter().map(String::as_str).ne(now.iter().copied())
+    };
+    if changed {
+        bail!(
+            "--resume: the training views of {} are not those the run started with ({} then, {} \
+             now): restore the dataset, or start a new run",
+            data_dir.display(),
+            if state.train_views.is_empty() {
+                "unknown".into()
+            } else {
+                state.train_views.len().to_string()
+            },
+            now.len()
+        );
     }
     Ok(())
 }

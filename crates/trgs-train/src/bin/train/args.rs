@@ -139,6 +139,8 @@ pub fn parse_args() -> Result<(Command, bool)> {
     };
     let mut resume = false;
     let mut viewer = false;
+    // Flags that only mean something with another: refused alone rather than ignored.
+    let (mut resolution_flags, mut demo_scene, mut cap) = (0, false, false);
     let mut others = Vec::new();
     let mut it = std::env::args().skip(1);
     while let Some(a) = it.next() {
@@ -155,6 +157,7 @@ pub fn parse_args() -> Result<(Command, bool)> {
             "--viewer" => viewer = true,
             "--data" => args.data = Some(PathBuf::from(value("--data")?)),
             "--demo-scene" => {
+                demo_scene = true;
                 (args.demo_no_glass, args.demo_night) = match value("--demo-scene")?.as_str() {
                     "glass" => (false, false),
                     "night-glass" => (false, true),
@@ -168,9 +171,11 @@ pub fn parse_args() -> Result<(Command, bool)> {
             "--resume" => resume = true,
             "--iterations" => args.iterations = num("--iterations", value("--iterations")?)?,
             "--resolution" => {
+                resolution_flags += 1;
                 args.resolution = Resolution::Width(num("--resolution", value("--resolution")?)?)
             }
             "--downscale" => {
+                resolution_flags += 1;
                 args.resolution = Resolution::Downscale(num("--downscale", value("--downscale")?)?)
             }
             "--sh-degree" => args.sh_degree = num("--sh-degree", value("--sh-degree")?)?,
@@ -188,7 +193,10 @@ pub fn parse_args() -> Result<(Command, bool)> {
                     other => bail!("--densify {other:?}: expected classic, mcmc or none"),
                 }
             }
-            "--cap" => args.cap = num("--cap", value("--cap")?)?,
+            "--cap" => {
+                cap = true;
+                args.cap = num("--cap", value("--cap")?)?
+            }
             "--no-planes" => args.no_planes = true,
             "--profile" => args.profile = true,
             "--seed" => args.seed = num("--seed", value("--seed")?)?,
@@ -218,6 +226,22 @@ pub fn parse_args() -> Result<(Command, bool)> {
     }
     if args.checkpoint_every == Some(0) || args.eval_every == Some(0) {
         bail!("--eval-every and --checkpoint-every must be at least 1");
+    }
+    if resolution_flags > 1 {
+        bail!("give one of --resolution and --downscale");
+    }
+    if demo_scene && args.data.is_some() {
+        bail!("--demo-scene chooses the built-in scene, which --data replaces: give one of them");
+    }
+    if cap && args.densify != DensifyMode::Mcmc {
+        bail!("--cap is the MCMC count: it needs --densify mcmc");
+    }
+    if args.no_planes && !args.ablations.names().is_empty() {
+        bail!(
+            "--no-planes trains plain 3DGS, which has none of TR-Gaussians' components to switch \
+             off: drop the ablation flags ({})",
+            args.ablations.names().join(", ")
+        );
     }
     Ok((Command::Train(args), viewer))
 }

@@ -1,0 +1,36 @@
+//! `train` refuses flag combinations where one flag would be silently ignored, before any work,
+//! and `render` refuses a malformed background colour.
+use std::process::Command;
+
+fn refused(bin: &str, args: &[&str]) -> String {
+    let out = Command::new(bin).args(args).output().expect("run");
+    assert!(!out.status.success(), "{args:?} was accepted");
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+#[test]
+fn conflicting_flags_are_refused_by_name() {
+    let train = env!("CARGO_BIN_EXE_train");
+    let cases: [(&[&str], &[&str]); 5] = [
+        (&["--resolution", "128", "--downscale", "2"], &["--resolution", "--downscale"]),
+        (&["--data", "somewhere", "--demo-scene", "glass"], &["--demo-scene", "--data"]),
+        (&["--cap", "1000"], &["--cap", "--densify mcmc"]),
+        (&["--no-planes", "--no-fresnel"], &["--no-planes", "no Fresnel"]),
+        (&["--iterations", "0"], &["--iterations"]),
+    ];
+    for (args, words) in cases {
+        let stderr = refused(train, args);
+        for w in words {
+            assert!(stderr.contains(w), "{args:?}: {stderr}");
+        }
+    }
+}
+
+#[test]
+fn render_background_must_be_three_numbers_in_range() {
+    let render = env!("CARGO_BIN_EXE_render");
+    for bad in ["1,x,0", "1,1", "2,0,0", "NaN,0,0"] {
+        let stderr = refused(render, &["--model", "m.ply", "--background", bad]);
+        assert!(stderr.contains("--background") && stderr.contains("[0, 1]"), "{bad}: {stderr}");
+    }
+}
