@@ -9,9 +9,12 @@ use super::FormatError;
 use super::colmap::ColmapModel;
 use super::masks::{mask_path, read_glass_mask};
 use super::planes_json::{PlaneSpec, read_planes_json};
+use super::ply::read_point_cloud_ply;
 use super::png::read_rgb_image;
 use super::test_split::{default_test_views, read_test_views};
-use super::transforms::{TransformsFrame, name_by_relative_path_if_needed, read_transforms};
+use super::transforms::{
+    TransformsFrame, name_by_relative_path_if_needed, read_transforms, transforms_point_cloud,
+};
 use crate::image::Image;
 use crate::scene::{Camera, Material};
 
@@ -73,7 +76,8 @@ impl std::str::FromStr for Split {
 pub struct SceneFolder {
     pub root: PathBuf,
     pub views: Vec<ViewSpec>,
-    /// The sparse point cloud (position, colour) for initialisation; empty for transforms.json.
+    /// The sparse point cloud (position, colour) for initialisation: COLMAP's points3D, or the
+    /// PLY a transforms.json names as `ply_file_path` (nerfstudio); empty without one.
     pub points: Vec<([f64; 3], [u8; 3])>,
     pub plane_specs: Vec<PlaneSpec>,
     /// Names of the test views: `test_views.txt`, or every 8th image.
@@ -90,8 +94,17 @@ impl SceneFolder {
         let (cameras, points) = if let Some(sparse) = colmap_dir(root) {
             open_colmap(root, &sparse)?
         } else if root.join("transforms.json").is_file() {
-            let frames = read_transforms(&root.join("transforms.json"))?;
-            (frames.into_iter().map(|f| (f.camera, f.image_path)).collect(), Vec::new())
+            let json = root.join("transforms.json");
+            let frames = read_transforms(&json)?;
+            let points = match transforms_point_cloud(&json)? {
+                Some(ply) if !ply.is_file() => {
+                    let problem = "named by `ply_file_path` in transforms.json, but missing";
+                    return Err(FormatError::new(&ply, problem));
+                }
+                Some(ply) => read_point_cloud_ply(&ply)?,
+                None => Vec::new(),
+            };
+            (frames.into_iter().map(|f| (f.camera, f.image_path)).collect(), points)
         } else if root.join("transforms_train.json").is_file() {
             let (frames, tests) = read_blender_split_files(root)?;
             split_file_tests = Some(tests);
@@ -443,6 +456,22 @@ mod tests {
         assert_eq!(scene.views[1].mask_path, Some(root.join("glass_masks/z.png.png")));
         assert!(scene.points.is_empty());
         assert_eq!(scene.mask_labels().expect("labels"), Vec::<u32>::new());
+
+        // nerfstudio's `ply_file_path`: the sparse points seed the scene; a missing file is named.
+        let json_path = root.join("transforms.json");
+        let mut json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json_path).expect("json"))
+                .expect("parse");
+        json["ply_file_path"] = "sparse_pc.ply".into();
+        std::fs::write(&json_path, json.to_string()).expect("json");
+        let err = SceneFolder::open(&root).expect_err("missing cloud");
+        assert_mentions(&err, &["sparse_pc.ply", "ply_file_path", "missing"]);
+        let ply = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n\
+                   property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n\
+                   end_header\n0.5 0 2 10 20 30\n";
+        std::fs::write(root.join("sparse_pc.ply"), ply).expect("ply");
+        let scene = SceneFolder::open(&root).expect("open with points");
+        assert_eq!(scene.points, vec![([0.5, 0.0, 2.0], [10, 20, 30])]);
     }
 
     #[test]

@@ -48,6 +48,21 @@ pub fn read_transforms(path: &Path) -> Result<Vec<TransformsFrame>, FormatError>
     Ok(out)
 }
 
+/// The sparse point cloud a transforms.json names (nerfstudio's `ply_file_path`, relative to its
+/// folder, in the frames' coordinates), if any.
+pub fn transforms_point_cloud(path: &Path) -> Result<Option<PathBuf>, FormatError> {
+    let text = read_text(path)?;
+    let root: Value =
+        serde_json::from_str(&text).map_err(|e| FormatError::new(path, e.to_string()))?;
+    match root.get("ply_file_path").filter(|v| !v.is_null()) {
+        None => Ok(None),
+        Some(Value::String(p)) => Ok(Some(path.parent().unwrap_or(Path::new(".")).join(p))),
+        Some(other) => {
+            Err(FormatError::new(path, format!("`ply_file_path` must be a string, found {other}")))
+        }
+    }
+}
+
 /// Views are named by their image's file name, as COLMAP names them, unless two share one (the
 /// Blender scenes' `train/r_0` and `test/r_0` in one merged file): then every view is named by
 /// its image's path relative to the JSON's folder (`train/r_0.png`), which masks, the test split

@@ -12,8 +12,11 @@
 //! [`crate::scene::validate_scene`] is where non-finite input is refused, with the Gaussian named.
 mod body;
 mod header;
+mod points;
 #[cfg(test)]
 mod tests;
+
+pub use points::{ColouredPoint, read_point_cloud_ply};
 
 use std::collections::HashMap;
 use std::fmt::Write as _;
