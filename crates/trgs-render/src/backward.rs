@@ -70,6 +70,11 @@ pub enum BackwardError {
         scene_gaussians: u32,
         scene_planes: usize,
     },
+    #[error(
+        "the gradient of layer {layer} holds {bytes} bytes, the frame needs {needed}: were the \
+         gradients made for another frame?"
+    )]
+    GradsTooSmall { layer: &'static str, bytes: u64, needed: u64 },
 }
 
 /// A mirrored view's gradient from its VIEW_GRAD_FLOATS (linear map by columns, translation,
@@ -107,6 +112,9 @@ impl Renderer {
                 scene_gaussians: scene.len(),
                 scene_planes: scene.planes().len(),
             });
+        }
+        if let Some((layer, bytes, needed)) = grads.too_small_for(frame) {
+            return Err(BackwardError::GradsTooSmall { layer, bytes, needed });
         }
         let bufs = frame.backward_buffers(ctx, scene);
         let frame = &*frame;

@@ -197,6 +197,12 @@ impl Frame {
         self.views.clear();
         self.binning = None;
         self.stage_times = None;
+        // Until this render finishes the frame holds no image: a render that fails part way
+        // leaves it "not rendered" (empty reads, BackwardError::NotRendered), never the previous
+        // frame's buffers read with this frame's size.
+        self.layers = None;
+        self.rays = None;
+        self.has_pass.clear();
     }
 
     pub(crate) fn layers(&mut self, ctx: &GpuContext, pixels: u64) -> LayerBuffers {

@@ -348,12 +348,18 @@ impl BufferPool {
     /// The buffer `label` with at least `size` bytes (new and, in poison mode, poisoned when it
     /// had to grow).
     pub fn get(&mut self, ctx: &GpuContext, label: &str, size: u64) -> wgpu::Buffer {
-        if let Some(b) = self.buffers.get(label)
-            && b.size() >= padded(size)
-        {
-            return b.clone();
-        }
-        let b = storage(ctx, label, size);
+        let grown = match self.buffers.get(label) {
+            Some(b) if b.size() >= padded(size) => return b.clone(),
+            // A buffer that grows once usually grows again (key counts creep up as the camera
+            // moves): a quarter of headroom, within what one binding and one buffer can hold.
+            Some(_) => {
+                let limits = ctx.device.limits();
+                let most = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
+                (size + size / 4).min(most).max(size)
+            }
+            None => size,
+        };
+        let b = storage(ctx, label, grown);
         self.buffers.insert(label.to_string(), b.clone());
         b
     }

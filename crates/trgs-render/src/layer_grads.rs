@@ -76,6 +76,24 @@ fn pack(
 }
 
 impl LayerGrads {
+    /// The first buffer too small for `frame` (layer name, bytes held, bytes needed): gradients
+    /// made for a smaller frame would be read out of range.
+    pub fn too_small_for(&self, frame: &Frame) -> Option<(&'static str, u64, u64)> {
+        let pixels = u64::from(frame.width()) * u64::from(frame.height());
+        let slots = frame.plane_slots() as u64;
+        [
+            ("color", &self.color, pixels * 16),
+            ("reflection", &self.reflection, pixels * 16),
+            ("strength", &self.strength, pixels * 16),
+            ("transmission", &self.transmission, pixels * 16),
+            ("geometry", &self.geometry, pixels * 16),
+            ("reflection_raw", &self.reflection_raw, slots * pixels * 16),
+        ]
+        .into_iter()
+        .find(|(_, b, need)| b.size() < *need)
+        .map(|(name, b, need)| (name, b.size(), need))
+    }
+
     /// All-zero gradients for `frame` (a loss kernel then writes the layers it depends on).
     pub fn zeros(ctx: &GpuContext, frame: &Frame) -> Self {
         let pixels = u64::from(frame.width()) * u64::from(frame.height());

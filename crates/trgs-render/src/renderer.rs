@@ -73,6 +73,15 @@ pub enum RenderError {
          adapter's limit of {limit} bytes; render at a lower resolution or with fewer Gaussians"
     )]
     FrameTooLarge { name: String, what: &'static str, bytes: u64, limit: u64 },
+    /// The image needs more tiles along one axis than a dispatch can have workgroups.
+    #[error(
+        "camera {name:?}: {tiles} tiles along one image axis, over the adapter's limit of {limit} \
+         workgroups per dispatch dimension; render at a lower resolution"
+    )]
+    TooManyTiles { name: String, tiles: u32, limit: u32 },
+    /// An option that would make the frame meaningless (NaN colours, Gaussians behind the camera).
+    #[error("render option {what}: {problem}")]
+    Option { what: &'static str, problem: String },
 }
 
 /// The largest per-pixel buffer of a frame with `planes` reflection slots, in bytes per pixel
@@ -83,6 +92,24 @@ fn bytes_per_pixel(planes: usize) -> u64 {
     let reflection =
         slots * (16u64).max(std::mem::size_of::<crate::layout::ReflectionState>() as u64);
     state.max(16).max(reflection)
+}
+
+/// Bytes of one projected Gaussian's record.
+const PROJECTED_BYTES: u64 = std::mem::size_of::<crate::layout::ProjectedGaussian>() as u64;
+
+/// Options a frame cannot be rendered with: a non-finite background (every pixel would be NaN)
+/// and a near plane that is not a positive finite depth (at or behind the camera the projection
+/// divides by zero or draws what is behind it).
+fn check_options(options: &RenderOptions) -> Result<(), RenderError> {
+    if !options.background.iter().all(|c| c.is_finite()) {
+        let problem = format!("background {:?} must be finite", options.background);
+        return Err(RenderError::Option { what: "background", problem });
+    }
+    if !(options.near > 0.0 && options.near.is_finite()) {
+        let problem = format!("near {} must be a positive finite depth", options.near);
+        return Err(RenderError::Option { what: "near", problem });
+    }
+    Ok(())
 }
 
 /// Fails when a buffer of `bytes` would not fit one binding.
@@ -154,12 +181,24 @@ impl Renderer {
         camera
             .validate()
             .map_err(|source| RenderError::Camera { name: camera.name.clone(), source })?;
+        check_options(options)?;
         let s = Stage { ctx, kernels: &self.kernels };
         let grid = TileGrid::new(k.width, k.height);
+        let most = ctx.device.limits().max_compute_workgroups_per_dimension;
+        if let Some(tiles) = [grid.tiles_x, grid.tiles_y].into_iter().find(|&t| t > most) {
+            return Err(RenderError::TooManyTiles {
+                name: camera.name.clone(),
+                tiles,
+                limit: most,
+            });
+        }
         let pixels = u64::from(k.width) * u64::from(k.height);
         let view = ViewTransform::from(&camera.pose);
         let planes = scene.planes();
         check_binding(ctx, camera, "image layers", pixels * bytes_per_pixel(planes.len()))?;
+        // Each view's projected Gaussians are bound whole by the rasterize passes.
+        let projected_bytes = u64::from(scene.len()) * PROJECTED_BYTES;
+        check_binding(ctx, camera, "projected Gaussians (one record each)", projected_bytes)?;
         let mut specs = vec![ViewSpec { view, plane: None, limit: grid.full() }];
         for (i, plane) in planes.iter().enumerate() {
             if !options.enabled_planes.get(i).copied().unwrap_or(true) {
@@ -197,7 +236,8 @@ impl Renderer {
         let mut views = Vec::with_capacity(specs.len());
         for (vi, spec) in specs.iter().enumerate() {
             let plane = spec.plane.map(|p| &planes[p]);
-            let projected = pool.get(ctx, &format!("trgs.project.projected.v{vi}"), n * 64);
+            let projected =
+                pool.get(ctx, &format!("trgs.project.projected.v{vi}"), n * PROJECTED_BYTES);
             let counts = pool.get(ctx, &format!("trgs.tile_counts.counts.v{vi}"), n * 4);
             let pparams =
                 project::params(&spec.view, k, plane, &spec.limit, options.near, sh_degree);
