@@ -42,10 +42,12 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let s = a1 * a2 / (b1 * b2);
     let g_s = -params.lambda_dssim * params.inv_samples;
     let p = gid.y * params.width + gid.x;
-    let g_mx = g_s * s * (2.0 * my / a1 - 2.0 * my / a2 - 2.0 * mx / b1 + 2.0 * mx / b2);
+    // S/A1 = A2/(B1 B2) and S/A2 = A1/(B1 B2), as in the twin: A2 can be exactly zero.
+    let inv_b = 1.0 / (b1 * b2);
+    let g_mx = g_s * (2.0 * my * (a2 - a1) * inv_b - 2.0 * mx * s / b1 + 2.0 * mx * s / b2);
     terms[3u * p] = vec4<f32>(g_mx, 0.0);
     terms[3u * p + 1u] = vec4<f32>(-g_s * s / b2, 0.0);
-    terms[3u * p + 2u] = vec4<f32>(g_s * s * 2.0 / a2, 0.0);
+    terms[3u * p + 2u] = vec4<f32>(g_s * 2.0 * a1 * inv_b, 0.0);
     let d = rendered[p].xyz - unpack4x8unorm(target_image[p]).xyz;
     let ones = vec3<f32>(1.0);
     stats[2u * p] = vec4<f32>(dot(abs(d), ones), dot(s, ones), dot(d, d), 0.0);

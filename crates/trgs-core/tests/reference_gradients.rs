@@ -164,11 +164,19 @@ struct Report {
 }
 
 fn check_scene(spec: &SceneSpec, options: BackwardOptions, settings: RenderSettings) -> Report {
-    let scene = random_scene(spec);
+    check_prepared(random_scene(spec), spec.seed, options, settings)
+}
+
+fn check_prepared(
+    scene: Scene,
+    seed: u64,
+    options: BackwardOptions,
+    settings: RenderSettings,
+) -> Report {
     let render_of =
         |s: &Scene| render(&s.gaussians, &s.planes, &s.camera, &settings).expect("valid scene");
     let frame = render_of(&scene);
-    let weights = random_weights(&frame, spec.seed ^ 0xABCD);
+    let weights = random_weights(&frame, seed ^ 0xABCD);
     let grads = backward(
         &scene.gaussians,
         &scene.planes,
@@ -249,6 +257,11 @@ fn assert_gradients(spec: SceneSpec, options: BackwardOptions) {
 
 fn assert_gradients_with(spec: SceneSpec, options: BackwardOptions, settings: RenderSettings) {
     let r = check_scene(&spec, options, settings);
+    assert_report(&spec, spec.planes, r);
+}
+
+fn assert_report(label: &dyn std::fmt::Debug, planes: usize, r: Report) {
+    let spec = label;
     println!(
         "{spec:?}: {} parameters checked, {} skipped at a discontinuity, worst relative error {:.2e} ({})",
         r.checked, r.skipped, r.worst, r.worst_param
@@ -258,7 +271,7 @@ fn assert_gradients_with(spec: SceneSpec, options: BackwardOptions, settings: Re
     }
     assert!(r.worst <= 1e-4, "worst relative error {:.3e} at {}", r.worst, r.worst_param);
     // The plane parameters must really be exercised, not compared as zero against zero.
-    if spec.planes > 0 {
+    if planes > 0 {
         for kind in ["plane_centre", "plane_normal", "plane_r0", "mask", "reflection"] {
             assert!(r.per_kind[kind].1 > 1e-3, "{kind} gradients are all (near) zero");
         }
@@ -320,5 +333,20 @@ fn gradients_without_fresnel_or_intensity() {
             BackwardOptions::default(),
             settings,
         );
+    }
+}
+
+#[test]
+fn gradients_with_plane_normals_of_other_lengths() {
+    // Training steps the raw normal, so its length drifts from 1: the gradient must hold for
+    // any length (the normalisation's Jacobian), not only at 1.
+    for length in [2.5, 0.1] {
+        let spec = SceneSpec { seed: 16, gaussians: 24, planes: 2, ..Default::default() };
+        let mut scene = random_scene(&spec);
+        for p in &mut scene.planes {
+            p.normal *= length;
+        }
+        let r = check_prepared(scene, spec.seed, BackwardOptions::default(), Default::default());
+        assert_report(&format!("normals of length {length}"), spec.planes, r);
     }
 }

@@ -299,3 +299,41 @@ fn stage_two_block_keeps_plane_gradients_and_stops_reflection_into_gaussians() {
     // The blocked Gaussian gradient is the one of a loss on pass 1 alone with C_r held fixed.
     assert_ne!(full.gaussians.means, blocked.gaussians.means);
 }
+
+#[test]
+fn bad_plane_values_settings_and_reflection_intensities_are_named() {
+    let base = scene();
+    let settings = RenderSettings::default();
+    let fails = |s: &Scene, settings: &RenderSettings| {
+        render(&s.gaussians, &s.planes, &s.camera, settings).expect_err("must fail").to_string()
+    };
+    // Every plane parameter, not only the centre.
+    type Poke = fn(&mut Scene);
+    let cases: [(&str, Poke); 5] = [
+        ("plane 1: normal is not finite", |s| s.planes[1].normal.y = f64::NAN),
+        ("plane 1: axis is not finite", |s| s.planes[1].axis.z = f64::INFINITY),
+        ("plane 1: width is not finite", |s| s.planes[1].width = f64::NAN),
+        ("plane 1: height is not finite", |s| s.planes[1].height = f64::NEG_INFINITY),
+        ("plane 1: normal length", |s| s.planes[1].normal *= 1e200),
+    ];
+    for (expect, poke) in cases {
+        let mut s = base.clone();
+        poke(&mut s);
+        let err = fails(&s, &settings);
+        assert!(err.contains(expect), "expected '{expect}', got '{err}'");
+    }
+    // Settings the GPU renderer refuses too.
+    for (bad, expect) in [
+        (RenderSettings { near: 0.0, ..settings }, "near"),
+        (RenderSettings { near: f64::NAN, ..settings }, "near"),
+        (RenderSettings { background: [0.0, f64::INFINITY, 0.0], ..settings }, "background"),
+    ] {
+        let err = fails(&base, &bad);
+        assert!(err.contains(expect), "expected '{expect}', got '{err}'");
+    }
+    // A reflection intensity f32 could not carry through compose.
+    let mut s = base.clone();
+    s.gaussians.log_reflections[4] = 31.0;
+    let err = fails(&s, &settings);
+    assert!(err.contains("Gaussian 4: log_reflection 31 is out of range"), "{err}");
+}

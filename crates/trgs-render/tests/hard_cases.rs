@@ -5,7 +5,10 @@ use trgs_core::reference::TILE_SIZE;
 use trgs_core::scene::{
     Camera, Gaussians, Intrinsics, Material, Population, Pose, ReflectionPlane,
 };
-use trgs_render::{DeviceOptions, FrameImages, GpuContext, GpuScene, RenderOptions, Renderer};
+use trgs_render::{
+    BackwardError, BackwardOptions, DeviceOptions, Frame, FrameImages, GpuContext, GpuScene, Layer,
+    LayerGrads, RenderError, RenderOptions, Renderer,
+};
 
 fn ctx() -> GpuContext {
     let opts = DeviceOptions { poison_fresh_buffers: true, ..Default::default() };
@@ -89,6 +92,55 @@ fn extreme_scales_stay_finite() {
 }
 
 #[test]
+fn huge_gaussians_extreme_logits_are_culled_alike_on_gpu_and_twin() {
+    let ctx = ctx();
+    let renderer = Renderer::new(&ctx);
+    let s = random_scene(&SceneSpec { planes: 0, gaussians: 60, ..SceneSpec::default() });
+    let mut g = s.gaussians.clone();
+    let base = g.len();
+    let ahead = s.camera.pose.direction_to_world(DVec3::Z) * 3.0 + s.camera.pose.centre();
+    // Scales the f32 determinant cannot hold (culled on the GPU), and an opacity logit whose f32
+    // sigmoid is exactly zero (log(0) in the opacity cull).
+    for (log_scale, logit) in [(20.0, 1.0), (50.0, 1.0), (100.0, 1.0), (-1.0, -200.0)] {
+        let sh = vec![[0.5; 3]; g.sh_coeffs()];
+        g.push(
+            ahead.to_array(),
+            [1.0, 0.0, 0.0, 0.0],
+            [log_scale; 3],
+            logit,
+            &sh,
+            Population::Primary,
+        );
+    }
+    let view = trgs_core::scene::ViewTransform::from(&s.camera.pose);
+    let k = &s.camera.intrinsics;
+    let grid = trgs_core::reference::TileGrid::new(k.width, k.height);
+    let p = trgs_core::reference::project(
+        &g,
+        &view,
+        k,
+        trgs_core::reference::ProjectionFilter::All,
+        &grid.full(),
+        0.2,
+    );
+    assert!((base..g.len()).all(|i| !p.visible[i]), "the twin culls them");
+    let opts = RenderOptions::default();
+    let without = GpuScene::upload(&ctx, &s.gaussians.cast(), &[]).expect("valid");
+    let with = GpuScene::upload(&ctx, &g.cast(), &[]).expect("valid");
+    let a = renderer.render(&without, &s.camera, &opts).expect("render");
+    let b = renderer.render(&with, &s.camera, &opts).expect("render");
+    assert_eq!(a.key_count(), b.key_count(), "the GPU culls them too");
+    let (ia, ib) = (a.read_images(&ctx), b.read_images(&ctx));
+    assert!(all_finite(&ib));
+    assert_eq!(ia.color.data, ib.color.data);
+    // A reflection intensity f32 cannot carry through compose is refused by name.
+    let mut r = g.cast::<f32>();
+    r.log_reflections[5] = 100.0;
+    let err = GpuScene::upload(&ctx, &r, &[]).expect_err("log_reflection 100");
+    assert!(err.to_string().contains("Gaussian 5: log_reflection"), "{err}");
+}
+
+#[test]
 fn non_finite_input_is_refused_with_its_name() {
     let ctx = ctx();
     let s = random_scene(&SceneSpec::default());
@@ -162,9 +214,57 @@ fn frames_over_the_binding_limit_are_refused_with_a_clear_error() {
         let mean = [0.0, 0.0, 5.0 + 1e-4 * i as f32];
         g.push(mean, [1.0, 0.0, 0.0, 0.0], [3.0; 3], 4.0, &[[0.5; 3]], Population::Primary);
     }
-    let scene = GpuScene::upload(&ctx, &g, &[]).expect("valid");
-    let cam = Camera::new("wide", Intrinsics::from_fov_x(1.0, w, h), Pose::default());
-    let err = renderer.render(&scene, &cam, &RenderOptions::default()).expect_err("too many keys");
+    let big = GpuScene::upload(&ctx, &g, &[]).expect("valid");
+    let wide = Camera::new("wide", Intrinsics::from_fov_x(1.0, w, h), Pose::default());
+    // Into a frame that holds an earlier, smaller render: the failure comes after the frame
+    // was reset, and must leave it "not rendered", not the old buffers under the new size.
+    let small = Camera::new("small", Intrinsics::from_fov_x(1.0, 8, 6), Pose::default());
+    let mut frame = Frame::default();
+    renderer.render_into(&big, &small, &RenderOptions::default(), &mut frame).expect("small");
+    let old_grads = LayerGrads::zeros(&ctx, &frame);
+    let err = renderer
+        .render_into(&big, &wide, &RenderOptions::default(), &mut frame)
+        .expect_err("too many keys");
     let text = err.to_string();
     assert!(text.contains("\"wide\"") && text.contains("tile keys"), "{text}");
+    assert_eq!(frame.read_layer(&ctx, Layer::Color).data.len(), 0, "no stale image");
+    let err = renderer
+        .backward(&big, &mut frame, &old_grads, &BackwardOptions::default())
+        .expect_err("nothing rendered");
+    assert!(matches!(err, BackwardError::NotRendered), "{err}");
+}
+
+#[test]
+fn bad_options_too_many_tiles_and_stale_gradients_are_errors() {
+    let ctx = ctx();
+    let renderer = Renderer::new(&ctx);
+    let s = random_scene(&SceneSpec { planes: 1, gaussians: 40, ..SceneSpec::default() });
+    let scene = GpuScene::upload(&ctx, &s.gaussians.cast(), &s.planes).expect("valid");
+    let bad = [
+        (RenderOptions { near: f64::NAN, ..Default::default() }, "near"),
+        (RenderOptions { near: 0.0, ..Default::default() }, "near"),
+        (RenderOptions { near: -1.0, ..Default::default() }, "near"),
+        (RenderOptions { background: [0.0, f32::NAN, 0.0], ..Default::default() }, "background"),
+    ];
+    for (options, what) in bad {
+        let err = renderer.render(&scene, &s.camera, &options).expect_err(what);
+        assert!(err.to_string().contains(what), "{err}");
+    }
+    // More tiles along one axis than a dispatch dimension holds.
+    let most = ctx.device.limits().max_compute_workgroups_per_dimension;
+    let mut strip = s.camera.clone();
+    strip.intrinsics = Intrinsics::from_fov_x(1.0, (most + 1) * TILE_SIZE, 1);
+    let err = renderer.render(&scene, &strip, &RenderOptions::default()).expect_err("tiles");
+    assert!(matches!(err, RenderError::TooManyTiles { .. }), "{err}");
+    // Gradients made for a smaller frame are refused, not read out of range.
+    let mut frame = Frame::default();
+    let mut small = s.camera.clone();
+    small.intrinsics = Intrinsics::from_fov_x(1.0, 8, 6);
+    renderer.render_into(&scene, &small, &RenderOptions::default(), &mut frame).expect("small");
+    let grads = LayerGrads::zeros(&ctx, &frame);
+    renderer.render_into(&scene, &s.camera, &RenderOptions::default(), &mut frame).expect("full");
+    let err = renderer
+        .backward(&scene, &mut frame, &grads, &BackwardOptions::default())
+        .expect_err("stale gradients");
+    assert!(matches!(err, BackwardError::GradsTooSmall { .. }), "{err}");
 }

@@ -94,17 +94,9 @@ pub fn photometric_loss(
         let mut g_mxx = vec![0.0; w * h];
         let mut g_mxy = vec![0.0; w * h];
         for i in 0..w * h {
-            let (mx, my) = (m_x[i], m_y[i]);
-            let a1 = 2.0 * mx * my + SSIM_C1;
-            let a2 = 2.0 * (m_xy[i] - mx * my) + SSIM_C2;
-            let b1 = mx * mx + my * my + SSIM_C1;
-            let b2 = (m_xx[i] - mx * mx) + (m_yy[i] - my * my) + SSIM_C2;
-            let s = a1 * a2 / (b1 * b2);
-            ssim_sum += s;
-            // S = A1 A2 / (B1 B2) with A2, B2 depending on m_x through the (co)variances.
-            g_mx[i] = g_s * s * (2.0 * my / a1 - 2.0 * my / a2 - 2.0 * mx / b1 + 2.0 * mx / b2);
-            g_mxx[i] = -g_s * s / b2;
-            g_mxy[i] = g_s * s * 2.0 / a2;
+            let t = ssim_terms(m_x[i], m_y[i], m_xx[i], m_yy[i], m_xy[i]);
+            ssim_sum += t.s;
+            (g_mx[i], g_mxx[i], g_mxy[i]) = (g_s * t.d_mx, g_s * t.d_mxx, g_s * t.d_mxy);
         }
         let (b_mx, b_mxx, b_mxy) = (blur(&g_mx), blur(&g_mxx), blur(&g_mxy));
         for i in 0..w * h {
@@ -113,6 +105,32 @@ pub fn photometric_loss(
     }
     let ssim = ssim_sum * inv_n;
     Ok(PhotometricLoss { value: (1.0 - lambda) * l1 + lambda * (1.0 - ssim), l1, ssim, grad })
+}
+
+/// SSIM at one sample from its window means, and its derivatives by m_x, m_xx and m_xy.
+struct SsimTerms {
+    s: f64,
+    d_mx: f64,
+    d_mxx: f64,
+    d_mxy: f64,
+}
+
+fn ssim_terms(mx: f64, my: f64, mxx: f64, myy: f64, mxy: f64) -> SsimTerms {
+    let a1 = 2.0 * mx * my + SSIM_C1;
+    let a2 = 2.0 * (mxy - mx * my) + SSIM_C2;
+    let b1 = mx * mx + my * my + SSIM_C1;
+    let b2 = (mxx - mx * mx) + (myy - my * my) + SSIM_C2;
+    let s = a1 * a2 / (b1 * b2);
+    // S = A1 A2 / (B1 B2) with A2, B2 depending on m_x through the (co)variances. S/A1 and S/A2
+    // are written A2/(B1 B2) and A1/(B1 B2): A2 (twice the covariance plus C2) can be exactly
+    // zero, where S (A2/A2) would be 0 inf = NaN. B1 >= C1 > 0 and B2 >= C2 > 0.
+    let inv_b = 1.0 / (b1 * b2);
+    SsimTerms {
+        s,
+        d_mx: 2.0 * my * (a2 - a1) * inv_b - 2.0 * mx * s / b1 + 2.0 * mx * s / b2,
+        d_mxx: -s / b2,
+        d_mxy: 2.0 * a1 * inv_b,
+    }
 }
 
 #[cfg(test)]
@@ -169,6 +187,32 @@ mod tests {
             worst = worst.max((fd - loss.grad.data[k]).abs() / scale);
         }
         assert!(worst < 1e-5, "worst relative error {worst:e}");
+    }
+
+    #[test]
+    fn ssim_derivatives_are_finite_where_the_covariance_term_is_zero() {
+        // Dark windows (small means) make the zero reachable in floating point.
+        let (mx, my, mxx, myy) = (0.03, 0.03, 0.002, 0.002);
+        // A2 = 2 (m_xy - m_x m_y) + C2 = 0 exactly: the m_xy next to the exact root where the
+        // f64 arithmetic gives zero.
+        let a2 = |mxy: f64| 2.0 * (mxy - mx * my) + SSIM_C2;
+        let root = mx * my - SSIM_C2 / 2.0;
+        let mxy = (-64i64..=64)
+            .map(|k| f64::from_bits((root.to_bits() as i64 + k) as u64))
+            .find(|&v| a2(v) == 0.0)
+            .expect("an m_xy with A2 = 0 within 64 ulps");
+        let t = ssim_terms(mx, my, mxx, myy, mxy);
+        assert_eq!(t.s, 0.0);
+        assert!([t.d_mx, t.d_mxx, t.d_mxy].iter().all(|v| v.is_finite()), "{:?}", t.d_mx);
+        // And they are the derivatives: central differences at that point.
+        let e = 1e-6;
+        let fd = |f: &dyn Fn(f64) -> f64| (f(e) - f(-e)) / (2.0 * e);
+        let by_mx = fd(&|d| ssim_terms(mx + d, my, mxx, myy, mxy).s);
+        let by_mxx = fd(&|d| ssim_terms(mx, my, mxx + d, myy, mxy).s);
+        let by_mxy = fd(&|d| ssim_terms(mx, my, mxx, myy, mxy + d).s);
+        for (a, b) in [(t.d_mx, by_mx), (t.d_mxx, by_mxx), (t.d_mxy, by_mxy)] {
+            assert!((a - b).abs() < 1e-6 * (1.0 + b.abs()), "{a} against {b}");
+        }
     }
 
     #[test]

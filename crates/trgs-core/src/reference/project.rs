@@ -156,6 +156,13 @@ pub fn project(
         if !(det > 0.0) || !det.is_finite() {
             continue;
         }
+        // The GPU forms the 2D covariance and its determinant in f32 and culls a determinant of
+        // 3e38 or more, where f32 overflows (project.wgsl: a Gaussian some 1e7 times larger than
+        // the view, log-scale above about 17); the twin culls the same ones instead of keeping a
+        // veil the GPU never draws.
+        if !(det < 3.0e38) || ![a, c, a * c].iter().all(|&v| (v as f32).is_finite()) {
+            continue;
+        }
         let mean2d = DVec2::new(k.fx * p.x / p.z + k.cx, k.fy * p.y / p.z + k.cy);
         let extent = DVec2::new((reach * a).sqrt(), (reach * c).sqrt());
         if tile_rect(mean2d, extent, &grid, limit).is_empty() {

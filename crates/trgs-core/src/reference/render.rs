@@ -61,8 +61,22 @@ pub fn render_view(
     ViewPass { view: *view, projected, keys, values, ranges }
 }
 
-/// Render every layer of `camera`'s view. Non-finite or malformed input is rejected with the
-/// attribute and index named, before any work.
+/// The settings the GPU renderer refuses too (trgs_render's `RenderOptions` checks): a
+/// non-finite background, a near plane that is not a positive finite depth.
+fn check_settings(settings: &RenderSettings) -> Result<(), InvalidInput> {
+    if !settings.background.iter().all(|c| c.is_finite()) {
+        let problem = format!("background {:?} must be finite", settings.background);
+        return Err(InvalidInput::Setting { what: "background", problem });
+    }
+    if !(settings.near > 0.0 && settings.near.is_finite()) {
+        let problem = format!("near {} must be a positive finite depth", settings.near);
+        return Err(InvalidInput::Setting { what: "near", problem });
+    }
+    Ok(())
+}
+
+/// Render every layer of `camera`'s view. Non-finite or malformed input (Gaussians, planes,
+/// camera, settings) is rejected with what is wrong named, before any work.
 pub fn render(
     g: &Gaussians<f64>,
     planes: &[ReflectionPlane],
@@ -70,6 +84,7 @@ pub fn render(
     settings: &RenderSettings,
 ) -> Result<Frame, InvalidInput> {
     validate_scene(g, planes, camera)?;
+    check_settings(settings)?;
     let k = &camera.intrinsics;
     let grid = TileGrid::new(k.width, k.height);
     let view = ViewTransform::from(&camera.pose);

@@ -122,6 +122,13 @@ impl ReflectionPlane {
         if self.normal.length_squared() < 1e-24 {
             return Err(bad("normal has zero length".into()));
         }
+        // The GPU normalises it in f32, where a length above about 1e19 squares to Inf.
+        if self.normal.length_squared() > 1e24 {
+            return Err(bad(format!(
+                "normal length {:e} is too large (at most 1e12; only its direction matters)",
+                self.normal.length()
+            )));
+        }
         if (self.axis.length() - 1.0).abs() > 1e-6 || self.axis.dot(self.unit_normal()).abs() > 1e-6
         {
             return Err(bad("axis must be a unit vector orthogonal to the normal".into()));

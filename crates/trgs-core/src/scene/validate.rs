@@ -8,10 +8,15 @@ pub enum InvalidInput {
     NonFinite { attribute: &'static str, index: usize, value: f64 },
     #[error("Gaussians: {0}")]
     Layout(String),
+    #[error("Gaussian {index}: {attribute} {value} is out of range ({expected})")]
+    OutOfRange { attribute: &'static str, index: usize, value: f64, expected: &'static str },
     #[error(transparent)]
     Plane(#[from] PlaneError),
     #[error(transparent)]
     Camera(#[from] CameraError),
+    /// A render setting the frame cannot be made with (as the GPU renderer refuses it).
+    #[error("render setting {what}: {problem}")]
+    Setting { what: &'static str, problem: String },
 }
 
 fn check<F: Scalar, const N: usize>(
@@ -42,7 +47,11 @@ pub fn validate_scene<F: Scalar>(
     Ok(())
 }
 
-/// Lengths consistent, every attribute finite, no zero quaternion.
+/// The largest log reflection intensity a scene may hold (e^30 = 1e13).
+pub const MAX_LOG_REFLECTION: f64 = 30.0;
+
+/// Lengths consistent, every attribute finite, no zero quaternion, reflection intensities that
+/// f32 can carry through compose.
 pub fn validate_gaussians<F: Scalar>(gaussians: &Gaussians<F>) -> Result<(), InvalidInput> {
     gaussians.check_lengths().map_err(InvalidInput::Layout)?;
     check("mean", &gaussians.means, 1)?;
@@ -53,6 +62,18 @@ pub fn validate_gaussians<F: Scalar>(gaussians: &Gaussians<F>) -> Result<(), Inv
     check("sh", &gaussians.sh, gaussians.sh_coeffs())?;
     check("mask_logit", &wrap(&gaussians.mask_logits), 1)?;
     check("log_reflection", &wrap(&gaussians.log_reflections), 1)?;
+    // exp(log_reflection) scales the reflection: above e^MAX_LOG_REFLECTION it would overflow
+    // f32 in compose (C_r = Inf on the GPU) long before any trained value gets near it.
+    if let Some((i, &v)) =
+        gaussians.log_reflections.iter().enumerate().find(|(_, v)| v.to_f64() > MAX_LOG_REFLECTION)
+    {
+        return Err(InvalidInput::OutOfRange {
+            attribute: "log_reflection",
+            index: i,
+            value: v.to_f64(),
+            expected: "at most 30",
+        });
+    }
     for (i, q) in gaussians.rotations.iter().enumerate() {
         let n2: f64 = q.iter().map(|v| v.to_f64() * v.to_f64()).sum();
         if n2 < 1e-24 {
