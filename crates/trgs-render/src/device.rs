@@ -15,7 +15,18 @@ pub enum DeviceError {
     NoMatchingAdapter { wanted: String, available: String },
     #[error("the adapter {adapter} refused a device: {source}")]
     RequestDevice { adapter: String, source: wgpu::RequestDeviceError },
+    /// A device created elsewhere ([`GpuContext::from_device`]) with a limit below what the
+    /// kernels need: create it from [`device_descriptor`].
+    #[error(
+        "the device allows {have} {what}, trgs's kernels need {need}: create it with \
+         trgs_render::device_descriptor (which asks for the adapter's limits)"
+    )]
+    Limit { what: &'static str, have: u32, need: u32 },
 }
+
+/// The most storage buffers one trgs kernel binds (`project_bwd`), above WebGPU's default of 8:
+/// a device must allow this many per shader stage (a test checks every shader against it).
+pub const STORAGE_BUFFERS_PER_STAGE: u32 = 17;
 
 /// Optional features the adapter granted.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -136,7 +147,7 @@ impl GpuContext {
             adapter.request_device(&device_descriptor(&adapter, options)).await.map_err(
                 |source| DeviceError::RequestDevice { adapter: info.name.clone(), source },
             )?;
-        Ok(Self::from_device(adapter, device, queue, options))
+        Self::from_device(adapter, device, queue, options)
     }
 
     /// A context on a device created elsewhere (e.g. by a UI toolkit that also presents to a
@@ -146,7 +157,16 @@ impl GpuContext {
         device: wgpu::Device,
         queue: wgpu::Queue,
         options: &DeviceOptions,
-    ) -> Self {
+    ) -> Result<Self, DeviceError> {
+        // Checked here, not when a pipeline fails to build (a validation panic).
+        let have = device.limits().max_storage_buffers_per_shader_stage;
+        if have < STORAGE_BUFFERS_PER_STAGE {
+            return Err(DeviceError::Limit {
+                what: "storage buffers per shader stage",
+                have,
+                need: STORAGE_BUFFERS_PER_STAGE,
+            });
+        }
         let features = device.features();
         let capabilities = Capabilities {
             float_atomics: features.contains(Features::SHADER_FLOAT32_ATOMIC),
@@ -156,7 +176,7 @@ impl GpuContext {
         let poison_fresh_buffers = options.poison_fresh_buffers
             || std::env::var("TRGS_POISON_BUFFERS").is_ok_and(|v| v == "1");
         let info = adapter.get_info();
-        Self { adapter, device, queue, info, capabilities, poison_fresh_buffers }
+        Ok(Self { adapter, device, queue, info, capabilities, poison_fresh_buffers })
     }
 
     /// One line for logs: adapter, backend and optional features.

@@ -102,12 +102,22 @@ pub fn map_and_read<T: bytemuck::Pod>(
     bytes: usize,
 ) -> Vec<T> {
     let slice = staging.slice(..);
-    slice.map_async(wgpu::MapMode::Read, |_| {});
-    // A lost device surfaces here; there is nothing better to do than to stop loudly.
-    #[allow(clippy::expect_used)]
-    ctx.device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .expect("GPU device lost while reading back");
+    let (tx, rx) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    // A lost device (or a buffer that could not be allocated) surfaces here as a failed
+    // mapping; the reads return plain values, so stop loudly and say what failed.
+    if let Err(e) = ctx.device.poll(wgpu::PollType::wait_indefinitely()) {
+        panic!("trgs: waiting for the GPU to finish before reading back failed: {e}");
+    }
+    match rx.try_recv() {
+        Ok(Ok(())) => {}
+        Ok(Err(e)) => panic!(
+            "trgs: reading back a GPU buffer failed ({e}): the device was lost or ran out of memory"
+        ),
+        Err(_) => panic!("trgs: the GPU never finished the readback (the device was lost)"),
+    }
     let out = {
         #[allow(clippy::expect_used)]
         let view = slice.get_mapped_range().expect("readback buffer is mapped");

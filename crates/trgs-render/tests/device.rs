@@ -86,3 +86,21 @@ fn unknown_adapter_name_is_a_clear_error() {
     let msg = err.to_string();
     assert!(msg.contains("no-such-gpu-xyz") || msg.contains("no GPU adapter"), "{msg}");
 }
+
+#[test]
+fn a_device_with_webgpu_default_limits_is_refused_by_name() {
+    let ctx = GpuContext::new().unwrap_or_else(|e| panic!("{e}"));
+    // What a UI toolkit creates when it asks for nothing: 8 storage buffers per stage.
+    let descriptor = wgpu::DeviceDescriptor {
+        label: Some("trgs.test.default_limits"),
+        required_limits: wgpu::Limits::default(),
+        ..Default::default()
+    };
+    let (device, queue) =
+        pollster::block_on(ctx.adapter.request_device(&descriptor)).expect("default device");
+    let err =
+        GpuContext::from_device(ctx.adapter.clone(), device, queue, &DeviceOptions::default())
+            .expect_err("8 storage buffers are too few");
+    let text = err.to_string();
+    assert!(text.contains("storage buffers") && text.contains("device_descriptor"), "{text}");
+}

@@ -24,6 +24,27 @@ fn every_shader_variant_validates() {
 }
 
 #[test]
+fn no_kernel_binds_more_storage_buffers_than_a_device_is_asked_for() {
+    let mut most = 0;
+    for (file, defines) in VARIANTS {
+        let src = compose(file, defines).unwrap_or_else(|e| panic!("{e}"));
+        let module = validate(&format!("{file} {defines:?}"), &src);
+        let storage = module
+            .global_variables
+            .iter()
+            .filter(|(_, v)| matches!(v.space, naga::AddressSpace::Storage { .. }))
+            .count() as u32;
+        assert!(
+            storage <= trgs_render::STORAGE_BUFFERS_PER_STAGE,
+            "{file} {defines:?} binds {storage} storage buffers, over STORAGE_BUFFERS_PER_STAGE"
+        );
+        most = most.max(storage);
+    }
+    // And the constant is what the kernels use, so that no device is refused for nothing.
+    assert_eq!(most, trgs_render::STORAGE_BUFFERS_PER_STAGE);
+}
+
+#[test]
 fn every_wgsl_file_is_compiled_in_and_every_stage_has_a_variant() {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shaders");
     let mut on_disk = Vec::new();

@@ -115,7 +115,7 @@ impl ViewerApp {
             rs.device.clone(),
             rs.queue.clone(),
             &trgs_render::DeviceOptions::default(),
-        );
+        )?;
         let renderer = Renderer::new(&ctx);
         let here = std::env::current_dir().unwrap_or_else(|_| PathBuf::from("."));
         let mut app = Self {
