@@ -38,14 +38,28 @@ fn sobel_y(dx: i32, dy: i32) -> f32 {
     return 0.125 * f32(dy) * select(1.0, 2.0, dx == 0);
 }
 
-// Whether pixel q is interior (its 3x3 neighbourhood is in the image) and hits a plane.
+// Whether L_c counts at pixel q: its 3x3 neighbourhood is in the image and every pixel of it
+// hits the same plane. C_r is zero off the plane's rectangle, so a Sobel window across the
+// rectangle's outline would see a step there that no reflection has, and L_c would flatten
+// C_t's edges along the outline (the window frame) for it.
 fn conflict_pixel(q: vec2<i32>) -> bool {
     let w = i32(params.width);
     let h = i32(params.height);
     if q.x < 1 || q.y < 1 || q.x > w - 2 || q.y > h - 2 {
         return false;
     }
-    return hit[u32(q.y) * params.width + u32(q.x)] != 0u;
+    let plane = hit[u32(q.y) * params.width + u32(q.x)];
+    if plane == 0u {
+        return false;
+    }
+    for (var dy = -1; dy <= 1; dy++) {
+        for (var dx = -1; dx <= 1; dx++) {
+            if hit[u32(q.y + dy) * params.width + u32(q.x + dx)] != plane {
+                return false;
+            }
+        }
+    }
+    return true;
 }
 
 // The Sobel gradients of C_t and C_r at the interior pixel q: (g_x^t, g_y^t, g_x^r, g_y^r).

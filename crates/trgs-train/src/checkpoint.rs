@@ -24,6 +24,10 @@ const MAGIC: &str = "trgs-checkpoint 1";
 pub struct PlaneMoments {
     pub m: [f64; 7],
     pub v: [f64; 7],
+    /// Adam steps this plane has taken: its bias correction counts from the plane's creation,
+    /// not from the run's start (0 in checkpoints that predate it; see `Trainer::step_planes`).
+    #[serde(default)]
+    pub steps: u32,
 }
 
 /// A training run's state at the end of step `step`.
@@ -336,7 +340,7 @@ mod tests {
             step: 42,
             state: TrainState { gaussians: g, m, v },
             planes: vec![plane],
-            plane_moments: vec![PlaneMoments { m: [0.25; 7], v: [1e-9; 7] }],
+            plane_moments: vec![PlaneMoments { m: [0.25; 7], v: [1e-9; 7], steps: 17 }],
             densify_stats: Some(DensifyStats {
                 grad_sum: vec![1.0, 2.0, 3.0, 4.0, 5.0],
                 count: vec![1, 2, 3, 4, 5],

@@ -518,8 +518,17 @@ impl Trainer {
             normal: fine * r.plane_normal,
             r0_logit: r.plane_r0,
         };
+        let stage1 = self.settings.stage1;
         for ((plane, g), mom) in planes.iter_mut().zip(grads).zip(&mut self.plane_moments) {
-            plane_adam(plane, g, mom, &rates, t);
+            // Adam's bias correction counts the plane's own steps: its moments start at zero
+            // when it is created (at the end of stage 1), and with the run's step count instead
+            // the first steps would be several times the rate (1 - b2^t near 1 under a tiny v).
+            // A checkpoint from before the count started: the planes began after stage 1.
+            if mom.steps == 0 && mom.v.iter().any(|&v| v != 0.0) {
+                mom.steps = t.saturating_sub(stage1 + 1);
+            }
+            mom.steps += 1;
+            plane_adam(plane, g, mom, &rates, mom.steps);
         }
         self.scene.set_planes(&planes).context("a plane step left an invalid plane")?;
         Ok(())

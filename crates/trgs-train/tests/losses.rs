@@ -38,10 +38,21 @@ fn levels(mut im: Image<f32>) -> Image<f32> {
 }
 
 fn layers(w: u32, h: u32, rng: &mut Rng) -> Layers {
+    // Two planes' regions (as their footprints are), a band without a plane, and a few holes:
+    // L_c counts where a whole 3x3 window is on one plane, so both the interiors and the
+    // outlines are exercised.
     let mut hit = Image::<u32>::new(w, h, 1);
-    hit.data
-        .iter_mut()
-        .for_each(|v| *v = if rng.uniform() < 0.65 { 1 + (rng.uniform() * 2.0) as u32 } else { 0 });
+    for (i, v) in hit.data.iter_mut().enumerate() {
+        let (x, y) = (i as u32 % w, i as u32 / w);
+        let region = if x < w / 6 || y < h / 6 {
+            0
+        } else if x < w / 2 {
+            1
+        } else {
+            2
+        };
+        *v = if rng.uniform() < 0.03 { 0 } else { region };
+    }
     let mut annotation = Image::<u8>::new(w, h, 1);
     annotation.data.iter_mut().for_each(|v| *v = u8::from(rng.uniform() < 0.5));
     Layers {
@@ -202,6 +213,10 @@ fn check(ctx: &GpuContext, kernels: &mut LossKernels, l: &Layers, labelled: bool
         ("L_m", values.mask, twin.mask),
     ] {
         assert!((got - want).abs() <= 1e-5 * want.abs().max(1e-3), "{tag}: {name} {got} vs {want}");
+    }
+    // L_c is compared where it exists, not only as zero against zero.
+    if planes && l.width >= 16 && l.height >= 16 {
+        assert!(twin.conflict > 0.0, "{tag}: no window counted for L_c");
     }
 }
 

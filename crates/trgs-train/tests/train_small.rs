@@ -87,6 +87,9 @@ fn small_scene_trains_and_finds_its_plane() {
     let p = &trainer.planes()[0];
     assert!(p.centre.is_finite() && p.normal.length() > 0.0 && p.normal.is_finite());
     assert!(p.centre.distance(scene.planes[0].centre) < 0.2 * data.extent);
+    // The plane's Adam counts its own steps (bias correction from its creation at step 60).
+    let ck = trainer.checkpoint(serde_json::Value::Null);
+    assert_eq!(ck.plane_moments[0].steps, iterations - 60);
     let after = test_psnr(&trainer, &data);
     eprintln!("test PSNR {after:.2} dB after {iterations} steps");
     assert!(after > before + 1.0);

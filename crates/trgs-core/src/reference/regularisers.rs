@@ -4,7 +4,8 @@
 //! - `depth_variance_loss`: L_d = mean H V, with V = sum |z - D_t| w the renderer's layer;
 //! - `gradient_conflict_loss`: L_c = mean H |grad C_t . sg(grad C_r)|, per channel the dot
 //!   product of the two images' Sobel derivative estimates (kernel / 8, units per pixel), on
-//!   interior pixels (no padding).
+//!   interior pixels (no padding) whose whole 3x3 window hits the same plane (C_r is zero off
+//!   the rectangle: a window across its outline would see a step no reflection has).
 //!
 //! [`regularisers`] weights and combines the three as the GPU stage does: it writes the direct
 //! gradients of the transmission layer (C_t, alpha) and of the geometry layer (D_t, V, M).
@@ -71,9 +72,14 @@ pub fn gradient_conflict_loss(ct: &Image<f64>, cr: &Image<f64>, hit: &Image<u32>
     if w < 3 || h < 3 {
         return LayerLoss { value, grad };
     }
+    // The whole window on one plane (see the module comment).
+    let counts = |x: usize, y: usize| {
+        let plane = hit.data[y * w + x];
+        plane != 0 && (0..9).all(|k| hit.data[(y + k / 3 - 1) * w + x + k % 3 - 1] == plane)
+    };
     for y in 1..h - 1 {
         for x in 1..w - 1 {
-            if hit.data[y * w + x] == 0 {
+            if !counts(x, y) {
                 continue;
             }
             for c in 0..ch {
@@ -171,11 +177,19 @@ mod tests {
         for v in ct.data.iter_mut().chain(cr.data.iter_mut()) {
             *v = rng.uniform();
         }
+        // Plane 1 over most of the image, plane 2 in its lower right corner: windows inside
+        // either count, windows across an outline do not.
         let mut hit = Image::<u32>::new(w, h, 1);
         for (i, v) in hit.data.iter_mut().enumerate() {
-            *v = u32::from(i % 3 != 0);
+            let (x, y) = (i % w as usize, i / w as usize);
+            *v = match (x, y) {
+                (0, _) | (_, 0) => 0,
+                (5.., 4..) => 2,
+                _ => 1,
+            };
         }
         let l = gradient_conflict_loss(&ct, &cr, &hit);
+        assert!(l.value > 0.0, "some windows count");
         let eps = 1e-7;
         for k in 0..ct.data.len() {
             let mut p = ct.clone();
@@ -187,6 +201,29 @@ mod tests {
                 / (2.0 * eps);
             assert!((fd - l.grad.data[k]).abs() < 1e-6, "sample {k}: {fd} vs {}", l.grad.data[k]);
         }
+    }
+
+    #[test]
+    fn the_rectangle_outline_is_no_conflict() {
+        // C_r constant on the plane and zero off it (as the mirrored pass leaves it), C_t with
+        // an edge everywhere: the only gradient of C_r is the outline, which is no reflection.
+        let (w, h) = (10, 8);
+        let mut ct = Image::<f64>::new(w, h, 3);
+        let mut cr = Image::<f64>::new(w, h, 3);
+        let mut hit = Image::<u32>::new(w, h, 1);
+        for y in 0..h as usize {
+            for x in 0..w as usize {
+                let on = (2..8).contains(&x) && (2..6).contains(&y);
+                hit.data[y * w as usize + x] = u32::from(on);
+                for c in 0..3 {
+                    ct.data[(y * w as usize + x) * 3 + c] = (x + 2 * y) as f64 * 0.1;
+                    cr.data[(y * w as usize + x) * 3 + c] = if on { 0.75 } else { 0.0 };
+                }
+            }
+        }
+        let l = gradient_conflict_loss(&ct, &cr, &hit);
+        assert_eq!(l.value, 0.0);
+        assert!(l.grad.data.iter().all(|&g| g == 0.0));
     }
 
     #[test]
