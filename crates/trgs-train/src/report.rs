@@ -11,12 +11,17 @@ pub struct Curve {
     pub points: Vec<(f64, f64)>,
 }
 
-/// Line colours, in run order (the table names them).
-pub const COLOURS: [([f32; 3], &str); 4] = [
+/// Line colours, in run order (the table names them); `report` takes at most this many runs,
+/// so that no two curves share a colour.
+pub const COLOURS: [([f32; 3], &str); 8] = [
     ([0.85, 0.2, 0.15], "red"),
     ([0.15, 0.35, 0.85], "blue"),
     ([0.1, 0.6, 0.2], "green"),
     ([0.6, 0.3, 0.7], "purple"),
+    ([0.95, 0.6, 0.1], "orange"),
+    ([0.1, 0.7, 0.75], "teal"),
+    ([0.5, 0.5, 0.5], "grey"),
+    ([0.55, 0.35, 0.15], "brown"),
 ];
 
 /// Read `psnr_over_time` of a run's metrics.json text.
@@ -32,7 +37,7 @@ pub fn curve_of(name: &str, metrics: &serde_json::Value) -> Curve {
     Curve { name: name.to_string(), points }
 }
 
-/// Markdown table: one row per evaluation time of the first curve's steps, one column per run.
+/// Markdown table: one row per run, one column per evaluation (its PSNR and training time).
 pub fn markdown_table(curves: &[Curve]) -> String {
     let mut s = String::from("| run | colour |");
     let n = curves.iter().map(|c| c.points.len()).max().unwrap_or(0);
@@ -43,7 +48,9 @@ pub fn markdown_table(curves: &[Curve]) -> String {
     s.push_str(&"---:|".repeat(n));
     s.push('\n');
     for (k, c) in curves.iter().enumerate() {
-        s.push_str(&format!("| {} | {} |", c.name, COLOURS[k % COLOURS.len()].1));
+        // A `|` in a name would end its cell.
+        let name = c.name.replace('|', "\\|");
+        s.push_str(&format!("| {name} | {} |", COLOURS[k % COLOURS.len()].1));
         for &(t, p) in &c.points {
             s.push_str(&format!(" {p:.2} dB at {t:.0} s |"));
         }

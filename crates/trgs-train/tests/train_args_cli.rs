@@ -34,3 +34,15 @@ fn render_background_must_be_three_numbers_in_range() {
         assert!(stderr.contains("--background") && stderr.contains("[0, 1]"), "{bad}: {stderr}");
     }
 }
+
+#[test]
+fn report_refuses_unknown_options_and_mismatched_names() {
+    let report = env!("CARGO_BIN_EXE_report");
+    let stderr = refused(report, &["runs/a", "--foo"]);
+    assert!(stderr.contains("unknown option \"--foo\""), "{stderr}");
+    let stderr = refused(report, &["runs/a", "runs/b", "--names", "A"]);
+    assert!(stderr.contains("--names has 1 names for 2 runs"), "{stderr}");
+    let nine: Vec<String> = (0..9).map(|i| format!("runs/{i}")).collect();
+    let args: Vec<&str> = nine.iter().map(String::as_str).collect();
+    assert!(refused(report, &args).contains("at most 8"));
+}

@@ -7,6 +7,16 @@ use std::time::Instant;
 impl ViewerApp {
     /// Scripted runs: a screenshot after the warm-up frames, or a frame-time benchmark.
     pub(super) fn run_script(&mut self, ctx: &egui::Context) {
+        // An error (a model that does not load, a frame the renderer refuses) stops a scripted
+        // run with a failing exit status, instead of waiting forever for a frame to capture.
+        let scripted = self.script.screenshot.is_some() || self.script.frames.is_some();
+        if scripted && let Some((message, true)) = &self.message {
+            if let Ok(mut failure) = self.script.failure.lock() {
+                failure.get_or_insert_with(|| message.clone());
+            }
+            ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+            return;
+        }
         if self.last_view.is_some() {
             self.script_state.shown += 1;
         }

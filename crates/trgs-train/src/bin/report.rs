@@ -31,11 +31,24 @@ fn main() -> Result<()> {
                 names = Some(v.split(',').map(str::to_string).collect());
             }
             "--plot" => out = PathBuf::from(it.next().context("--plot needs a value")?),
+            other if other.starts_with("--") => bail!("unknown option {other:?}\n\n{HELP}"),
             _ => runs.push(PathBuf::from(a)),
         }
     }
     if runs.is_empty() {
         bail!("no run folders given\n\n{HELP}");
+    }
+    if runs.len() > trgs_train::report::COLOURS.len() {
+        bail!(
+            "{} runs: at most {} fit one plot with a colour each",
+            runs.len(),
+            trgs_train::report::COLOURS.len()
+        );
+    }
+    if let Some(n) = &names
+        && n.len() != runs.len()
+    {
+        bail!("--names has {} names for {} runs", n.len(), runs.len());
     }
     let mut curves = Vec::new();
     for (i, run) in runs.iter().enumerate() {
