@@ -323,3 +323,114 @@ fn malformed_files_get_named_errors() {
     let empty = Gaussians::<f32>::zeros(0, 0);
     assert!(encode_glb(&empty, &[]).is_err(), "a point primitive needs a point");
 }
+
+/// The covariance R S S R^T of Gaussian `i` (f64), for comparing placements.
+fn covariance(g: &Gaussians<f32>, i: usize) -> DMat3 {
+    let [w, x, y, z] = g.rotations[i].map(f64::from);
+    let r = DMat3::from_quat(DQuat::from_xyzw(x, y, z, w).normalize());
+    let s = DMat3::from_diagonal(DVec3::from_array(g.log_scales[i].map(|v| f64::from(v).exp())));
+    r * s * s * r.transpose()
+}
+
+#[test]
+fn a_y_up_file_without_trgs_root_is_turned_into_trgs_frame_with_its_sh() {
+    // Another tool's file: the Gaussians in glTF's y-up frame under an identity node. trgs's
+    // frame is y down, z forward: the same Gaussians with y and z negated, and their colours
+    // seen along the flipped directions.
+    let mut rng = Rng::new(8);
+    let g = random_gaussians(12, 3, &mut rng);
+    let bytes = rebuild(&encode_glb(&g, &[]).expect("encode"), |doc| {
+        doc["nodes"][0]["rotation"] = json!([0.0, 0.0, 0.0, 1.0]);
+    });
+    let (back, _) = parse_glb(&bytes, Path::new("yup.glb")).expect("read");
+    let flip = DMat3::from_diagonal(DVec3::new(1.0, -1.0, -1.0));
+    let k = g.sh_coeffs();
+    for i in 0..g.len() {
+        let [x, y, z] = g.means[i];
+        assert_eq!(back.means[i], [x, -y, -z]);
+        let want = flip * covariance(&g, i) * flip;
+        assert!(covariance(&back, i).abs_diff_eq(
+            want,
+            1e-4 * want.abs().to_cols_array().iter().fold(1.0, |a, &b| f64::max(a, b))
+        ));
+        let sh = |h: &Gaussians<f32>| -> Vec<[f64; 3]> {
+            h.sh[i * k..(i + 1) * k].iter().map(|c| c.map(f64::from)).collect()
+        };
+        for d in [[0.3, -0.5, 0.81], [-0.9, 0.1, 0.42], [0.0, 0.6, -0.8]] {
+            let flipped = [d[0], -d[1], -d[2]];
+            let (a, b) = (crate::sh::eval(3, &sh(&back), flipped), crate::sh::eval(3, &sh(&g), d));
+            for c in 0..3 {
+                assert!((a[c] - b[c]).abs() < 1e-5, "Gaussian {i}: colour {a:?} against {b:?}");
+            }
+        }
+    }
+}
+
+#[test]
+fn node_transforms_move_scale_and_turn_or_are_refused() {
+    let mut rng = Rng::new(9);
+    let g = random_gaussians(6, 0, &mut rng);
+    // Under trgs's root: a child node that moves, scales by 2 and turns 90 degrees about y.
+    let turn = DQuat::from_rotation_y(std::f64::consts::FRAC_PI_2);
+    let node = |doc: &mut Value| {
+        doc["nodes"][1]["translation"] = json!([1.0, 2.0, 3.0]);
+        doc["nodes"][1]["scale"] = json!([2.0, 2.0, 2.0]);
+        doc["nodes"][1]["rotation"] = json!([turn.x, turn.y, turn.z, turn.w]);
+    };
+    let bytes = rebuild(&encode_glb(&g, &[]).expect("encode"), node);
+    let (back, _) = parse_glb(&bytes, Path::new("moved.glb")).expect("read");
+    // The root's flip is undone by the glTF-to-trgs conversion: in trgs's frame the Gaussians
+    // move by the node's own transform.
+    let l = DMat3::from_quat(turn) * 2.0;
+    let t = DVec3::new(1.0, 2.0, 3.0);
+    for i in 0..g.len() {
+        let want = l * DVec3::from_array(g.means[i].map(f64::from)) + t;
+        let got = DVec3::from_array(back.means[i].map(f64::from));
+        assert!(got.abs_diff_eq(want, 1e-4), "{got} against {want}");
+        let cov = l * covariance(&g, i) * l.transpose();
+        let scale = cov.to_cols_array().iter().fold(1e-12, |a, &b| f64::max(a, b.abs()));
+        assert!(covariance(&back, i).abs_diff_eq(cov, 1e-4 * scale));
+    }
+    // With view-dependent colour the same turn is refused (its SH would need a rotation).
+    let g1 = random_gaussians(6, 1, &mut rng);
+    let bytes = rebuild(&encode_glb(&g1, &[]).expect("encode"), node);
+    let err = parse_glb(&bytes, Path::new("moved.glb")).expect_err("turned SH");
+    assert_mentions(&err, &["moved.glb", "SH of degree 1"]);
+    // A non-uniform scale cannot be applied to Gaussians exactly.
+    let bytes = rebuild(&encode_glb(&g, &[]).expect("encode"), |doc| {
+        doc["nodes"][1]["scale"] = json!([1.0, 2.0, 1.0]);
+    });
+    let err = parse_glb(&bytes, Path::new("squashed.glb")).expect_err("non-uniform");
+    assert_mentions(&err, &["squashed.glb", "non-uniform scale"]);
+}
+
+#[test]
+fn unsupported_features_are_refused_not_misread() {
+    let mut rng = Rng::new(10);
+    let g = random_gaussians(6, 2, &mut rng);
+    let base = encode_glb(&g, &[]).expect("encode");
+    let required =
+        rebuild(&base, |doc| doc["extensionsRequired"] = json!(["EXT_meshopt_compression"]));
+    assert_mentions(
+        &parse_glb(&required, Path::new("r.glb")).expect_err("required"),
+        &["r.glb", "EXT_meshopt_compression"],
+    );
+    let sparse = rebuild(&base, |doc| {
+        let i = doc["meshes"][0]["primitives"][0]["attributes"]["KHR_gaussian_splatting:SCALE"]
+            .as_u64()
+            .expect("scale accessor") as usize;
+        doc["accessors"][i]["sparse"] = json!({"count": 1});
+    });
+    assert_mentions(
+        &parse_glb(&sparse, Path::new("s.glb")).expect_err("sparse"),
+        &["s.glb", "SCALE", "sparse"],
+    );
+    let gap = rebuild(&base, |doc| {
+        let attrs = doc["meshes"][0]["primitives"][0]["attributes"].as_object_mut().expect("map");
+        attrs.retain(|name, _| !name.contains("SH_DEGREE_1_"));
+    });
+    assert_mentions(
+        &parse_glb(&gap, Path::new("gap.glb")).expect_err("gap"),
+        &["gap.glb", "SH_DEGREE_2", "degree 1"],
+    );
+}
