@@ -17,7 +17,8 @@
 //! plane's centre and orientation (x: width axis, y: height axis, z: normal) as its transform, and
 //! every parameter exactly in `extras.trgs_plane`.
 //!
-//! Reading, the splat mesh's node transform (with its parents') and the glTF-to-trgs flip are
+//! Reading accepts 8- and 16-bit integer attributes too (normalised or not, as quantising
+//! exporters write rotations, scales and opacities). The splat mesh's node transform (with its parents') and the glTF-to-trgs flip are
 //! applied to the Gaussians (identity for trgs's own files): a y-up file from another tool comes
 //! out upright. Rotations move SH of degree 1 and up only when they map each axis onto itself up to
 //! sign (as the flip does); other rotations with view-dependent colour, non-uniform scales,
@@ -286,12 +287,30 @@ fn read_accessor(
     if !kinds.contains(&kind) {
         return Err(what(format!("accessor type {kind:?}, expected {}", kinds.join(" or "))));
     }
-    if acc["componentType"].as_u64() != Some(FLOAT) {
-        return Err(what(format!(
-            "componentType {}, trgs reads float (5126) attributes only",
-            acc["componentType"]
-        )));
-    }
+    // Float, or the integer types quantising exporters use (KHR_gaussian_splatting allows
+    // normalised rotations, scales and opacities), decoded with glTF's normalisation rules.
+    let normalized = acc["normalized"].as_bool().unwrap_or(false);
+    let (bytes, decode): (u64, fn(&[u8], bool) -> f32) = match acc["componentType"].as_u64() {
+        Some(FLOAT) => (4, |b, _| f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+        Some(5120) => (1, |b, n| {
+            let v = f32::from(b[0] as i8);
+            if n { (v / 127.0).max(-1.0) } else { v }
+        }),
+        Some(5121) => (1, |b, n| f32::from(b[0]) / if n { 255.0 } else { 1.0 }),
+        Some(5122) => (2, |b, n| {
+            let v = f32::from(i16::from_le_bytes([b[0], b[1]]));
+            if n { (v / 32767.0).max(-1.0) } else { v }
+        }),
+        Some(5123) => {
+            (2, |b, n| f32::from(u16::from_le_bytes([b[0], b[1]])) / if n { 65535.0 } else { 1.0 })
+        }
+        _ => {
+            return Err(what(format!(
+                "componentType {}: expected float (5126) or 8/16-bit integers (5120-5123)",
+                acc["componentType"]
+            )));
+        }
+    };
     let n = acc["count"].as_u64().ok_or_else(|| what("no count".into()))? as usize;
     if let Some(c) = count
         && n != c
@@ -310,7 +329,7 @@ fn read_accessor(
     if view["buffer"].as_u64() != Some(0) {
         return Err(what("data outside the GLB's own buffer".into()));
     }
-    let elem = width as u64 * 4;
+    let elem = width as u64 * bytes;
     let stride = view["byteStride"].as_u64().unwrap_or(elem);
     if stride < elem {
         return Err(what(format!("byteStride {stride} is below the element's {elem} bytes")));
@@ -335,8 +354,8 @@ fn read_accessor(
     let mut out = Vec::with_capacity(n * width);
     for e in 0..n {
         let at = start + e * stride;
-        for b in bin[at..at + elem].chunks_exact(4) {
-            out.push(f32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+        for b in bin[at..at + elem].chunks_exact(bytes as usize) {
+            out.push(decode(b, normalized));
         }
     }
     Ok((out, n))

@@ -271,7 +271,7 @@ fn malformed_files_get_named_errors() {
             }),
             "colorSpace",
         ),
-        (rebuild(&good, |d| d["accessors"][1]["componentType"] = json!(5122)), "float (5126)"),
+        (rebuild(&good, |d| d["accessors"][1]["componentType"] = json!(5125)), "float (5126)"),
         (rebuild(&good, |d| d["accessors"][2]["count"] = json!(9)), "9 elements"),
         // Corrupt sizes are errors before anything is allocated or an offset overflows.
         (
@@ -433,4 +433,71 @@ fn unsupported_features_are_refused_not_misread() {
         &parse_glb(&gap, Path::new("gap.glb")).expect_err("gap"),
         &["gap.glb", "SH_DEGREE_2", "degree 1"],
     );
+}
+
+/// `bytes` with the BIN chunk extended by `data` (4-byte aligned) as a new bufferView, and
+/// attribute `semantic` pointing at a new accessor over it.
+fn with_attribute(bytes: &[u8], semantic: &str, accessor: Value, data: &[u8]) -> Vec<u8> {
+    let (mut doc, mut bin) = split(bytes);
+    let offset = bin.len();
+    bin.extend(data);
+    bin.resize(bin.len().next_multiple_of(4), 0);
+    let view = doc["bufferViews"].as_array().expect("views").len();
+    doc["bufferViews"]
+        .as_array_mut()
+        .expect("views")
+        .push(json!({"buffer": 0, "byteOffset": offset, "byteLength": data.len()}));
+    let mut accessor = accessor;
+    accessor["bufferView"] = json!(view);
+    let index = doc["accessors"].as_array().expect("accessors").len();
+    doc["accessors"].as_array_mut().expect("accessors").push(accessor);
+    doc["meshes"][0]["primitives"][0]["attributes"][semantic] = json!(index);
+    doc["buffers"][0]["byteLength"] = json!(bin.len());
+    let mut text = serde_json::to_vec(&doc).expect("json");
+    text.resize(text.len().next_multiple_of(4), b' ');
+    let total = (12 + 8 + text.len() + 8 + bin.len()) as u32;
+    let mut out = Vec::new();
+    for w in [MAGIC, 2, total, text.len() as u32, CHUNK_JSON] {
+        out.extend(w.to_le_bytes());
+    }
+    out.extend(&text);
+    out.extend((bin.len() as u32).to_le_bytes());
+    out.extend(CHUNK_BIN.to_le_bytes());
+    out.extend(&bin);
+    out
+}
+
+#[test]
+fn quantised_rotations_scales_and_opacities_are_decoded() {
+    let mut rng = Rng::new(11);
+    let g = random_gaussians(2, 0, &mut rng);
+    let base = rebuild(&encode_glb(&g, &[]).expect("encode"), |doc| {
+        // Another tool's file: no trgs attributes, so the standard ones are what is read.
+        let attrs = doc["meshes"][0]["primitives"][0]["attributes"].as_object_mut().expect("map");
+        attrs.retain(|name, _| !name.starts_with('_'));
+    });
+    // int16 normalised rotations (x y z w): the identity and a half turn about z.
+    let rot: Vec<u8> =
+        [0i16, 0, 0, 32767, 0, 0, 32767, 0].iter().flat_map(|v| v.to_le_bytes()).collect();
+    let acc = json!({"componentType": 5122, "normalized": true, "count": 2, "type": "VEC4"});
+    let bytes = with_attribute(&base, "KHR_gaussian_splatting:ROTATION", acc, &rot);
+    // uint8 normalised opacities, 4-byte stride (each element aligned as glTF requires).
+    let opacity = [255u8, 0, 0, 0, 51, 0, 0, 0];
+    let acc = json!({"componentType": 5121, "normalized": true, "count": 2, "type": "SCALAR"});
+    let mut bytes = with_attribute(&bytes, "KHR_gaussian_splatting:OPACITY", acc, &opacity);
+    let (mut doc, _) = split(&bytes);
+    let last = doc["bufferViews"].as_array().expect("views").len() - 1;
+    doc["bufferViews"][last]["byteStride"] = json!(4);
+    bytes = rebuild(&bytes, |d| *d = doc);
+    // uint16 scales, not normalised: whole units.
+    let scale: Vec<u8> = [1u16, 2, 3, 4, 5, 6].iter().flat_map(|v| v.to_le_bytes()).collect();
+    let acc = json!({"componentType": 5123, "count": 2, "type": "VEC3"});
+    let bytes = with_attribute(&bytes, "KHR_gaussian_splatting:SCALE", acc, &scale);
+    let (back, _) = parse_glb(&bytes, Path::new("quantised.glb")).expect("read");
+    assert_eq!(back.rotations[0], [1.0, 0.0, 0.0, 0.0]);
+    assert_eq!(back.rotations[1], [0.0, 0.0, 0.0, 1.0]);
+    assert_eq!(back.log_scales[1].map(|v| v.exp().round()), [4.0, 5.0, 6.0]);
+    let opacity = |logit: f32| 1.0 / (1.0 + (-logit).exp());
+    assert!((opacity(back.opacity_logits[1]) - 0.2).abs() < 1e-5);
+    assert!(opacity(back.opacity_logits[0]) > 0.999);
 }
