@@ -18,11 +18,12 @@
 //! every parameter exactly in `extras.trgs_plane`.
 //!
 //! Reading accepts 8- and 16-bit integer attributes too (normalised or not, as quantising
-//! exporters write rotations, scales and opacities). The splat mesh's node transform (with its parents') and the glTF-to-trgs flip are
-//! applied to the Gaussians (identity for trgs's own files): a y-up file from another tool comes
-//! out upright. Rotations move SH of degree 1 and up only when they map each axis onto itself up to
-//! sign (as the flip does); other rotations with view-dependent colour, non-uniform scales,
-//! sparse accessors and required extensions trgs does not know are refused by name.
+//! exporters write rotations, scales and opacities). The splat mesh's node transform (with its
+//! parents') and the glTF-to-trgs flip are applied to the Gaussians (identity for trgs's own
+//! files): a y-up file from another tool comes out upright. Rotations move SH of degree 1 and up
+//! only when they map each axis onto itself up to sign (as the flip does); other rotations with
+//! view-dependent colour, non-uniform scales, sparse accessors and required extensions trgs does
+//! not know are refused by name.
 use std::path::Path;
 
 use glam::{DMat3, DMat4, DQuat, DVec3};
@@ -290,7 +291,7 @@ fn read_accessor(
     // Float, or the integer types quantising exporters use (KHR_gaussian_splatting allows
     // normalised rotations, scales and opacities), decoded with glTF's normalisation rules.
     let normalized = acc["normalized"].as_bool().unwrap_or(false);
-    let (bytes, decode): (u64, fn(&[u8], bool) -> f32) = match acc["componentType"].as_u64() {
+    let (bytes, decode): (u64, Decode) = match acc["componentType"].as_u64() {
         Some(FLOAT) => (4, |b, _| f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
         Some(5120) => (1, |b, n| {
             let v = f32::from(b[0] as i8);
@@ -550,6 +551,9 @@ fn parse(bytes: &[u8]) -> Result<(Gaussians<f32>, Vec<ReflectionPlane>), String>
     }
     Ok((g, planes))
 }
+
+/// Decodes one component (its little-endian bytes; whether it is normalised) to f32.
+type Decode = fn(&[u8], bool) -> f32;
 
 /// glTF (y up, z backward) to trgs's frame (y down, z forward): 180 degrees about x, the
 /// inverse of the root node `encode_glb` writes.
