@@ -79,9 +79,6 @@ pub enum RenderError {
          workgroups per dispatch dimension; render at a lower resolution"
     )]
     TooManyTiles { name: String, tiles: u32, limit: u32 },
-    /// An option that would make the frame meaningless (NaN colours, Gaussians behind the camera).
-    #[error("render option {what}: {problem}")]
-    Option { what: &'static str, problem: String },
 }
 
 /// The largest per-pixel buffer of a frame with `planes` reflection slots, in bytes per pixel
@@ -96,21 +93,6 @@ fn bytes_per_pixel(planes: usize) -> u64 {
 
 /// Bytes of one projected Gaussian's record.
 const PROJECTED_BYTES: u64 = std::mem::size_of::<crate::layout::ProjectedGaussian>() as u64;
-
-/// Options a frame cannot be rendered with: a non-finite background (every pixel would be NaN)
-/// and a near plane that is not a positive finite depth (at or behind the camera the projection
-/// divides by zero or draws what is behind it).
-fn check_options(options: &RenderOptions) -> Result<(), RenderError> {
-    if !options.background.iter().all(|c| c.is_finite()) {
-        let problem = format!("background {:?} must be finite", options.background);
-        return Err(RenderError::Option { what: "background", problem });
-    }
-    if !(options.near > 0.0 && options.near.is_finite()) {
-        let problem = format!("near {} must be a positive finite depth", options.near);
-        return Err(RenderError::Option { what: "near", problem });
-    }
-    Ok(())
-}
 
 /// Fails when a buffer of `bytes` would not fit one binding.
 fn check_binding(
@@ -181,7 +163,8 @@ impl Renderer {
         camera
             .validate()
             .map_err(|source| RenderError::Camera { name: camera.name.clone(), source })?;
-        check_options(options)?;
+        let background = options.background.map(f64::from);
+        trgs_core::reference::check_render_settings(background, options.near)?;
         let s = Stage { ctx, kernels: &self.kernels };
         let grid = TileGrid::new(k.width, k.height);
         let most = ctx.device.limits().max_compute_workgroups_per_dimension;

@@ -58,7 +58,7 @@ pub use regularisers::{
     LayerLoss, RegulariserInputs, RegulariserWeights, Regularisers, depth_variance_loss,
     gradient_conflict_loss, mask_loss, regularisers,
 };
-pub use render::{RenderSettings, ViewPass, render, render_view};
+pub use render::{RenderSettings, ViewPass, check_render_settings, render, render_view};
 pub use sort::sort_keys;
 pub use tile_counts::{TileGrid, tile_counts, tile_rect};
 pub use tile_ranges::tile_ranges;

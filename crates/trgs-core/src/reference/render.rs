@@ -61,15 +61,16 @@ pub fn render_view(
     ViewPass { view: *view, projected, keys, values, ranges }
 }
 
-/// The settings the GPU renderer refuses too (trgs_render's `RenderOptions` checks): a
-/// non-finite background, a near plane that is not a positive finite depth.
-fn check_settings(settings: &RenderSettings) -> Result<(), InvalidInput> {
-    if !settings.background.iter().all(|c| c.is_finite()) {
-        let problem = format!("background {:?} must be finite", settings.background);
+/// Settings no frame can be made with, refused by the twin and the GPU renderer alike: a
+/// non-finite background (every pixel would be NaN), a near plane that is not a positive finite
+/// depth (at or behind the camera the projection divides by zero or draws what is behind it).
+pub fn check_render_settings(background: [f64; 3], near: f64) -> Result<(), InvalidInput> {
+    if !background.iter().all(|c| c.is_finite()) {
+        let problem = format!("background {background:?} must be finite");
         return Err(InvalidInput::Setting { what: "background", problem });
     }
-    if !(settings.near > 0.0 && settings.near.is_finite()) {
-        let problem = format!("near {} must be a positive finite depth", settings.near);
+    if !(near > 0.0 && near.is_finite()) {
+        let problem = format!("near {near} must be a positive finite depth");
         return Err(InvalidInput::Setting { what: "near", problem });
     }
     Ok(())
@@ -84,7 +85,7 @@ pub fn render(
     settings: &RenderSettings,
 ) -> Result<Frame, InvalidInput> {
     validate_scene(g, planes, camera)?;
-    check_settings(settings)?;
+    check_render_settings(settings.background, settings.near)?;
     let k = &camera.intrinsics;
     let grid = TileGrid::new(k.width, k.height);
     let view = ViewTransform::from(&camera.pose);

@@ -55,7 +55,12 @@ fn split(bytes: &[u8]) -> (Value, Vec<u8>) {
 fn rebuild(bytes: &[u8], edit: impl FnOnce(&mut Value)) -> Vec<u8> {
     let (mut doc, bin) = split(bytes);
     edit(&mut doc);
-    let mut text = serde_json::to_vec(&doc).expect("json");
+    assemble(&doc, &bin)
+}
+
+/// The GLB bytes of a document and a BIN chunk.
+fn assemble(doc: &Value, bin: &[u8]) -> Vec<u8> {
+    let mut text = serde_json::to_vec(doc).expect("json");
     text.resize(text.len().next_multiple_of(4), b' ');
     let total = (12 + 8 + text.len() + 8 + bin.len()) as u32;
     let mut out = Vec::new();
@@ -65,7 +70,7 @@ fn rebuild(bytes: &[u8], edit: impl FnOnce(&mut Value)) -> Vec<u8> {
     out.extend(&text);
     out.extend((bin.len() as u32).to_le_bytes());
     out.extend(CHUNK_BIN.to_le_bytes());
-    out.extend(&bin);
+    out.extend(bin);
     out
 }
 
@@ -453,18 +458,7 @@ fn with_attribute(bytes: &[u8], semantic: &str, accessor: Value, data: &[u8]) ->
     doc["accessors"].as_array_mut().expect("accessors").push(accessor);
     doc["meshes"][0]["primitives"][0]["attributes"][semantic] = json!(index);
     doc["buffers"][0]["byteLength"] = json!(bin.len());
-    let mut text = serde_json::to_vec(&doc).expect("json");
-    text.resize(text.len().next_multiple_of(4), b' ');
-    let total = (12 + 8 + text.len() + 8 + bin.len()) as u32;
-    let mut out = Vec::new();
-    for w in [MAGIC, 2, total, text.len() as u32, CHUNK_JSON] {
-        out.extend(w.to_le_bytes());
-    }
-    out.extend(&text);
-    out.extend((bin.len() as u32).to_le_bytes());
-    out.extend(CHUNK_BIN.to_le_bytes());
-    out.extend(&bin);
-    out
+    assemble(&doc, &bin)
 }
 
 #[test]

@@ -96,22 +96,31 @@ pub fn encode_ply(g: &Gaussians<f32>) -> Result<Vec<u8>, String> {
 /// Parse a PLY held in memory; `path` is only used to name the file in errors.
 pub fn parse_ply(bytes: &[u8], path: &Path) -> Result<Gaussians<f32>, FormatError> {
     let fail = |m: String| FormatError::new(path, m);
-    let header = parse_header(bytes).map_err(fail)?;
+    let (mut body, vertex) = vertex_section(bytes, "one Gaussian per vertex").map_err(fail)?;
+    let layout = Layout::of(&vertex).map_err(fail)?;
+    read_vertices(&mut body, &vertex, &layout).map_err(fail)
+}
+
+/// The body read up to the first vertex (every element before it skipped) and the vertex
+/// element; `expected` says what a vertex is, for the error when there is none.
+fn vertex_section<'a>(bytes: &'a [u8], expected: &str) -> Result<(Body<'a>, Element), String> {
+    let header = parse_header(bytes)?;
     let body = &bytes[header.body_offset..];
     let mut body = match header.format {
         Format::Ascii => Body::ascii(body),
         Format::Binary(e) => Body::Binary(ByteReader::new(body), e),
     };
-    let vertex_index =
-        header.elements.iter().position(|e| e.name == "vertex").ok_or_else(|| {
-            fail("the file has no `vertex` element (expected one Gaussian per vertex)".into())
-        })?;
+    let vertex_index = header
+        .elements
+        .iter()
+        .position(|e| e.name == "vertex")
+        .ok_or_else(|| format!("the file has no `vertex` element (expected {expected})"))?;
     for element in &header.elements[..vertex_index] {
-        skip_element(&mut body, element).map_err(fail)?;
+        skip_element(&mut body, element)?;
     }
-    let vertex = &header.elements[vertex_index];
-    let layout = Layout::of(vertex).map_err(fail)?;
-    read_vertices(&mut body, vertex, &layout).map_err(fail)
+    let vertex = header.elements.into_iter().nth(vertex_index);
+    #[allow(clippy::expect_used)]
+    Ok((body, vertex.expect("found above")))
 }
 
 /// Read past every instance of an element we do not use (list properties included).

@@ -3,11 +3,9 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use super::body::Body;
-use super::header::{Format, ScalarType, parse_header};
-use super::skip_element;
+use super::header::ScalarType;
+use super::vertex_section;
 use crate::io::FormatError;
-use crate::io::bytes::ByteReader;
 use crate::io::error::read_bytes;
 
 /// A sparse point: position and colour.
@@ -18,20 +16,7 @@ pub type ColouredPoint = ([f64; 3], [u8; 3]);
 pub fn read_point_cloud_ply(path: &Path) -> Result<Vec<ColouredPoint>, FormatError> {
     let bytes = read_bytes(path)?;
     let fail = |m: String| FormatError::new(path, m);
-    let header = parse_header(&bytes).map_err(fail)?;
-    let body = &bytes[header.body_offset..];
-    let mut body = match header.format {
-        Format::Ascii => Body::ascii(body),
-        Format::Binary(e) => Body::Binary(ByteReader::new(body), e),
-    };
-    let vertex_index =
-        header.elements.iter().position(|e| e.name == "vertex").ok_or_else(|| {
-            fail("the file has no `vertex` element (expected one per point)".into())
-        })?;
-    for element in &header.elements[..vertex_index] {
-        skip_element(&mut body, element).map_err(fail)?;
-    }
-    let vertex = &header.elements[vertex_index];
+    let (mut body, vertex) = vertex_section(&bytes, "one per point").map_err(fail)?;
     let names = ["x", "y", "z", "red", "green", "blue"];
     let slot: HashMap<&str, usize> = names.iter().enumerate().map(|(i, n)| (*n, i)).collect();
     let mut found = [None::<ScalarType>; 6];
