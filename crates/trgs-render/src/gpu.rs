@@ -364,8 +364,9 @@ impl BufferPool {
             // moves): a quarter of headroom, within what one binding and one buffer can hold.
             Some(_) => {
                 let limits = ctx.device.limits();
+                // storage() pads to 64 bytes: cap below the limit after padding.
                 let most = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
-                (size + size / 4).min(most).max(size)
+                (size + size / 4).min(most / 64 * 64).max(size)
             }
             None => size,
         };

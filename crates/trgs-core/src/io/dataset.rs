@@ -107,7 +107,7 @@ impl SceneFolder {
             (frames.into_iter().map(|f| (f.camera, f.image_path)).collect(), points)
         } else if root.join("transforms_train.json").is_file() {
             let (frames, tests) = read_blender_split_files(root)?;
-            split_file_tests = Some(tests);
+            split_file_tests = tests;
             (frames.into_iter().map(|f| (f.camera, f.image_path)).collect(), Vec::new())
         } else {
             return Err(FormatError::new(
@@ -254,7 +254,7 @@ fn open_colmap(root: &Path, sparse: &Path) -> Result<(Cameras, Points), FormatEr
 /// which are the test split unless `test_views.txt` says otherwise.
 fn read_blender_split_files(
     root: &Path,
-) -> Result<(Vec<TransformsFrame>, Vec<String>), FormatError> {
+) -> Result<(Vec<TransformsFrame>, Option<Vec<String>>), FormatError> {
     let mut frames = read_transforms(&root.join("transforms_train.json"))?;
     let train = frames.len();
     let test_file = root.join("transforms_test.json");
@@ -262,8 +262,9 @@ fn read_blender_split_files(
         frames.extend(read_transforms(&test_file)?);
     }
     name_by_relative_path_if_needed(&mut frames, root);
-    let tests = frames[train..].iter().map(|f| f.camera.name.clone()).collect();
-    Ok((frames, tests))
+    // Without test frames the folder's own rule holds (every 8th image), as for transforms.json.
+    let tests: Vec<String> = frames[train..].iter().map(|f| f.camera.name.clone()).collect();
+    Ok((frames, (!tests.is_empty()).then_some(tests)))
 }
 
 /// The file stem under which outputs of view `name` are written (renders, layers): the name
@@ -511,5 +512,12 @@ mod tests {
         let scene = SceneFolder::open(&root).expect("open merged");
         let names: Vec<&str> = scene.views.iter().map(|v| v.camera.name.as_str()).collect();
         assert_eq!(names, ["test/r_0.png", "train/r_0.png", "train/r_1.png"]);
+        // Without transforms_test.json (nor transforms.json) the every-8th rule holds.
+        std::fs::remove_file(root.join("transforms.json")).expect("rm");
+        std::fs::remove_file(root.join("transforms_test.json")).expect("rm");
+        let scene = SceneFolder::open(&root).expect("open train only");
+        let names: Vec<String> = scene.views.iter().map(|v| v.camera.name.clone()).collect();
+        assert_eq!(scene.test_views, default_test_views(&names));
+        assert!(!scene.test_views.is_empty());
     }
 }

@@ -410,7 +410,8 @@ pub fn parse_glb(
 fn parse(bytes: &[u8]) -> Result<(Gaussians<f32>, Vec<ReflectionPlane>), String> {
     let (doc, bin) = chunks(bytes)?;
     for required in doc["extensionsRequired"].as_array().into_iter().flatten() {
-        if required.as_str() != Some(EXTENSION) {
+        // KHR_mesh_quantization only allows the integer attributes read_accessor decodes.
+        if !matches!(required.as_str(), Some(EXTENSION | "KHR_mesh_quantization")) {
             return Err(format!(
                 "the file requires the extension {required}, which trgs does not read"
             ));
@@ -566,9 +567,9 @@ const GLTF_TO_TRGS: DMat4 = DMat4::from_cols_array(&[
 /// is the identity, as in trgs's own files (their root node undoes the conversion).
 fn mesh_to_trgs(doc: &Value, mesh: usize) -> Result<Option<DMat4>, String> {
     let nodes = doc["nodes"].as_array().map_or(&[][..], Vec::as_slice);
-    // A mesh no node places is read in the glTF frame.
+    // A mesh no node places is in glTF's frame as it stands.
     let Some(mut node) = nodes.iter().position(|n| n["mesh"].as_u64() == Some(mesh as u64)) else {
-        return Ok(None);
+        return Ok(Some(GLTF_TO_TRGS));
     };
     let parent_of = |child: usize| {
         nodes.iter().position(|n| {

@@ -110,10 +110,13 @@ fn main() -> Result<()> {
     }
     let fps = render_fps(&subject, &data)?;
     let (w, h) = data.size();
+    // A scene without test views is scored on training views: say so.
+    let measured =
+        if args.split == Split::Test { data.eval_views_name() } else { args.split.name() };
     println!(
         "mean over {} {} views: PSNR {:.2} dB, SSIM {:.4}; {} Gaussians, {} planes, {fps:.1} FPS at {w}x{h}",
         e.views.len(),
-        args.split.name(),
+        measured,
         e.psnr,
         e.ssim,
         model.gaussians.len(),
@@ -126,7 +129,7 @@ fn main() -> Result<()> {
     let json = serde_json::json!({
         "model": model.ply,
         "data": data_dir,
-        "split": args.split.name(),
+        "split": measured,
         "psnr": e.psnr,
         "ssim": e.ssim,
         "views": e.views.iter().map(|(n, p, s)| serde_json::json!({"name": n, "psnr": p, "ssim": s})).collect::<Vec<_>>(),

@@ -227,8 +227,12 @@ fn train(
     let was_finished = resumed.as_ref().is_some_and(|(ck, _)| ck.step >= args.iterations);
     remove_stale_temporaries(&args.out);
     let (mut trainer, mut state) = match resumed {
-        Some((ck, state)) => {
+        Some((ck, mut state)) => {
             check_same_views(&state, &data, &data_dir)?;
+            // A checkpoint from before the names were kept: they are known good now.
+            if state.train_views.is_empty() {
+                state.train_views = data.train.iter().map(|v| v.camera.name.clone()).collect();
+            }
             truncate_log(&log_path, ck.step)?;
             let mut trainer = Trainer::from_checkpoint(&ctx, &ck, settings, data.extent, densify)?;
             if let Some(m) = mcmc.clone() {
@@ -390,8 +394,12 @@ fn train(
             say(
                 &bar,
                 format!(
-                    "step {}: test PSNR {:.2} dB, SSIM {:.4} ({:.0} s of training)",
-                    e.step, e.psnr, e.ssim, e.seconds
+                    "step {}: PSNR {:.2} dB, SSIM {:.4} on the {} views ({:.0} s of training)",
+                    e.step,
+                    e.psnr,
+                    e.ssim,
+                    data.eval_views_name(),
+                    e.seconds
                 ),
             );
             writeln!(log, "{}", serde_json::json!({"eval": &e}))?;
@@ -564,6 +572,7 @@ fn metrics_json(
     serde_json::json!({
         "psnr": last.psnr,
         "ssim": last.ssim,
+        "eval_views": data.eval_views_name(),
         "views": last.views.iter().map(|(n, p, s)| serde_json::json!({"name": n, "psnr": p, "ssim": s})).collect::<Vec<_>>(),
         "train_seconds": state.train_seconds,
         "step_ms": step_ms.iter().map(|(k, v)| (k.to_string(), serde_json::json!(v))).collect::<serde_json::Map<_, _>>(),

@@ -348,6 +348,12 @@ fn a_y_up_file_without_trgs_root_is_turned_into_trgs_frame_with_its_sh() {
         doc["nodes"][0]["rotation"] = json!([0.0, 0.0, 0.0, 1.0]);
     });
     let (back, _) = parse_glb(&bytes, Path::new("yup.glb")).expect("read");
+    // A mesh that no node places is in glTF's frame too.
+    let unplaced = rebuild(&encode_glb(&g, &[]).expect("encode"), |doc| {
+        doc["nodes"][1].as_object_mut().expect("node").remove("mesh");
+    });
+    let (loose, _) = parse_glb(&unplaced, Path::new("loose.glb")).expect("read");
+    assert_eq!(loose.means, back.means);
     let flip = DMat3::from_diagonal(DVec3::new(1.0, -1.0, -1.0));
     let k = g.sh_coeffs();
     for i in 0..g.len() {
@@ -414,6 +420,11 @@ fn unsupported_features_are_refused_not_misread() {
     let mut rng = Rng::new(10);
     let g = random_gaussians(6, 2, &mut rng);
     let base = encode_glb(&g, &[]).expect("encode");
+    // The quantisation extension only allows integer attributes, which trgs decodes.
+    let quantised = rebuild(&base, |doc| {
+        doc["extensionsRequired"] = json!(["KHR_mesh_quantization", EXTENSION]);
+    });
+    parse_glb(&quantised, Path::new("q.glb")).expect("KHR_mesh_quantization is fine");
     let required =
         rebuild(&base, |doc| doc["extensionsRequired"] = json!(["EXT_meshopt_compression"]));
     assert_mentions(
