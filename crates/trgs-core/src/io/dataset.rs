@@ -272,20 +272,22 @@ fn read_blender_split_files(
 /// the same file name in two folders stay apart) and dropping any `..`, root or `.` component
 /// (an output never lands outside its folder). None when nothing is left.
 pub fn view_output_stem(name: &str) -> Option<String> {
-    use std::path::Component;
-    let path = Path::new(name);
-    let parts: Vec<String> = path
-        .components()
-        .filter_map(|c| match c {
-            Component::Normal(s) => Some(s.to_string_lossy().into_owned()),
-            _ => None,
-        })
-        .collect();
+    let parts = plain_components(Path::new(name));
     let (last, folders) = parts.split_last()?;
     let stem = Path::new(last).file_stem().map(|s| s.to_string_lossy().into_owned())?;
     let mut out: Vec<String> = folders.to_vec();
     out.push(stem);
     Some(out.join("/"))
+}
+
+/// The names a path walks through, without its root, `.` and `..` components.
+pub(crate) fn plain_components(path: &Path) -> Vec<String> {
+    path.components()
+        .filter_map(|c| match c {
+            std::path::Component::Normal(s) => Some(s.to_string_lossy().into_owned()),
+            _ => None,
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -43,6 +43,20 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), FormatError> {
     })
 }
 
+/// Remove what writes of `files` (names in `dir`) cut short by a kill left behind: the
+/// temporary files `write_atomic` names `.<file>.<pid>.<n>.tmp`. Best effort: a file that cannot
+/// be removed stays.
+pub fn remove_stale_temporaries(dir: &Path, files: &[&str]) {
+    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    for e in entries.flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        let ours = files.iter().any(|f| name.starts_with(&format!(".{f}.")));
+        if ours && name.ends_with(".tmp") {
+            let _ = std::fs::remove_file(e.path());
+        }
+    }
+}
+
 /// The whole of `path`, or an error naming it (e.g. "No such file or directory").
 pub(crate) fn read_bytes(path: &Path) -> Result<Vec<u8>, FormatError> {
     std::fs::read(path).map_err(|e| FormatError::io(path, &e))

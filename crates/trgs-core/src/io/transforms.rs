@@ -75,13 +75,7 @@ pub(crate) fn name_by_relative_path_if_needed(frames: &mut [TransformsFrame], di
     }
     for f in frames {
         let rel = f.image_path.strip_prefix(dir).unwrap_or(&f.image_path);
-        let parts: Vec<String> = rel
-            .components()
-            .filter_map(|c| match c {
-                std::path::Component::Normal(s) => Some(s.to_string_lossy().into_owned()),
-                _ => None,
-            })
-            .collect();
+        let parts = super::dataset::plain_components(rel);
         if !parts.is_empty() {
             f.camera.name = parts.join("/");
         }

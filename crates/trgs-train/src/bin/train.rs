@@ -8,7 +8,9 @@ use serde::{Deserialize, Serialize};
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
-use trgs_core::io::{write_atomic, write_cameras_json, write_planes_json, write_ply};
+use trgs_core::io::{
+    remove_stale_temporaries, write_atomic, write_cameras_json, write_planes_json, write_ply,
+};
 use trgs_core::rng::Rng;
 use trgs_core::synthetic::{SyntheticConfig, generate, write_dataset};
 use trgs_render::GpuContext;
@@ -225,7 +227,9 @@ fn train(
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating the output folder {}", args.out.display()))?;
     let was_finished = resumed.as_ref().is_some_and(|(ck, _)| ck.step >= args.iterations);
-    remove_stale_temporaries(&args.out);
+    // A checkpoint's temporary file is as large as the checkpoint.
+    let outputs = [CHECKPOINT_FILE, "log.jsonl", "metrics.json", "model.ply", "planes.json"];
+    remove_stale_temporaries(&args.out, &outputs);
     let (mut trainer, mut state) = match resumed {
         Some((ck, mut state)) => {
             check_same_views(&state, &data, &data_dir)?;
@@ -406,11 +410,7 @@ fn train(
             state.evaluations.push(e);
         }
         if trainer.step % checkpoint_every == 0 && trainer.step < args.iterations {
-            state.rng_state = rng.state();
-            state.seconds = t0.elapsed().as_secs_f64();
-            let extra = serde_json::to_value(&state)?;
-            let path = args.out.join(CHECKPOINT_FILE);
-            write_checkpoint(&path, &trainer.checkpoint(extra))?;
+            save_checkpoint(&args.out, &trainer, &mut state, &rng, t0)?;
             log.flush()?;
         }
     }
@@ -418,10 +418,7 @@ fn train(
     // The finished state, so that `--resume` after the end writes the same results again
     // instead of training on from the last intermediate checkpoint.
     if !was_finished {
-        state.rng_state = rng.state();
-        state.seconds = t0.elapsed().as_secs_f64();
-        let extra = serde_json::to_value(&state)?;
-        write_checkpoint(&args.out.join(CHECKPOINT_FILE), &trainer.checkpoint(extra))?;
+        save_checkpoint(&args.out, &trainer, &mut state, &rng, t0)?;
     }
     finish(&args, &trainer, &data, &data_dir, &state)?;
     if let Some(feed) = feed {
@@ -436,20 +433,19 @@ fn train(
     Ok(())
 }
 
-/// Remove the temporary files of writes a killed run left in `out` (`write_atomic` names them
-/// `.<file>.<pid>.<n>.tmp`; a checkpoint's is as large as the checkpoint). Only this folder's own
-/// outputs: the dataset and renders folders are left alone.
-fn remove_stale_temporaries(out: &Path) {
-    let Ok(entries) = std::fs::read_dir(out) else { return };
-    for e in entries.flatten() {
-        let name = e.file_name().to_string_lossy().into_owned();
-        let ours = [CHECKPOINT_FILE, "log.jsonl", "metrics.json", "model.ply", "planes.json"]
-            .iter()
-            .any(|f| name.starts_with(&format!(".{f}.")));
-        if ours && name.ends_with(".tmp") {
-            let _ = std::fs::remove_file(e.path());
-        }
-    }
+/// Write `out`'s checkpoint: the trainer's state and the run's own (random state, wall clock).
+fn save_checkpoint(
+    out: &Path,
+    trainer: &Trainer,
+    state: &mut RunState,
+    rng: &Rng,
+    t0: Instant,
+) -> Result<()> {
+    state.rng_state = rng.state();
+    state.seconds = t0.elapsed().as_secs_f64();
+    let extra = serde_json::to_value(&*state)?;
+    write_checkpoint(&out.join(CHECKPOINT_FILE), &trainer.checkpoint(extra))?;
+    Ok(())
 }
 
 /// Refuse to resume on a dataset whose training views are not those the run started with
