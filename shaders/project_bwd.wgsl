@@ -141,11 +141,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let j1 = vec3<f32>(0.0, fy * iz, -fy * yc * iz2);
         let s0 = sc * j0;
         let s1 = sc * j1;
-        let a = dot(j0, s0) + COV2D_BLUR;
-        let b = dot(j0, s1);
-        let c = dot(j1, s1) + COV2D_BLUR;
-        let det = a * c - b * b;
-        let qm = mat2x2<f32>(c / det, -b / det, -b / det, a / det);
+        // Q = inverse(cov2d) as the forward stored it: recomputing it here would divide by a
+        // determinant that only the forward's guard (0 < det < 3e38) has checked, and would
+        // match the forward only while both compile to bit-identical arithmetic.
+        let qm = mat2x2<f32>(g.conic.x, g.conic.y, g.conic.y, g.conic.z);
 
         let pg0 = projected_grads[3u * i];
         let pg1 = projected_grads[3u * i + 1u];

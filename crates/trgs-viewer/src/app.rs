@@ -63,6 +63,9 @@ impl Smoothed {
     }
 }
 
+/// Milliseconds between two rendering frames beyond the render time that count as idle.
+const IDLE_GAP_MS: f64 = 500.0;
+
 /// Progress of a scripted run (`--screenshot`, `--frames`).
 #[derive(Default)]
 struct ScriptState {
@@ -92,8 +95,14 @@ pub struct ViewerApp {
     target: Option<(DisplayTarget, egui::TextureId)>,
     dirty: bool,
     render_ms: Smoothed,
+    /// The time between the starts of two consecutive UI frames that both rendered the view
+    /// (gaps of idle time left out): egui draws only on input, so the time since any earlier
+    /// frame would include idle time.
     frame_ms: Smoothed,
-    last_frame: Option<Instant>,
+    /// When this UI frame started.
+    frame_start: Instant,
+    /// When the previous UI frame started, if it rendered the view.
+    last_render_frame: Option<Instant>,
     /// The camera of the image on screen and where it is, in window pixels.
     last_view: Option<(Camera, [u32; 4])>,
     message: Option<(String, bool)>,
@@ -132,7 +141,8 @@ impl ViewerApp {
             dirty: true,
             render_ms: Smoothed::default(),
             frame_ms: Smoothed::default(),
-            last_frame: None,
+            frame_start: Instant::now(),
+            last_render_frame: None,
             last_view: None,
             message: None,
             browser: Browser::new(here),
@@ -395,6 +405,7 @@ impl ViewerApp {
 
     /// The render area: draw (when something changed), show, overlay.
     fn scene(&mut self, ui: &mut egui::Ui, frame: &eframe::Frame) {
+        let previous_render_frame = self.last_render_frame.take();
         let ppp = ui.ctx().pixels_per_point();
         let rect = ui.max_rect();
         let (min, max) = ((rect.min.to_vec2() * ppp).round(), (rect.max.to_vec2() * ppp).round());
@@ -459,6 +470,15 @@ impl ViewerApp {
                 Ok(()) => {
                     let ms = t.elapsed().as_secs_f64() * 1e3;
                     self.render_ms.add(ms);
+                    if let Some(previous) = previous_render_frame {
+                        // A drag held still makes no UI frames: a gap far over the render time
+                        // is idle time, not a frame.
+                        let gap = self.frame_start.duration_since(previous).as_secs_f64() * 1e3;
+                        if gap < ms + IDLE_GAP_MS {
+                            self.frame_ms.add(gap);
+                        }
+                    }
+                    self.last_render_frame = Some(self.frame_start);
                     self.script_state.rendered += 1;
                     if self.script.frames.is_some()
                         && self.script_state.rendered > WARMUP_FRAMES
@@ -532,10 +552,7 @@ fn default_shot_path() -> PathBuf {
 impl eframe::App for ViewerApp {
     fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
         let ctx = ui.ctx().clone();
-        let now = Instant::now();
-        if let Some(last) = self.last_frame.replace(now) {
-            self.frame_ms.add(now.duration_since(last).as_secs_f64() * 1e3);
-        }
+        self.frame_start = Instant::now();
         self.poll_live();
         if let Some(feed) = &self.live {
             ctx.request_repaint_after(std::time::Duration::from_millis(200));

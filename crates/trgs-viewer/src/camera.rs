@@ -90,11 +90,21 @@ impl ViewCamera {
     }
 
     /// Turn the view direction by `yaw` about the up direction and `pitch` about the camera's
-    /// right axis, refusing to pass the vertical.
+    /// right axis (positive: towards up), stopping at the steepest allowed look instead of
+    /// passing the vertical. A step that would pass it ends at the limit, so the view can always
+    /// reach the limit (refusing the whole step would leave it up to one step short).
     fn turned(&self, yaw: f64, pitch: f64) -> DVec3 {
         let (right, _, forward) = self.axes();
-        let pitched = DQuat::from_axis_angle(right, pitch) * forward;
-        let f = if pitched.dot(self.up).abs() < MAX_VERTICAL { pitched } else { forward };
+        let elevation = forward.dot(self.up).clamp(-1.0, 1.0).asin();
+        let steepest = MAX_VERTICAL.asin();
+        let target = (elevation + pitch).clamp(-steepest, steepest);
+        // The horizontal heading; looking straight along up it comes from the right axis.
+        let mut heading = forward - self.up * forward.dot(self.up);
+        if heading.length_squared() < 1e-18 {
+            heading = self.up.cross(right);
+        }
+        let heading = heading.normalize();
+        let f = heading * target.cos() + self.up * target.sin();
         DQuat::from_axis_angle(self.up, yaw) * f
     }
 
@@ -169,6 +179,25 @@ mod tests {
         }
         assert!(c.axes().2.dot(c.up).abs() <= MAX_VERTICAL + 1e-9);
         assert!(c.pose.rotation.determinant() > 0.999);
+    }
+
+    #[test]
+    fn pitch_reaches_the_limit_and_turns_back() {
+        let mut c = cam();
+        // One large step past the vertical ends at the limit, not where it started.
+        c.look(0.0, -1000.0);
+        let steepest = c.axes().2.dot(c.up);
+        assert!((steepest - MAX_VERTICAL).abs() < 1e-9, "{steepest}");
+        // A small step down from the limit is taken as asked.
+        let before = steepest.asin();
+        c.look(0.0, 20.0);
+        let after = c.axes().2.dot(c.up).asin();
+        assert!((before - after - 20.0 * RADIANS_PER_PIXEL).abs() < 1e-9);
+        // The heading did not change on the way.
+        let mut level = cam();
+        level.look(0.0, 0.0);
+        let h = |v: DVec3, up: DVec3| (v - up * v.dot(up)).normalize();
+        assert!((h(c.axes().2, c.up) - h(level.axes().2, c.up)).length() < 1e-9);
     }
 
     #[test]
