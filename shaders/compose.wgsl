@@ -33,6 +33,11 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     var best = -1;
     var best_s = 0.0;
     for (var k = 0u; k < params.num_planes; k++) {
+        // A plane whose mirrored pass did not run (switched off, or out of view) is not in the
+        // frame: it must not hide a plane behind it.
+        if planes[k].normal.w == 0.0 {
+            continue;
+        }
         let s = rectangle_hit(planes[k], origin, dir);
         if s >= 0.0 && (best < 0 || s < best_s) {
             best = i32(k);
@@ -43,8 +48,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     var out_reflection = vec3<f32>(0.0);
     var out_strength = vec4<f32>(0.0);
     var out_hit = 0u;
-    // A hit implies the camera is in front, so pass 2 ran; guard anyway.
-    if best >= 0 && planes[best].normal.w != 0.0 {
+    if best >= 0 {
         let plane = planes[best];
         let r0 = plane.centre.w;
         let cos_i = clamp(-dot(plane.normal.xyz, dir), 0.0, 1.0);

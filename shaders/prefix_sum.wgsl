@@ -47,7 +47,10 @@ fn main(
             data[base + k] = before + local[k];
         }
     }
-    if lid == SCAN_THREADS - 1u {
+    // Past 65535 blocks the grid is 2D and its last row has padding blocks without values;
+    // their index is past the end of `block_sums`, where a clamped write could land on a real
+    // total. (Block 0 writes even for an empty input: its total 0 is the scan's total.)
+    if lid == SCAN_THREADS - 1u && (block == 0u || block * SCAN_BLOCK < params.count) {
         block_sums[block] = sums[SCAN_THREADS - 1u];
     }
 }

@@ -108,15 +108,18 @@ pub fn ray_rectangle_hit(plane: &ReflectionPlane, origin: DVec3, dir: DVec3) -> 
     (u.abs() <= 0.5 * plane.width && v.abs() <= 0.5 * plane.height).then_some(s)
 }
 
-/// The nearest plane hit by a ray among several: its index and distance. Ties keep the lower index.
+/// The nearest plane hit by a ray among the planes that `present` accepts (a plane switched off
+/// must not hide one behind it): its index and distance. Ties keep the lower index.
 pub fn nearest_plane_hit(
     planes: &[ReflectionPlane],
+    present: impl Fn(usize) -> bool,
     origin: DVec3,
     dir: DVec3,
 ) -> Option<(usize, f64)> {
     let mut best: Option<(usize, f64)> = None;
     for (k, p) in planes.iter().enumerate() {
-        if let Some(s) = ray_rectangle_hit(p, origin, dir)
+        if present(k)
+            && let Some(s) = ray_rectangle_hit(p, origin, dir)
             && best.is_none_or(|(_, b)| s < b)
         {
             best = Some((k, s));

@@ -74,6 +74,41 @@ fn camera_behind_or_on_the_plane_skips_the_mirrored_pass() {
 }
 
 #[test]
+fn a_plane_switched_off_does_not_hide_the_plane_behind_it() {
+    let ctx = ctx();
+    let s = random_scene(&SceneSpec {
+        planes: 1,
+        gaussians: 300,
+        width: 64,
+        height: 48,
+        ..SceneSpec::default()
+    });
+    let back = s.planes[0].clone();
+    // The same pane moved a third of the way towards the camera: it covers the back one.
+    let mut front = back.clone();
+    front.centre += (s.camera.pose.centre() - back.centre) / 3.0;
+    let g = s.gaussians.cast();
+    let renderer = Renderer::new(&ctx);
+    let images = |planes: &[ReflectionPlane], enabled: Vec<bool>| {
+        let scene = GpuScene::upload(&ctx, &g, planes).expect("valid");
+        let options = RenderOptions { enabled_planes: enabled, ..Default::default() };
+        renderer.render(&scene, &s.camera, &options).expect("render").read_images(&ctx)
+    };
+    let both = images(&[back.clone(), front.clone()], vec![true, true]);
+    let front_off = images(&[back.clone(), front], vec![true, false]);
+    let back_only = images(&[back], vec![true]);
+    // With both on, the front pane takes pixels the back one has alone.
+    let hits = |f: &FrameImages, k: u32| f.hit.data.iter().filter(|&&h| h == k + 1).count();
+    assert!(hits(&back_only, 0) > 20, "the back pane is in view");
+    assert!(hits(&both, 1) > 0 && hits(&both, 0) < hits(&back_only, 0));
+    // Switched off, the front pane is as if it were not in the scene.
+    assert_eq!(front_off.hit.data, back_only.hit.data);
+    assert_eq!(front_off.color.data, back_only.color.data);
+    assert_eq!(front_off.reflection.data, back_only.reflection.data);
+    assert_eq!(front_off.strength.data, back_only.strength.data);
+}
+
+#[test]
 fn extreme_scales_stay_finite() {
     let ctx = ctx();
     let mut s = random_scene(&SceneSpec { planes: 1, gaussians: 60, ..SceneSpec::default() });

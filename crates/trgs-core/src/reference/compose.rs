@@ -72,8 +72,9 @@ pub fn compose(
     for y in 0..h {
         for x in 0..w {
             let d = camera.pixel_ray(x, y);
-            let Some((k, _)) = nearest_plane_hit(planes, origin, d) else { continue };
-            // A hit implies the camera is in front, so pass 2 ran; guard anyway.
+            // Only planes whose mirrored pass ran are in the frame (as in WGSL `compose`).
+            let ran = |k: usize| raw_color[k].is_some() && intensity[k].is_some();
+            let Some((k, _)) = nearest_plane_hit(planes, ran, origin, d) else { continue };
             let (Some(raw), Some(a)) = (raw_color[k], intensity[k]) else { continue };
             let plane = &planes[k];
             let r_raw = model.strength(plane.r0(), incidence_cos(plane.unit_normal(), d));
