@@ -5,7 +5,7 @@ use crate::adam::{Adam, AdamMoments};
 use crate::checkpoint::{Checkpoint, PlaneMoments};
 use crate::data::View;
 use crate::densify::{
-    ClassicSettings, DensifyReport, DensifyStats, TrainState, densify_and_prune, reset_opacity,
+    ClassicSettings, DensifyReport, DensifyStats, TrainState, cap_opacity_logits, densify_and_prune,
 };
 use crate::losses::{GpuTarget, LossKernels, LossLayers, LossSettings};
 use crate::mcmc::{McmcKernels, McmcSettings, relocate_and_grow};
@@ -190,10 +190,7 @@ impl Trainer {
     fn perturb_step(&mut self) -> Result<usize> {
         let t = self.step;
         let Some(p) = self.settings.perturb else { return Ok(0) };
-        let reset_now = self
-            .densify
-            .as_ref()
-            .is_some_and(|(s, _)| t < s.until && t.is_multiple_of(s.opacity_reset_every));
+        let reset_now = self.densify.as_ref().is_some_and(|(s, _)| s.resets_opacity_at(t));
         if self.scene.planes().is_empty()
             || self.settings.stage(t) != Stage::Joint
             || t >= p.until
@@ -281,14 +278,19 @@ impl Trainer {
             self.set_state(&next)?;
             report = Some(r);
         }
-        let reset = self
-            .densify
-            .as_ref()
-            .is_some_and(|(s, _)| t < s.until && t.is_multiple_of(s.opacity_reset_every));
+        let reset = self.densify.as_ref().is_some_and(|(s, _)| s.resets_opacity_at(t));
         if reset {
-            let mut state = self.read_state();
-            reset_opacity(&mut state);
-            self.set_state(&state)?;
+            // In place, as `reset_opacity` edits a state: only the opacities and their moments
+            // change, so the densification statistics gathered since the last densification
+            // stay (a reset between densifications used to clear them).
+            let mut logits = self.gaussians().opacity_logits;
+            cap_opacity_logits(&mut logits);
+            let opacity = self.scene.parameters()[3];
+            self.ctx.queue.write_buffer(opacity, 0, bytemuck::cast_slice(&logits));
+            let mut enc = self.ctx.device.create_command_encoder(&Default::default());
+            enc.clear_buffer(&self.moments[3].m, 0, None);
+            enc.clear_buffer(&self.moments[3].v, 0, None);
+            self.ctx.queue.submit([enc.finish()]);
         }
         Ok(report)
     }

@@ -44,4 +44,8 @@ fn hook_runs_after_the_update_and_before_the_opacity_reset() {
     assert!(moved, "the hook sees the step's update");
     assert!(logit > cap + 1.0, "the hook ran after the reset: largest logit {logit}");
     assert!(max_logit(&trainer) <= cap, "the reset did not follow the hook");
+    // The reset clears the opacities' moments only.
+    let state = trainer.read_state();
+    assert!(state.m[3].iter().chain(&state.v[3]).all(|&x| x == 0.0));
+    assert!(state.m[0].iter().any(|&x| x != 0.0), "the means' moments stay");
 }
