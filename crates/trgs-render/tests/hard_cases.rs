@@ -83,9 +83,9 @@ fn a_plane_switched_off_does_not_hide_the_plane_behind_it() {
         height: 48,
         ..SceneSpec::default()
     });
-    let back = s.planes[0].clone();
+    let back = s.planes[0];
     // The same pane moved a third of the way towards the camera: it covers the back one.
-    let mut front = back.clone();
+    let mut front = back;
     front.centre += (s.camera.pose.centre() - back.centre) / 3.0;
     let g = s.gaussians.cast();
     let renderer = Renderer::new(&ctx);
@@ -94,8 +94,8 @@ fn a_plane_switched_off_does_not_hide_the_plane_behind_it() {
         let options = RenderOptions { enabled_planes: enabled, ..Default::default() };
         renderer.render(&scene, &s.camera, &options).expect("render").read_images(&ctx)
     };
-    let both = images(&[back.clone(), front.clone()], vec![true, true]);
-    let front_off = images(&[back.clone(), front], vec![true, false]);
+    let both = images(&[back, front], vec![true, true]);
+    let front_off = images(&[back, front], vec![true, false]);
     let back_only = images(&[back], vec![true]);
     // With both on, the front pane takes pixels the back one has alone.
     let hits = |f: &FrameImages, k: u32| f.hit.data.iter().filter(|&&h| h == k + 1).count();
