@@ -20,12 +20,17 @@ use trgs_render::layout::McmcParams;
 use trgs_render::{GpuContext, GpuScene, SceneGradBuffers};
 
 /// The largest number of Gaussians sharing one source in the relocation formula (the binomial
-/// sums alternate in sign and lose precision beyond; the reference code caps at 51 too).
-pub const MAX_SHARE: usize = 51;
+/// sums alternate in sign and lose precision beyond): 50, as the reference code clamps N to
+/// `N_max - 1` with its binomial table of `N_max = 51` rows.
+pub const MAX_SHARE: usize = 50;
 
 /// The shortest relocation interval in steps (each relocation reads the state back and rebuilds
 /// it on the CPU: about 100-200 ms at 30k Gaussians on lavapipe).
 pub const MIN_RELOCATION_INTERVAL: u32 = 5;
+
+/// 3DGS-MCMC's opacity learning rate (its `arguments/__init__.py`), twice 3DGS's 0.025: its
+/// regulariser pulls opacities down all through the run and relocation needs dead Gaussians.
+pub const OPACITY_LEARNING_RATE: f64 = 0.05;
 
 /// The schedule and constants (the paper's values for 30k steps; lengths scale with the run).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -84,7 +89,9 @@ pub struct McmcReport {
 /// one of opacity `opacity` (at most [`MAX_SHARE`] are accounted for).
 pub fn relocation(opacity: f64, share: usize, min_opacity: f64) -> (f64, f64) {
     let n = share.clamp(1, MAX_SHARE);
-    let new_o = (1.0 - (1.0 - opacity).powf(1.0 / n as f64)).clamp(min_opacity, 1.0 - 1e-7);
+    // The scale comes from the unclamped opacity and only the opacity is clamped afterwards, as
+    // in the reference (its kernel, then `_update_params`); the floor keeps the sum non-zero.
+    let new_o = (1.0 - (1.0 - opacity).powf(1.0 / n as f64)).max(f64::MIN_POSITIVE);
     let mut denom = 0.0;
     for i in 1..=n {
         let mut binom = 1.0;
@@ -94,7 +101,7 @@ pub fn relocation(opacity: f64, share: usize, min_opacity: f64) -> (f64, f64) {
             binom = binom * (i - 1 - k) as f64 / (k + 1) as f64;
         }
     }
-    (new_o, opacity / denom)
+    (new_o.clamp(min_opacity, 1.0 - 1e-7), opacity / denom)
 }
 
 fn logit(p: f64) -> f32 {
@@ -302,6 +309,11 @@ mod tests {
             assert!((1.0 - (1.0 - o).powi(n) - 0.8).abs() < 1e-9, "share {share}: {o}");
             assert!(f.is_finite() && f > 0.0, "share {share}: scale factor {f}");
         }
+        // A faint source: the copies' opacity is clamped to the floor, but their scale comes
+        // from Eq. 9's unclamped opacity (about o / n each, so about the source's scale).
+        let (o, f) = relocation(0.01, 3, 0.005);
+        assert_eq!(o, 0.005);
+        assert!((f - 1.0).abs() < 0.01, "scale factor {f}");
         // Two copies of an opaque Gaussian must each be wider than half its footprint.
         let (_, f) = relocation(0.9, 2, 0.005);
         assert!(f > 0.5 && f < 2.0, "{f}");
