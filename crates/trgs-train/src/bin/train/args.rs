@@ -271,3 +271,35 @@ pub fn settings_of(args: &Args) -> TrainSettings {
     }
     s
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn args(densify: DensifyMode) -> Args {
+        Args {
+            data: None,
+            demo_no_glass: false,
+            demo_night: false,
+            out: PathBuf::from("runs/test"),
+            iterations: 1000,
+            resolution: Resolution::Original,
+            sh_degree: 3,
+            eval_every: None,
+            checkpoint_every: None,
+            random_init: 10_000,
+            densify,
+            cap: 300_000,
+            no_planes: false,
+            seed: 0,
+            profile: false,
+            ablations: Ablations::default(),
+        }
+    }
+
+    #[test]
+    fn mcmc_trains_opacities_at_its_own_rate() {
+        assert_eq!(settings_of(&args(DensifyMode::Classic)).rates.opacity, 0.025);
+        assert_eq!(settings_of(&args(DensifyMode::Mcmc)).rates.opacity, 0.05);
+    }
+}
