@@ -75,6 +75,11 @@ pub enum BackwardError {
          gradients made for another frame?"
     )]
     GradsTooSmall { layer: &'static str, bytes: u64, needed: u64 },
+    #[error(
+        "the gradients were made for a {}x{} frame, the frame is {}x{}", grads.0, grads.1,
+        frame.0, frame.1
+    )]
+    GradsForAnotherSize { grads: (u32, u32), frame: (u32, u32) },
 }
 
 /// A mirrored view's gradient from its VIEW_GRAD_FLOATS (linear map by columns, translation,
@@ -113,6 +118,13 @@ impl Renderer {
                 scene_planes: scene.planes().len(),
             });
         }
+        if grads.size != (frame.width(), frame.height()) {
+            return Err(BackwardError::GradsForAnotherSize {
+                grads: grads.size,
+                frame: (frame.width(), frame.height()),
+            });
+        }
+        // Buffers made by hand (the fields are public) may still be short.
         if let Some((layer, bytes, needed)) = grads.too_small_for(frame) {
             return Err(BackwardError::GradsTooSmall { layer, bytes, needed });
         }

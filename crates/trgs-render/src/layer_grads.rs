@@ -22,6 +22,9 @@ pub struct LayerGrads {
     pub geometry: wgpu::Buffer,
     /// dL/d(C_raw^k, A^k) per plane slot: direct in, total out.
     pub reflection_raw: wgpu::Buffer,
+    /// The image size (width, height) of the frame they were made for: gradients of a frame with
+    /// as many pixels in another shape fit the buffers but would be read at the wrong pixels.
+    pub size: (u32, u32),
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -78,7 +81,7 @@ fn pack(
 impl LayerGrads {
     /// The first buffer too small for `frame` (layer name, bytes held, bytes needed): gradients
     /// made for a smaller frame would be read out of range.
-    pub fn too_small_for(&self, frame: &Frame) -> Option<(&'static str, u64, u64)> {
+    pub(crate) fn too_small_for(&self, frame: &Frame) -> Option<(&'static str, u64, u64)> {
         let pixels = u64::from(frame.width()) * u64::from(frame.height());
         let slots = frame.plane_slots() as u64;
         [
@@ -111,6 +114,7 @@ impl LayerGrads {
             transmission: zeroed("transmission", pixels * 16),
             geometry: zeroed("geometry", pixels * 16),
             reflection_raw: zeroed("reflection_raw", slots * pixels * 16),
+            size: (frame.width(), frame.height()),
         };
         ctx.queue.submit([enc.finish()]);
         grads
@@ -172,6 +176,7 @@ impl LayerGrads {
                 )?,
             ),
             reflection_raw: up("reflection_raw", &raw),
+            size: (w, h),
         })
     }
 }

@@ -130,6 +130,7 @@ fn check_compose_bwd_model(name: &str, spec: SceneSpec, model: ReflectionModel) 
                 ]),
             ),
             reflection_raw: gpu::storage_init(&ctx, "test.g_reflection_raw", &raw),
+            size: (w, h),
         };
         let plane_grads = renderer.compose_bwd(&frame, &buffers);
         let n = (w * h) as usize;

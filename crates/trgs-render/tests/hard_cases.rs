@@ -291,15 +291,30 @@ fn bad_options_too_many_tiles_and_stale_gradients_are_errors() {
     strip.intrinsics = Intrinsics::from_fov_x(1.0, (most + 1) * TILE_SIZE, 1);
     let err = renderer.render(&scene, &strip, &RenderOptions::default()).expect_err("tiles");
     assert!(matches!(err, RenderError::TooManyTiles { .. }), "{err}");
-    // Gradients made for a smaller frame are refused, not read out of range.
+    // Gradients made for another frame size are refused: a smaller one would be read out of
+    // range, a transposed one (as many pixels) at the wrong pixels; so are buffers made by hand
+    // too short for the frame.
+    let render_at = |w: u32, h: u32, frame: &mut Frame| {
+        let mut cam = s.camera.clone();
+        cam.intrinsics = Intrinsics::from_fov_x(1.0, w, h);
+        renderer.render_into(&scene, &cam, &RenderOptions::default(), frame).expect("render");
+    };
+    let backward = |frame: &mut Frame, grads: &LayerGrads| {
+        renderer.backward(&scene, frame, grads, &BackwardOptions::default()).expect_err("stale")
+    };
     let mut frame = Frame::default();
-    let mut small = s.camera.clone();
-    small.intrinsics = Intrinsics::from_fov_x(1.0, 8, 6);
-    renderer.render_into(&scene, &small, &RenderOptions::default(), &mut frame).expect("small");
-    let grads = LayerGrads::zeros(&ctx, &frame);
-    renderer.render_into(&scene, &s.camera, &RenderOptions::default(), &mut frame).expect("full");
-    let err = renderer
-        .backward(&scene, &mut frame, &grads, &BackwardOptions::default())
-        .expect_err("stale gradients");
+    for (w, h) in [(8, 6), (6, 8)] {
+        render_at(w, h, &mut frame);
+        let grads = LayerGrads::zeros(&ctx, &frame);
+        render_at(8, 6, &mut frame);
+        if (w, h) != (8, 6) {
+            let err = backward(&mut frame, &grads);
+            assert!(matches!(err, BackwardError::GradsForAnotherSize { .. }), "{err}");
+        }
+    }
+    let mut grads = LayerGrads::zeros(&ctx, &frame);
+    render_at(16, 12, &mut frame);
+    grads.size = (16, 12);
+    let err = backward(&mut frame, &grads);
     assert!(matches!(err, BackwardError::GradsTooSmall { .. }), "{err}");
 }

@@ -139,6 +139,7 @@ fn check(ctx: &GpuContext, kernels: &mut LossKernels, l: &Layers, labelled: bool
         transmission: poisoned("test.g.transmission", pixels * 16),
         geometry: poisoned("test.g.geometry", pixels * 16),
         reflection_raw: poisoned("test.g.reflection_raw", 2 * pixels * 16),
+        size: (l.width, l.height),
     };
     let settings =
         LossSettings { lambda_dssim: DSSIM_LAMBDA, regularisers: planes.then_some(WEIGHTS) };
