@@ -5,6 +5,7 @@
 mod script;
 use crate::browser::{Browser, is_model_file};
 use crate::camera::{ViewCamera, up_of};
+use crate::frame_times::FrameTimes;
 use crate::live::LiveFeed;
 use crate::overlay::plane_overlay;
 use crate::scene::{Extent, LoadedModel, depth_range, load_for_viewer};
@@ -53,19 +54,6 @@ struct Shown {
     name: String,
 }
 
-/// A running mean that forgets slowly, for the frame-time display.
-#[derive(Default)]
-struct Smoothed(Option<f64>);
-
-impl Smoothed {
-    fn add(&mut self, v: f64) {
-        self.0 = Some(self.0.map_or(v, |m| 0.9 * m + 0.1 * v));
-    }
-}
-
-/// Milliseconds between two rendering frames beyond the render time that count as idle.
-const IDLE_GAP_MS: f64 = 500.0;
-
 /// Progress of a scripted run (`--screenshot`, `--frames`).
 #[derive(Default)]
 struct ScriptState {
@@ -94,15 +82,7 @@ pub struct ViewerApp {
     frame: Frame,
     target: Option<(DisplayTarget, egui::TextureId)>,
     dirty: bool,
-    render_ms: Smoothed,
-    /// The time between the starts of two consecutive UI frames that both rendered the view
-    /// (gaps of idle time left out): egui draws only on input, so the time since any earlier
-    /// frame would include idle time.
-    frame_ms: Smoothed,
-    /// When this UI frame started.
-    frame_start: Instant,
-    /// When the previous UI frame started, if it rendered the view.
-    last_render_frame: Option<Instant>,
+    times: FrameTimes,
     /// The camera of the image on screen and where it is, in window pixels.
     last_view: Option<(Camera, [u32; 4])>,
     message: Option<(String, bool)>,
@@ -139,10 +119,7 @@ impl ViewerApp {
             frame: Frame::default(),
             target: None,
             dirty: true,
-            render_ms: Smoothed::default(),
-            frame_ms: Smoothed::default(),
-            frame_start: Instant::now(),
-            last_render_frame: None,
+            times: FrameTimes::default(),
             last_view: None,
             message: None,
             browser: Browser::new(here),
@@ -348,10 +325,10 @@ impl ViewerApp {
             self.screenshot(ui.ctx(), default_shot_path());
         }
         ui.separator();
-        if let Some(ms) = self.render_ms.0 {
+        if let Some(ms) = self.times.render_ms.0 {
             ui.label(format!("render {ms:.1} ms"));
         }
-        if let Some(ms) = self.frame_ms.0 {
+        if let Some(ms) = self.times.frame_ms.0 {
             ui.label(format!("frame {ms:.1} ms ({:.1} fps)", 1000.0 / ms.max(1e-3)));
         }
         if let Some((c, _)) = &self.last_view {
@@ -405,7 +382,6 @@ impl ViewerApp {
 
     /// The render area: draw (when something changed), show, overlay.
     fn scene(&mut self, ui: &mut egui::Ui, frame: &eframe::Frame) {
-        let previous_render_frame = self.last_render_frame.take();
         let ppp = ui.ctx().pixels_per_point();
         let rect = ui.max_rect();
         let (min, max) = ((rect.min.to_vec2() * ppp).round(), (rect.max.to_vec2() * ppp).round());
@@ -469,16 +445,7 @@ impl ViewerApp {
             match drawn {
                 Ok(()) => {
                     let ms = t.elapsed().as_secs_f64() * 1e3;
-                    self.render_ms.add(ms);
-                    if let Some(previous) = previous_render_frame {
-                        // A drag held still makes no UI frames: a gap far over the render time
-                        // is idle time, not a frame.
-                        let gap = self.frame_start.duration_since(previous).as_secs_f64() * 1e3;
-                        if gap < ms + IDLE_GAP_MS {
-                            self.frame_ms.add(gap);
-                        }
-                    }
-                    self.last_render_frame = Some(self.frame_start);
+                    self.times.rendered(ms);
                     self.script_state.rendered += 1;
                     if self.script.frames.is_some()
                         && self.script_state.rendered > WARMUP_FRAMES
@@ -552,7 +519,7 @@ fn default_shot_path() -> PathBuf {
 impl eframe::App for ViewerApp {
     fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
         let ctx = ui.ctx().clone();
-        self.frame_start = Instant::now();
+        self.times.start_frame();
         self.poll_live();
         if let Some(feed) = &self.live {
             ctx.request_repaint_after(std::time::Duration::from_millis(200));

@@ -7,6 +7,7 @@
 mod app;
 mod browser;
 pub mod camera;
+mod frame_times;
 pub mod live;
 pub mod overlay;
 pub mod scene;

@@ -116,27 +116,34 @@ pub enum Command {
     Resume { out: PathBuf },
 }
 
+/// The settings of a run without flags (the help text's defaults).
+impl Default for Args {
+    fn default() -> Self {
+        Self {
+            data: None,
+            demo_no_glass: false,
+            demo_night: false,
+            out: PathBuf::from("runs/demo"),
+            iterations: 1000,
+            resolution: Resolution::Original,
+            sh_degree: 3,
+            eval_every: None,
+            checkpoint_every: None,
+            random_init: 10_000,
+            densify: DensifyMode::Classic,
+            cap: 300_000,
+            no_planes: false,
+            seed: 0,
+            profile: false,
+            ablations: Ablations::default(),
+        }
+    }
+}
+
 /// The command, and whether to show training in the viewer (not a setting of the run: a resumed
 /// run may be watched or not).
 pub fn parse_args() -> Result<(Command, bool)> {
-    let mut args = Args {
-        data: None,
-        demo_no_glass: false,
-        demo_night: false,
-        out: PathBuf::from("runs/demo"),
-        iterations: 1000,
-        resolution: Resolution::Original,
-        sh_degree: 3,
-        eval_every: None,
-        checkpoint_every: None,
-        random_init: 10_000,
-        densify: DensifyMode::Classic,
-        cap: 300_000,
-        no_planes: false,
-        seed: 0,
-        profile: false,
-        ablations: Ablations::default(),
-    };
+    let mut args = Args::default();
     let mut resume = false;
     let mut viewer = false;
     // Flags that only mean something with another: refused alone rather than ignored.
@@ -277,24 +284,7 @@ mod tests {
     use super::*;
 
     fn args(densify: DensifyMode) -> Args {
-        Args {
-            data: None,
-            demo_no_glass: false,
-            demo_night: false,
-            out: PathBuf::from("runs/test"),
-            iterations: 1000,
-            resolution: Resolution::Original,
-            sh_degree: 3,
-            eval_every: None,
-            checkpoint_every: None,
-            random_init: 10_000,
-            densify,
-            cap: 300_000,
-            no_planes: false,
-            seed: 0,
-            profile: false,
-            ablations: Ablations::default(),
-        }
+        Args { densify, ..Args::default() }
     }
 
     #[test]
