@@ -203,8 +203,7 @@ impl Trainer {
         let selected = seen_through_planes(&g, self.scene.planes(), &self.camera_centres);
         let n = perturb_opacities(&mut g, &selected, p.amplitude, &mut self.rng);
         // Only the opacity buffer changes: the moments and densification statistics stay.
-        let opacity = self.scene.parameters()[3];
-        self.ctx.queue.write_buffer(opacity, 0, bytemuck::cast_slice(&g.opacity_logits));
+        self.write_opacity_logits(&g.opacity_logits);
         Ok(n)
     }
 
@@ -249,6 +248,12 @@ impl Trainer {
         Ok(())
     }
 
+    /// Replace the opacity logits on the GPU (the other parameters and all moments stay).
+    fn write_opacity_logits(&self, logits: &[f32]) {
+        let opacity = self.scene.parameters()[3];
+        self.ctx.queue.write_buffer(opacity, 0, bytemuck::cast_slice(logits));
+    }
+
     /// Densification after step `self.step`, when the schedule says so.
     fn densify_step(&mut self) -> Result<Option<DensifyReport>> {
         if let Some((settings, _)) = &self.mcmc {
@@ -280,13 +285,14 @@ impl Trainer {
         }
         let reset = self.densify.as_ref().is_some_and(|(s, _)| s.resets_opacity_at(t));
         if reset {
-            // In place, as `reset_opacity` edits a state: only the opacities and their moments
-            // change, so the densification statistics gathered since the last densification
-            // stay (a reset between densifications used to clear them).
-            let mut logits = self.gaussians().opacity_logits;
-            cap_opacity_logits(&mut logits);
+            // In place: only the opacities and their moments change, so the densification
+            // statistics gathered since the last densification stay (rebuilding the state, as
+            // a densification does, used to clear them).
             let opacity = self.scene.parameters()[3];
-            self.ctx.queue.write_buffer(opacity, 0, bytemuck::cast_slice(&logits));
+            let mut logits: Vec<f32> =
+                trgs_render::gpu::read_buffer(&self.ctx, opacity, 0, self.scene.len() as usize);
+            cap_opacity_logits(&mut logits);
+            self.write_opacity_logits(&logits);
             let mut enc = self.ctx.device.create_command_encoder(&Default::default());
             enc.clear_buffer(&self.moments[3].m, 0, None);
             enc.clear_buffer(&self.moments[3].v, 0, None);
