@@ -3,19 +3,30 @@
 //! within atol 1e-5 + rtol 1e-3 of the twin's out (plane sums relative to their scale). Each runs
 //! twice: with the adapter's float atomics and subgroup reduction, and with the optional features
 //! off (the compare-exchange fallback without subgroups). Fresh buffers are poison-filled.
+//!
+//! `rasterize_bwd` is checked twice: as a stage, the twin run on the GPU's own forward results
+//! (projected records, lists, pixel states, D_t) and upstream gradients, to 1e-4 of each
+//! attribute's scale; and end to end, against the twin's whole f64 backward. End to end, the
+//! depth-variance term w |z - D_t| has a kink where a Gaussian's depth equals the pixel's mean
+//! depth D_t: there f32 and f64 pick different subgradients (sign 0 or +-1), a jump of the
+//! Gaussian's weight times dL/dV. On an H100 a Gaussian 4e-7 from D_t took the other side and
+//! moved its depth gradient by 1e-3 of the scale, so the end-to-end depth and mean gradients of
+//! Gaussians that sit within 1e-5 of D_t at a pixel they blend are left to the stage check.
 use trgs_core::Image;
 use trgs_core::fixtures::{SceneSpec, random_scene};
 use trgs_core::reference::{
-    self, FrameGrads, PlaneLayerGrads, ReflectionModel, RenderSettings, compose_bwd,
+    self, FrameGrads, MIN_ALPHA, PixelState, PlaneLayerGrads, ReflectionModel, RenderSettings,
+    compose_bwd,
 };
 use trgs_core::rng::Rng;
 use trgs_core::scene::Gaussians;
-use trgs_render::LayerGrads;
 use trgs_render::gpu;
+use trgs_render::layout::RasterState;
 use trgs_render::{BackwardOptions, DeviceOptions, GpuContext, GpuScene, RenderOptions, Renderer};
+use trgs_render::{Layer, LayerGrads};
 
 mod common;
-use common::{compare_values, spec};
+use common::{compare_values, spec, to_reference};
 
 fn contexts() -> Vec<(&'static str, GpuContext)> {
     let fast = DeviceOptions { poison_fresh_buffers: true, ..Default::default() };
@@ -219,15 +230,142 @@ fn random_grads(seed: u64, frame: &reference::Frame, planes: usize) -> FrameGrad
 /// The acceptance rule: every value within 1e-3 of the largest |value| of its attribute (its
 /// scale). Returns the attribute's relative error.
 fn check_scaled(what: &str, gpu: &[f32], cpu: &[f64]) -> f64 {
+    check_scaled_within(what, gpu, cpu, 1e-3, |_| false)
+}
+
+/// Every value within `tolerance` of its attribute's scale, except those `skip` names (by
+/// index); the worst one is named.
+fn check_scaled_within(
+    what: &str,
+    gpu: &[f32],
+    cpu: &[f64],
+    tolerance: f64,
+    skip: impl Fn(usize) -> bool,
+) -> f64 {
     assert_eq!(gpu.len(), cpu.len(), "{what}: value counts");
-    let scale = cpu.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    let worst = gpu.iter().zip(cpu).fold(0.0f64, |m, (&g, &c)| m.max((f64::from(g) - c).abs()));
-    let rel = if scale > 0.0 { worst / scale } else { worst };
-    eprintln!("{what}: scale {scale:.3e}, max |gpu - cpu| {worst:.3e}, relative {rel:.2e}");
     assert!(gpu.iter().all(|v| v.is_finite()), "{what}: non-finite GPU gradient");
-    assert!(rel <= 1e-3 || worst <= 1e-7, "{what}: relative error {rel:.2e} above 1e-3");
+    let scale = cpu.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let (at, worst) = gpu
+        .iter()
+        .zip(cpu)
+        .map(|(&g, &c)| (f64::from(g) - c).abs())
+        .enumerate()
+        .filter(|&(i, _)| !skip(i))
+        .fold((0, 0.0f64), |m, (i, d)| if d > m.1 { (i, d) } else { m });
+    let rel = if scale > 0.0 { worst / scale } else { worst };
+    eprintln!(
+        "{what}: scale {scale:.3e}, max |gpu - cpu| {worst:.3e} at {at} (gpu {}, cpu {}), \
+         relative {rel:.2e}",
+        gpu[at], cpu[at]
+    );
+    assert!(
+        rel <= tolerance || worst <= 1e-7,
+        "{what}: relative error {rel:.2e} above {tolerance:e}"
+    );
     rel
 }
+
+/// The Gaussians whose depth lies within 1e-5 of the mean depth D_t of a pixel where they may
+/// blend (alpha at least 0.999 of the 1/255 threshold, before the pixel's last entry): the
+/// kink of |z - D_t|, where the twin and the GPU may take different subgradients.
+fn on_depth_kink(frame: &reference::Frame) -> Vec<bool> {
+    let pass = &frame.primary;
+    let p = &pass.projected;
+    let grid = reference::TileGrid::new(frame.width(), frame.height());
+    let mut kink = vec![false; p.len()];
+    for y in 0..frame.height() {
+        for x in 0..frame.width() {
+            let tile = (y / reference::TILE_SIZE) * grid.tiles_x + x / reference::TILE_SIZE;
+            let (start, end) = pass.ranges[tile as usize];
+            let last = frame.pixels[(y * frame.width() + x) as usize].last_t as usize;
+            let d = frame.depth.get(x, y, 0);
+            let (px, py) = (f64::from(x) + 0.5, f64::from(y) + 0.5);
+            for &i in pass.values[start as usize..end as usize].iter().take(last) {
+                let i = i as usize;
+                let [a, b, c] = p.conic[i];
+                let (dx, dy) = (px - p.mean2d[i].x, py - p.mean2d[i].y);
+                let power = -0.5 * (a * dx * dx + c * dy * dy) - b * dx * dy;
+                let near = (p.depth[i] - d).abs() <= 1e-5 * d.abs();
+                if near && p.opacity[i] * power.exp() >= 0.999 * MIN_ALPHA {
+                    kink[i] = true;
+                }
+            }
+        }
+    }
+    kink
+}
+
+fn image_of(v: &[[f32; 4]], channels: std::ops::Range<usize>, w: u32, h: u32) -> Image<f64> {
+    let mut im = Image::new(w, h, channels.len() as u32);
+    im.data = v.iter().flat_map(|p| p[channels.clone()].iter().map(|&x| f64::from(x))).collect();
+    im
+}
+
+fn pixel_state(s: &RasterState) -> PixelState {
+    PixelState {
+        t_final: f64::from(s.t_final),
+        tm_final: f64::from(s.tm_final),
+        last_t: s.last_t,
+        last_m: s.last_m,
+        weight_sum: f64::from(s.weight_sum),
+        depth_sign_sum: f64::from(s.depth_sign_sum),
+    }
+}
+
+/// Stage `rasterize_bwd` alone: the twin from the GPU's forward results and the upstream
+/// gradients compose_bwd left in `layer_grads`, against the GPU's screen-space gradients.
+fn check_rasterize_bwd_stage(
+    what: &str,
+    ctx: &GpuContext,
+    frame: &trgs_render::Frame,
+    layer_grads: &LayerGrads,
+    background: [f64; 3],
+    gpu_pg: &[f32],
+) {
+    let (w, h) = layer_grads.size;
+    let n_px = (w * h) as usize;
+    let n = gpu_pg.len() / 12;
+    let inter = frame.read_intermediates(ctx, 0, n).expect("captured intermediates");
+    let projected = to_reference(&inter.projected);
+    let states: Vec<PixelState> = frame.read_states(ctx).iter().map(pixel_state).collect();
+    let depth = frame.read_layer(ctx, Layer::Depth);
+    let mut d = Image::new(w, h, 1);
+    d.data = depth.data.iter().map(|&v| f64::from(v)).collect();
+    let t: Vec<[f32; 4]> = gpu::read_buffer(ctx, &layer_grads.transmission, 0, n_px);
+    let geo: Vec<[f32; 4]> = gpu::read_buffer(ctx, &layer_grads.geometry, 0, n_px);
+    let (transmission, alpha) = (image_of(&t, 0..3, w, h), image_of(&t, 3..4, w, h));
+    let (g_depth, g_v, g_m) =
+        (image_of(&geo, 0..1, w, h), image_of(&geo, 1..2, w, h), image_of(&geo, 2..3, w, h));
+    let twin = reference::rasterize_bwd(
+        &projected,
+        &inter.sorted_values,
+        &inter.ranges,
+        &reference::TileGrid::new(w, h),
+        &states,
+        &d,
+        background,
+        reference::RasterizeUpstream {
+            transmission: &transmission,
+            depth: &g_depth,
+            depth_variance: &g_v,
+            mask: &g_m,
+            alpha: &alpha,
+        },
+    );
+    let twin: Vec<f64> = (0..n).flat_map(|i| projected_record(&twin, i)).collect();
+    for (c, field) in PROJECTED_FIELDS.iter().enumerate() {
+        let gv: Vec<f32> = gpu_pg.iter().skip(c).step_by(12).copied().collect();
+        let cv: Vec<f64> = twin.iter().skip(c).step_by(12).copied().collect();
+        check_scaled_within(&format!("{what} stage rasterize_bwd {field}"), &gv, &cv, 1e-4, |_| {
+            false
+        });
+    }
+}
+
+const PROJECTED_FIELDS: [&str; 11] = [
+    "dmean.x", "dmean.y", "dopacity", "ddepth", "dconic.a", "dconic.b", "dconic.c", "dmask",
+    "dcolor.r", "dcolor.g", "dcolor.b",
+];
 
 fn flat<const N: usize>(v: &[[f32; N]]) -> Vec<f32> {
     v.iter().flatten().copied().collect()
@@ -306,6 +444,10 @@ fn check_backward(name: &str, mut scene: trgs_core::fixtures::Scene, block: bool
         },
     );
 
+    let kink = on_depth_kink(&cpu_frame);
+    let kinks = kink.iter().filter(|&&k| k).count();
+    eprintln!("{name}: {kinks} Gaussians on a depth-variance kink");
+    assert!(kinks * 50 <= n, "{name}: {kinks} of {n} Gaussians on a kink");
     for (mode, ctx) in contexts() {
         let what = format!("{name} ({mode})");
         let renderer = Renderer::new(&ctx);
@@ -313,6 +455,7 @@ fn check_backward(name: &str, mut scene: trgs_core::fixtures::Scene, block: bool
         let render_options = RenderOptions {
             background: background.map(|v| v as f32),
             depth_variance: true,
+            capture_intermediates: true,
             ..Default::default()
         };
         let mut frame =
@@ -323,22 +466,24 @@ fn check_backward(name: &str, mut scene: trgs_core::fixtures::Scene, block: bool
 
         let pg = out.read_projected_grads(&ctx, 0).expect("primary view");
         let gpu_pg: Vec<f32> = pg.iter().flatten().copied().collect();
+        check_rasterize_bwd_stage(&what, &ctx, &frame, &layer_grads, background, &gpu_pg);
         let cpu_pg: Vec<f64> = (0..n).flat_map(|i| projected_record(&cpu_pg, i)).collect();
-        for (c, field) in [
-            "dmean.x", "dmean.y", "dopacity", "ddepth", "dconic.a", "dconic.b", "dconic.c",
-            "dmask", "dcolor.r", "dcolor.g", "dcolor.b",
-        ]
-        .iter()
-        .enumerate()
-        {
+        for (c, field) in PROJECTED_FIELDS.iter().enumerate() {
             let gv: Vec<f32> = gpu_pg.iter().skip(c).step_by(12).copied().collect();
             let cv: Vec<f64> = cpu_pg.iter().skip(c).step_by(12).copied().collect();
-            check_scaled(&format!("{what} rasterize_bwd {field}"), &gv, &cv);
+            let skip = |i: usize| *field == "ddepth" && kink[i];
+            check_scaled_within(&format!("{what} rasterize_bwd {field}"), &gv, &cv, 1e-3, skip);
         }
 
         let gg = out.gaussians.read(&ctx);
         let c = &cpu.gaussians;
-        check_scaled(&format!("{what} means"), &flat(&gg.means), &flat64(&c.means));
+        check_scaled_within(
+            &format!("{what} means"),
+            &flat(&gg.means),
+            &flat64(&c.means),
+            1e-3,
+            |v| kink[v / 3],
+        );
         check_scaled(&format!("{what} rotations"), &flat(&gg.rotations), &flat64(&c.rotations));
         check_scaled(&format!("{what} log_scales"), &flat(&gg.log_scales), &flat64(&c.log_scales));
         check_scaled(&format!("{what} opacity_logits"), &gg.opacity_logits, &c.opacity_logits);

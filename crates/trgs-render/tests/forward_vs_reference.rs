@@ -3,49 +3,21 @@
 //! projected Gaussians and must match exactly; projection, both rasterize passes and compose
 //! agree within atol 1e-5 + rtol 1e-3. Fresh buffers are poison-filled. The end-to-end render is
 //! compared with the reference renderer too.
-use glam::DVec2;
 use trgs_core::Image;
 use trgs_core::fixtures::{SceneSpec, random_scene};
 use trgs_core::reference::{
-    self, Projected, ProjectionFilter, ReflectionModel, RenderSettings, TileGrid, depth_order,
-    emit_keys, prefix_sum, rasterize, rasterize_reflection, sort_keys, tile_counts, tile_ranges,
+    self, ProjectionFilter, ReflectionModel, RenderSettings, TileGrid, depth_order, emit_keys,
+    prefix_sum, rasterize, rasterize_reflection, sort_keys, tile_counts, tile_ranges,
 };
 use trgs_core::scene::Gaussians;
-use trgs_render::layout::{
-    FLAG_CLAMPED_B, FLAG_CLAMPED_G, FLAG_CLAMPED_R, FLAG_GLASS, FLAG_VISIBLE, ProjectedGaussian,
-};
 use trgs_render::{DeviceOptions, GpuContext, GpuScene, RenderOptions, Renderer};
 
 mod common;
-use common::{ATOL, RTOL, close, compare_values, spec};
+use common::{ATOL, RTOL, close, compare_values, spec, to_reference};
 
 fn ctx() -> GpuContext {
     let opts = DeviceOptions { poison_fresh_buffers: true, ..Default::default() };
     GpuContext::with_options(&opts).unwrap_or_else(|e| panic!("{e}"))
-}
-
-/// The twin's Projected holding exactly the GPU's values.
-fn to_reference(p: &[ProjectedGaussian]) -> Projected {
-    let mut out = Projected::default();
-    for g in p {
-        let f = g.flags;
-        out.visible.push(f & FLAG_VISIBLE != 0);
-        out.mean2d.push(DVec2::new(f64::from(g.mean2d[0]), f64::from(g.mean2d[1])));
-        out.conic.push([g.conic[0], g.conic[1], g.conic[2]].map(f64::from));
-        out.depth.push(f64::from(g.color[3]));
-        out.extent.push(DVec2::new(f64::from(g.extent[0]), f64::from(g.extent[1])));
-        out.color.push([g.color[0], g.color[1], g.color[2]].map(f64::from));
-        out.color_clamped.push([
-            f & FLAG_CLAMPED_R != 0,
-            f & FLAG_CLAMPED_G != 0,
-            f & FLAG_CLAMPED_B != 0,
-        ]);
-        out.opacity.push(f64::from(g.conic[3]));
-        out.mask.push(f64::from(g.mask));
-        out.reflection.push(f64::from(g.reflection));
-        out.glass.push(f & FLAG_GLASS != 0);
-    }
-    out
 }
 
 /// Compare images; returns the count of failing values.

@@ -1,7 +1,12 @@
 //! (Each test binary uses a part of this module.)
 #![allow(dead_code)]
 //! What the GPU-versus-twin tests share: the tolerance, the value comparison and the scene shape.
+use glam::DVec2;
 use trgs_core::fixtures::SceneSpec;
+use trgs_core::reference::Projected;
+use trgs_render::layout::{
+    FLAG_CLAMPED_B, FLAG_CLAMPED_G, FLAG_CLAMPED_R, FLAG_GLASS, FLAG_VISIBLE, ProjectedGaussian,
+};
 
 pub const ATOL: f64 = 1e-5;
 pub const RTOL: f64 = 1e-3;
@@ -41,4 +46,28 @@ pub fn spec(seed: u64, gaussians: usize, planes: usize, angle: f64) -> SceneSpec
         sh_degree: 3,
         glass_fraction: 0.2,
     }
+}
+
+/// The twin's Projected holding exactly the GPU's values.
+pub fn to_reference(p: &[ProjectedGaussian]) -> Projected {
+    let mut out = Projected::default();
+    for g in p {
+        let f = g.flags;
+        out.visible.push(f & FLAG_VISIBLE != 0);
+        out.mean2d.push(DVec2::new(f64::from(g.mean2d[0]), f64::from(g.mean2d[1])));
+        out.conic.push([g.conic[0], g.conic[1], g.conic[2]].map(f64::from));
+        out.depth.push(f64::from(g.color[3]));
+        out.extent.push(DVec2::new(f64::from(g.extent[0]), f64::from(g.extent[1])));
+        out.color.push([g.color[0], g.color[1], g.color[2]].map(f64::from));
+        out.color_clamped.push([
+            f & FLAG_CLAMPED_R != 0,
+            f & FLAG_CLAMPED_G != 0,
+            f & FLAG_CLAMPED_B != 0,
+        ]);
+        out.opacity.push(f64::from(g.conic[3]));
+        out.mask.push(f64::from(g.mask));
+        out.reflection.push(f64::from(g.reflection));
+        out.glass.push(f & FLAG_GLASS != 0);
+    }
+    out
 }
