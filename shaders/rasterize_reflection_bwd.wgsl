@@ -54,7 +54,6 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
     let pixel = vec2<f32>(f32(x) + 0.5, f32(y) + 0.5);
 
     let last = workgroupUniformLoad(&max_last);
-    let lane = subgroup_lane();
     // The subgroup's own last entry: its lanes skip the entries none of them blended (a subgroup
     // runs its own trip count; on a CPU adapter it is one SIMD vector).
     let sg_last = subgroup_max(st.last);
@@ -101,7 +100,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
                 }
             }
             if subgroup_any(blended) {
-                accumulate_subgroup12(PROJECTED_GRAD_FLOATS * s_index[j], g, lane.x, lane.y);
+                accumulate_subgroup12(PROJECTED_GRAD_FLOATS * s_index[j], g);
             }
         }
     }

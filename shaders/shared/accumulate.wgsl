@@ -29,11 +29,6 @@ fn subgroup_max(x: u32) -> u32 {
     return subgroupMax(x);
 }
 
-// This lane's rank and the subgroup's size (call in uniform control flow).
-fn subgroup_lane() -> vec2<u32> {
-    return vec2<u32>(subgroupExclusiveAdd(1u), subgroupAdd(1u));
-}
-
 // Whether any lane of the subgroup has `b` (lets a whole subgroup skip its reductions).
 fn subgroup_any(b: bool) -> bool {
     return subgroupAny(b);
@@ -54,10 +49,14 @@ fn accumulate_subgroup4(base: u32, v: vec4<f32>) {
 
 // A Gaussian's record of three vec4 at grads[base ..]: one reduction per vector, then the lanes
 // share the atomics (lane l adds the components l, l + size, ...) instead of one lane making
-// them all in turn. `lane` and `size` are subgroupExclusiveAdd(1u) and subgroupAdd(1u) taken in
-// uniform control flow.
-fn accumulate_subgroup12(base: u32, g: array<vec4<f32>, 3>, lane: u32, size: u32) {
+// them all in turn. The rank and the count are taken here, among the lanes that make the
+// reductions: ranks carried from the top of a kernel would leave a share of the sums unadded
+// wherever a driver has not reconverged the subgroup after a divergent branch (Vulkan promises
+// reconvergence only with maximal reconvergence).
+fn accumulate_subgroup12(base: u32, g: array<vec4<f32>, 3>) {
     let t = array<vec4<f32>, 3>(subgroupAdd(g[0]), subgroupAdd(g[1]), subgroupAdd(g[2]));
+    let lane = subgroupExclusiveAdd(1u);
+    let size = subgroupAdd(1u);
     for (var c = lane; c < 12u; c += size) {
         let v = t[c / 4u][c % 4u];
         if v != 0.0 {
@@ -79,10 +78,6 @@ fn subgroup_max(x: u32) -> u32 {
     return x;
 }
 
-fn subgroup_lane() -> vec2<u32> {
-    return vec2<u32>(0u, 1u);
-}
-
 fn subgroup_any(b: bool) -> bool {
     return b;
 }
@@ -95,7 +90,7 @@ fn accumulate_subgroup4(base: u32, v: vec4<f32>) {
     }
 }
 
-fn accumulate_subgroup12(base: u32, g: array<vec4<f32>, 3>, lane: u32, size: u32) {
+fn accumulate_subgroup12(base: u32, g: array<vec4<f32>, 3>) {
     for (var c = 0u; c < 12u; c++) {
         let v = g[c / 4u][c % 4u];
         if v != 0.0 {
