@@ -1,5 +1,5 @@
 //! The backward measurement of `bench`: forward and backward of one training-like step.
-use crate::{median, room_100k, upload};
+use crate::{median, room_100k, upload, warm_up};
 use anyhow::Result;
 use std::time::Instant;
 use trgs_core::fixtures::RoomDensity;
@@ -63,10 +63,13 @@ pub fn bench_backward(
     let grads = pseudo_grads(spec.width, spec.height, planes);
     let mut frame = Frame::default();
     let plain = BackwardOptions::default();
-    // Warm-up (JIT, buffer pools).
-    renderer.render_into(&scene, &camera, &options, &mut frame)?;
-    let layer_grads = LayerGrads::upload(ctx, &frame, &grads)?;
-    renderer.backward(&scene, &mut frame, &layer_grads, &plain)?;
+    // JIT, buffer pools, clocks.
+    warm_up(|| -> Result<()> {
+        renderer.render_into(&scene, &camera, &options, &mut frame)?;
+        let layer_grads = LayerGrads::upload(ctx, &frame, &grads)?;
+        renderer.backward(&scene, &mut frame, &layer_grads, &plain)?;
+        Ok(())
+    })?;
     let (mut fwd, mut bwd, mut ratios) = (Vec::new(), Vec::new(), Vec::new());
     for _ in 0..steps {
         let t = Instant::now();

@@ -88,6 +88,23 @@ struct Row {
     memory_mb: f64,
 }
 
+/// How long each configuration runs untimed before it is timed. One frame compiles the
+/// pipelines and fills the buffer pools; a real GPU also has to leave the idle clocks it drops to
+/// while the CPU builds the next scene (an H100 read 345 MHz at rest, and after a one-frame
+/// warm-up some configurations measured 3x slower in every stage, the unchanged ones included).
+/// One lavapipe frame takes 50-700 ms, so there this adds a frame or two.
+const WARM_UP_SECONDS: f64 = 0.5;
+
+/// Runs `step` once, then again until `WARM_UP_SECONDS` have passed.
+pub(crate) fn warm_up<E>(mut step: impl FnMut() -> Result<(), E>) -> Result<(), E> {
+    let start = Instant::now();
+    step()?;
+    while start.elapsed().as_secs_f64() < WARM_UP_SECONDS {
+        step()?;
+    }
+    Ok(())
+}
+
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
@@ -108,8 +125,7 @@ fn bench_config(
     let (scene, camera) = upload(ctx, spec)?;
     let mut frame = Frame::default();
     let options = RenderOptions::default();
-    // Warm-up: shader JIT and buffer allocation.
-    renderer.render_into(&scene, &camera, &options, &mut frame)?;
+    warm_up(|| renderer.render_into(&scene, &camera, &options, &mut frame).map(drop))?;
     let mut times = Vec::with_capacity(reps);
     for _ in 0..reps {
         let t = Instant::now();
@@ -207,9 +223,11 @@ fn plane_cost(
     let off = RenderOptions { enabled_planes: vec![false], ..RenderOptions::default() };
     let on = RenderOptions::default();
     let mut frame = Frame::default();
-    // Warm-up of both paths (JIT, buffer pool).
-    renderer.render_into(&scene, &camera, &on, &mut frame)?;
-    renderer.render_into(&scene, &camera, &off, &mut frame)?;
+    // Both paths (JIT, buffer pool, clocks).
+    warm_up(|| {
+        renderer.render_into(&scene, &camera, &on, &mut frame)?;
+        renderer.render_into(&scene, &camera, &off, &mut frame)
+    })?;
     let (mut without, mut with, mut ratios) = (Vec::new(), Vec::new(), Vec::new());
     for i in 0..pairs {
         // Alternate which comes first so that neither always follows the other.

@@ -1,6 +1,6 @@
 //! The training-step measurement of `bench`: whole steps of `Trainer` (render, loss, backward,
 //! Adam) at 256x192 on the capture-like room with 100k Gaussians, with their phase breakdown.
-use crate::{median, room_100k};
+use crate::{median, room_100k, warm_up};
 use anyhow::Result;
 use trgs_core::fixtures::{RoomDensity, room_scene};
 use trgs_render::{GpuContext, Layer};
@@ -21,7 +21,7 @@ pub struct TrainStepRow {
     pub stages: Vec<(&'static str, f64)>,
 }
 
-/// `steps` timed training steps (after one warm-up) of the joint stage, with the paper's losses
+/// `steps` timed training steps (after half a second of warm-up) of the joint stage, with the paper's losses
 /// and no densification: the target is the scene's own render darkened by 10%, so that every
 /// parameter gets a gradient.
 pub fn bench_train_step(ctx: &GpuContext, planes: usize, steps: usize) -> Result<TrainStepRow> {
@@ -37,7 +37,7 @@ pub fn bench_train_step(ctx: &GpuContext, planes: usize, steps: usize) -> Result
     let mut image = trainer.render(&scene.camera)?.read_layer(ctx, Layer::Color);
     image.data.iter_mut().for_each(|v| *v *= 0.9);
     let view = View { camera: scene.camera.clone(), image, mask: None };
-    trainer.train_step(&view)?;
+    warm_up(|| trainer.train_step(&view).map(drop))?;
     let (mut totals, mut phases) = (Vec::new(), vec![Vec::new(); 5]);
     for _ in 0..steps {
         let s = trainer.train_step(&view)?;
