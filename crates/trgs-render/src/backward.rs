@@ -50,6 +50,12 @@ impl Gradients {
         Some(gpu::read_buffer(ctx, b, 0, self.gaussian_count as usize))
     }
 
+    /// The buffer of view `vi`'s screen-space gradients (`PROJECTED_GRAD_FLOATS` per Gaussian),
+    /// for kernels that read them where they are (the trainer's densification statistics).
+    pub fn projected_grads(&self, vi: usize) -> Option<&wgpu::Buffer> {
+        self.projected_grads.get(vi)
+    }
+
     /// Milliseconds per stage, with `profile` on an adapter with timestamps.
     pub fn stage_times(&self) -> Option<&[(&'static str, f64)]> {
         self.stage_times.as_deref()

@@ -315,6 +315,18 @@ gpu_struct! {
     }
 }
 
+gpu_struct! {
+    /// Parameters of `densify_stats` over `count` Gaussians (one pass of the frame).
+    pub struct DensifyStatsParams {
+        pub count: u32,
+        /// 1 for the frame's first pass (the camera's): the step's "seen" flags start over.
+        pub first_pass: u32,
+        /// Half the image's width and height (3DGS measures the gradient in NDC).
+        pub half_width: f32,
+        pub half_height: f32,
+    }
+}
+
 /// `ProjectedGaussian::flags` bits.
 pub const FLAG_VISIBLE: u32 = 1;
 pub const FLAG_GLASS: u32 = 2;
@@ -403,6 +415,7 @@ pub fn all_structs() -> Vec<StructInfo> {
         entry::<PlaneGpu>(),
         entry::<AdamParams>(),
         entry::<McmcParams>(),
+        entry::<DensifyStatsParams>(),
         entry::<LossParams>(),
     ]
 }

@@ -63,9 +63,12 @@ impl ClassicSettings {
 /// Per-Gaussian statistics gathered between densification steps.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct DensifyStats {
-    pub(crate) grad_sum: Vec<f64>,
-    pub(crate) count: Vec<u32>,
-    pub(crate) max_radius: Vec<f64>,
+    /// Per Gaussian, the sum over its observations of its screen-space gradient norm (in NDC).
+    pub grad_sum: Vec<f64>,
+    /// Steps in which a pass saw the Gaussian.
+    pub count: Vec<u32>,
+    /// The largest screen radius in pixels it had.
+    pub max_radius: Vec<f64>,
 }
 
 impl DensifyStats {
@@ -73,7 +76,8 @@ impl DensifyStats {
         Self { grad_sum: vec![0.0; n], count: vec![0; n], max_radius: vec![0.0; n] }
     }
 
-    /// Add one step's screen-space gradients of an image `width x height`: the camera's pass, then
+    /// Add one step's screen-space gradients of an image `width x height` (the twin of the GPU's
+    /// `densify_stats`, which training uses): the camera's pass, then
     /// any mirrored passes (whose images are the camera's). A Gaussian seen in any pass counts as
     /// one observation whose gradient is the sum of its passes' norms, as its mean's gradient is
     /// the sum of theirs: averaged as separate views, the faint reflection would dilute what the

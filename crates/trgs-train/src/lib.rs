@@ -7,6 +7,7 @@ pub mod adam;
 pub mod checkpoint;
 pub mod data;
 pub mod densify;
+pub mod densify_stats;
 pub mod eval;
 pub mod exr_layers;
 pub mod init;

@@ -5,8 +5,9 @@ use crate::adam::{Adam, AdamMoments};
 use crate::checkpoint::{Checkpoint, PlaneMoments};
 use crate::data::View;
 use crate::densify::{
-    ClassicSettings, DensifyReport, DensifyStats, TrainState, cap_opacity_logits, densify_and_prune,
+    ClassicSettings, DensifyReport, TrainState, cap_opacity_logits, densify_and_prune,
 };
+use crate::densify_stats::GpuDensifyStats;
 use crate::losses::{GpuTarget, LossKernels, LossLayers, LossSettings};
 use crate::mcmc::{McmcKernels, McmcSettings, relocate_and_grow};
 use crate::perturb::{perturb_opacities, seen_through_planes};
@@ -101,7 +102,7 @@ pub struct Trainer {
     /// The scene extent (scales the position and plane-centre rates).
     pub extent: f64,
     /// Classic densification, when on, and its statistics since the last densification.
-    densify: Option<(ClassicSettings, DensifyStats)>,
+    densify: Option<(ClassicSettings, GpuDensifyStats)>,
     /// MCMC densification, when on (instead of classic), with its GPU stages.
     mcmc: Option<(McmcSettings, McmcKernels)>,
     rng: trgs_core::rng::Rng,
@@ -161,7 +162,10 @@ impl Trainer {
         t.rng = trgs_core::rng::Rng::from_state(ck.rng_state);
         if let Some(d) = densify {
             let n = ck.state.gaussians.len();
-            let stats = ck.densify_stats.clone().unwrap_or_else(|| DensifyStats::new(n));
+            let stats = match &ck.densify_stats {
+                Some(s) => GpuDensifyStats::from_stats(ctx, s),
+                None => GpuDensifyStats::new(ctx, n),
+            };
             t.densify = Some((d, stats));
         }
         Ok(t)
@@ -174,7 +178,7 @@ impl Trainer {
             state: self.read_state(),
             planes: self.scene.planes().to_vec(),
             plane_moments: self.plane_moments.clone(),
-            densify_stats: self.densify.as_ref().map(|(_, s)| s.clone()),
+            densify_stats: self.densify.as_ref().map(|(_, s)| s.read(&self.ctx)),
             rng_state: self.rng.state(),
             extra,
         }
@@ -209,7 +213,8 @@ impl Trainer {
 
     /// Densify with `settings` from now on.
     pub fn enable_densification(&mut self, settings: ClassicSettings) {
-        self.densify = Some((settings, DensifyStats::new(self.scene.len() as usize)));
+        let stats = GpuDensifyStats::new(&self.ctx, self.scene.len() as usize);
+        self.densify = Some((settings, stats));
     }
 
     /// Densify with MCMC (relocation, growth up to the cap, noise, regularisers) from now on,
@@ -243,7 +248,7 @@ impl Trainer {
             .map(|(a, name)| AdamMoments::from_values(&self.ctx, name, &state.m[a], &state.v[a]))
             .collect();
         if let Some((_, stats)) = &mut self.densify {
-            *stats = DensifyStats::new(state.gaussians.len());
+            stats.reset(&self.ctx, state.gaussians.len());
         }
         Ok(())
     }
@@ -269,7 +274,7 @@ impl Trainer {
         let t = self.step;
         let mut report = None;
         if t > settings.from && t < settings.until && t.is_multiple_of(settings.every) {
-            let (settings, stats) = (settings.clone(), stats.clone());
+            let (settings, stats) = (settings.clone(), stats.read(&self.ctx));
             let state = self.read_state();
             let prune_large = t > settings.opacity_reset_every;
             let (next, r) = densify_and_prune(
@@ -449,22 +454,14 @@ impl Trainer {
             let seed = (self.settings.seed as u32).wrapping_mul(0x9e37_79b9) ^ t;
             kernels.record_noise(ctx, &mut rec, &self.scene, settings, &rates[0], seed);
         }
-        if let Some((settings, stats)) = &mut self.densify
+        if let Some((settings, stats)) = &self.densify
             && t <= settings.until
         {
             // The camera's pass, and in the joint stage each plane's mirrored pass too (see
             // `DensifyStats::add`). In stage 2 the reflection's gradient does not reach the
             // Gaussians: its passes hold zeros.
             let views = if stage == Stage::Joint { self.frame.views().len() } else { 1 };
-            let passes: Vec<_> = (0..views)
-                .map(|vi| {
-                    (
-                        self.frame.read_projected(ctx, vi).unwrap_or_default(),
-                        g.read_projected_grads(ctx, vi).unwrap_or_default(),
-                    )
-                })
-                .collect();
-            stats.add(&passes, self.frame.width(), self.frame.height());
+            stats.record_add(ctx, &mut rec, &self.frame, &g, views);
         }
         rec.submit_and_wait(ctx);
         self.step_planes(&g.planes, t)?;

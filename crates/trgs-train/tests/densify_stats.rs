@@ -1,0 +1,137 @@
+//! Stage `densify_stats` (the GPU's densification statistics) against its twin
+//! `DensifyStats::add`, on a real frame and backward: a scene with two planes, so that the
+//! camera's pass and two mirrored passes add to one step, over two steps; then the round trip
+//! through a checkpoint's statistics and the reset after an edit.
+use trgs_core::Image;
+use trgs_core::fixtures::{SceneSpec, random_scene};
+use trgs_core::reference::{FrameGrads, PlaneLayerGrads};
+use trgs_core::rng::Rng;
+use trgs_core::scene::Gaussians;
+use trgs_render::gpu::Recorder;
+use trgs_render::{
+    BackwardOptions, DeviceOptions, Frame, GpuContext, GpuScene, Gradients, LayerGrads,
+    RenderOptions, Renderer,
+};
+use trgs_train::densify::DensifyStats;
+use trgs_train::densify_stats::GpuDensifyStats;
+
+fn random_image(rng: &mut Rng, w: u32, h: u32, channels: u32) -> Image<f64> {
+    let mut im = Image::new(w, h, channels);
+    for v in &mut im.data {
+        *v = rng.range(-1.0, 1.0);
+    }
+    im
+}
+
+/// A frame of a two-plane scene and its backward from random upstream gradients.
+fn frame_and_grads(ctx: &GpuContext) -> (Frame, Gradients) {
+    let spec = SceneSpec {
+        seed: 71,
+        gaussians: 800,
+        planes: 2,
+        width: 96,
+        height: 72,
+        view_angle_deg: 30.0,
+        sh_degree: 1,
+        glass_fraction: 0.1,
+    };
+    let scene = random_scene(&spec);
+    let g32: Gaussians<f32> = scene.gaussians.cast();
+    let gpu_scene = GpuScene::upload(ctx, &g32, &scene.planes).expect("valid scene");
+    let renderer = Renderer::new(ctx);
+    let options = RenderOptions { depth_variance: true, ..Default::default() };
+    let mut frame = renderer.render(&gpu_scene, &scene.camera, &options).expect("render");
+    assert_eq!(frame.views().len(), 3, "the camera's pass and two mirrored passes");
+    let (w, h) = (spec.width, spec.height);
+    let mut rng = Rng::new(5);
+    let mut im = |c| random_image(&mut rng, w, h, c);
+    let grads = FrameGrads {
+        color: im(3),
+        transmission: im(3),
+        depth: im(1),
+        depth_variance: im(1),
+        mask: im(1),
+        alpha: im(1),
+        strength_raw: im(1),
+        strength: im(1),
+        reflection: im(3),
+        planes: (0..2).map(|_| PlaneLayerGrads { raw_color: im(3), intensity: im(1) }).collect(),
+    };
+    let layer_grads = LayerGrads::upload(ctx, &frame, &grads).expect("finite gradients");
+    let out = renderer
+        .backward(&gpu_scene, &mut frame, &layer_grads, &BackwardOptions::default())
+        .expect("backward");
+    (frame, out)
+}
+
+#[test]
+fn gpu_densify_stats_match_twin() {
+    let ctx = GpuContext::with_options(&DeviceOptions {
+        poison_fresh_buffers: true,
+        ..Default::default()
+    })
+    .expect("adapter");
+    let (frame, grads) = frame_and_grads(&ctx);
+    let n = frame.gaussian_count() as usize;
+    let passes: Vec<_> = (0..frame.views().len())
+        .map(|vi| {
+            (
+                frame.read_projected(&ctx, vi).expect("view"),
+                grads.read_projected_grads(&ctx, vi).expect("view"),
+            )
+        })
+        .collect();
+    for views in [1, 3] {
+        let gpu = GpuDensifyStats::new(&ctx, n);
+        let mut twin = DensifyStats::new(n);
+        for _ in 0..2 {
+            let mut rec = Recorder::new(&ctx, "test.densify_stats", false);
+            gpu.record_add(&ctx, &mut rec, &frame, &grads, views);
+            rec.submit_and_wait(&ctx);
+            twin.add(&passes[..views], frame.width(), frame.height());
+        }
+        let got = gpu.read(&ctx);
+        assert_eq!(got.count, twin.count, "{views} passes: observations");
+        assert!(twin.count.contains(&2), "{views} passes: some Gaussians seen");
+        assert_eq!(got.max_radius, twin.max_radius, "{views} passes: radii");
+        let scale = twin.grad_sum.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!(scale > 0.0, "{views} passes: gradients");
+        for (i, (a, b)) in got.grad_sum.iter().zip(&twin.grad_sum).enumerate() {
+            assert!((a - b).abs() <= 1e-6 * scale + 1e-6 * b.abs(), "{views} passes, {i}: {a} {b}");
+        }
+        if views == 3 {
+            // The mirrored passes add gradients to Gaussians the camera's pass saw too.
+            let camera_only = {
+                let mut s = DensifyStats::new(n);
+                s.add(&passes[..1], frame.width(), frame.height());
+                s.add(&passes[..1], frame.width(), frame.height());
+                s
+            };
+            assert!(twin.grad_sum.iter().zip(&camera_only.grad_sum).any(|(a, b)| a > b));
+        }
+    }
+}
+
+#[test]
+fn densify_stats_survive_a_checkpoint_and_reset() {
+    let ctx = GpuContext::with_options(&DeviceOptions {
+        poison_fresh_buffers: true,
+        ..Default::default()
+    })
+    .expect("adapter");
+    let stats = DensifyStats {
+        grad_sum: vec![0.25, 0.0, 3.5e-4],
+        count: vec![3, 0, 17],
+        max_radius: vec![2.5, 0.0, 40.0],
+    };
+    let mut gpu = GpuDensifyStats::from_stats(&ctx, &stats);
+    assert_eq!(
+        gpu.read(&ctx),
+        DensifyStats {
+            grad_sum: stats.grad_sum.iter().map(|&v| f64::from(v as f32)).collect(),
+            ..stats.clone()
+        }
+    );
+    gpu.reset(&ctx, 5);
+    assert_eq!(gpu.read(&ctx), DensifyStats::new(5));
+}
