@@ -95,6 +95,27 @@ pub fn read_buffer<T: bytemuck::Pod>(
     map_and_read(ctx, &staging, bytes as usize)
 }
 
+/// The longest the CPU waits for submitted GPU work before it gives up: far beyond any frame or
+/// training step (a 500k-Gaussian frame takes about 1 s on a 2-core lavapipe), so that a hung
+/// kernel or a device that stopped answering ends in a panic that says so instead of a process
+/// that never returns.
+pub const GPU_WAIT_LIMIT: std::time::Duration = std::time::Duration::from_secs(300);
+
+/// Block until the GPU has finished everything submitted so far, at most `GPU_WAIT_LIMIT`;
+/// `what` names the wait in the panic when the device is lost or does not finish in time.
+pub fn wait_for_gpu(ctx: &GpuContext, what: &str) {
+    let wait = wgpu::PollType::Wait { submission_index: None, timeout: Some(GPU_WAIT_LIMIT) };
+    match ctx.device.poll(wait) {
+        Ok(_) => {}
+        Err(wgpu::PollError::Timeout) => panic!(
+            "trgs: the GPU did not finish {what} within {} s (a hung kernel or a device that \
+             stopped answering)",
+            GPU_WAIT_LIMIT.as_secs()
+        ),
+        Err(e) => panic!("trgs: waiting for the GPU to finish {what} failed: {e}"),
+    }
+}
+
 /// Map a MAP_READ buffer whose copy has been submitted, and read its first `bytes` bytes.
 pub fn map_and_read<T: bytemuck::Pod>(
     ctx: &GpuContext,
@@ -108,9 +129,7 @@ pub fn map_and_read<T: bytemuck::Pod>(
     });
     // A lost device (or a buffer that could not be allocated) surfaces here as a failed
     // mapping; the reads return plain values, so stop loudly and say what failed.
-    if let Err(e) = ctx.device.poll(wgpu::PollType::wait_indefinitely()) {
-        panic!("trgs: waiting for the GPU to finish before reading back failed: {e}");
-    }
+    wait_for_gpu(ctx, "its work before a readback");
     match rx.try_recv() {
         Ok(Ok(())) => {}
         Ok(Err(e)) => panic!(
@@ -336,8 +355,7 @@ impl Recorder {
                 }
             }
         } else {
-            #[allow(clippy::expect_used)]
-            ctx.device.poll(wgpu::PollType::wait_indefinitely()).expect("GPU device lost");
+            wait_for_gpu(ctx, "a recorded batch of passes");
         }
     }
 

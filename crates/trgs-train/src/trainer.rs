@@ -553,7 +553,7 @@ impl PhaseClock {
 
     /// Milliseconds since the previous lap.
     fn lap(&mut self, ctx: &GpuContext) -> f64 {
-        let _ = ctx.device.poll(wgpu::PollType::wait_indefinitely());
+        trgs_render::gpu::wait_for_gpu(ctx, "a training phase");
         let now = std::time::Instant::now();
         let ms = 1e3 * (now - self.last).as_secs_f64();
         self.last = now;
