@@ -3,9 +3,8 @@
 //! angle including edge-on and behind the camera) and random finite upstream gradients up to
 //! 1e3 never produce a NaN or Inf gradient; non-finite inputs are rejected with an error before
 //! any kernel runs.
-use trgs_core::Image;
 use trgs_core::fixtures::{Scene, random_scene};
-use trgs_core::reference::{FrameGrads, PlaneLayerGrads};
+use trgs_core::reference::FrameGrads;
 use trgs_core::rng::Rng;
 use trgs_core::scene::Gaussians;
 use trgs_render::{
@@ -50,28 +49,12 @@ fn wild_scene(seed: u64, width: u32, height: u32) -> Scene {
 }
 
 fn random_grads(rng: &mut Rng, w: u32, h: u32, planes: usize) -> FrameGrads {
-    let mut im = |c: u32| {
+    FrameGrads::filled(w, h, planes, |im| {
         let scale = 10f64.powf(rng.range(-3.0, 3.0));
-        let mut i = Image::new(w, h, c);
-        for v in &mut i.data {
+        for v in &mut im.data {
             *v = scale * rng.range(-1.0, 1.0);
         }
-        i
-    };
-    FrameGrads {
-        color: im(3),
-        transmission: im(3),
-        depth: im(1),
-        depth_variance: im(1),
-        mask: im(1),
-        alpha: im(1),
-        strength_raw: im(1),
-        strength: im(1),
-        reflection: im(3),
-        planes: (0..planes)
-            .map(|_| PlaneLayerGrads { raw_color: im(3), intensity: im(1) })
-            .collect(),
-    }
+    })
 }
 
 fn all_finite(g: &Gaussians<f32>) -> bool {

@@ -15,8 +15,7 @@
 use trgs_core::Image;
 use trgs_core::fixtures::{SceneSpec, random_scene};
 use trgs_core::reference::{
-    self, FrameGrads, MIN_ALPHA, PixelState, PlaneLayerGrads, ReflectionModel, RenderSettings,
-    compose_bwd,
+    self, FrameGrads, MIN_ALPHA, PixelState, ReflectionModel, RenderSettings, compose_bwd,
 };
 use trgs_core::rng::Rng;
 use trgs_core::scene::Gaussians;
@@ -35,14 +34,6 @@ fn contexts() -> Vec<(&'static str, GpuContext)> {
         .into_iter()
         .map(|(n, o)| (n, GpuContext::with_options(&o).unwrap_or_else(|e| panic!("{e}"))))
         .collect()
-}
-
-fn random_image(rng: &mut Rng, w: u32, h: u32, channels: u32) -> Image<f64> {
-    let mut im = Image::new(w, h, channels);
-    for v in &mut im.data {
-        *v = rng.range(-1.0, 1.0);
-    }
-    im
 }
 
 /// Pixels of up to four single- or multi-channel images packed as vec4 per pixel.
@@ -204,27 +195,14 @@ fn compose_bwd_ablation_models() {
     }
 }
 
-/// Random upstream gradients for every layer of `frame`.
+/// Random upstream gradients in [-1, 1] for every layer of `frame`.
 fn random_grads(seed: u64, frame: &reference::Frame, planes: usize) -> FrameGrads {
-    let (w, h) = (frame.width(), frame.height());
     let mut rng = Rng::new(seed);
-    FrameGrads {
-        color: random_image(&mut rng, w, h, 3),
-        transmission: random_image(&mut rng, w, h, 3),
-        depth: random_image(&mut rng, w, h, 1),
-        depth_variance: random_image(&mut rng, w, h, 1),
-        mask: random_image(&mut rng, w, h, 1),
-        alpha: random_image(&mut rng, w, h, 1),
-        strength_raw: random_image(&mut rng, w, h, 1),
-        strength: random_image(&mut rng, w, h, 1),
-        reflection: random_image(&mut rng, w, h, 3),
-        planes: (0..planes)
-            .map(|_| PlaneLayerGrads {
-                raw_color: random_image(&mut rng, w, h, 3),
-                intensity: random_image(&mut rng, w, h, 1),
-            })
-            .collect(),
-    }
+    FrameGrads::filled(frame.width(), frame.height(), planes, |im| {
+        for v in &mut im.data {
+            *v = rng.range(-1.0, 1.0);
+        }
+    })
 }
 
 /// The acceptance rule: every value within 1e-3 of the largest |value| of its attribute (its

@@ -2,9 +2,8 @@
 //! `DensifyStats::add`, on a real frame and backward: a scene with two planes, so that the
 //! camera's pass and two mirrored passes add to one step, over two steps; then the round trip
 //! through a checkpoint's statistics and the reset after an edit.
-use trgs_core::Image;
 use trgs_core::fixtures::{SceneSpec, random_scene};
-use trgs_core::reference::{FrameGrads, PlaneLayerGrads};
+use trgs_core::reference::FrameGrads;
 use trgs_core::rng::Rng;
 use trgs_core::scene::Gaussians;
 use trgs_render::gpu::Recorder;
@@ -14,14 +13,6 @@ use trgs_render::{
 };
 use trgs_train::densify::DensifyStats;
 use trgs_train::densify_stats::GpuDensifyStats;
-
-fn random_image(rng: &mut Rng, w: u32, h: u32, channels: u32) -> Image<f64> {
-    let mut im = Image::new(w, h, channels);
-    for v in &mut im.data {
-        *v = rng.range(-1.0, 1.0);
-    }
-    im
-}
 
 /// A frame of a two-plane scene and its backward from random upstream gradients.
 fn frame_and_grads(ctx: &GpuContext) -> (Frame, Gradients) {
@@ -44,19 +35,11 @@ fn frame_and_grads(ctx: &GpuContext) -> (Frame, Gradients) {
     assert_eq!(frame.views().len(), 3, "the camera's pass and two mirrored passes");
     let (w, h) = (spec.width, spec.height);
     let mut rng = Rng::new(5);
-    let mut im = |c| random_image(&mut rng, w, h, c);
-    let grads = FrameGrads {
-        color: im(3),
-        transmission: im(3),
-        depth: im(1),
-        depth_variance: im(1),
-        mask: im(1),
-        alpha: im(1),
-        strength_raw: im(1),
-        strength: im(1),
-        reflection: im(3),
-        planes: (0..2).map(|_| PlaneLayerGrads { raw_color: im(3), intensity: im(1) }).collect(),
-    };
+    let grads = FrameGrads::filled(w, h, 2, |im| {
+        for v in &mut im.data {
+            *v = rng.range(-1.0, 1.0);
+        }
+    });
     let layer_grads = LayerGrads::upload(ctx, &frame, &grads).expect("finite gradients");
     let out = renderer
         .backward(&gpu_scene, &mut frame, &layer_grads, &BackwardOptions::default())

@@ -117,6 +117,36 @@ impl FrameGrads {
         }
     }
 
+    /// Gradients for a `width` x `height` frame with `planes` planes, each layer filled by `fill`
+    /// in the order of the fields, the planes' layers last (C_raw, then A, plane by plane):
+    /// random or synthetic upstream gradients for tests and benchmarks.
+    pub fn filled(
+        width: u32,
+        height: u32,
+        planes: usize,
+        mut fill: impl FnMut(&mut Image<f64>),
+    ) -> Self {
+        let mut g = Self::zeros(width, height, planes);
+        for layer in [
+            &mut g.color,
+            &mut g.transmission,
+            &mut g.depth,
+            &mut g.depth_variance,
+            &mut g.mask,
+            &mut g.alpha,
+            &mut g.strength_raw,
+            &mut g.strength,
+            &mut g.reflection,
+        ] {
+            fill(layer);
+        }
+        for p in &mut g.planes {
+            fill(&mut p.raw_color);
+            fill(&mut p.intensity);
+        }
+        g
+    }
+
     /// All-zero gradients shaped like `frame`.
     pub fn zeros_like(frame: &Frame) -> Self {
         Self::zeros(frame.width(), frame.height(), frame.planes.len())

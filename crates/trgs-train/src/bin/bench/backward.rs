@@ -3,7 +3,7 @@ use crate::{median, room_100k, upload, warm_up};
 use anyhow::Result;
 use std::time::Instant;
 use trgs_core::fixtures::RoomDensity;
-use trgs_core::reference::{FrameGrads, PlaneLayerGrads};
+use trgs_core::reference::FrameGrads;
 use trgs_render::{BackwardOptions, Frame, GpuContext, LayerGrads, RenderOptions, Renderer};
 
 /// Forward and backward of one training-like step on one scene (256x192, 100k Gaussians).
@@ -23,30 +23,14 @@ pub struct BackwardRow {
 /// on all of them, so that no adjoint stage can skip work).
 fn pseudo_grads(w: u32, h: u32, planes: usize) -> FrameGrads {
     let mut state = 0x9e37_79b9_7f4a_7c15u64;
-    let mut image = |channels: u32| {
-        let mut im = trgs_core::Image::new(w, h, channels);
+    FrameGrads::filled(w, h, planes, |im| {
         for v in &mut im.data {
             state = state
                 .wrapping_mul(6_364_136_223_846_793_005)
                 .wrapping_add(1_442_695_040_888_963_407);
             *v = ((state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0;
         }
-        im
-    };
-    FrameGrads {
-        color: image(3),
-        transmission: image(3),
-        depth: image(1),
-        depth_variance: image(1),
-        mask: image(1),
-        alpha: image(1),
-        strength_raw: image(1),
-        strength: image(1),
-        reflection: image(3),
-        planes: (0..planes)
-            .map(|_| PlaneLayerGrads { raw_color: image(3), intensity: image(1) })
-            .collect(),
-    }
+    })
 }
 
 pub fn bench_backward(
