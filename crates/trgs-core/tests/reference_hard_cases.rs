@@ -27,19 +27,7 @@ fn render_finite(scene: &Scene) -> Frame {
     ] {
         assert!(all_finite(img), "layer {name} is not finite");
     }
-    let mut g = FrameGrads::zeros_like(&f);
-    for img in [
-        &mut g.color,
-        &mut g.transmission,
-        &mut g.depth,
-        &mut g.depth_variance,
-        &mut g.mask,
-        &mut g.alpha,
-        &mut g.strength,
-        &mut g.reflection,
-    ] {
-        img.data.iter_mut().for_each(|v| *v = 1.0);
-    }
+    let g = FrameGrads::filled(f.width(), f.height(), f.planes.len(), |img| img.data.fill(1.0));
     let gr = backward(
         &scene.gaussians,
         &scene.planes,
