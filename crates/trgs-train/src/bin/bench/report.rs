@@ -58,9 +58,9 @@ pub fn report(
         let _ = writeln!(s, "### Forward\n");
         let _ = writeln!(
             s,
-            "| room | image | Gaussians | planes | wall ms | GPU ms | vs no plane | keys | frame memory MiB |"
+            "| room | image | Gaussians | planes | wall ms | frames/s | GPU ms | vs no plane | keys | frame memory MiB |"
         );
-        let _ = writeln!(s, "|---|---|---:|---:|---:|---:|---:|---:|---:|");
+        let _ = writeln!(s, "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|");
         for r in rows {
             let base = rows
                 .iter()
@@ -73,13 +73,14 @@ pub fn report(
                 .map_or(f64::NAN, |b| b.wall_ms);
             let _ = writeln!(
                 s,
-                "| {} | {}x{} | {} | {} | {:.1} | {:.1} | {:.2}x | {} | {:.1} |",
+                "| {} | {}x{} | {} | {} | {:.1} | {:.0} | {:.1} | {:.2}x | {} | {:.1} |",
                 density_name(r.density),
                 r.width,
                 r.height,
                 r.gaussians,
                 r.planes,
                 r.wall_ms,
+                1e3 / r.wall_ms,
                 r.gpu_ms,
                 r.wall_ms / base,
                 r.keys,
