@@ -43,15 +43,26 @@ pub fn storage(ctx: &GpuContext, label: &str, size: u64) -> wgpu::Buffer {
     })
 }
 
-/// A storage buffer holding `data` (padded to the minimum size).
+/// A storage buffer holding `data` (padded to the minimum size with zeros). The data is copied
+/// once, into the buffer mapped at creation: a padded copy made first doubled the host traffic
+/// of every upload, e.g. the whole state after each densification.
 pub fn storage_init<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, data: &[T]) -> wgpu::Buffer {
-    let mut bytes = bytemuck::cast_slice::<T, u8>(data).to_vec();
-    bytes.resize(padded(bytes.len() as u64) as usize, 0);
-    ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+    let bytes = bytemuck::cast_slice::<T, u8>(data);
+    let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
-        contents: &bytes,
+        size: padded(bytes.len() as u64),
         usage: STORAGE,
-    })
+        mapped_at_creation: true,
+    });
+    {
+        // A buffer mapped at creation is mapped whole, so its range is always available.
+        #[allow(clippy::expect_used)]
+        let mut view = buffer.slice(..).get_mapped_range_mut().expect("mapped at creation");
+        view.slice(..bytes.len()).copy_from_slice(bytes);
+        view.slice(bytes.len()..).fill(0);
+    }
+    buffer.unmap();
+    buffer
 }
 
 /// A dispatch's parameter block holding `value`, bound as `var<storage, read>`.
