@@ -74,6 +74,9 @@ impl GpuDensifyStats {
         views: usize,
     ) {
         let count = self.len as u32;
+        // A training step renders the current set before it adds, so the frame always matches;
+        // a frame of another set would index other Gaussians' records.
+        debug_assert_eq!(frame.gaussian_count(), count, "statistics of another Gaussian set");
         if count == 0 || frame.gaussian_count() != count {
             return;
         }
