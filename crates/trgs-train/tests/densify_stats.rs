@@ -14,6 +14,11 @@ use trgs_render::{
 use trgs_train::densify::DensifyStats;
 use trgs_train::densify_stats::GpuDensifyStats;
 
+fn ctx() -> GpuContext {
+    GpuContext::with_options(&DeviceOptions { poison_fresh_buffers: true, ..Default::default() })
+        .expect("adapter")
+}
+
 /// A frame of a two-plane scene and its backward from random upstream gradients.
 fn frame_and_grads(ctx: &GpuContext) -> (Frame, Gradients) {
     let spec = SceneSpec {
@@ -49,11 +54,7 @@ fn frame_and_grads(ctx: &GpuContext) -> (Frame, Gradients) {
 
 #[test]
 fn gpu_densify_stats_match_twin() {
-    let ctx = GpuContext::with_options(&DeviceOptions {
-        poison_fresh_buffers: true,
-        ..Default::default()
-    })
-    .expect("adapter");
+    let ctx = ctx();
     let (frame, grads) = frame_and_grads(&ctx);
     let n = frame.gaussian_count() as usize;
     let passes: Vec<_> = (0..frame.views().len())
@@ -97,11 +98,7 @@ fn gpu_densify_stats_match_twin() {
 
 #[test]
 fn densify_stats_survive_a_checkpoint_and_reset() {
-    let ctx = GpuContext::with_options(&DeviceOptions {
-        poison_fresh_buffers: true,
-        ..Default::default()
-    })
-    .expect("adapter");
+    let ctx = ctx();
     let stats = DensifyStats {
         grad_sum: vec![0.25, 0.0, 3.5e-4],
         count: vec![3, 0, 17],
