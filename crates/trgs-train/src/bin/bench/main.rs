@@ -125,7 +125,7 @@ fn bench_config(
     let (scene, camera) = upload(ctx, spec)?;
     let mut frame = Frame::default();
     let options = RenderOptions::default();
-    warm_up(|| renderer.render_into(&scene, &camera, &options, &mut frame).map(drop))?;
+    warm_up(|| renderer.render_into(&scene, &camera, &options, &mut frame))?;
     let mut times = Vec::with_capacity(reps);
     for _ in 0..reps {
         let t = Instant::now();
