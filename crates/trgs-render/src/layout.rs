@@ -327,6 +327,25 @@ gpu_struct! {
     }
 }
 
+gpu_struct! {
+    /// Parameters of `gather_rows`: `count` output rows of `width` words each, from the source
+    /// rows [`first_source`, `first_source + source_rows`) bound in this dispatch.
+    pub struct GatherParams {
+        pub count: u32,
+        pub width: u32,
+        pub first_source: u32,
+        pub source_rows: u32,
+        /// 1: a source with the GATHER_ZERO bit makes a zero row (Adam moments that restart).
+        pub honour_zero: u32,
+        pub pad0: u32,
+        pub pad1: u32,
+        pub pad2: u32,
+    }
+}
+
+/// `gather_rows`' source-index bit for an output row that starts from zero (when honoured).
+pub const GATHER_ZERO: u32 = 1 << 31;
+
 /// `ProjectedGaussian::flags` bits.
 pub const FLAG_VISIBLE: u32 = 1;
 pub const FLAG_GLASS: u32 = 2;
@@ -416,6 +435,7 @@ pub fn all_structs() -> Vec<StructInfo> {
         entry::<AdamParams>(),
         entry::<McmcParams>(),
         entry::<DensifyStatsParams>(),
+        entry::<GatherParams>(),
         entry::<LossParams>(),
     ]
 }
@@ -460,6 +480,7 @@ pub fn prelude() -> String {
         ("MODEL_NO_FRESNEL", MODEL_NO_FRESNEL),
         ("MODEL_NO_INTENSITY", MODEL_NO_INTENSITY),
         ("LOSS_STRIP", LOSS_STRIP),
+        ("GATHER_ZERO", GATHER_ZERO),
     ];
     for (name, v) in consts_u32 {
         s.push_str(&format!("const {name}: u32 = {v}u;\n"));

@@ -77,6 +77,42 @@ impl GpuScene {
         })
     }
 
+    /// The scene rebuilt with `len` Gaussians: `rebuild(current buffer, words per Gaussian,
+    /// label)` makes each new attribute buffer from the current one, the seven of [`ATTRIBUTES`]
+    /// and then the populations (one word each). The planes and binding ranges stay. Densification
+    /// gathers rows this way on the GPU; whoever rebuilds keeps every attribute valid (finite, no
+    /// zero quaternion), as [`GpuScene::upload`] checks.
+    pub fn rebuilt(
+        &self,
+        len: u32,
+        mut rebuild: impl FnMut(&wgpu::Buffer, u32, &'static str) -> wgpu::Buffer,
+    ) -> GpuScene {
+        let w = self.attribute_widths();
+        GpuScene {
+            len,
+            sh_degree: self.sh_degree,
+            sh_coeffs: self.sh_coeffs,
+            means: rebuild(&self.means, w[0], "trgs.scene.means"),
+            rotations: rebuild(&self.rotations, w[1], "trgs.scene.rotations"),
+            log_scales: rebuild(&self.log_scales, w[2], "trgs.scene.log_scales"),
+            opacity_logits: rebuild(&self.opacity_logits, w[3], "trgs.scene.opacity_logits"),
+            sh: rebuild(&self.sh, w[4], "trgs.scene.sh"),
+            mask_logits: rebuild(&self.mask_logits, w[5], "trgs.scene.mask_logits"),
+            log_reflections: rebuild(&self.log_reflections, w[6], "trgs.scene.log_reflections"),
+            populations: rebuild(&self.populations, 1, "trgs.scene.populations"),
+            planes: self.planes.clone(),
+            chunk: self.chunk,
+        }
+    }
+
+    /// Each Gaussian's population, read back.
+    pub fn read_populations(&self, ctx: &GpuContext) -> Vec<trgs_core::scene::Population> {
+        let pops: Vec<u32> = gpu::read_buffer(ctx, &self.populations, 0, self.len as usize);
+        pops.into_iter()
+            .map(|p| trgs_core::scene::Population::from_u8(p as u8).unwrap_or_default())
+            .collect()
+    }
+
     pub fn len(&self) -> u32 {
         self.len
     }
@@ -132,11 +168,7 @@ impl GpuScene {
     /// Read the Gaussians back (after training steps changed them on the GPU).
     pub fn read(&self, ctx: &GpuContext) -> Gaussians<f32> {
         let mut g = read_attributes(ctx, self.parameters(), self.len as usize, self.sh_degree);
-        let pops: Vec<u32> = gpu::read_buffer(ctx, &self.populations, 0, self.len as usize);
-        g.populations = pops
-            .into_iter()
-            .map(|p| trgs_core::scene::Population::from_u8(p as u8).unwrap_or_default())
-            .collect();
+        g.populations = self.read_populations(ctx);
         g
     }
 

@@ -1,13 +1,14 @@
 //! Classic 3DGS densification (Kerbl et al. 2023, section 5.2 and the reference code): Gaussians
 //! whose mean moves the image a lot (large average screen-space position gradient) are cloned
 //! when small and split in two when large; transparent, huge or screen-filling ones are pruned;
-//! opacities are reset to at most 0.01 at intervals. Edits run on the CPU over the parameters
-//! and Adam moments read back from the GPU (every `every` steps): survivors keep their moments,
-//! new Gaussians start from zero moments, as in the reference code.
+//! opacities are reset to at most 0.01 at intervals. Every `every` steps the decisions are made
+//! on the CPU from a few attributes read back ([`Geometry`]) into a [`RowPlan`], which the GPU
+//! carries out over every parameter and Adam moment (`gather_rows`): survivors keep their
+//! moments, new Gaussians start from zero moments, as in the reference code.
 use crate::settings::scale_len;
 use glam::{DMat3, DQuat, DVec3};
 use trgs_core::rng::Rng;
-use trgs_core::scene::Gaussians;
+use trgs_core::scene::{Gaussians, Population};
 use trgs_render::layout::{FLAG_VISIBLE, PROJECTED_GRAD_FLOATS, ProjectedGaussian};
 
 /// The schedule and thresholds (3DGS defaults for 30k steps; lengths scale with the run).
@@ -129,7 +130,7 @@ pub struct DensifyReport {
     pub pruned: usize,
 }
 
-pub(crate) fn widths(g: &Gaussians<f32>) -> [usize; 7] {
+pub fn widths(g: &Gaussians<f32>) -> [usize; 7] {
     [3, 4, 3, 1, 3 * g.sh_coeffs(), 1, 1]
 }
 
@@ -161,7 +162,92 @@ pub(crate) fn sigmoid(x: f64) -> f64 {
     1.0 / (1.0 + (-x).exp())
 }
 
-/// One densify-and-prune step (3DGS's `densify_and_prune`).
+/// The attributes densification decides from (classic and MCMC), read back on their own: 15
+/// words per Gaussian, where the parameters and their Adam moments are about 180 at SH degree 3.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Geometry {
+    pub means: Vec<[f32; 3]>,
+    pub rotations: Vec<[f32; 4]>,
+    pub log_scales: Vec<[f32; 3]>,
+    pub opacity_logits: Vec<f32>,
+    pub populations: Vec<Population>,
+}
+
+impl Geometry {
+    pub fn of(g: &Gaussians<f32>) -> Self {
+        Self {
+            means: g.means.clone(),
+            rotations: g.rotations.clone(),
+            log_scales: g.log_scales.clone(),
+            opacity_logits: g.opacity_logits.clone(),
+            populations: g.populations.clone(),
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.opacity_logits.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.opacity_logits.is_empty()
+    }
+}
+
+/// A rebuild of the Gaussian set: output row j is a copy of input row `sources[j].0`, with its
+/// Adam moments when `sources[j].1` and zero moments otherwise; the attributes given here are
+/// replaced whole (e.g. the split children's means and scales). Densification and relocation
+/// plan on the CPU from a [`Geometry`]; the plan runs on the GPU (`gather_rows`), or on the CPU
+/// with [`RowPlan::apply`], its twin.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RowPlan {
+    pub sources: Vec<(usize, bool)>,
+    pub means: Option<Vec<[f32; 3]>>,
+    pub log_scales: Option<Vec<[f32; 3]>>,
+    pub opacity_logits: Option<Vec<f32>>,
+}
+
+impl RowPlan {
+    /// The state this plan makes of `state`, on the CPU.
+    pub fn apply(&self, state: &TrainState) -> TrainState {
+        let mut out = gather(state, &self.sources);
+        let g = &mut out.gaussians;
+        if let Some(v) = &self.means {
+            g.means.clone_from(v);
+        }
+        if let Some(v) = &self.log_scales {
+            g.log_scales.clone_from(v);
+        }
+        if let Some(v) = &self.opacity_logits {
+            g.opacity_logits.clone_from(v);
+        }
+        out
+    }
+
+    /// The attributes given whole, as GPU words by attribute name (`trgs_render::ATTRIBUTES`).
+    pub fn given_words(&self) -> Vec<(&'static str, Vec<u32>)> {
+        let words = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<u32>>();
+        let mut out = Vec::new();
+        if let Some(v) = &self.means {
+            out.push(("means", words(v.as_flattened())));
+        }
+        if let Some(v) = &self.log_scales {
+            out.push(("log_scales", words(v.as_flattened())));
+        }
+        if let Some(v) = &self.opacity_logits {
+            out.push(("opacity_logits", words(v)));
+        }
+        out
+    }
+
+    /// Whether every attribute the plan gives is finite (an upload's check; the gathered rows
+    /// come from a checked set).
+    pub fn given_are_finite(&self) -> bool {
+        self.given_words().iter().all(|(_, w)| w.iter().all(|&b| f32::from_bits(b).is_finite()))
+    }
+}
+
+/// One densify-and-prune step (3DGS's `densify_and_prune`) on the CPU: [`plan_densify`], then
+/// [`RowPlan::apply`].
 pub fn densify_and_prune(
     state: &TrainState,
     stats: &DensifyStats,
@@ -170,7 +256,21 @@ pub fn densify_and_prune(
     prune_large: bool,
     rng: &mut Rng,
 ) -> (TrainState, DensifyReport) {
-    let g = &state.gaussians;
+    let geometry = Geometry::of(&state.gaussians);
+    let (plan, report) = plan_densify(&geometry, stats, settings, extent, prune_large, rng);
+    (plan.apply(state), report)
+}
+
+/// The plan of one densify-and-prune step: survivors, clones and split children, with the
+/// children's means and scales.
+pub fn plan_densify(
+    g: &Geometry,
+    stats: &DensifyStats,
+    settings: &ClassicSettings,
+    extent: f64,
+    prune_large: bool,
+    rng: &mut Rng,
+) -> (RowPlan, DensifyReport) {
     let n = g.len();
     let max_scale = |i: usize| {
         let s = g.log_scales[i];
@@ -231,7 +331,8 @@ pub fn densify_and_prune(
         sources.push((i, false));
         sources.push((i, false));
     }
-    let mut out = gather(state, &sources);
+    let mut means: Vec<[f32; 3]> = sources.iter().map(|&(i, _)| g.means[i]).collect();
+    let mut log_scales: Vec<[f32; 3]> = sources.iter().map(|&(i, _)| g.log_scales[i]).collect();
     // Children: means drawn from the parent's Gaussian, scales divided by 0.8 N (N = 2).
     for (c, &i) in parents.iter().enumerate() {
         let q = g.rotations[i].map(f64::from);
@@ -242,12 +343,13 @@ pub fn densify_and_prune(
             let j = first_child + 2 * c + k;
             let local = DVec3::new(s[0] * rng.normal(), s[1] * rng.normal(), s[2] * rng.normal());
             let p = mean + rot * local;
-            out.gaussians.means[j] = p.to_array().map(|v| v as f32);
-            out.gaussians.log_scales[j] =
-                g.log_scales[i].map(|v| (f64::from(v) - (0.8f64 * 2.0).ln()) as f32);
+            means[j] = p.to_array().map(|v| v as f32);
+            log_scales[j] = g.log_scales[i].map(|v| (f64::from(v) - (0.8f64 * 2.0).ln()) as f32);
         }
     }
-    (out, report)
+    let plan =
+        RowPlan { sources, means: Some(means), log_scales: Some(log_scales), opacity_logits: None };
+    (plan, report)
 }
 
 /// 3DGS's opacity reset of the logits: every opacity becomes at most 0.01.
@@ -261,7 +363,6 @@ pub fn cap_opacity_logits(logits: &mut [f32]) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use trgs_core::scene::Population;
 
     fn state(n: usize) -> TrainState {
         let mut g = Gaussians::<f32>::empty(0);

@@ -10,6 +10,7 @@ pub mod densify;
 pub mod densify_stats;
 pub mod eval;
 pub mod exr_layers;
+pub mod gather_rows;
 pub mod init;
 pub mod losses;
 pub mod mcmc;

@@ -2,7 +2,8 @@
 //! densification selected by `--densify mcmc`:
 //! - every step, the regularisers' gradients (`mcmc_regularise`) before Adam and the exploration
 //!   noise on the means (`mcmc_noise`) after it, both on the GPU;
-//! - every `every` steps of [from, until), on the CPU over the state read back: dead Gaussians
+//! - every `every` steps of [from, until), planned on the CPU from the opacities, scales and
+//!   populations read back and carried out on the GPU (`gather_rows`): dead Gaussians
 //!   (opacity at most `min_opacity`) are moved onto live ones drawn in proportion to their
 //!   opacity, then 5% more Gaussians are added the same way, up to `cap`. A Gaussian that receives
 //!   N - 1 copies and its copies all take the opacity and scale of the paper's Eq. 9, so that the
@@ -10,7 +11,7 @@
 //!
 //! There is no pruning and no opacity reset. Glass Gaussians are never moved, sampled or noised:
 //! they belong to their plane.
-use crate::densify::{TrainState, gather, sigmoid, widths};
+use crate::densify::{Geometry, RowPlan, TrainState, sigmoid};
 use crate::settings::scale_len;
 use trgs_core::reference::AdamRate;
 use trgs_core::rng::Rng;
@@ -24,8 +25,8 @@ use trgs_render::{GpuContext, GpuScene, SceneGradBuffers};
 /// `N_max - 1` with its binomial table of `N_max = 51` rows.
 pub const MAX_SHARE: usize = 50;
 
-/// The shortest relocation interval in steps (each relocation reads the state back and rebuilds
-/// it on the CPU: about 100-200 ms at 30k Gaussians on lavapipe).
+/// The shortest relocation interval in steps (each relocation reads a few attributes back, plans
+/// on the CPU and rebuilds every buffer: about 80 ms at 100k Gaussians on lavapipe).
 pub const MIN_RELOCATION_INTERVAL: u32 = 5;
 
 /// 3DGS-MCMC's opacity learning rate (its `arguments/__init__.py`), twice 3DGS's 0.025: its
@@ -133,21 +134,43 @@ fn sample_by_weight(
         .collect()
 }
 
-/// Give each source of `counts` (copies it receives) its share's opacity and scale, and zero its
-/// moments.
-fn apply_shares(state: &mut TrainState, counts: &[(usize, usize)], min_opacity: f64) {
-    let w = widths(&state.gaussians);
+/// Give each source of `counts` (copies it receives) its share's opacity and scale, and mark its
+/// moments to restart.
+fn apply_shares(rows: &mut Rows, counts: &[(usize, usize)], min_opacity: f64) {
     for &(src, copies) in counts {
-        let g = &mut state.gaussians;
-        let o = sigmoid(f64::from(g.opacity_logits[src]));
+        let o = sigmoid(f64::from(rows.opacity_logits[src]));
         let (new_o, factor) = relocation(o, copies + 1, min_opacity);
-        g.opacity_logits[src] = logit(new_o);
+        rows.opacity_logits[src] = logit(new_o);
         let ln_factor = factor.ln() as f32;
-        g.log_scales[src] = g.log_scales[src].map(|s| s + ln_factor);
-        for a in 0..w.len() {
-            state.m[a][src * w[a]..(src + 1) * w[a]].fill(0.0);
-            state.v[a][src * w[a]..(src + 1) * w[a]].fill(0.0);
-        }
+        rows.log_scales[src] = rows.log_scales[src].map(|s| s + ln_factor);
+        rows.sources[src].1 = false;
+    }
+}
+
+/// The relocation's working rows: per row, the input Gaussian it copies and whether its moments
+/// stay, with the attributes relocation changes.
+struct Rows {
+    sources: Vec<(usize, bool)>,
+    opacity_logits: Vec<f32>,
+    log_scales: Vec<[f32; 3]>,
+    populations: Vec<Population>,
+}
+
+impl Rows {
+    /// Row `to` becomes a copy of row `from`, with restarting moments.
+    fn copy(&mut self, to: usize, from: usize) {
+        self.sources[to] = (self.sources[from].0, false);
+        self.opacity_logits[to] = self.opacity_logits[from];
+        self.log_scales[to] = self.log_scales[from];
+        self.populations[to] = self.populations[from];
+    }
+
+    fn opacities(&self) -> Vec<f64> {
+        self.opacity_logits.iter().map(|&l| sigmoid(f64::from(l))).collect()
+    }
+
+    fn primary(&self, i: usize) -> bool {
+        self.populations[i] == Population::Primary
     }
 }
 
@@ -172,38 +195,58 @@ pub fn relocate_and_grow(
     settings: &McmcSettings,
     rng: &mut Rng,
 ) -> (TrainState, McmcReport) {
-    let mut out = state.clone();
-    let n = state.gaussians.len();
-    let primary =
-        |g: &trgs_core::scene::Gaussians<f32>, i: usize| g.populations[i] == Population::Primary;
-    let opacities = |g: &trgs_core::scene::Gaussians<f32>| -> Vec<f64> {
-        g.opacity_logits.iter().map(|&l| sigmoid(f64::from(l))).collect()
+    let (plan, report) = plan_relocation(&Geometry::of(&state.gaussians), settings, rng);
+    (plan.apply(state), report)
+}
+
+/// The plan of one relocation step ([`relocate_and_grow`] runs it on the CPU, training on the
+/// GPU): the rows it copies, with every row's opacity and scale.
+pub fn plan_relocation(
+    g: &Geometry,
+    settings: &McmcSettings,
+    rng: &mut Rng,
+) -> (RowPlan, McmcReport) {
+    let n = g.len();
+    let mut rows = Rows {
+        sources: (0..n).map(|i| (i, true)).collect(),
+        opacity_logits: g.opacity_logits.clone(),
+        log_scales: g.log_scales.clone(),
+        populations: g.populations.clone(),
     };
-    let o = opacities(&out.gaussians);
+    let o = rows.opacities();
     let dead: Vec<usize> =
-        (0..n).filter(|&i| primary(&out.gaussians, i) && o[i] <= settings.min_opacity).collect();
+        (0..n).filter(|&i| rows.primary(i) && o[i] <= settings.min_opacity).collect();
     let alive: Vec<usize> =
-        (0..n).filter(|&i| primary(&out.gaussians, i) && o[i] > settings.min_opacity).collect();
+        (0..n).filter(|&i| rows.primary(i) && o[i] > settings.min_opacity).collect();
     let sources = sample_by_weight(&alive, &o, dead.len(), rng);
-    apply_shares(&mut out, &tally(&sources), settings.min_opacity);
+    apply_shares(&mut rows, &tally(&sources), settings.min_opacity);
     // Each dead slot becomes a copy of its (updated) source, with zero moments.
-    let mut slots: Vec<(usize, bool)> = (0..n).map(|i| (i, true)).collect();
     for (&d, &src) in dead.iter().zip(&sources) {
-        slots[d] = (src, false);
+        rows.copy(d, src);
     }
-    let mut out = gather(&out, &slots);
     let relocated = sources.len();
     // Growth: sample among every primary Gaussian by its (new) opacity.
     let target = ((settings.growth * n as f64) as usize).min(settings.cap);
     let wanted = target.saturating_sub(n);
-    let o = opacities(&out.gaussians);
-    let candidates: Vec<usize> = (0..n).filter(|&i| primary(&out.gaussians, i)).collect();
+    let o = rows.opacities();
+    let candidates: Vec<usize> = (0..n).filter(|&i| rows.primary(i)).collect();
     let added_from = sample_by_weight(&candidates, &o, wanted, rng);
-    apply_shares(&mut out, &tally(&added_from), settings.min_opacity);
-    let mut gather_list: Vec<(usize, bool)> = (0..n).map(|i| (i, true)).collect();
-    gather_list.extend(added_from.iter().map(|&i| (i, false)));
-    let grown = gather(&out, &gather_list);
-    (grown, McmcReport { relocated, added: added_from.len() })
+    apply_shares(&mut rows, &tally(&added_from), settings.min_opacity);
+    for &i in &added_from {
+        rows.sources.push((i, true));
+        rows.opacity_logits.push(0.0);
+        rows.log_scales.push([0.0; 3]);
+        rows.populations.push(Population::Primary);
+        let last = rows.sources.len() - 1;
+        rows.copy(last, i);
+    }
+    let plan = RowPlan {
+        sources: rows.sources,
+        means: None,
+        log_scales: Some(rows.log_scales),
+        opacity_logits: Some(rows.opacity_logits),
+    };
+    (plan, McmcReport { relocated, added: added_from.len() })
 }
 
 /// The two per-step GPU stages.
@@ -326,7 +369,7 @@ mod tests {
         for (i, m) in g.means.iter_mut().enumerate() {
             *m = [i as f32, 0.0, 0.0];
         }
-        let w = widths(&g);
+        let w = crate::densify::widths(&g);
         let ones = |k: usize| vec![1.0f32; opacities.len() * w[k]];
         TrainState { m: (0..7).map(ones).collect(), v: (0..7).map(ones).collect(), gaussians: g }
     }
