@@ -6,11 +6,13 @@
 //! forward + backward per training-like step (`backward.rs`).
 //! `--write FILE` writes the report as Markdown (docs/BENCHMARKS.md).
 mod backward;
+mod densify;
 mod report;
 mod train_step;
 
 use anyhow::{Context, Result, bail};
 use backward::bench_backward;
+use densify::bench_densify;
 use report::{Throughput, report};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -25,13 +27,14 @@ const HELP: &str = "\
 trgs bench: renderer benchmarks (forward, forward + backward, whole training steps)
 
 USAGE:
-    bench [--quick] [--plane-cost] [--backward] [--train-step] [--reps N] [--write FILE]
+    bench [--quick] [--plane-cost] [--backward] [--train-step] [--densify] [--reps N] [--write FILE]
 
 OPTIONS:
     --quick       only 256x192 and at most 100k Gaussians
     --plane-cost  only the plane-cost measurement (no grid, no throughput, no backward)
     --backward    only the backward measurement
     --train-step  only the training-step measurement (100k Gaussians, phase breakdown)
+    --densify     only the densification measurement (rebuild on the GPU against the CPU)
     --reps N      timed frames per configuration (default 5; the median is reported)
     --write FILE  also write the report as Markdown (e.g. docs/BENCHMARKS.md)
 ";
@@ -41,6 +44,7 @@ struct Args {
     plane_cost_only: bool,
     backward_only: bool,
     train_step_only: bool,
+    densify_only: bool,
     reps: usize,
     write: Option<PathBuf>,
 }
@@ -51,6 +55,7 @@ fn parse_args() -> Result<Option<Args>> {
         plane_cost_only: false,
         backward_only: false,
         train_step_only: false,
+        densify_only: false,
         reps: 5,
         write: None,
     };
@@ -62,6 +67,7 @@ fn parse_args() -> Result<Option<Args>> {
             "--plane-cost" => args.plane_cost_only = true,
             "--backward" => args.backward_only = true,
             "--train-step" => args.train_step_only = true,
+            "--densify" => args.densify_only = true,
             "--reps" => {
                 let v = it.next().context("--reps needs a value")?;
                 args.reps = v.parse().with_context(|| format!("--reps {v:?} is not a count"))?;
@@ -338,7 +344,8 @@ fn main() -> Result<()> {
         }
     }
     configs.push((RoomDensity::Uniform, 256, 192, 100_000));
-    let only = args.plane_cost_only || args.backward_only || args.train_step_only;
+    let only =
+        args.plane_cost_only || args.backward_only || args.train_step_only || args.densify_only;
     if only {
         configs.clear();
     }
@@ -428,7 +435,28 @@ fn main() -> Result<()> {
             steps.push(t);
         }
     }
-    let report = report(&ctx, &rows, &costs, throughput, &backward, &steps, &args);
+    let mut densify = Vec::new();
+    if !only || args.densify_only {
+        let sizes: &[usize] = if args.quick { &[100_000] } else { &[100_000, 300_000] };
+        for &gaussians in sizes {
+            for r in bench_densify(&ctx, gaussians, args.reps.max(1))? {
+                println!(
+                    "{}, {} -> {} Gaussians: read {:.1} ms, plan {:.1} ms, rebuild on the GPU {:.1} ms, through the CPU {:.1} ms",
+                    r.kind, r.gaussians, r.rows, r.read_ms, r.plan_ms, r.gpu_ms, r.cpu_ms
+                );
+                densify.push(r);
+            }
+        }
+    }
+    let measured = report::Measured {
+        rows: &rows,
+        costs: &costs,
+        throughput,
+        backward: &backward,
+        steps: &steps,
+        densify: &densify,
+    };
+    let report = report(&ctx, &measured, &args);
     println!("\n{report}");
     if let Some(path) = &args.write {
         trgs_core::io::write_atomic(path, report.as_bytes())?;

@@ -1,5 +1,6 @@
 //! The Markdown report of `bench`: every measurement's table, with the command that made it.
 use crate::backward::BackwardRow;
+use crate::densify::{DensifyRow, densify_section};
 use crate::train_step::TrainStepRow;
 use crate::{Args, PlaneCost, Row};
 use std::fmt::Write as _;
@@ -22,22 +23,27 @@ pub struct Throughput {
     pub long: f64,
 }
 
-pub fn report(
-    ctx: &GpuContext,
-    rows: &[Row],
-    costs: &[PlaneCost],
-    throughput: Option<Throughput>,
-    backward: &[BackwardRow],
-    steps: &[TrainStepRow],
-    args: &Args,
-) -> String {
+/// Every measurement of one run.
+pub struct Measured<'a> {
+    pub rows: &'a [Row],
+    pub costs: &'a [PlaneCost],
+    pub throughput: Option<Throughput>,
+    pub backward: &'a [BackwardRow],
+    pub steps: &'a [TrainStepRow],
+    pub densify: &'a [DensifyRow],
+}
+
+pub fn report(ctx: &GpuContext, m: &Measured<'_>, args: &Args) -> String {
+    let Measured { rows, costs, backward, steps, .. } = *m;
+    let throughput = m.throughput.as_ref();
     let mut s = String::new();
     let cmd = format!(
-        "cargo run --release --bin bench --{}{}{}{}{}",
+        "cargo run --release --bin bench --{}{}{}{}{}{}",
         if args.quick { " --quick" } else { "" },
         if args.plane_cost_only { " --plane-cost" } else { "" },
         if args.backward_only { " --backward" } else { "" },
         if args.train_step_only { " --train-step" } else { "" },
+        if args.densify_only { " --densify" } else { "" },
         args.write.as_ref().map_or(String::new(), |p| format!(" --write {}", p.display()))
     );
     let _ = writeln!(s, "## Renderer benchmarks\n");
@@ -212,6 +218,9 @@ pub fn report(
     }
     if !steps.is_empty() {
         train_step_section(&mut s, steps);
+    }
+    if !m.densify.is_empty() {
+        densify_section(&mut s, m.densify);
     }
     s
 }
