@@ -169,9 +169,11 @@ impl TrainSettings {
         }
     }
 
-    /// The SH degree in use at `step` (0-based).
-    pub fn active_sh_degree(&self, step: u32) -> u32 {
-        (step / self.sh_interval.max(1)).min(self.sh_degree)
+    /// The SH degree of the model after `steps` steps, which the step that brings the count to
+    /// `steps` already trains with: 3DGS raises it at the start of iterations 1000, 2000 and 3000
+    /// (counted from 1), so the step numbered 1000 renders with degree 1.
+    pub fn active_sh_degree(&self, steps: u32) -> u32 {
+        (steps / self.sh_interval.max(1)).min(self.sh_degree)
     }
 }
 
@@ -199,5 +201,10 @@ mod tests {
         assert_eq!(s.active_sh_degree(0), 0);
         assert_eq!(s.active_sh_degree(250), 2);
         assert_eq!(s.active_sh_degree(2999), 3);
+        // 3DGS at 30k steps: degree 1 from the step numbered 1000, 3 from 3000.
+        let s = TrainSettings::scaled(30_000);
+        assert_eq!(s.active_sh_degree(999), 0);
+        assert_eq!(s.active_sh_degree(1000), 1);
+        assert_eq!(s.active_sh_degree(3000), 3);
     }
 }

@@ -399,7 +399,7 @@ impl Trainer {
         self.scene.planes()
     }
 
-    /// The options a render of the current state uses (the active SH degree included).
+    /// The options a render of the current state uses (the SH degree of the last step included).
     pub fn render_options(&self) -> RenderOptions {
         RenderOptions {
             background: self.settings.background,
@@ -434,6 +434,8 @@ impl Trainer {
         let stage = self.settings.stage(self.step);
         let has_planes = !self.scene.planes().is_empty();
         let mut options = self.render_options();
+        // This step, numbered self.step + 1 from 1, trains the degree the model has after it.
+        options.sh_degree = Some(self.settings.active_sh_degree(self.step + 1));
         options.depth_variance = has_planes && self.settings.lambda_depth > 0.0;
         options.profile = self.profile;
         let mut times = StepTimes::default();
