@@ -80,8 +80,9 @@ impl GpuScene {
     /// The scene rebuilt with `len` Gaussians: `rebuild(current buffer, words per Gaussian,
     /// label)` makes each new attribute buffer from the current one, the seven of [`ATTRIBUTES`]
     /// and then the populations (one word each). The planes and binding ranges stay. Densification
-    /// gathers rows this way on the GPU; whoever rebuilds keeps every attribute valid (finite, no
-    /// zero quaternion), as [`GpuScene::upload`] checks.
+    /// gathers rows this way on the GPU. Nothing is validated here, unlike [`GpuScene::upload`]:
+    /// rows copied from this scene are as valid as they are now, and whoever writes new values
+    /// checks them (the trainer refuses a plan that gives a non-finite one).
     pub fn rebuilt(
         &self,
         len: u32,

@@ -59,7 +59,8 @@ impl GpuRowGather {
         }
     }
 
-    /// Bind at most `words` words at once (tests exercise the ranges that large buffers need).
+    /// Bind ranges of at most `words` words, or of 64 rows where a row is wider than a 64th of
+    /// that (tests exercise the ranges that large buffers need).
     pub fn set_binding_words(&mut self, words: u64) {
         self.binding_words = self.binding_words.min(words.max(64));
     }
