@@ -4,16 +4,16 @@
 use crate::adam::{Adam, AdamMoments};
 use crate::checkpoint::{Checkpoint, PlaneMoments};
 use crate::data::View;
-use crate::densify::{
-    ClassicSettings, DensifyReport, Geometry, RowPlan, TrainState, cap_opacity_logits, plan_densify,
-};
+use crate::densify::{ClassicSettings, DensifyReport, TrainState, cap_opacity_logits};
 use crate::densify_stats::GpuDensifyStats;
 use crate::gather_rows::GpuRowGather;
 use crate::losses::{GpuTarget, LossKernels, LossLayers, LossSettings};
-use crate::mcmc::{McmcKernels, McmcReport, McmcSettings, plan_relocation};
+use crate::mcmc::{McmcKernels, McmcSettings};
 use crate::perturb::{perturb_opacities, seen_through_planes};
 use crate::plane_adam::{PlaneRates, plane_adam};
 use crate::settings::{Stage, TrainSettings};
+
+mod rebuild;
 use anyhow::{Context, Result};
 use std::collections::HashMap;
 use trgs_core::reference::{AdamSettings, RegulariserWeights};
@@ -255,88 +255,6 @@ impl Trainer {
             stats.reset(&self.ctx, state.gaussians.len());
         }
         Ok(())
-    }
-
-    /// The attributes densification and relocation decide from, read back (15 words per
-    /// Gaussian; [`Trainer::read_state`] reads about 180 at SH degree 3).
-    pub fn geometry(&self) -> Geometry {
-        let (ctx, n) = (&self.ctx, self.scene.len() as usize);
-        let p = self.scene.parameters();
-        Geometry {
-            means: trgs_render::gpu::read_buffer(ctx, p[0], 0, n),
-            rotations: trgs_render::gpu::read_buffer(ctx, p[1], 0, n),
-            log_scales: trgs_render::gpu::read_buffer(ctx, p[2], 0, n),
-            opacity_logits: trgs_render::gpu::read_buffer(ctx, p[3], 0, n),
-            populations: self.scene.read_populations(ctx),
-        }
-    }
-
-    /// Rebuild the Gaussians and their moments by `plan` on the GPU (stage `gather_rows`); the
-    /// densification statistics start over.
-    pub fn apply_plan(&mut self, plan: &RowPlan) -> Result<()> {
-        self.check_plan(plan)?;
-        let (scene, moments) = self.gather.apply(&self.ctx, &self.scene, &self.moments, plan);
-        self.scene = scene;
-        self.moments = moments;
-        if let Some((_, stats)) = &mut self.densify {
-            stats.reset(&self.ctx, plan.sources.len());
-        }
-        Ok(())
-    }
-
-    /// [`Trainer::apply_plan`] through the CPU: the whole state read back, rebuilt by
-    /// [`RowPlan::apply`] (the twin) and uploaded, as densification did before `gather_rows`.
-    /// For tests and the benchmark.
-    pub fn apply_plan_on_cpu(&mut self, plan: &RowPlan) -> Result<()> {
-        self.check_plan(plan)?;
-        let state = self.read_state();
-        self.set_state(&plan.apply(&state))
-    }
-
-    fn check_plan(&self, plan: &RowPlan) -> Result<()> {
-        let n = self.scene.len() as usize;
-        if let Some(&(i, _)) = plan.sources.iter().find(|&&(i, _)| i >= n) {
-            anyhow::bail!("a densification plan copies Gaussian {i} of {n}");
-        }
-        let rows = plan.sources.len();
-        let lengths = [
-            plan.means.as_ref().map(Vec::len),
-            plan.log_scales.as_ref().map(Vec::len),
-            plan.opacity_logits.as_ref().map(Vec::len),
-        ];
-        if lengths.iter().flatten().any(|&l| l != rows) {
-            anyhow::bail!("a densification plan of {rows} rows gives attributes of {lengths:?}");
-        }
-        if !plan.given_are_finite() {
-            anyhow::bail!("densification made a non-finite mean, scale or opacity");
-        }
-        Ok(())
-    }
-
-    /// Classic densification now (the schedule calls it every `every` steps); needs
-    /// [`Trainer::enable_densification`].
-    pub fn densify_now(&mut self, prune_large: bool) -> Result<DensifyReport> {
-        let Some((settings, stats)) = &self.densify else {
-            anyhow::bail!("densify_now needs classic densification enabled");
-        };
-        let (settings, stats) = (settings.clone(), stats.read(&self.ctx));
-        let geometry = self.geometry();
-        let (plan, report) =
-            plan_densify(&geometry, &stats, &settings, self.extent, prune_large, &mut self.rng);
-        self.apply_plan(&plan)?;
-        Ok(report)
-    }
-
-    /// An MCMC relocation now (the schedule calls it every `every` steps); needs
-    /// [`Trainer::enable_mcmc`].
-    pub fn relocate_now(&mut self) -> Result<McmcReport> {
-        let Some((settings, _)) = &self.mcmc else {
-            anyhow::bail!("relocate_now needs MCMC densification enabled");
-        };
-        let settings = settings.clone();
-        let (plan, report) = plan_relocation(&self.geometry(), &settings, &mut self.rng);
-        self.apply_plan(&plan)?;
-        Ok(report)
     }
 
     /// Replace the opacity logits on the GPU (the other parameters and all moments stay).
