@@ -5,7 +5,7 @@
 //! and project_bwd of its mirrored view, whose view gradient then chains into the plane on the CPU
 //! (a dozen numbers per plane, the twin's own `mirrored_view_bwd`).
 use crate::frame::Frame;
-use crate::gpu::{self, Recorder};
+use crate::gpu::{self, GpuError, Recorder};
 use crate::layer_grads::LayerGrads;
 use crate::layout::{BWD_ADD, BWD_NO_GAUSSIANS, BWD_VIEW, PROJECTED_GRAD_FLOATS, VIEW_GRAD_FLOATS};
 use crate::renderer::Renderer;
@@ -45,9 +45,11 @@ impl Gradients {
         &self,
         ctx: &crate::GpuContext,
         vi: usize,
-    ) -> Option<Vec<[f32; PROJECTED_GRAD_FLOATS as usize]>> {
-        let b = self.projected_grads.get(vi)?;
-        Some(gpu::read_buffer(ctx, b, 0, self.gaussian_count as usize))
+    ) -> Result<Option<Vec<[f32; PROJECTED_GRAD_FLOATS as usize]>>, GpuError> {
+        let Some(b) = self.projected_grads.get(vi) else {
+            return Ok(None);
+        };
+        gpu::read_buffer(ctx, b, 0, self.gaussian_count as usize).map(Some)
     }
 
     /// The buffer of view `vi`'s screen-space gradients (`PROJECTED_GRAD_FLOATS` per Gaussian),
@@ -86,6 +88,8 @@ pub enum BackwardError {
         frame.0, frame.1
     )]
     GradsForAnotherSize { grads: (u32, u32), frame: (u32, u32) },
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
 }
 
 /// A mirrored view's gradient from its VIEW_GRAD_FLOATS (linear map by columns, translation,
@@ -106,6 +110,18 @@ impl Renderer {
     /// pass-layer buffers hold compose's totals afterwards. The Gaussian gradient buffers belong
     /// to `frame` and are overwritten by its next backward.
     pub fn backward(
+        &self,
+        scene: &GpuScene,
+        frame: &mut Frame,
+        grads: &LayerGrads,
+        options: &BackwardOptions,
+    ) -> Result<Gradients, BackwardError> {
+        gpu::scoped(&self.ctx, "computing gradients", || {
+            self.backward_scoped(scene, frame, grads, options)
+        })
+    }
+
+    fn backward_scoped(
         &self,
         scene: &GpuScene,
         frame: &mut Frame,
@@ -226,8 +242,8 @@ impl Renderer {
         });
         rec.encoder.copy_buffer_to_buffer(&bufs.plane_grads, 0, &staging, 0, plane_bytes);
         rec.encoder.copy_buffer_to_buffer(&bufs.view_grads, 0, &staging, plane_bytes, view_bytes);
-        rec.submit_and_wait(ctx);
-        let flat: Vec<f32> = gpu::map_and_read(ctx, &staging, (plane_bytes + view_bytes) as usize);
+        rec.submit_and_wait(ctx)?;
+        let flat: Vec<f32> = gpu::map_and_read(ctx, &staging, (plane_bytes + view_bytes) as usize)?;
         let stride = (bufs.view_stride / 4) as usize;
         let view_of = |vi: usize| {
             let o = (plane_bytes / 4) as usize + vi * stride;

@@ -62,6 +62,27 @@ pub struct GpuContext {
     pub capabilities: Capabilities,
     /// See [`DeviceOptions::poison_fresh_buffers`].
     pub poison_fresh_buffers: bool,
+    /// Why the device was lost, once it has been (set by its device-lost callback).
+    loss: DeviceLoss,
+}
+
+/// Where a device's lost callback leaves its reason, shared by every clone of the context.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct DeviceLoss(std::sync::Arc<std::sync::Mutex<Option<String>>>);
+
+impl DeviceLoss {
+    fn record(&self, reason: wgpu::DeviceLostReason, message: &str) {
+        if let Ok(mut slot) = self.0.lock() {
+            slot.get_or_insert_with(|| match message {
+                "" => format!("{reason:?}"),
+                m => format!("{reason:?}: {m}"),
+            });
+        }
+    }
+
+    pub(crate) fn reason(&self) -> Option<String> {
+        self.0.lock().ok().and_then(|slot| slot.clone())
+    }
 }
 
 const OPTIONAL: [(Features, &str); 3] = [
@@ -152,6 +173,9 @@ impl GpuContext {
 
     /// A context on a device created elsewhere (e.g. by a UI toolkit that also presents to a
     /// window), from [`device_descriptor`] so that it has the features trgs uses.
+    ///
+    /// Sets the device's lost callback (replacing one the app set before), so that work on a
+    /// lost device fails with [`crate::GpuError::Lost`] and its reason.
     pub fn from_device(
         adapter: wgpu::Adapter,
         device: wgpu::Device,
@@ -176,7 +200,15 @@ impl GpuContext {
         let poison_fresh_buffers = options.poison_fresh_buffers
             || std::env::var("TRGS_POISON_BUFFERS").is_ok_and(|v| v == "1");
         let info = adapter.get_info();
-        Ok(Self { adapter, device, queue, info, capabilities, poison_fresh_buffers })
+        let loss = DeviceLoss::default();
+        let on_loss = loss.clone();
+        device.set_device_lost_callback(move |reason, message| on_loss.record(reason, &message));
+        Ok(Self { adapter, device, queue, info, capabilities, poison_fresh_buffers, loss })
+    }
+
+    /// Why the device was lost, if it has been (known once the GPU was last waited for).
+    pub fn lost(&self) -> Option<String> {
+        self.loss.reason()
     }
 
     /// One line for logs: adapter, backend and optional features.

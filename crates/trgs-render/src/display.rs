@@ -1,7 +1,7 @@
 //! A frame's layer as 8-bit RGBA on the GPU, for a window (a texture the UI samples, with no trip
 //! through the CPU) or for a PNG ([`DisplayTarget::read_rgba`]). Stage `display` does the
 //! conversion; this module picks the buffer and mapping of each [`Layer`] and owns the target.
-use crate::gpu::{self, Recorder};
+use crate::gpu::{self, GpuError, Recorder};
 use crate::stages::{self, Stage};
 use crate::{Frame, GpuContext, Layer, Renderer};
 use trgs_core::Image;
@@ -29,6 +29,8 @@ pub enum DisplayError {
     SizeMismatch { target: (u32, u32), frame: (u32, u32) },
     #[error("the frame has not been rendered")]
     NotRendered,
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
 }
 
 impl DisplayTarget {
@@ -66,9 +68,9 @@ impl DisplayTarget {
     }
 
     /// The last displayed image as RGBA bytes (4 channels, row-major, no padding).
-    pub fn read_rgba(&self, ctx: &GpuContext) -> Image<u8> {
+    pub fn read_rgba(&self, ctx: &GpuContext) -> Result<Image<u8>, GpuError> {
         let words: Vec<u32> =
-            gpu::read_buffer(ctx, &self.rgba, 0, (self.row_pixels * self.height) as usize);
+            gpu::read_buffer(ctx, &self.rgba, 0, (self.row_pixels * self.height) as usize)?;
         let mut img = Image::new(self.width, self.height, 4);
         for y in 0..self.height as usize {
             let row = &words[y * self.row_pixels as usize..][..self.width as usize];
@@ -77,7 +79,7 @@ impl DisplayTarget {
                 img.data[at..at + 4].copy_from_slice(&w.to_le_bytes());
             }
         }
-        img
+        Ok(img)
     }
 }
 
@@ -121,6 +123,7 @@ impl Renderer {
         let (buffer, mapping) =
             layer_mapping(frame, layer, depth_range).ok_or(DisplayError::NotRendered)?;
         let ctx = &self.ctx;
+        let scopes = gpu::ErrorScopes::open(ctx, "converting a layer for display");
         let s = Stage { ctx, kernels: &self.kernels };
         let mut rec = Recorder::new(ctx, "trgs.display", false);
         let dims = (target.width, target.height, target.row_pixels);
@@ -142,7 +145,7 @@ impl Renderer {
             },
             wgpu::Extent3d { width: target.width, height: target.height, depth_or_array_layers: 1 },
         );
-        rec.submit_and_wait(ctx);
-        Ok(())
+        let waited = rec.submit_and_wait(ctx);
+        scopes.close_after(waited.map_err(DisplayError::from))
     }
 }

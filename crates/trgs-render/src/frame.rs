@@ -1,7 +1,7 @@
 //! A rendered view on the GPU: every layer, what the backward pass will need (projected
 //! Gaussians, sorted lists, per-pixel states), and readback to images.
 use crate::GpuContext;
-use crate::gpu::{self, BufferPool};
+use crate::gpu::{self, BufferPool, GpuError};
 use crate::layout::{ProjectParams, RasterState, ReflectionState};
 use crate::stages::sort::KeyList;
 use trgs_core::Image;
@@ -328,7 +328,7 @@ impl Frame {
         ctx: &GpuContext,
         buffer: &wgpu::Buffer,
         offset_pixels: usize,
-    ) -> Vec<[f32; 4]> {
+    ) -> Result<Vec<[f32; 4]>, GpuError> {
         gpu::read_buffer(ctx, buffer, offset_pixels as u64 * 16, self.pixels())
     }
 
@@ -363,22 +363,22 @@ impl Frame {
     }
 
     /// Read one layer back (zeros for a layer the frame does not have).
-    pub fn read_layer(&self, ctx: &GpuContext, layer: Layer) -> Image<f32> {
+    pub fn read_layer(&self, ctx: &GpuContext, layer: Layer) -> Result<Image<f32>, GpuError> {
         if self.layers.is_none() {
-            return Image::new(0, 0, layer.channels());
+            return Ok(Image::new(0, 0, layer.channels()));
         }
-        match self.layer_source(layer) {
-            Some((buffer, range)) => self.channel_image(&self.read_vec4(ctx, buffer, 0), range),
+        Ok(match self.layer_source(layer) {
+            Some((buffer, range)) => self.channel_image(&self.read_vec4(ctx, buffer, 0)?, range),
             None => Image::new(self.width(), self.height(), layer.channels()),
-        }
+        })
     }
 
     /// Read every layer back (each layer buffer once).
-    pub fn read_images(&self, ctx: &GpuContext) -> FrameImages {
+    pub fn read_images(&self, ctx: &GpuContext) -> Result<FrameImages, GpuError> {
         let (w, h) = (self.width(), self.height());
         let Some(l) = &self.layers else {
             let z = |c| Image::new(w, h, c);
-            return FrameImages {
+            return Ok(FrameImages {
                 color: z(3),
                 transmission: z(3),
                 depth: z(1),
@@ -390,21 +390,21 @@ impl Frame {
                 strength: z(1),
                 reflection: z(3),
                 planes: Vec::new(),
-            };
+            });
         };
-        let transmission = self.read_vec4(ctx, &l.transmission, 0);
-        let geometry = self.read_vec4(ctx, &l.geometry, 0);
+        let transmission = self.read_vec4(ctx, &l.transmission, 0)?;
+        let geometry = self.read_vec4(ctx, &l.geometry, 0)?;
         let composed = self.composed();
         let (color, reflection, strength, hit) = if composed {
             (
-                self.channel_image(&self.read_vec4(ctx, &l.color, 0), 0..3),
-                self.channel_image(&self.read_vec4(ctx, &l.reflection, 0), 0..3),
-                self.read_vec4(ctx, &l.strength, 0),
+                self.channel_image(&self.read_vec4(ctx, &l.color, 0)?, 0..3),
+                self.channel_image(&self.read_vec4(ctx, &l.reflection, 0)?, 0..3),
+                self.read_vec4(ctx, &l.strength, 0)?,
                 Image {
                     width: w,
                     height: h,
                     channels: 1,
-                    data: gpu::read_buffer(ctx, &l.hit, 0, self.pixels()),
+                    data: gpu::read_buffer(ctx, &l.hit, 0, self.pixels())?,
                 },
             )
         } else {
@@ -415,18 +415,20 @@ impl Frame {
                 Image::new(w, h, 1),
             )
         };
-        let planes = (0..self.plane_count)
-            .map(|k| {
-                let v = self.views.iter().find(|v| v.plane == Some(k))?;
-                let raw = self.read_vec4(ctx, &l.reflection_raw, k * self.pixels());
-                Some(PlaneImages {
-                    raw_color: self.channel_image(&raw, 0..3),
-                    intensity: self.channel_image(&raw, 3..4),
-                    footprint: v.limit,
-                })
-            })
-            .collect();
-        FrameImages {
+        let mut planes = Vec::with_capacity(self.plane_count);
+        for k in 0..self.plane_count {
+            let Some(v) = self.views.iter().find(|v| v.plane == Some(k)) else {
+                planes.push(None);
+                continue;
+            };
+            let raw = self.read_vec4(ctx, &l.reflection_raw, k * self.pixels())?;
+            planes.push(Some(PlaneImages {
+                raw_color: self.channel_image(&raw, 0..3),
+                intensity: self.channel_image(&raw, 3..4),
+                footprint: v.limit,
+            }));
+        }
+        Ok(FrameImages {
             color,
             transmission: self.channel_image(&transmission, 0..3),
             depth: self.channel_image(&geometry, 0..1),
@@ -438,14 +440,14 @@ impl Frame {
             strength: self.channel_image(&strength, 1..2),
             reflection,
             planes,
-        }
+        })
     }
 
     /// Pass 1's per-pixel states.
-    pub fn read_states(&self, ctx: &GpuContext) -> Vec<RasterState> {
+    pub fn read_states(&self, ctx: &GpuContext) -> Result<Vec<RasterState>, GpuError> {
         self.layers
             .as_ref()
-            .map_or_else(Vec::new, |l| gpu::read_buffer(ctx, &l.states, 0, self.pixels()))
+            .map_or_else(|| Ok(Vec::new()), |l| gpu::read_buffer(ctx, &l.states, 0, self.pixels()))
     }
 
     /// The projected Gaussians of view `vi` (0 = camera, then mirrored passes).
@@ -453,9 +455,11 @@ impl Frame {
         &self,
         ctx: &GpuContext,
         vi: usize,
-    ) -> Option<Vec<crate::layout::ProjectedGaussian>> {
-        let v = self.views.get(vi)?;
-        Some(gpu::read_buffer(ctx, &v.projected, 0, self.gaussian_count() as usize))
+    ) -> Result<Option<Vec<crate::layout::ProjectedGaussian>>, GpuError> {
+        let Some(v) = self.views.get(vi) else {
+            return Ok(None);
+        };
+        gpu::read_buffer(ctx, &v.projected, 0, self.gaussian_count() as usize).map(Some)
     }
 }
 

@@ -3,8 +3,8 @@
 //! bind groups, and a recorder that puts every dispatch in its own labelled pass with optional
 //! timestamp queries.
 use crate::GpuContext;
+pub use crate::gpu_error::{ErrorScopes, GpuError, scoped};
 use std::collections::HashMap;
-use wgpu::util::DeviceExt;
 
 /// The byte pattern fresh buffers get in poison mode: NaN as f32, 0xffffffff as u32.
 pub const POISON_BYTE: u8 = 0xff;
@@ -28,12 +28,7 @@ fn padded(size: u64) -> u64 {
 pub fn storage(ctx: &GpuContext, label: &str, size: u64) -> wgpu::Buffer {
     let size = padded(size);
     if ctx.poison_fresh_buffers {
-        let bytes = vec![POISON_BYTE; size as usize];
-        return ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some(label),
-            contents: &bytes,
-            usage: STORAGE,
-        });
+        return filled_at_creation(ctx, label, size, STORAGE, &[], POISON_BYTE);
     }
     ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
@@ -43,26 +38,39 @@ pub fn storage(ctx: &GpuContext, label: &str, size: u64) -> wgpu::Buffer {
     })
 }
 
+/// A buffer of `size` bytes holding `bytes` and then `rest` in every byte after them, written
+/// while it is mapped at creation (one copy of the data on the host). When the buffer could not be made (a lost device, no memory
+/// left) there is no mapping to write: the buffer is returned unwritten, and the failure reaches
+/// the caller through the operation's error scopes or its next wait, not as a panic here (as
+/// `wgpu::util::DeviceExt::create_buffer_init` would).
+fn filled_at_creation(
+    ctx: &GpuContext,
+    label: &str,
+    size: u64,
+    usage: wgpu::BufferUsages,
+    bytes: &[u8],
+    rest: u8,
+) -> wgpu::Buffer {
+    let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size,
+        usage,
+        mapped_at_creation: true,
+    });
+    if let Ok(mut view) = buffer.slice(..).get_mapped_range_mut() {
+        view.slice(..bytes.len()).copy_from_slice(bytes);
+        view.slice(bytes.len()..).fill(rest);
+    }
+    buffer.unmap();
+    buffer
+}
+
 /// A storage buffer holding `data` (padded to the minimum size with zeros). The data is copied
 /// once, into the buffer mapped at creation: a padded copy made first doubled the host traffic
 /// of every upload, e.g. the whole state after each densification.
 pub fn storage_init<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, data: &[T]) -> wgpu::Buffer {
     let bytes = bytemuck::cast_slice::<T, u8>(data);
-    let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some(label),
-        size: padded(bytes.len() as u64),
-        usage: STORAGE,
-        mapped_at_creation: true,
-    });
-    {
-        // A buffer mapped at creation is mapped whole, so its range is always available.
-        #[allow(clippy::expect_used)]
-        let mut view = buffer.slice(..).get_mapped_range_mut().expect("mapped at creation");
-        view.slice(..bytes.len()).copy_from_slice(bytes);
-        view.slice(bytes.len()..).fill(0);
-    }
-    buffer.unmap();
-    buffer
+    filled_at_creation(ctx, label, padded(bytes.len() as u64), STORAGE, bytes, 0)
 }
 
 /// A dispatch's parameter block holding `value`, bound as `var<storage, read>`.
@@ -72,12 +80,12 @@ pub fn storage_init<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, data: &[T])
 /// mirrored view of a moving plane; a storage buffer is never inlined. Real GPUs read a small
 /// block shared by all threads equally fast from either.
 pub fn params<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, value: &T) -> wgpu::Buffer {
-    ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some(label),
-        contents: bytemuck::bytes_of(value),
-        // COPY_DST: a field may come from the GPU (the depth order's entry count, copied in).
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-    })
+    let bytes = bytemuck::bytes_of(value);
+    // COPY_DST: a field may come from the GPU (the depth order's entry count, copied in).
+    let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
+    // Mapped at creation, the size must be a multiple of 4 (every parameter block is).
+    let size = (bytes.len() as u64).div_ceil(4) * 4;
+    filled_at_creation(ctx, label, size, usage, bytes, 0)
 }
 
 /// Read `count` values of `T` from `buffer` at byte `offset` (blocking).
@@ -86,12 +94,14 @@ pub fn read_buffer<T: bytemuck::Pod>(
     buffer: &wgpu::Buffer,
     offset: u64,
     count: usize,
-) -> Vec<T> {
+) -> Result<Vec<T>, GpuError> {
     let bytes = (count * std::mem::size_of::<T>()) as u64;
     if bytes == 0 {
-        return Vec::new();
+        return Ok(Vec::new());
     }
     let size = bytes.div_ceil(4) * 4;
+    // The staging buffer and the copy may fail too (no memory left, a lost device).
+    let scopes = ErrorScopes::open(ctx, "copying a buffer for readback");
     let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("trgs.readback.staging"),
         size,
@@ -103,27 +113,29 @@ pub fn read_buffer<T: bytemuck::Pod>(
         .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("trgs.readback") });
     enc.copy_buffer_to_buffer(buffer, offset, &staging, 0, size);
     ctx.queue.submit([enc.finish()]);
-    map_and_read(ctx, &staging, bytes as usize)
+    let read = map_and_read(ctx, &staging, bytes as usize);
+    scopes.close_after(read)
 }
 
 /// The longest the CPU waits for submitted GPU work before it gives up: far beyond any frame or
 /// training step (a 500k-Gaussian frame takes about 1 s on a 2-core lavapipe), so that a hung
-/// kernel or a device that stopped answering ends in a panic that says so instead of a process
-/// that never returns.
+/// kernel or a device that stopped answering ends in a [`GpuError`] that says so instead of a
+/// process that never returns.
 pub const GPU_WAIT_LIMIT: std::time::Duration = std::time::Duration::from_secs(300);
 
 /// Block until the GPU has finished everything submitted so far, at most `GPU_WAIT_LIMIT`;
-/// `what` names the wait in the panic when the device is lost or does not finish in time.
-pub fn wait_for_gpu(ctx: &GpuContext, what: &str) {
+/// `what` names the wait in the error when the device is lost or does not finish in time.
+pub fn wait_for_gpu(ctx: &GpuContext, what: &str) -> Result<(), GpuError> {
     let wait = wgpu::PollType::Wait { submission_index: None, timeout: Some(GPU_WAIT_LIMIT) };
     match ctx.device.poll(wait) {
-        Ok(_) => {}
-        Err(wgpu::PollError::Timeout) => panic!(
-            "trgs: the GPU did not finish {what} within {} s (a hung kernel or a device that \
-             stopped answering)",
-            GPU_WAIT_LIMIT.as_secs()
-        ),
-        Err(e) => panic!("trgs: waiting for the GPU to finish {what} failed: {e}"),
+        Ok(_) => Ok(()),
+        Err(wgpu::PollError::Timeout) => {
+            Err(GpuError::Timeout { what: what.to_string(), seconds: GPU_WAIT_LIMIT.as_secs() })
+        }
+        Err(e) => Err(crate::gpu_error::lost(
+            &format!("waiting for {what}"),
+            ctx.lost().unwrap_or_else(|| e.to_string()),
+        )),
     }
 }
 
@@ -132,29 +144,34 @@ pub fn map_and_read<T: bytemuck::Pod>(
     ctx: &GpuContext,
     staging: &wgpu::Buffer,
     bytes: usize,
-) -> Vec<T> {
+) -> Result<Vec<T>, GpuError> {
+    const WHAT: &str = "reading back a buffer";
+    let scopes = ErrorScopes::open(ctx, WHAT);
     let slice = staging.slice(..);
     let (tx, rx) = std::sync::mpsc::channel();
     slice.map_async(wgpu::MapMode::Read, move |r| {
         let _ = tx.send(r);
     });
     // A lost device (or a buffer that could not be allocated) surfaces here as a failed
-    // mapping; the reads return plain values, so stop loudly and say what failed.
-    wait_for_gpu(ctx, "its work before a readback");
-    match rx.try_recv() {
-        Ok(Ok(())) => {}
-        Ok(Err(e)) => panic!(
-            "trgs: reading back a GPU buffer failed ({e}): the device was lost or ran out of memory"
-        ),
-        Err(_) => panic!("trgs: the GPU never finished the readback (the device was lost)"),
-    }
+    // mapping: the caller gets an error instead of values that were never computed.
+    let waited = wait_for_gpu(ctx, "its work before a readback");
+    let mapped = match rx.try_recv() {
+        Ok(Ok(())) => Ok(()),
+        Ok(Err(e)) => Err(e.to_string()),
+        Err(_) => Err("the mapping never completed".to_string()),
+    };
+    // Most specific first: what wgpu refused (or the loss behind it), a wait that failed, then
+    // a mapping that failed without either.
+    scopes.close()?;
+    waited?;
+    let lost = |detail: String| crate::gpu_error::lost(WHAT, ctx.lost().unwrap_or(detail));
+    mapped.map_err(lost)?;
     let out = {
-        #[allow(clippy::expect_used)]
-        let view = slice.get_mapped_range().expect("readback buffer is mapped");
+        let view = slice.get_mapped_range().map_err(|e| lost(e.to_string()))?;
         bytemuck::pod_collect_to_vec(&view[..bytes])
     };
     staging.unmap();
-    out
+    Ok(out)
 }
 
 /// A compute pipeline with the layout derived from its WGSL.
@@ -324,8 +341,8 @@ impl Recorder {
     }
 
     /// Submit the recorded work and wait for it; with profiling, add this submission's stage
-    /// times. Returns a fresh encoder for what follows.
-    pub fn submit_and_wait(&mut self, ctx: &GpuContext) {
+    /// times. Leaves a fresh encoder for what follows.
+    pub fn submit_and_wait(&mut self, ctx: &GpuContext) -> Result<(), GpuError> {
         let resolve = self.profiler.as_ref().and_then(|p| {
             let n = p.labels.len() as u32 * 2;
             (n > 0).then(|| {
@@ -356,7 +373,7 @@ impl Recorder {
         );
         ctx.queue.submit([encoder.finish()]);
         if let (Some(p), Some((n, _, staging))) = (&mut self.profiler, resolve) {
-            let stamps: Vec<u64> = map_and_read(ctx, &staging, n as usize * 8);
+            let stamps: Vec<u64> = map_and_read(ctx, &staging, n as usize * 8)?;
             let period = f64::from(ctx.queue.get_timestamp_period());
             for (i, stage) in p.labels.drain(..).enumerate() {
                 let ms = stamps[2 * i + 1].saturating_sub(stamps[2 * i]) as f64 * period * 1e-6;
@@ -366,8 +383,9 @@ impl Recorder {
                 }
             }
         } else {
-            wait_for_gpu(ctx, "a recorded batch of passes");
+            wait_for_gpu(ctx, "a recorded batch of passes")?;
         }
+        Ok(())
     }
 
     /// Milliseconds per stage (in first-recorded order), when profiling.

@@ -16,15 +16,15 @@
 //! let gpu_scene = GpuScene::upload(&ctx, &scene.gaussians.cast::<f32>(), &scene.planes)?;
 //! let renderer = Renderer::new(&ctx);
 //! let mut frame = renderer.render(&gpu_scene, &scene.camera, &RenderOptions::default())?;
-//! let color = frame.read_layer(&ctx, Layer::Color); // trgs_core::Image<f32>, RGB
-//! let layers = frame.read_images(&ctx); // every layer, and each plane's C_raw and A
+//! let color = frame.read_layer(&ctx, Layer::Color)?; // trgs_core::Image<f32>, RGB
+//! let layers = frame.read_images(&ctx)?; // every layer, and each plane's C_raw and A
 //!
 //! // L = the sum of the final image: dL/dC = 1, every other layer 0.
 //! let mut dl = FrameGrads::zeros(frame.width(), frame.height(), frame.plane_count());
 //! dl.color.data.fill(1.0);
 //! let upstream = LayerGrads::upload(&ctx, &frame, &dl)?; // checked: sizes, finite values
 //! let grads = renderer.backward(&gpu_scene, &mut frame, &upstream, &BackwardOptions::default())?;
-//! let per_gaussian = grads.gaussians.read(&ctx); // shaped like the scene's Gaussians
+//! let per_gaussian = grads.gaussians.read(&ctx)?; // shaped like the scene's Gaussians
 //! assert_eq!(per_gaussian.len(), scene.gaussians.len());
 //! println!("dL/d(plane 0 centre) = {:?}", grads.planes[0].centre);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
@@ -34,6 +34,7 @@ mod device;
 mod display;
 mod frame;
 pub mod gpu;
+mod gpu_error;
 mod kernels;
 mod layer_grads;
 pub mod layout;
@@ -52,7 +53,8 @@ pub use frame::{
     DepthOrderIntermediates, Frame, FrameImages, Layer, LayerBuffers, PlaneImages, ViewBuffers,
     ViewIntermediates,
 };
+pub use gpu_error::GpuError;
 pub use layer_grads::{LayerGrads, LayerGradsError};
 pub use renderer::{RenderError, RenderOptions, Renderer};
-pub use scene::{ATTRIBUTES, GpuScene, SceneGradBuffers, attribute_widths};
+pub use scene::{ATTRIBUTES, GpuScene, SceneGradBuffers, UploadError, attribute_widths};
 pub use trgs_core::reference::ReflectionModel;

@@ -1,7 +1,7 @@
 //! The forward renderer: the stages of DESIGN.md's data flow for one camera, into a [`Frame`].
 use crate::GpuContext;
 use crate::frame::{Binning, Frame, ViewBuffers};
-use crate::gpu::{self, Recorder};
+use crate::gpu::{self, GpuError, Recorder};
 use crate::kernels::Kernels;
 use crate::layer_grads::LayerGrads;
 use crate::layout::{EmitParams, TileParams, ViewTiles};
@@ -79,6 +79,8 @@ pub enum RenderError {
          workgroups per dispatch dimension; render at a lower resolution"
     )]
     TooManyTiles { name: String, tiles: u32, limit: u32 },
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
 }
 
 /// The largest per-pixel buffer of a frame with `planes` reflection slots, in bytes per pixel
@@ -145,6 +147,18 @@ impl Renderer {
 
     /// Render into `frame`, reusing its buffers where they are large enough.
     pub fn render_into(
+        &self,
+        scene: &GpuScene,
+        camera: &Camera,
+        options: &RenderOptions,
+        frame: &mut Frame,
+    ) -> Result<(), RenderError> {
+        gpu::scoped(&self.ctx, "rendering a frame", || {
+            self.render_scoped(scene, camera, options, frame)
+        })
+    }
+
+    fn render_scoped(
         &self,
         scene: &GpuScene,
         camera: &Camera,
@@ -265,8 +279,8 @@ impl Renderer {
         rec.encoder.copy_buffer_to_buffer(&order.entries, 0, &totals_staging, 0, 4);
         rec.encoder.copy_buffer_to_buffer(&entries.key_totals, 0, &totals_staging, 4, views_bytes);
         rec.encoder.copy_buffer_to_buffer(&total, 0, &totals_staging, 4 + views_bytes, 4);
-        rec.submit_and_wait(ctx);
-        let totals: Vec<u32> = gpu::map_and_read(ctx, &totals_staging, 4 * words);
+        rec.submit_and_wait(ctx)?;
+        let totals: Vec<u32> = gpu::map_and_read(ctx, &totals_staging, 4 * words)?;
         let (num_entries, total) = (totals[0], totals[words - 1]);
         let view_keys: Vec<u64> = totals[1..words - 1]
             .chunks_exact(2)
@@ -416,7 +430,7 @@ impl Renderer {
                 },
             );
         }
-        rec.submit_and_wait(ctx);
+        rec.submit_and_wait(ctx)?;
         frame.finish(views, binning, has_pass, Some(rays), rec.stage_times());
         Ok(())
     }
@@ -425,14 +439,19 @@ impl Renderer {
     /// gradients into the pass-layer buffers of `grads` (direct gradients in, totals out) and
     /// returns each plane's (dL/dR0, dL/d(unit normal)). A stage-level entry point, used by the
     /// stage-by-stage tests against the CPU twin; the full backward builds on it.
-    pub fn compose_bwd(&self, frame: &Frame, grads: &LayerGrads) -> Vec<[f32; 4]> {
+    pub fn compose_bwd(
+        &self,
+        frame: &Frame,
+        grads: &LayerGrads,
+    ) -> Result<Vec<[f32; 4]>, GpuError> {
         let ctx = &self.ctx;
         let s = Stage { ctx, kernels: &self.kernels };
         let (Some(grid), Some(layers), Some(rays)) =
             (frame.grid(), frame.layer_buffers(), frame.rays())
         else {
-            return Vec::new();
+            return Ok(Vec::new());
         };
+        let scopes = gpu::ErrorScopes::open(ctx, "the adjoint of compose");
         let planes = frame.plane_count();
         let acc = gpu::storage(
             ctx,
@@ -442,8 +461,9 @@ impl Renderer {
         let mut rec = Recorder::new(ctx, "trgs.compose_bwd", false);
         rec.encoder.clear_buffer(&acc, 0, None);
         compose_bwd::record(s, &mut rec, &grid, rays, layers, grads, &acc);
-        rec.submit_and_wait(ctx);
-        let flat: Vec<f32> = gpu::read_buffer(ctx, &acc, 0, planes * 4);
-        flat.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]).collect()
+        let flat =
+            rec.submit_and_wait(ctx).and_then(|()| gpu::read_buffer(ctx, &acc, 0, planes * 4));
+        let flat: Vec<f32> = scopes.close_after(flat)?;
+        Ok(flat.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]).collect())
     }
 }

@@ -3,10 +3,19 @@
 //! the adapter's limit (128 MiB on lavapipe), so the per-Gaussian stages bind ranges of these
 //! buffers, [`GpuScene::chunks`] Gaussians at a time.
 use crate::GpuContext;
-use crate::gpu;
+use crate::gpu::{self, GpuError};
 use trgs_core::scene::{
     Gaussians, InvalidInput, ReflectionPlane, validate_gaussians, validate_planes,
 };
+
+/// Why [`GpuScene::upload`] failed.
+#[derive(Debug, thiserror::Error)]
+pub enum UploadError {
+    #[error(transparent)]
+    Input(#[from] InvalidInput),
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+}
 
 /// Gaussians and planes uploaded to a device.
 #[derive(Debug)]
@@ -35,9 +44,20 @@ impl GpuScene {
         ctx: &GpuContext,
         gaussians: &Gaussians<f32>,
         planes: &[ReflectionPlane],
-    ) -> Result<Self, InvalidInput> {
+    ) -> Result<Self, UploadError> {
         validate_gaussians(gaussians)?;
         validate_planes(planes)?;
+        // A scene too large for the device's memory fails here, as an error.
+        gpu::scoped(ctx, "uploading the Gaussians", || {
+            Ok(Self::upload_valid(ctx, gaussians, planes))
+        })
+    }
+
+    fn upload_valid(
+        ctx: &GpuContext,
+        gaussians: &Gaussians<f32>,
+        planes: &[ReflectionPlane],
+    ) -> Self {
         let len = gaussians.len() as u32;
         let flat3 = |v: &[[f32; 3]]| v.iter().flatten().copied().collect::<Vec<f32>>();
         let pops: Vec<u32> = gaussians.populations.iter().map(|&p| p as u32).collect();
@@ -48,7 +68,7 @@ impl GpuScene {
         // one-thread-per-Gaussian dispatches stay within the workgroup limit.
         let most = u64::from(crate::layout::MAX_WORKGROUPS) * 256;
         let chunk = ((limit / widest) / 256 * 256).clamp(256, most) as u32;
-        Ok(Self {
+        Self {
             len,
             sh_degree: gaussians.sh_degree,
             sh_coeffs,
@@ -74,7 +94,7 @@ impl GpuScene {
             populations: gpu::storage_init(ctx, "trgs.scene.populations", &pops),
             planes: planes.to_vec(),
             chunk,
-        })
+        }
     }
 
     /// The scene rebuilt with `len` Gaussians: `rebuild(current buffer, words per Gaussian,
@@ -107,11 +127,15 @@ impl GpuScene {
     }
 
     /// Each Gaussian's population, read back.
-    pub fn read_populations(&self, ctx: &GpuContext) -> Vec<trgs_core::scene::Population> {
-        let pops: Vec<u32> = gpu::read_buffer(ctx, &self.populations, 0, self.len as usize);
-        pops.into_iter()
+    pub fn read_populations(
+        &self,
+        ctx: &GpuContext,
+    ) -> Result<Vec<trgs_core::scene::Population>, GpuError> {
+        let pops: Vec<u32> = gpu::read_buffer(ctx, &self.populations, 0, self.len as usize)?;
+        Ok(pops
+            .into_iter()
             .map(|p| trgs_core::scene::Population::from_u8(p as u8).unwrap_or_default())
-            .collect()
+            .collect())
     }
 
     pub fn len(&self) -> u32 {
@@ -167,10 +191,10 @@ impl GpuScene {
     }
 
     /// Read the Gaussians back (after training steps changed them on the GPU).
-    pub fn read(&self, ctx: &GpuContext) -> Gaussians<f32> {
-        let mut g = read_attributes(ctx, self.parameters(), self.len as usize, self.sh_degree);
-        g.populations = self.read_populations(ctx);
-        g
+    pub fn read(&self, ctx: &GpuContext) -> Result<Gaussians<f32>, GpuError> {
+        let mut g = read_attributes(ctx, self.parameters(), self.len as usize, self.sh_degree)?;
+        g.populations = self.read_populations(ctx)?;
+        Ok(g)
     }
 
     /// Use at most `gaussians` Gaussians per binding (rounded down to a multiple of 256, at
@@ -265,7 +289,7 @@ impl SceneGradBuffers {
 
     /// Read every gradient back, shaped like the scene's Gaussians (populations are not
     /// parameters and read as Primary).
-    pub fn read(&self, ctx: &GpuContext) -> Gaussians<f32> {
+    pub fn read(&self, ctx: &GpuContext) -> Result<Gaussians<f32>, GpuError> {
         read_attributes(ctx, self.parameters(), self.len as usize, self.sh_degree)
     }
 }
@@ -277,15 +301,15 @@ fn read_attributes(
     b: [&wgpu::Buffer; 7],
     n: usize,
     sh_degree: u32,
-) -> Gaussians<f32> {
+) -> Result<Gaussians<f32>, GpuError> {
     let mut g = Gaussians::<f32>::zeros(n, sh_degree);
     let coeffs = g.sh_coeffs();
-    g.means = gpu::read_buffer(ctx, b[0], 0, n);
-    g.rotations = gpu::read_buffer(ctx, b[1], 0, n);
-    g.log_scales = gpu::read_buffer(ctx, b[2], 0, n);
-    g.opacity_logits = gpu::read_buffer(ctx, b[3], 0, n);
-    g.sh = gpu::read_buffer(ctx, b[4], 0, n * coeffs);
-    g.mask_logits = gpu::read_buffer(ctx, b[5], 0, n);
-    g.log_reflections = gpu::read_buffer(ctx, b[6], 0, n);
-    g
+    g.means = gpu::read_buffer(ctx, b[0], 0, n)?;
+    g.rotations = gpu::read_buffer(ctx, b[1], 0, n)?;
+    g.log_scales = gpu::read_buffer(ctx, b[2], 0, n)?;
+    g.opacity_logits = gpu::read_buffer(ctx, b[3], 0, n)?;
+    g.sh = gpu::read_buffer(ctx, b[4], 0, n * coeffs)?;
+    g.mask_logits = gpu::read_buffer(ctx, b[5], 0, n)?;
+    g.log_reflections = gpu::read_buffer(ctx, b[6], 0, n)?;
+    Ok(g)
 }

@@ -122,7 +122,7 @@ impl Gpu {
         let scene =
             GpuScene::upload(&self.ctx, &s.gaussians.cast::<f32>(), &s.planes).expect("valid");
         let frame = self.renderer.render(&scene, &s.camera, &self.options).expect("render");
-        let im = frame.read_images(&self.ctx);
+        let im = frame.read_images(&self.ctx).expect("readback");
         let mut l = dot(&im.color, &w.color)
             + dot(&im.transmission, &w.transmission)
             + dot(&im.depth, &w.depth)
@@ -168,7 +168,7 @@ fn check(seed: u64, planes: usize, angle: f64) {
         .renderer
         .backward(&gpu_scene, &mut frame, &grads, &BackwardOptions::default())
         .expect("backward");
-    let gg = out.gaussians.read(&gpu.ctx);
+    let gg = out.gaussians.read(&gpu.ctx).expect("readback");
 
     let mut params = Vec::new();
     let coeffs = scene.gaussians.sh_coeffs();

@@ -85,7 +85,7 @@ fn random_finite_inputs_give_finite_gradients() {
         let block = seed % 4 == 1;
         let bwd = BackwardOptions { block_reflection_to_gaussians: block, profile: false };
         let out = renderer.backward(&gpu_scene, &mut frame, &layer_grads, &bwd).expect("backward");
-        let g = out.gaussians.read(&ctx);
+        let g = out.gaussians.read(&ctx).expect("readback");
         assert!(all_finite(&g), "seed {seed}: a Gaussian gradient is not finite");
         for p in &out.planes {
             let v = [p.centre.to_array(), p.normal.to_array(), [p.r0_logit; 3]];
@@ -105,7 +105,7 @@ fn empty_scene_has_empty_gradients() {
     let grads = LayerGrads::zeros(&ctx, &frame);
     let out = renderer.backward(&gpu_scene, &mut frame, &grads, &BackwardOptions::default());
     let out = out.expect("backward");
-    assert!(out.gaussians.read(&ctx).is_empty());
+    assert!(out.gaussians.read(&ctx).expect("readback").is_empty());
     assert_eq!(out.planes.len(), 1);
 }
 

@@ -86,7 +86,7 @@ fn check_compose_bwd_model(name: &str, spec: SceneSpec, model: ReflectionModel) 
             ..Default::default()
         };
         let frame = renderer.render(&gpu_scene, &scene.camera, &options).expect("render");
-        let images = frame.read_images(&ctx);
+        let images = frame.read_images(&ctx).expect("readback");
         let differing =
             images.hit.data.iter().zip(&cpu_frame.hit.data).filter(|(a, b)| a != b).count();
         assert_eq!(differing, 0, "{what}: hit masks differ");
@@ -134,16 +134,18 @@ fn check_compose_bwd_model(name: &str, spec: SceneSpec, model: ReflectionModel) 
             reflection_raw: gpu::storage_init(&ctx, "test.g_reflection_raw", &raw),
             size: (w, h),
         };
-        let plane_grads = renderer.compose_bwd(&frame, &buffers);
+        let plane_grads = renderer.compose_bwd(&frame, &buffers).expect("readback");
         let n = (w * h) as usize;
-        let t: Vec<[f32; 4]> = gpu::read_buffer(&ctx, &buffers.transmission, 0, n);
-        let geo: Vec<[f32; 4]> = gpu::read_buffer(&ctx, &buffers.geometry, 0, n);
+        let t: Vec<[f32; 4]> =
+            gpu::read_buffer(&ctx, &buffers.transmission, 0, n).expect("readback");
+        let geo: Vec<[f32; 4]> = gpu::read_buffer(&ctx, &buffers.geometry, 0, n).expect("readback");
         let mut bad = compare(&format!("{what} dC_t"), &channel(&t, 0..3), &cpu.transmission.data);
         bad += compare(&format!("{what} dalpha"), &channel(&t, 3..4), &grads.alpha.data);
         bad += compare(&format!("{what} dD_t"), &channel(&geo, 0..1), &grads.depth.data);
         bad += compare(&format!("{what} dV"), &channel(&geo, 1..2), &grads.depth_variance.data);
         bad += compare(&format!("{what} dM"), &channel(&geo, 2..3), &cpu.mask.data);
-        let r: Vec<[f32; 4]> = gpu::read_buffer(&ctx, &buffers.reflection_raw, 0, n * slots);
+        let r: Vec<[f32; 4]> =
+            gpu::read_buffer(&ctx, &buffers.reflection_raw, 0, n * slots).expect("readback");
         for (k, (g_raw, g_int)) in cpu.planes.iter().enumerate() {
             let slot = &r[k * n..(k + 1) * n];
             bad += compare(&format!("{what} plane {k} dC_raw"), &channel(slot, 0..3), &g_raw.data);
@@ -303,14 +305,18 @@ fn check_rasterize_bwd_stage(
     let (w, h) = layer_grads.size;
     let n_px = (w * h) as usize;
     let n = gpu_pg.len() / 12;
-    let inter = frame.read_intermediates(ctx, 0, n).expect("captured intermediates");
+    let inter =
+        frame.read_intermediates(ctx, 0, n).expect("readback").expect("captured intermediates");
     let projected = to_reference(&inter.projected);
-    let states: Vec<PixelState> = frame.read_states(ctx).iter().map(pixel_state).collect();
-    let depth = frame.read_layer(ctx, Layer::Depth);
+    let states: Vec<PixelState> =
+        frame.read_states(ctx).expect("readback").iter().map(pixel_state).collect();
+    let depth = frame.read_layer(ctx, Layer::Depth).expect("readback");
     let mut d = Image::new(w, h, 1);
     d.data = depth.data.iter().map(|&v| f64::from(v)).collect();
-    let t: Vec<[f32; 4]> = gpu::read_buffer(ctx, &layer_grads.transmission, 0, n_px);
-    let geo: Vec<[f32; 4]> = gpu::read_buffer(ctx, &layer_grads.geometry, 0, n_px);
+    let t: Vec<[f32; 4]> =
+        gpu::read_buffer(ctx, &layer_grads.transmission, 0, n_px).expect("readback");
+    let geo: Vec<[f32; 4]> =
+        gpu::read_buffer(ctx, &layer_grads.geometry, 0, n_px).expect("readback");
     let (transmission, alpha) = (image_of(&t, 0..3, w, h), image_of(&t, 3..4, w, h));
     let (g_depth, g_v, g_m) =
         (image_of(&geo, 0..1, w, h), image_of(&geo, 1..2, w, h), image_of(&geo, 2..3, w, h));
@@ -442,7 +448,7 @@ fn check_backward(name: &str, mut scene: trgs_core::fixtures::Scene, block: bool
         let bwd = BackwardOptions { block_reflection_to_gaussians: block, profile: false };
         let out = renderer.backward(&gpu_scene, &mut frame, &layer_grads, &bwd).expect("backward");
 
-        let pg = out.read_projected_grads(&ctx, 0).expect("primary view");
+        let pg = out.read_projected_grads(&ctx, 0).expect("readback").expect("primary view");
         let gpu_pg: Vec<f32> = pg.iter().flatten().copied().collect();
         check_rasterize_bwd_stage(&what, &ctx, &frame, &layer_grads, background, &gpu_pg);
         let cpu_pg: Vec<f64> = (0..n).flat_map(|i| projected_record(&cpu_pg, i)).collect();
@@ -453,7 +459,7 @@ fn check_backward(name: &str, mut scene: trgs_core::fixtures::Scene, block: bool
             check_scaled_within(&format!("{what} rasterize_bwd {field}"), &gv, &cv, 1e-3, skip);
         }
 
-        let gg = out.gaussians.read(&ctx);
+        let gg = out.gaussians.read(&ctx).expect("readback");
         let c = &cpu.gaussians;
         check_scaled_within(
             &format!("{what} means"),

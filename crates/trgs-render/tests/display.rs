@@ -34,9 +34,10 @@ fn every_layer_matches_the_twin() {
             let range = [0.5, 6.0];
             renderer.display(&frame, layer, range, &target).expect("displays");
             let (buffer, mapping) = layer_mapping(&frame, layer, range).expect("rendered");
-            let input: Vec<[f32; 4]> = gpu::read_buffer(&ctx, buffer, 0, (w * h) as usize);
+            let input: Vec<[f32; 4]> =
+                gpu::read_buffer(&ctx, buffer, 0, (w * h) as usize).expect("readback");
             let want = display(&input, mapping);
-            let got = target.read_rgba(&ctx);
+            let got = target.read_rgba(&ctx).expect("readback");
             let mut worst = 0i32;
             for (p, &word) in want.iter().enumerate() {
                 for (c, &b) in word.to_le_bytes().iter().enumerate() {

@@ -49,13 +49,14 @@ fn check_scene(name: &str, spec: SceneSpec, chunk: Option<u32>) {
     let frame = renderer.render(&gpu_scene, &scene.camera, &options).expect("render");
     let k = &scene.camera.intrinsics;
     let grid = TileGrid::new(k.width, k.height);
-    let images = frame.read_images(&ctx);
+    let images = frame.read_images(&ctx).expect("readback");
     let n = g.len();
     let mut bad = 0;
     let mut all_counts = Vec::new();
     for (vi, view) in frame.views().iter().enumerate() {
         let what = format!("{name} view {vi}");
-        let inter = frame.read_intermediates(&ctx, vi, n).expect("intermediates");
+        let inter =
+            frame.read_intermediates(&ctx, vi, n).expect("readback").expect("intermediates");
         // project: against the twin in f64 from the same f32 parameters.
         let filter = match view.plane {
             Some(p) => ProjectionFilter::FrontOf(&scene.planes[p]),
@@ -127,7 +128,7 @@ fn check_scene(name: &str, spec: SceneSpec, chunk: Option<u32>) {
                 bad += compare(&format!("{what} V"), &images.depth_variance, &out.depth_variance);
                 bad += compare(&format!("{what} M"), &images.mask, &out.mask);
                 bad += compare(&format!("{what} alpha"), &images.alpha, &out.alpha);
-                let states = frame.read_states(&ctx);
+                let states = frame.read_states(&ctx).expect("readback");
                 let stops = states
                     .iter()
                     .zip(&out.pixels)
@@ -153,10 +154,10 @@ fn check_scene(name: &str, spec: SceneSpec, chunk: Option<u32>) {
         }
     }
     // The depth order of all views together, and the scan of its counts: exact.
-    let depth = frame.read_depth_order(&ctx).expect("depth order");
+    let depth = frame.read_depth_order(&ctx).expect("readback").expect("depth order");
     let mut expected: Vec<(u32, u32, u32)> = Vec::new();
     for (vi, counts) in all_counts.iter().enumerate() {
-        let projected = frame.read_projected(&ctx, vi).expect("projected");
+        let projected = frame.read_projected(&ctx, vi).expect("readback").expect("projected");
         for (i, &c) in counts.iter().enumerate() {
             if c > 0 {
                 let entry = (vi * n + i) as u32;

@@ -27,7 +27,11 @@ fn empty_scene_shows_the_background() {
     let camera = Camera::new("c", Intrinsics::from_fov_x(1.0, 40, 30), Pose::default());
     let scene = GpuScene::upload(&ctx, &Gaussians::<f32>::empty(0), &[]).expect("empty is valid");
     let opts = RenderOptions { background: [0.25, 0.5, 0.75], ..Default::default() };
-    let f = Renderer::new(&ctx).render(&scene, &camera, &opts).expect("render").read_images(&ctx);
+    let f = Renderer::new(&ctx)
+        .render(&scene, &camera, &opts)
+        .expect("render")
+        .read_images(&ctx)
+        .expect("readback");
     assert!(f.color.data.chunks(3).all(|p| p == [0.25, 0.5, 0.75]));
     assert!(f.alpha.data.iter().all(|&a| a == 0.0));
 }
@@ -45,7 +49,7 @@ fn one_pixel_image_and_gaussians_behind_the_camera() {
     let scene = GpuScene::upload(&ctx, &s.gaussians.cast(), &s.planes).expect("valid");
     let renderer = Renderer::new(&ctx);
     let f = renderer.render(&scene, &s.camera, &RenderOptions::default()).expect("render");
-    assert!(all_finite(&f.read_images(&ctx)));
+    assert!(all_finite(&f.read_images(&ctx).expect("readback")));
     // Turn the camera around: everything is behind it.
     let mut back = s.camera.clone();
     back.pose = Pose::look_at(s.camera.pose.centre(), 2.0 * s.camera.pose.centre(), DVec3::Y);
@@ -67,7 +71,7 @@ fn camera_behind_or_on_the_plane_skips_the_mirrored_pass() {
         cam.pose = Pose::look_at(eye, DVec3::new(0.0, 0.5, 1.0), DVec3::Y);
         let f = renderer.render(&scene, &cam, &RenderOptions::default()).expect("render");
         assert!(!f.plane_rendered(0), "{name}: the mirrored pass must not run");
-        let img = f.read_images(&ctx);
+        let img = f.read_images(&ctx).expect("readback");
         assert!(all_finite(&img), "{name}");
         assert_eq!(img.color.data, img.transmission.data, "{name}: C = C_t");
     }
@@ -92,7 +96,11 @@ fn a_plane_switched_off_does_not_hide_the_plane_behind_it() {
     let images = |planes: &[ReflectionPlane], enabled: Vec<bool>| {
         let scene = GpuScene::upload(&ctx, &g, planes).expect("valid");
         let options = RenderOptions { enabled_planes: enabled, ..Default::default() };
-        renderer.render(&scene, &s.camera, &options).expect("render").read_images(&ctx)
+        renderer
+            .render(&scene, &s.camera, &options)
+            .expect("render")
+            .read_images(&ctx)
+            .expect("readback")
     };
     let both = images(&[back, front], vec![true, true]);
     let front_off = images(&[back, front], vec![true, false]);
@@ -123,7 +131,7 @@ fn extreme_scales_stay_finite() {
     let scene = GpuScene::upload(&ctx, &s.gaussians.cast(), &s.planes).expect("valid");
     let f =
         Renderer::new(&ctx).render(&scene, &s.camera, &RenderOptions::default()).expect("render");
-    assert!(all_finite(&f.read_images(&ctx)));
+    assert!(all_finite(&f.read_images(&ctx).expect("readback")));
 }
 
 #[test]
@@ -165,7 +173,7 @@ fn huge_gaussians_extreme_logits_are_culled_alike_on_gpu_and_twin() {
     let a = renderer.render(&without, &s.camera, &opts).expect("render");
     let b = renderer.render(&with, &s.camera, &opts).expect("render");
     assert_eq!(a.key_count(), b.key_count(), "the GPU culls them too");
-    let (ia, ib) = (a.read_images(&ctx), b.read_images(&ctx));
+    let (ia, ib) = (a.read_images(&ctx).expect("readback"), b.read_images(&ctx).expect("readback"));
     assert!(all_finite(&ib));
     assert_eq!(ia.color.data, ib.color.data);
     // A reflection intensity f32 cannot carry through compose is refused by name.
@@ -214,7 +222,7 @@ fn half_a_million_gaussians_render() {
     let scene = GpuScene::upload(&ctx, &s.gaussians.cast(), &s.planes).expect("valid");
     let f =
         Renderer::new(&ctx).render(&scene, &s.camera, &RenderOptions::default()).expect("render");
-    let img = f.read_images(&ctx);
+    let img = f.read_images(&ctx).expect("readback");
     assert!(all_finite(&img));
     let limit = ctx.device.limits().max_storage_buffer_binding_size;
     eprintln!(
@@ -262,7 +270,11 @@ fn frames_over_the_binding_limit_are_refused_with_a_clear_error() {
         .expect_err("too many keys");
     let text = err.to_string();
     assert!(text.contains("\"wide\"") && text.contains("tile keys"), "{text}");
-    assert_eq!(frame.read_layer(&ctx, Layer::Color).data.len(), 0, "no stale image");
+    assert_eq!(
+        frame.read_layer(&ctx, Layer::Color).expect("readback").data.len(),
+        0,
+        "no stale image"
+    );
     let err = renderer
         .backward(&big, &mut frame, &old_grads, &BackwardOptions::default())
         .expect_err("nothing rendered");

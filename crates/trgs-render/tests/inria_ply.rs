@@ -17,7 +17,7 @@ fn inria_layout_ply_renders_like_the_reference() {
     let scene = GpuScene::upload(&ctx, &g, &[]).expect("valid model");
     let frame =
         Renderer::new(&ctx).render(&scene, &camera, &RenderOptions::default()).expect("render");
-    let gpu = frame.read_layer(&ctx, Layer::Color);
+    let gpu = frame.read_layer(&ctx, Layer::Color).expect("readback");
     let cpu = reference::render(&g.cast::<f64>(), &[], &camera, &RenderSettings::default())
         .expect("reference");
     let mut worst = 0.0f64;

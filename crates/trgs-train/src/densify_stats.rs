@@ -54,13 +54,13 @@ impl GpuDensifyStats {
     }
 
     /// The statistics, read back.
-    pub fn read(&self, ctx: &GpuContext) -> DensifyStats {
-        let data: Vec<[f32; STATS_FLOATS]> = gpu::read_buffer(ctx, &self.buffer, 0, self.len);
-        DensifyStats {
+    pub fn read(&self, ctx: &GpuContext) -> Result<DensifyStats, gpu::GpuError> {
+        let data: Vec<[f32; STATS_FLOATS]> = gpu::read_buffer(ctx, &self.buffer, 0, self.len)?;
+        Ok(DensifyStats {
             grad_sum: data.iter().map(|s| f64::from(s[0])).collect(),
             count: data.iter().map(|s| s[1] as u32).collect(),
             max_radius: data.iter().map(|s| f64::from(s[2])).collect(),
-        }
+        })
     }
 
     /// Record the addition of one step: the first `views` passes of `frame` (the camera's, then

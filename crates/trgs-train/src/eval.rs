@@ -29,7 +29,7 @@ impl Renderable<'_> {
     }
 
     pub fn layer(&self, view: &View, layer: Layer) -> Result<trgs_core::Image<f32>> {
-        Ok(self.frame(view)?.read_layer(self.ctx, layer))
+        Ok(self.frame(view)?.read_layer(self.ctx, layer)?)
     }
 }
 
@@ -231,9 +231,9 @@ pub fn compare_with_truth(
         let truth = read_rgb_image(&path)?;
         let truth = resize_area(&truth, v.camera.width(), v.camera.height());
         let frame = model.frame(v)?;
-        let t = frame.read_layer(model.ctx, Layer::Transmission);
+        let t = frame.read_layer(model.ctx, Layer::Transmission)?;
         psnrs.push(psnr(&t, &truth)?);
-        let color = frame.read_layer(model.ctx, Layer::Color);
+        let color = frame.read_layer(model.ctx, Layer::Color)?;
         let context = || format!("comparing {} with {}", v.camera.name, path.display());
         let splits = [
             region_errors(&color, &v.image, &v.image, &truth).with_context(context)?,
@@ -272,15 +272,15 @@ pub fn write_renders(model: &Renderable, data: &TrainingData, dir: &Path) -> Res
         let frame = model.frame(v)?;
         write_png_rgb(
             &dir.join(format!("{stem}.png")),
-            &frame.read_layer(model.ctx, Layer::Color),
+            &frame.read_layer(model.ctx, Layer::Color)?,
         )?;
         if !has_planes {
             continue;
         }
         let layers = dir.join("layers");
-        let ct = frame.read_layer(model.ctx, Layer::Transmission);
-        let cr = frame.read_layer(model.ctx, Layer::Reflection);
-        let r = frame.read_layer(model.ctx, Layer::Strength);
+        let ct = frame.read_layer(model.ctx, Layer::Transmission)?;
+        let cr = frame.read_layer(model.ctx, Layer::Reflection)?;
+        let r = frame.read_layer(model.ctx, Layer::Strength)?;
         let mut weighted = cr.clone();
         for (i, px) in weighted.data.chunks_exact_mut(3).enumerate() {
             px.iter_mut().for_each(|c| *c *= r.data[i]);

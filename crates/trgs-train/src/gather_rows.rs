@@ -131,7 +131,8 @@ impl GpuRowGather {
         scene: &GpuScene,
         moments: &[AdamMoments],
         plan: &RowPlan,
-    ) -> (GpuScene, Vec<AdamMoments>) {
+    ) -> Result<(GpuScene, Vec<AdamMoments>), gpu::GpuError> {
+        let scopes = gpu::ErrorScopes::open(ctx, "rebuilding the Gaussians");
         let sources = GatherSources::new(ctx, &plan.sources);
         let n_src = scene.len();
         let mut rec = Recorder::new(ctx, "trgs.gather_rows", false);
@@ -155,7 +156,7 @@ impl GpuRowGather {
                 AdamMoments { m, v, len: u64::from(sources.len()) * u64::from(width) }
             })
             .collect();
-        rec.submit_and_wait(ctx);
-        (rebuilt, moments)
+        let waited = rec.submit_and_wait(ctx);
+        scopes.close_after(waited.map(|()| (rebuilt, moments)))
     }
 }

@@ -14,7 +14,7 @@
 //! statistics.
 use trgs_core::Image;
 use trgs_core::reference::RegulariserWeights;
-use trgs_render::gpu::{self, BufferPool, Kernel, Recorder};
+use trgs_render::gpu::{self, BufferPool, GpuError, Kernel, Recorder};
 use trgs_render::layout::{LOSS_STRIP, LossParams};
 use trgs_render::{Frame, GpuContext, LayerGrads};
 
@@ -141,8 +141,8 @@ pub struct PendingLoss {
 
 impl PendingLoss {
     /// Sum the strips' sums (blocking read of 32 bytes per strip).
-    pub fn read(&self, ctx: &GpuContext) -> LossValues {
-        let partials = gpu::read_buffer::<[f32; 4]>(ctx, &self.partials, 0, 2 * self.strips);
+    pub fn read(&self, ctx: &GpuContext) -> Result<LossValues, GpuError> {
+        let partials = gpu::read_buffer::<[f32; 4]>(ctx, &self.partials, 0, 2 * self.strips)?;
         let total = |slot: usize| {
             partials.iter().skip(slot).step_by(2).fold([0.0f64; 3], |acc, p| {
                 [acc[0] + f64::from(p[0]), acc[1] + f64::from(p[1]), acc[2] + f64::from(p[2])]
@@ -156,7 +156,7 @@ impl PendingLoss {
             [0.0; 3]
         };
         let lambda = self.lambda_dssim;
-        LossValues {
+        Ok(LossValues {
             value: (1.0 - lambda) * l1 + lambda * (1.0 - ssim),
             l1,
             ssim,
@@ -164,7 +164,7 @@ impl PendingLoss {
             depth,
             conflict,
             mask,
-        }
+        })
     }
 }
 

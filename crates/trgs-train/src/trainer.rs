@@ -125,6 +125,18 @@ impl Trainer {
         settings: TrainSettings,
         extent: f64,
     ) -> Result<Self> {
+        trgs_render::gpu::scoped(ctx, "setting up training", || {
+            Self::new_scoped(ctx, gaussians, planes, settings, extent)
+        })
+    }
+
+    fn new_scoped(
+        ctx: &GpuContext,
+        gaussians: &Gaussians<f32>,
+        planes: &[ReflectionPlane],
+        settings: TrainSettings,
+        extent: f64,
+    ) -> Result<Self> {
         let scene = GpuScene::upload(ctx, gaussians, planes).context("uploading the Gaussians")?;
         let moments = zero_moments(ctx, &scene);
         Ok(Self {
@@ -176,16 +188,16 @@ impl Trainer {
     }
 
     /// Everything needed to continue this run later, with `extra` for the caller's own state.
-    pub fn checkpoint(&self, extra: serde_json::Value) -> Checkpoint {
-        Checkpoint {
+    pub fn checkpoint(&self, extra: serde_json::Value) -> Result<Checkpoint> {
+        Ok(Checkpoint {
             step: self.step,
-            state: self.read_state(),
+            state: self.read_state()?,
             planes: self.scene.planes().to_vec(),
             plane_moments: self.plane_moments.clone(),
-            densify_stats: self.densify.as_ref().map(|(_, s)| s.read(&self.ctx)),
+            densify_stats: self.densify.as_ref().map(|(_, s)| s.read(&self.ctx)).transpose()?,
             rng_state: self.rng.state(),
             extra,
-        }
+        })
     }
 
     /// The training cameras (for the opacity perturbation; without them it perturbs nothing).
@@ -207,7 +219,7 @@ impl Trainer {
         {
             return Ok(0);
         }
-        let mut g = self.gaussians();
+        let mut g = self.gaussians()?;
         let selected = seen_through_planes(&g, self.scene.planes(), &self.camera_centres);
         let n = perturb_opacities(&mut g, &selected, p.amplitude, &mut self.rng);
         // Only the opacity buffer changes: the moments and densification statistics stay.
@@ -230,19 +242,26 @@ impl Trainer {
     }
 
     /// The parameters and Adam moments, read back.
-    pub fn read_state(&self) -> TrainState {
-        let read = |b: &wgpu::Buffer, len: u64| -> Vec<f32> {
-            trgs_render::gpu::read_buffer(&self.ctx, b, 0, len as usize)
+    pub fn read_state(&self) -> Result<TrainState> {
+        let read = |b: &wgpu::Buffer, len: u64| {
+            trgs_render::gpu::read_buffer::<f32>(&self.ctx, b, 0, len as usize)
         };
-        TrainState {
-            gaussians: self.gaussians(),
-            m: self.moments.iter().map(|mo| read(&mo.m, mo.len)).collect(),
-            v: self.moments.iter().map(|mo| read(&mo.v, mo.len)).collect(),
-        }
+        Ok(TrainState {
+            gaussians: self.gaussians()?,
+            m: self.moments.iter().map(|mo| read(&mo.m, mo.len)).collect::<Result<_, _>>()?,
+            v: self.moments.iter().map(|mo| read(&mo.v, mo.len)).collect::<Result<_, _>>()?,
+        })
     }
 
     /// Replace the parameters and moments (after an edit such as densification).
     pub fn set_state(&mut self, state: &TrainState) -> Result<()> {
+        let ctx = self.ctx.clone();
+        trgs_render::gpu::scoped(&ctx, "uploading the training state", || {
+            self.set_state_scoped(state)
+        })
+    }
+
+    fn set_state_scoped(&mut self, state: &TrainState) -> Result<()> {
         let planes = self.scene.planes().to_vec();
         self.scene = GpuScene::upload(&self.ctx, &state.gaussians, &planes)
             .context("uploading the edited Gaussians")?;
@@ -285,7 +304,7 @@ impl Trainer {
             // a densification does, used to clear them).
             let opacity = self.scene.parameters()[3];
             let mut logits: Vec<f32> =
-                trgs_render::gpu::read_buffer(&self.ctx, opacity, 0, self.scene.len() as usize);
+                trgs_render::gpu::read_buffer(&self.ctx, opacity, 0, self.scene.len() as usize)?;
             cap_opacity_logits(&mut logits);
             self.write_opacity_logits(&logits);
             let mut enc = self.ctx.device.create_command_encoder(&Default::default());
@@ -309,8 +328,8 @@ impl Trainer {
     }
 
     /// The current Gaussians, read back from the GPU.
-    pub fn gaussians(&self) -> Gaussians<f32> {
-        self.scene.read(&self.ctx)
+    pub fn gaussians(&self) -> Result<Gaussians<f32>> {
+        Ok(self.scene.read(&self.ctx)?)
     }
 
     pub fn planes(&self) -> &[ReflectionPlane] {
@@ -343,7 +362,19 @@ impl Trainer {
     /// model the step made, not the moment an opacity reset or perturbation knocked it back
     /// (the training recovers from those within a few steps). Its time is not in the step's
     /// phase times.
+    /// A GPU failure (out of memory, a lost device) ends the step with an error, not a panic.
     pub fn train_step_then(
+        &mut self,
+        view: &View,
+        before_maintenance: impl FnOnce(&Trainer) -> Result<()>,
+    ) -> Result<StepStats> {
+        let ctx = self.ctx.clone();
+        trgs_render::gpu::scoped(&ctx, "a training step", || {
+            self.train_step_scoped(view, before_maintenance)
+        })
+    }
+
+    fn train_step_scoped(
         &mut self,
         view: &View,
         before_maintenance: impl FnOnce(&Trainer) -> Result<()>,
@@ -359,7 +390,7 @@ impl Trainer {
         let mut times = StepTimes::default();
         let mut clock = PhaseClock::start();
         self.renderer.render_into(&self.scene, &view.camera, &options, &mut self.frame)?;
-        times.render = clock.lap(&self.ctx);
+        times.render = clock.lap(&self.ctx)?;
         let target = match self.targets.entry(view.camera.name.clone()) {
             std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
             std::collections::hash_map::Entry::Vacant(e) => e.insert(GpuTarget::upload(
@@ -396,19 +427,19 @@ impl Trainer {
                 &loss_settings,
             )
             .with_context(|| format!("loss of view {}", view.camera.name))?;
-        rec.submit_and_wait(ctx);
-        let loss = pending.read(ctx);
+        rec.submit_and_wait(ctx)?;
+        let loss = pending.read(ctx)?;
         if !loss.value.is_finite() {
             anyhow::bail!("loss of view {}: not finite ({})", view.camera.name, loss.value);
         }
         let loss_stages = rec.stage_times().unwrap_or_default();
-        times.loss = clock.lap(&self.ctx);
+        times.loss = clock.lap(&self.ctx)?;
         let backward = BackwardOptions {
             block_reflection_to_gaussians: stage == Stage::PlaneAdjustment,
             profile: self.profile,
         };
         let g = self.renderer.backward(&self.scene, &mut self.frame, layer_grads, &backward)?;
-        times.backward = clock.lap(&self.ctx);
+        times.backward = clock.lap(&self.ctx)?;
         let gpu_stages: Vec<_> =
             [self.frame.stage_times(), Some(&loss_stages[..]), g.stage_times()]
                 .into_iter()
@@ -455,14 +486,14 @@ impl Trainer {
             let views = if stage == Stage::Joint { self.frame.views().len() } else { 1 };
             stats.record_add(ctx, &mut rec, &self.frame, &g, views);
         }
-        rec.submit_and_wait(ctx);
+        rec.submit_and_wait(ctx)?;
         self.step_planes(&g.planes, t)?;
-        times.adam = clock.lap(&self.ctx);
+        times.adam = clock.lap(&self.ctx)?;
         before_maintenance(self)?;
-        clock.lap(&self.ctx);
+        clock.lap(&self.ctx)?;
         self.densify_step()?;
         let perturbed = self.perturb_step()?;
-        times.densify = clock.lap(&self.ctx);
+        times.densify = clock.lap(&self.ctx)?;
         Ok(StepStats {
             loss: loss.value,
             l1: loss.l1,
@@ -476,7 +507,7 @@ impl Trainer {
 
     /// Add reflection planes and their glass Gaussians (zero moments) to the optimisation.
     pub fn add_planes(&mut self, planes: &[ReflectionPlane], glass: &Gaussians<f32>) -> Result<()> {
-        let mut state = self.read_state();
+        let mut state = self.read_state()?;
         let n_old = state.gaussians.len();
         let g = &mut state.gaussians;
         g.means.extend_from_slice(&glass.means);
@@ -544,12 +575,12 @@ impl PhaseClock {
     }
 
     /// Milliseconds since the previous lap.
-    fn lap(&mut self, ctx: &GpuContext) -> f64 {
-        trgs_render::gpu::wait_for_gpu(ctx, "a training phase");
+    fn lap(&mut self, ctx: &GpuContext) -> Result<f64, trgs_render::GpuError> {
+        trgs_render::gpu::wait_for_gpu(ctx, "a training phase")?;
         let now = std::time::Instant::now();
         let ms = 1e3 * (now - self.last).as_secs_f64();
         self.last = now;
-        ms
+        Ok(ms)
     }
 }
 

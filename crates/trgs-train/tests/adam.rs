@@ -49,13 +49,13 @@ fn gpu_adam_matches_twin() {
         let rate = AdamRate { lr, lead_lr: 20.0 * lr, lead: 3, stride: 48 };
         let mut rec = Recorder::new(&ctx, "test.adam", false);
         adam_gpu.record(&ctx, &mut rec, &values, &g_buf, &moments, &rate, t);
-        rec.submit_and_wait(&ctx);
+        rec.submit_and_wait(&ctx).expect("GPU work");
         adam(&mut params, &grads, &mut m, &mut v, &rate, t, &adam_gpu.settings);
         for (i, s) in step_sum.iter_mut().enumerate() {
             *s += rate.at(i);
         }
     }
-    let got: Vec<f32> = gpu::read_buffer(&ctx, &values, 0, n);
+    let got: Vec<f32> = gpu::read_buffer(&ctx, &values, 0, n).expect("readback");
     // f32 rounding: a few ulps of the parameter, plus a relative error of the updates (1 - beta2
     // is 0.001 + 4.7e-8 in f32, which moves sqrt(v) by 2.3e-5 relative) times their size.
     let mut worst = 0.0f64;

@@ -60,8 +60,8 @@ fn gpu_densify_stats_match_twin() {
     let passes: Vec<_> = (0..frame.views().len())
         .map(|vi| {
             (
-                frame.read_projected(&ctx, vi).expect("view"),
-                grads.read_projected_grads(&ctx, vi).expect("view"),
+                frame.read_projected(&ctx, vi).expect("readback").expect("view"),
+                grads.read_projected_grads(&ctx, vi).expect("readback").expect("view"),
             )
         })
         .collect();
@@ -71,10 +71,10 @@ fn gpu_densify_stats_match_twin() {
         for _ in 0..2 {
             let mut rec = Recorder::new(&ctx, "test.densify_stats", false);
             gpu.record_add(&ctx, &mut rec, &frame, &grads, views);
-            rec.submit_and_wait(&ctx);
+            rec.submit_and_wait(&ctx).expect("GPU work");
             twin.add(&passes[..views], frame.width(), frame.height());
         }
-        let got = gpu.read(&ctx);
+        let got = gpu.read(&ctx).expect("readback");
         assert_eq!(got.count, twin.count, "{views} passes: observations");
         assert!(twin.count.contains(&2), "{views} passes: some Gaussians seen");
         assert_eq!(got.max_radius, twin.max_radius, "{views} passes: radii");
@@ -106,12 +106,12 @@ fn densify_stats_survive_a_checkpoint_and_reset() {
     };
     let mut gpu = GpuDensifyStats::from_stats(&ctx, &stats);
     assert_eq!(
-        gpu.read(&ctx),
+        gpu.read(&ctx).expect("readback"),
         DensifyStats {
             grad_sum: stats.grad_sum.iter().map(|&v| f64::from(v as f32)).collect(),
             ..stats.clone()
         }
     );
     gpu.reset(&ctx, 5);
-    assert_eq!(gpu.read(&ctx), DensifyStats::new(5));
+    assert_eq!(gpu.read(&ctx).expect("readback"), DensifyStats::new(5));
 }

@@ -26,16 +26,17 @@ fn hook_runs_after_the_update_and_before_the_opacity_reset() {
     (densify.from, densify.until, densify.every, densify.opacity_reset_every) = (50, 60, 50, 3);
     trainer.enable_densification(densify);
     let cap = (0.01f32 / 0.99).ln();
-    let max_logit =
-        |t: &Trainer| t.gaussians().opacity_logits.iter().copied().fold(f32::MIN, f32::max);
+    let max_logit = |t: &Trainer| {
+        t.gaussians().expect("readback").opacity_logits.iter().copied().fold(f32::MIN, f32::max)
+    };
     for v in &data.train[..2] {
         trainer.train_step(v).expect("step");
     }
-    let before = trainer.gaussians().means;
+    let before = trainer.gaussians().expect("readback").means;
     let mut seen = None;
     trainer
         .train_step_then(&data.train[2], |t| {
-            seen = Some((t.step, max_logit(t), t.gaussians().means != before));
+            seen = Some((t.step, max_logit(t), t.gaussians().expect("readback").means != before));
             Ok(())
         })
         .expect("step");
@@ -45,7 +46,7 @@ fn hook_runs_after_the_update_and_before_the_opacity_reset() {
     assert!(logit > cap + 1.0, "the hook ran after the reset: largest logit {logit}");
     assert!(max_logit(&trainer) <= cap, "the reset did not follow the hook");
     // The reset clears the opacities' moments only.
-    let state = trainer.read_state();
+    let state = trainer.read_state().expect("readback");
     assert!(state.m[3].iter().chain(&state.v[3]).all(|&x| x == 0.0));
     assert!(state.m[0].iter().any(|&x| x != 0.0), "the means' moments stay");
 }

@@ -69,9 +69,11 @@ fn upload(
 }
 
 fn read_back(ctx: &GpuContext, scene: &GpuScene, moments: &[AdamMoments]) -> TrainState {
-    let read = |b: &wgpu::Buffer, len: u64| -> Vec<f32> { read_buffer(ctx, b, 0, len as usize) };
+    let read = |b: &wgpu::Buffer, len: u64| -> Vec<f32> {
+        read_buffer(ctx, b, 0, len as usize).expect("readback")
+    };
     TrainState {
-        gaussians: scene.read(ctx),
+        gaussians: scene.read(ctx).expect("readback"),
         m: moments.iter().map(|mo| read(&mo.m, mo.len)).collect(),
         v: moments.iter().map(|mo| read(&mo.v, mo.len)).collect(),
     }
@@ -101,14 +103,15 @@ fn gather_rows_matches_twin_in_one_range_and_in_many() {
         }
         for give in [false, true] {
             let plan = random_plan(1000, &mut rng, give);
-            let (scene2, moments2) = gather.apply(&ctx, &scene, &moments, &plan);
+            let (scene2, moments2) = gather.apply(&ctx, &scene, &moments, &plan).expect("rebuild");
             let what = format!("binding {binding_words:?}, given attributes {give}");
             assert_same(&read_back(&ctx, &scene2, &moments2), &plan.apply(&s), &what);
         }
     }
     // Everything pruned: an empty set.
     let gather = GpuRowGather::new(&ctx);
-    let (empty, moments0) = gather.apply(&ctx, &scene, &moments, &RowPlan::default());
+    let (empty, moments0) =
+        gather.apply(&ctx, &scene, &moments, &RowPlan::default()).expect("rebuild");
     assert_eq!(empty.len(), 0);
     assert!(moments0.iter().all(|m| m.len == 0));
 }
@@ -154,7 +157,11 @@ fn trainers(ctx: &GpuContext) -> (Trainer, Trainer, Checkpoint) {
 fn densification_on_the_gpu_matches_the_cpu_rebuild() {
     let ctx = ctx();
     let (mut gpu, mut cpu, ck) = trainers(&ctx);
-    assert_eq!(gpu.geometry(), Geometry::of(&ck.state.gaussians), "the geometry read back");
+    assert_eq!(
+        gpu.geometry().expect("readback"),
+        Geometry::of(&ck.state.gaussians),
+        "the geometry read back"
+    );
     let report = gpu.densify_now(true).expect("densify on the GPU");
     let stats = ck.densify_stats.as_ref().expect("statistics");
     let settings = {
@@ -168,9 +175,17 @@ fn densification_on_the_gpu_matches_the_cpu_rebuild() {
     assert_eq!(report, twin_report);
     assert!(report.cloned > 0 && report.split > 0 && report.pruned > 0, "{report:?}");
     cpu.apply_plan_on_cpu(&plan).expect("rebuild on the CPU");
-    assert_same(&gpu.read_state(), &cpu.read_state(), "classic densification");
+    assert_same(
+        &gpu.read_state().expect("readback"),
+        &cpu.read_state().expect("readback"),
+        "classic densification",
+    );
     // The statistics start over for the new set.
-    let after = gpu.checkpoint(serde_json::Value::Null).densify_stats.expect("statistics");
+    let after = gpu
+        .checkpoint(serde_json::Value::Null)
+        .expect("readback")
+        .densify_stats
+        .expect("statistics");
     assert_eq!(after.count, vec![0; plan.sources.len()]);
 }
 
@@ -187,7 +202,11 @@ fn relocation_on_the_gpu_matches_the_cpu_rebuild() {
     assert_eq!(report, twin_report);
     assert!(report.relocated > 0 && report.added > 0, "{report:?}");
     cpu.apply_plan_on_cpu(&plan).expect("rebuild on the CPU");
-    assert_same(&gpu.read_state(), &cpu.read_state(), "MCMC relocation");
+    assert_same(
+        &gpu.read_state().expect("readback"),
+        &cpu.read_state().expect("readback"),
+        "MCMC relocation",
+    );
 }
 
 #[test]

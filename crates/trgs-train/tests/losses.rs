@@ -146,9 +146,11 @@ fn check(ctx: &GpuContext, kernels: &mut LossKernels, l: &Layers, labelled: bool
     let mut rec = Recorder::new(ctx, "test.losses", false);
     let pending =
         kernels.record(ctx, &mut rec, &inputs, &target, &grads, &settings).expect("same size");
-    rec.submit_and_wait(ctx);
-    let values = pending.read(ctx);
-    let read = |b: &wgpu::Buffer| -> Vec<[f32; 4]> { gpu::read_buffer(ctx, b, 0, pixels as usize) };
+    rec.submit_and_wait(ctx).expect("GPU work");
+    let values = pending.read(ctx).expect("readback");
+    let read = |b: &wgpu::Buffer| -> Vec<[f32; 4]> {
+        gpu::read_buffer(ctx, b, 0, pixels as usize).expect("readback")
+    };
     let rgb = |v: &[[f32; 4]]| -> Vec<f32> { v.iter().flat_map(|p| [p[0], p[1], p[2]]).collect() };
 
     // photometric_loss
@@ -178,7 +180,8 @@ fn check(ctx: &GpuContext, kernels: &mut LossKernels, l: &Layers, labelled: bool
     // regularisers, or zeros where the backward accumulates
     let g_t = read(&grads.transmission);
     let g_geo = read(&grads.geometry);
-    let raw: Vec<[f32; 4]> = gpu::read_buffer(ctx, &grads.reflection_raw, 0, 2 * pixels as usize);
+    let raw: Vec<[f32; 4]> =
+        gpu::read_buffer(ctx, &grads.reflection_raw, 0, 2 * pixels as usize).expect("readback");
     assert!(raw.iter().flatten().all(|&v| v == 0.0), "{tag}: dL/dC_raw not reset");
     if !planes {
         assert!(

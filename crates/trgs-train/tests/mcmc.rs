@@ -48,7 +48,7 @@ fn gpu_mcmc_stages_match_twins() {
     ctx.queue.write_buffer(&grads.opacity_logits, 0, bytemuck::cast_slice(&g_opacity));
     let mut rec = Recorder::new(&ctx, "test.mcmc", false);
     kernels.record_regularise(&ctx, &mut rec, &gpu_scene, &grads, &settings);
-    rec.submit_and_wait(&ctx);
+    rec.submit_and_wait(&ctx).expect("GPU work");
     let mut want_o: Vec<f64> = g_opacity.iter().map(|&v| f64::from(v)).collect();
     let mut want_s: Vec<[f64; 3]> =
         g_scales.chunks(3).map(|c| [c[0], c[1], c[2]].map(f64::from)).collect();
@@ -60,8 +60,8 @@ fn gpu_mcmc_stages_match_twins() {
         &mut want_o,
         &mut want_s,
     );
-    let got_o: Vec<f32> = gpu::read_buffer(&ctx, &grads.opacity_logits, 0, n);
-    let got_s: Vec<f32> = gpu::read_buffer(&ctx, &grads.log_scales, 0, 3 * n);
+    let got_o: Vec<f32> = gpu::read_buffer(&ctx, &grads.opacity_logits, 0, n).expect("readback");
+    let got_s: Vec<f32> = gpu::read_buffer(&ctx, &grads.log_scales, 0, 3 * n).expect("readback");
     let close = |a: f32, b: f64| (f64::from(a) - b).abs() <= 1e-6 * b.abs() + 1e-12;
     for i in 0..n {
         assert!(close(got_o[i], want_o[i]), "opacity gradient {i}: {} vs {}", got_o[i], want_o[i]);
@@ -76,10 +76,10 @@ fn gpu_mcmc_stages_match_twins() {
     let seed = 77;
     let mut rec = Recorder::new(&ctx, "test.mcmc", false);
     kernels.record_noise(&ctx, &mut rec, &gpu_scene, &settings, &lr, seed);
-    rec.submit_and_wait(&ctx);
+    rec.submit_and_wait(&ctx).expect("GPU work");
     let mut want = twin.clone();
     mcmc_noise(&mut want, settings.noise_rate * lr.lr, seed);
-    let got = gpu_scene.read(&ctx);
+    let got = gpu_scene.read(&ctx).expect("readback");
     let (mut moved, mut worst) = (0, 0.0f64);
     for i in 0..n {
         let largest =

@@ -15,7 +15,7 @@ fn test_psnr(trainer: &Trainer, data: &data::TrainingData) -> f64 {
     let mut sum = 0.0;
     for v in &data.test {
         let frame = trainer.render(&v.camera).expect("render");
-        let c = frame.read_layer(trainer.context(), Layer::Color);
+        let c = frame.read_layer(trainer.context(), Layer::Color).expect("readback");
         sum += psnr(&c, &v.image).expect("same size");
     }
     sum / data.test.len() as f64
@@ -52,7 +52,7 @@ fn small_scene_trains_and_finds_its_plane() {
                 eprintln!("test PSNR {before:.2} dB at the start, {after_stage1:.2} after stage 1");
                 assert!(after_stage1 > before + 1.0, "stage 1 did not learn");
                 let init = initialise_planes(
-                    &trainer.gaussians(),
+                    &trainer.gaussians().expect("readback"),
                     &data.train,
                     &data.materials,
                     data.extent,
@@ -82,13 +82,13 @@ fn small_scene_trains_and_finds_its_plane() {
             assert!(stats.loss.is_finite());
         }
     }
-    let g = trainer.gaussians();
+    let g = trainer.gaussians().expect("readback");
     assert!(g.means.iter().flatten().chain(g.log_scales.iter().flatten()).all(|v| v.is_finite()));
     let p = &trainer.planes()[0];
     assert!(p.centre.is_finite() && p.normal.length() > 0.0 && p.normal.is_finite());
     assert!(p.centre.distance(scene.planes[0].centre) < 0.2 * data.extent);
     // The plane's Adam counts its own steps (bias correction from its creation at step 60).
-    let ck = trainer.checkpoint(serde_json::Value::Null);
+    let ck = trainer.checkpoint(serde_json::Value::Null).expect("readback");
     assert_eq!(ck.plane_moments[0].steps, iterations - 60);
     let after = test_psnr(&trainer, &data);
     eprintln!("test PSNR {after:.2} dB after {iterations} steps");

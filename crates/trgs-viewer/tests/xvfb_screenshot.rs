@@ -142,7 +142,7 @@ fn screenshot_scene_region_matches_the_offscreen_render() {
     let frame = Renderer::new(&ctx)
         .render(&scene, &camera, &RenderOptions::default())
         .expect("offscreen render");
-    let offscreen = frame.read_layer(&ctx, Layer::Color).to_u8();
+    let offscreen = frame.read_layer(&ctx, Layer::Color).expect("readback").to_u8();
     let (mut sum, mut n) = (0.0f64, 0usize);
     for y in 0..h {
         for x in 0..w {

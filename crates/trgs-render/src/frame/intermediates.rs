@@ -1,7 +1,7 @@
 //! Readback of a frame's geometry stages, in the CPU twin's form (for stage-by-stage tests).
 use super::Frame;
 use crate::GpuContext;
-use crate::gpu;
+use crate::gpu::{self, GpuError};
 use crate::layout::ProjectedGaussian;
 
 /// Intermediate results of one view's geometry stages (for stage-by-stage tests).
@@ -43,32 +43,41 @@ impl Frame {
         ctx: &GpuContext,
         vi: usize,
         gaussians: usize,
-    ) -> Option<ViewIntermediates> {
-        let v = self.views.get(vi)?;
-        let keys = v.keys.as_ref()?;
-        let grid = self.grid?;
-        let binning = self.binning.as_ref()?;
+    ) -> Result<Option<ViewIntermediates>, GpuError> {
+        let (Some(v), Some(grid), Some(binning)) =
+            (self.views.get(vi), self.grid, self.binning.as_ref())
+        else {
+            return Ok(None);
+        };
+        let (Some(keys), Some(view_ranges)) = (v.keys.as_ref(), v.ranges.as_ref()) else {
+            return Ok(None);
+        };
         let (n, base) = (v.num_keys as usize, u64::from(v.key_base) * 4);
         let (sorted, sorted_values) = (
-            gpu::read_buffer::<u32>(ctx, &keys.keys, base, n),
-            gpu::read_buffer::<u32>(ctx, &keys.values, base, n),
+            gpu::read_buffer::<u32>(ctx, &keys.keys, base, n)?,
+            gpu::read_buffer::<u32>(ctx, &keys.values, base, n)?,
         );
         let sorted_keys = sorted.iter().map(|&t| v.grid_tile(&grid, t)).collect();
         let own = v.tile_base..v.tile_base + v.limit.count();
         // The emitted list interleaves the views: this view's keys are those in its tiles.
-        let emitted = binning.emitted.as_ref().map(|k| {
-            let all = binning.total as usize;
-            let tiles: Vec<u32> = gpu::read_buffer(ctx, &k.keys, 0, all);
-            let values: Vec<u32> = gpu::read_buffer(ctx, &k.values, 0, all);
-            tiles
-                .into_iter()
-                .zip(values)
-                .filter(|(t, _)| own.contains(t))
-                .map(|(t, value)| (v.grid_tile(&grid, t), value))
-                .unzip()
-        });
+        let emitted = match binning.emitted.as_ref() {
+            None => None,
+            Some(k) => {
+                let all = binning.total as usize;
+                let tiles: Vec<u32> = gpu::read_buffer(ctx, &k.keys, 0, all)?;
+                let values: Vec<u32> = gpu::read_buffer(ctx, &k.values, 0, all)?;
+                Some(
+                    tiles
+                        .into_iter()
+                        .zip(values)
+                        .filter(|(t, _)| own.contains(t))
+                        .map(|(t, value)| (v.grid_tile(&grid, t), value))
+                        .unzip(),
+                )
+            }
+        };
         let entries: Vec<u32> =
-            gpu::read_buffer(ctx, &binning.order.values, 0, binning.entries as usize);
+            gpu::read_buffer(ctx, &binning.order.values, 0, binning.entries as usize)?;
         let first = vi as u32 * self.gaussian_count;
         let order = entries
             .into_iter()
@@ -78,36 +87,41 @@ impl Frame {
         let mut ranges = vec![(0, 0); grid.tile_count() as usize];
         let read: Vec<[u32; 2]> = gpu::read_buffer(
             ctx,
-            v.ranges.as_ref()?,
+            view_ranges,
             u64::from(v.tile_base) * 8,
             v.limit.count() as usize,
-        );
+        )?;
         for (local, [a, b]) in read.into_iter().enumerate() {
             if b > a {
                 let tile = v.grid_tile(&grid, v.tile_base + local as u32) as usize;
                 ranges[tile] = (a - v.key_base, b - v.key_base);
             }
         }
-        Some(ViewIntermediates {
-            projected: gpu::read_buffer(ctx, &v.projected, 0, gaussians),
-            counts: gpu::read_buffer(ctx, &v.counts, 0, gaussians),
+        Ok(Some(ViewIntermediates {
+            projected: gpu::read_buffer(ctx, &v.projected, 0, gaussians)?,
+            counts: gpu::read_buffer(ctx, &v.counts, 0, gaussians)?,
             order,
             emitted,
             sorted_keys,
             sorted_values,
             ranges,
-        })
+        }))
     }
 
     /// The frame's depth order, every view's together.
-    pub fn read_depth_order(&self, ctx: &GpuContext) -> Option<DepthOrderIntermediates> {
-        let b = self.binning.as_ref()?;
+    pub fn read_depth_order(
+        &self,
+        ctx: &GpuContext,
+    ) -> Result<Option<DepthOrderIntermediates>, GpuError> {
+        let Some(b) = self.binning.as_ref() else {
+            return Ok(None);
+        };
         let n = b.entries as usize;
-        Some(DepthOrderIntermediates {
-            entries: gpu::read_buffer(ctx, &b.order.values, 0, n),
-            depths: gpu::read_buffer(ctx, &b.order.keys, 0, n),
-            offsets: gpu::read_buffer(ctx, &b.offsets, 0, n),
+        Ok(Some(DepthOrderIntermediates {
+            entries: gpu::read_buffer(ctx, &b.order.values, 0, n)?,
+            depths: gpu::read_buffer(ctx, &b.order.keys, 0, n)?,
+            offsets: gpu::read_buffer(ctx, &b.offsets, 0, n)?,
             total: b.total,
-        })
+        }))
     }
 }

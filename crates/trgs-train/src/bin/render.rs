@@ -159,7 +159,7 @@ fn render_mirror(
         renderer
             .render_into(&scene, &mirrored, options, &mut frame)
             .with_context(|| format!("rendering the mirrored view of {:?}", cam.name))?;
-        let color = flip_horizontal(&frame.read_layer(ctx, Layer::Color));
+        let color = flip_horizontal(&frame.read_layer(ctx, Layer::Color)?);
         write_png_rgb(&args.out.join(format!("{name}_mirror{n}.png")), &color)?;
         written += 1;
         bar.set_message(name);
@@ -218,7 +218,7 @@ fn main() -> Result<()> {
             .render_into(&scene, cam, &options, &mut frame)
             .with_context(|| format!("rendering view {:?}", cam.name))?;
         let name = stem(&cam.name, i);
-        let color = frame.read_layer(&ctx, Layer::Color);
+        let color = frame.read_layer(&ctx, Layer::Color)?;
         write_png_rgb(&args.out.join(format!("{name}.png")), &color)?;
         if args.exr {
             let layers: Vec<(Layer, trgs_core::Image<f32>)> = [
@@ -229,8 +229,8 @@ fn main() -> Result<()> {
                 Layer::Depth,
             ]
             .into_iter()
-            .map(|l| (l, frame.read_layer(&ctx, l)))
-            .collect();
+            .map(|l| Ok((l, frame.read_layer(&ctx, l)?)))
+            .collect::<Result<_>>()?;
             let named: Vec<(&str, &trgs_core::Image<f32>)> =
                 layers.iter().map(|(l, img)| (l.name(), img)).collect();
             write_exr(&args.out.join(format!("{name}.exr")), &named)?;

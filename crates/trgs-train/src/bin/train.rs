@@ -352,6 +352,14 @@ fn train(
                 eval_time = te.elapsed();
             }
             Ok(())
+        });
+        // A failed step (a lost GPU, no memory left) loses nothing saved: say where to go on.
+        let stats = stats.with_context(|| {
+            format!(
+                "training stopped at step {next}; `train --out {} --resume` continues from the \
+                 last checkpoint",
+                args.out.display()
+            )
         })?;
         state.train_seconds += ts.elapsed().saturating_sub(eval_time).as_secs_f64();
         state.phase_ms.accumulate(&stats.times);
@@ -381,7 +389,7 @@ fn train(
             && feed.wants_snapshot(SNAPSHOT_INTERVAL)
         {
             feed.publish(Snapshot {
-                gaussians: trainer.gaussians(),
+                gaussians: trainer.gaussians()?,
                 planes: trainer.planes().to_vec(),
                 reflection: trainer.render_options().reflection,
                 status: format!(
@@ -424,7 +432,7 @@ fn train(
     if let Some(feed) = feed {
         // The final model, whatever the snapshot interval left the viewer with.
         feed.publish(Snapshot {
-            gaussians: trainer.gaussians(),
+            gaussians: trainer.gaussians()?,
             planes: trainer.planes().to_vec(),
             reflection: trainer.render_options().reflection,
             status: format!("training finished: results in {}", args.out.display()),
@@ -444,7 +452,7 @@ fn save_checkpoint(
     state.rng_state = rng.state();
     state.seconds = t0.elapsed().as_secs_f64();
     let extra = serde_json::to_value(&*state)?;
-    write_checkpoint(&out.join(CHECKPOINT_FILE), &trainer.checkpoint(extra))?;
+    write_checkpoint(&out.join(CHECKPOINT_FILE), &trainer.checkpoint(extra)?)?;
     Ok(())
 }
 
@@ -481,7 +489,7 @@ fn init_planes(
     bar: &ProgressBar,
 ) -> Result<()> {
     let init = initialise_planes(
-        &trainer.gaussians(),
+        &trainer.gaussians()?,
         &data.train,
         &data.materials,
         data.extent,
@@ -535,7 +543,7 @@ fn finish(
         mean_ms.iter().map(|(k, v)| format!("{k} {v:.1}")).collect::<Vec<_>>().join(", ")
     );
     let out = &args.out;
-    let gaussians = trainer.gaussians();
+    let gaussians = trainer.gaussians()?;
     write_ply(&out.join("model.ply"), &gaussians)?;
     write_planes_json(&out.join("planes.json"), trainer.planes())?;
     write_renders(&model, data, &out.join("renders"))?;

@@ -8,23 +8,23 @@ use anyhow::Result;
 impl Trainer {
     /// The attributes densification and relocation decide from, read back (15 words per
     /// Gaussian; [`Trainer::read_state`] reads about 180 at SH degree 3).
-    pub fn geometry(&self) -> Geometry {
+    pub fn geometry(&self) -> Result<Geometry> {
         let (ctx, n) = (&self.ctx, self.scene.len() as usize);
         let p = self.scene.parameters();
-        Geometry {
-            means: trgs_render::gpu::read_buffer(ctx, p[0], 0, n),
-            rotations: trgs_render::gpu::read_buffer(ctx, p[1], 0, n),
-            log_scales: trgs_render::gpu::read_buffer(ctx, p[2], 0, n),
-            opacity_logits: trgs_render::gpu::read_buffer(ctx, p[3], 0, n),
-            populations: self.scene.read_populations(ctx),
-        }
+        Ok(Geometry {
+            means: trgs_render::gpu::read_buffer(ctx, p[0], 0, n)?,
+            rotations: trgs_render::gpu::read_buffer(ctx, p[1], 0, n)?,
+            log_scales: trgs_render::gpu::read_buffer(ctx, p[2], 0, n)?,
+            opacity_logits: trgs_render::gpu::read_buffer(ctx, p[3], 0, n)?,
+            populations: self.scene.read_populations(ctx)?,
+        })
     }
 
     /// Rebuild the Gaussians and their moments by `plan` on the GPU (stage `gather_rows`); the
     /// densification statistics start over.
     pub fn apply_plan(&mut self, plan: &RowPlan) -> Result<()> {
         self.check_plan(plan)?;
-        let (scene, moments) = self.gather.apply(&self.ctx, &self.scene, &self.moments, plan);
+        let (scene, moments) = self.gather.apply(&self.ctx, &self.scene, &self.moments, plan)?;
         self.scene = scene;
         self.moments = moments;
         if let Some((_, stats)) = &mut self.densify {
@@ -38,7 +38,7 @@ impl Trainer {
     /// For tests and the benchmark.
     pub fn apply_plan_on_cpu(&mut self, plan: &RowPlan) -> Result<()> {
         self.check_plan(plan)?;
-        let state = self.read_state();
+        let state = self.read_state()?;
         self.set_state(&plan.apply(&state))
     }
 
@@ -68,8 +68,8 @@ impl Trainer {
         let Some((settings, stats)) = &self.densify else {
             anyhow::bail!("densify_now needs classic densification enabled");
         };
-        let (settings, stats) = (settings.clone(), stats.read(&self.ctx));
-        let geometry = self.geometry();
+        let (settings, stats) = (settings.clone(), stats.read(&self.ctx)?);
+        let geometry = self.geometry()?;
         let (plan, report) =
             plan_densify(&geometry, &stats, &settings, self.extent, prune_large, &mut self.rng);
         self.apply_plan(&plan)?;
@@ -83,7 +83,7 @@ impl Trainer {
             anyhow::bail!("relocate_now needs MCMC densification enabled");
         };
         let settings = settings.clone();
-        let (plan, report) = plan_relocation(&self.geometry(), &settings, &mut self.rng);
+        let (plan, report) = plan_relocation(&self.geometry()?, &settings, &mut self.rng);
         self.apply_plan(&plan)?;
         Ok(report)
     }

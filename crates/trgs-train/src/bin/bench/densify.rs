@@ -67,15 +67,15 @@ fn time_rebuilds(
     reps: usize,
 ) -> Result<DensifyRow> {
     let ctx = t.context().clone();
-    let start = t.read_state();
+    let start = t.read_state()?;
     let (mut read, mut planning, mut gpu, mut cpu) = (vec![], vec![], vec![], vec![]);
     let mut rows = 0;
     for _ in 0..reps {
         for on_gpu in [true, false] {
             t.set_state(&start)?;
-            trgs_render::gpu::wait_for_gpu(&ctx, "the upload");
+            trgs_render::gpu::wait_for_gpu(&ctx, "the upload")?;
             let clock = Instant::now();
-            let geometry = t.geometry();
+            let geometry = t.geometry()?;
             read.push(clock.elapsed().as_secs_f64() * 1e3);
             let clock = Instant::now();
             let plan = plan_of(&geometry);
@@ -87,7 +87,7 @@ fn time_rebuilds(
             } else {
                 t.apply_plan_on_cpu(&plan)?;
             }
-            trgs_render::gpu::wait_for_gpu(&ctx, "the rebuild");
+            trgs_render::gpu::wait_for_gpu(&ctx, "the rebuild")?;
             let ms = clock.elapsed().as_secs_f64() * 1e3;
             if on_gpu { gpu.push(ms) } else { cpu.push(ms) }
         }

@@ -267,9 +267,9 @@ fn plane_cost(
 }
 
 /// Pixel-Gaussian evaluations of pass 1: per pixel, the list entries visited before it stopped.
-fn rasterize_evaluations(ctx: &GpuContext, frame: &Frame, gaussians: usize) -> u64 {
-    let states = frame.read_states(ctx);
-    let Some(inter) = frame.read_intermediates(ctx, 0, gaussians) else { return 0 };
+fn rasterize_evaluations(ctx: &GpuContext, frame: &Frame, gaussians: usize) -> Result<u64> {
+    let states = frame.read_states(ctx)?;
+    let Some(inter) = frame.read_intermediates(ctx, 0, gaussians)? else { return Ok(0) };
     let (w, h) = (frame.width(), frame.height());
     let tiles_x = w.div_ceil(TILE_SIZE);
     let mut evals = 0u64;
@@ -281,7 +281,7 @@ fn rasterize_evaluations(ctx: &GpuContext, frame: &Frame, gaussians: usize) -> u
             evals += u64::from(if st.last_t < n { st.last_t + 1 } else { n });
         }
     }
-    evals
+    Ok(evals)
 }
 
 /// The trivial tiled splat loop over `list` Gaussians of `frame`'s projection: evaluations/s.
@@ -291,7 +291,7 @@ fn splat_loop_throughput(
     gaussians: usize,
     list: usize,
 ) -> Result<f64> {
-    let inter = frame.read_intermediates(ctx, 0, gaussians).context("frame has no views")?;
+    let inter = frame.read_intermediates(ctx, 0, gaussians)?.context("frame has no views")?;
     let visible: Vec<ProjectedGaussian> =
         inter.projected.into_iter().filter(|g| g.flags & 1 != 0).take(list).collect();
     let (w, h) = (frame.width(), frame.height());
@@ -315,7 +315,7 @@ fn splat_loop_throughput(
     for _ in 0..4 {
         let mut rec = Recorder::new(ctx, "trgs.splat_loop", true);
         rec.dispatch("splat_loop", &kernel, &bind, [params.tiles_x, params.tiles_y, 1]);
-        rec.submit_and_wait(ctx);
+        rec.submit_and_wait(ctx)?;
         let ms = rec.stage_times().and_then(|t| t.first().map(|s| s.1)).context("no timestamps")?;
         best = best.min(ms);
     }
@@ -362,7 +362,7 @@ fn main() -> Result<()> {
                 if (density, width, height, gaussians, planes)
                     == (RoomDensity::AsCaptured, 256, 192, 100_000, 0)
                 {
-                    let evals = rasterize_evaluations(&ctx, &frame, gaussians);
+                    let evals = rasterize_evaluations(&ctx, &frame, gaussians)?;
                     let raster_ms =
                         row.stages.iter().find(|s| s.0 == "rasterize").map_or(f64::NAN, |s| s.1);
                     let ours = evals as f64 / (raster_ms * 1e-3);
