@@ -1,6 +1,7 @@
 // Stage `mcmc_regularise` (twin: trgs_core::reference::mcmc_regularise): the gradients of
 // 3DGS-MCMC's regularisers lambda_o mean(o) + lambda_s mean(s), added to the opacity-logit and
 // log-scale gradients before the optimiser step, one thread per Gaussian (glass ones excepted).
+// exp stops at MAX_REGULARISED_LOG_SCALE: a diverged scale gets a finite gradient (see the twin).
 #include "shared/common.wgsl"
 
 @group(0) @binding(0) var<storage, read> params: McmcParams;
@@ -19,6 +20,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     let o = sigmoid(opacity_logits[i]);
     g_opacity_logits[i] += params.opacity_weight * o * (1.0 - o);
     for (var c = 0u; c < 3u; c++) {
-        g_log_scales[3u * i + c] += params.scale_weight * exp(log_scales[3u * i + c]);
+        let s = exp(min(log_scales[3u * i + c], MAX_REGULARISED_LOG_SCALE));
+        g_log_scales[3u * i + c] += params.scale_weight * s;
     }
 }

@@ -492,6 +492,7 @@ pub fn prelude() -> String {
         ("COV2D_BLUR".to_string(), COV2D_BLUR),
         ("NOISE_GATE_STEEPNESS".to_string(), trgs_core::reference::NOISE_GATE_STEEPNESS),
         ("NOISE_GATE_THRESHOLD".to_string(), trgs_core::reference::NOISE_GATE_THRESHOLD),
+        ("MAX_REGULARISED_LOG_SCALE".to_string(), trgs_core::reference::MAX_REGULARISED_LOG_SCALE),
         ("SH_C0".to_string(), sh::C0),
         ("SH_C1".to_string(), sh::C1),
     ];

@@ -20,6 +20,11 @@ use glam::DVec3;
 pub const NOISE_GATE_STEEPNESS: f64 = 100.0;
 pub const NOISE_GATE_THRESHOLD: f64 = 0.995;
 
+/// The scale regulariser's gradient is exp(log-scale): above this log-scale (a scale of 5.5e34)
+/// it stops growing, so that one diverged Gaussian gets a large finite gradient, which Adam turns
+/// into a bounded step, instead of an infinite one in f32, which Adam would turn into NaN.
+pub const MAX_REGULARISED_LOG_SCALE: f64 = 80.0;
+
 /// PCG hash (Jarzynski and Olano 2020), on u32 exactly as in WGSL.
 pub fn pcg_hash(v: u32) -> u32 {
     let state = v.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
@@ -80,7 +85,7 @@ pub fn mcmc_regularise(
         let o = sigmoid(g.opacity_logits[i]);
         grad_opacity_logits[i] += opacity_weight / n * o * (1.0 - o);
         for (gs, ls) in grad_log_scales[i].iter_mut().zip(g.log_scales[i]) {
-            *gs += scale_weight / (3.0 * n) * ls.exp();
+            *gs += scale_weight / (3.0 * n) * ls.min(MAX_REGULARISED_LOG_SCALE).exp();
         }
     }
 }

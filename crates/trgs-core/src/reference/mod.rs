@@ -43,8 +43,8 @@ pub use emit_keys::emit_keys;
 pub use footprint::{TileRect, footprint};
 pub use frame::{Frame, FrameGrads, PlaneLayerGrads, PlaneLayers};
 pub use mcmc::{
-    NOISE_GATE_STEEPNESS, NOISE_GATE_THRESHOLD, mcmc_noise, mcmc_regularise, noise_normal,
-    noise_offset, pcg_hash,
+    MAX_REGULARISED_LOG_SCALE, NOISE_GATE_STEEPNESS, NOISE_GATE_THRESHOLD, mcmc_noise,
+    mcmc_regularise, noise_normal, noise_offset, pcg_hash,
 };
 pub use photometric_loss::{DSSIM_LAMBDA, PhotometricLoss, photometric_loss};
 pub use prefix_sum::prefix_sum;
