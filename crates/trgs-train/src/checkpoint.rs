@@ -112,8 +112,40 @@ fn chunks<const N: usize>(v: &[f32]) -> Vec<[f32; N]> {
     v.chunks_exact(N).map(|c| std::array::from_fn(|i| c[i])).collect()
 }
 
-/// Write `ck` to `path` atomically (a temporary file renamed into place).
+/// Why `state` could not be resumed from: a parameter an upload refuses (not finite, a zero
+/// quaternion, an out-of-range reflection) or an Adam moment that is not finite.
+pub fn check_state(state: &TrainState) -> Result<(), String> {
+    trgs_core::scene::validate_gaussians(&state.gaussians).map_err(|e| e.to_string())?;
+    let n = state.gaussians.len().max(1);
+    for (a, (m, v)) in state.m.iter().zip(&state.v).enumerate() {
+        for (which, moments) in [("first", m), ("second", v)] {
+            if let Some(k) = moments.iter().position(|x| !x.is_finite()) {
+                let name = trgs_render::ATTRIBUTES.get(a).copied().unwrap_or("an attribute");
+                let gaussian = k / (moments.len() / n).max(1);
+                return Err(format!(
+                    "Gaussian {gaussian}: the {which} Adam moment of {name} is not finite ({})",
+                    moments[k]
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Write `ck` to `path` atomically (a temporary file renamed into place). A state that could
+/// not be resumed from ([`check_state`]) is refused and the file keeps what it held: a diverged
+/// run never overwrites its last good checkpoint.
 pub fn write_checkpoint(path: &Path, ck: &Checkpoint) -> Result<(), FormatError> {
+    check_state(&ck.state).map_err(|problem| {
+        FormatError::new(
+            path,
+            format!(
+                "the training state after step {} is not valid, so it was not written (the file \
+                 keeps the checkpoint written before): {problem}",
+                ck.step
+            ),
+        )
+    })?;
     let g = &ck.state.gaussians;
     let mut arrays: Vec<(String, Array)> = vec![
         ("means".into(), Array::F32(flat(&g.means))),
@@ -323,6 +355,7 @@ mod tests {
         for x in g.means.iter_mut().flatten() {
             *x = rng.range(-1.0, 1.0) as f32;
         }
+        g.rotations.fill([1.0, 0.0, 0.0, 0.0]);
         g.populations[2] = Population::Glass;
         let widths = trgs_render::attribute_widths(g.sh_coeffs() as u32);
         let m: Vec<Vec<f32>> =
@@ -373,6 +406,33 @@ mod tests {
         assert_eq!(back.densify_stats, ck.densify_stats);
         assert_eq!(back.rng_state, ck.rng_state);
         assert_eq!(back.extra, ck.extra);
+    }
+
+    #[test]
+    fn a_state_that_cannot_be_resumed_is_not_written_over_a_good_one() {
+        let (_dir, path) = scratch("diverged");
+        let good = sample();
+        write_checkpoint(&path, &good).expect("write");
+        let before = std::fs::read(&path).expect("read back");
+        type Spoil = fn(&mut TrainState);
+        let cases: [(&str, Spoil); 3] = [
+            ("Gaussian 1: mean is not finite", |s| s.gaussians.means[1][2] = f32::NAN),
+            ("Gaussian 0: rotation (zero quaternion)", |s| s.gaussians.rotations[0] = [0.0; 4]),
+            ("Gaussian 4: the second Adam moment of sh", |s| {
+                let k = s.v[4].len() - 1;
+                s.v[4][k] = f32::INFINITY;
+            }),
+        ];
+        for (expected, spoil) in cases {
+            let mut bad = sample();
+            bad.step += 100;
+            spoil(&mut bad.state);
+            let err = write_checkpoint(&path, &bad).expect_err(expected).to_string();
+            assert!(err.contains(expected) && err.contains("not written"), "{err}");
+            assert!(err.contains(&format!("after step {}", bad.step)), "{err}");
+            assert_eq!(std::fs::read(&path).expect("read back"), before, "{expected}");
+        }
+        assert_eq!(read_checkpoint(&path).expect("read").step, good.step);
     }
 
     #[test]

@@ -544,6 +544,9 @@ fn finish(
     );
     let out = &args.out;
     let gaussians = trainer.gaussians()?;
+    // A model other tools cannot read (a NaN, a zero quaternion) is not written as one.
+    trgs_core::scene::validate_gaussians(&gaussians)
+        .context("the trained model is not valid, so model.ply was not written")?;
     write_ply(&out.join("model.ply"), &gaussians)?;
     write_planes_json(&out.join("planes.json"), trainer.planes())?;
     write_renders(&model, data, &out.join("renders"))?;
