@@ -1,7 +1,8 @@
 // Stage `mcmc_regularise` (twin: trgs_core::reference::mcmc_regularise): the gradients of
 // 3DGS-MCMC's regularisers lambda_o mean(o) + lambda_s mean(s), added to the opacity-logit and
 // log-scale gradients before the optimiser step, one thread per Gaussian (glass ones excepted).
-// exp stops at MAX_REGULARISED_LOG_SCALE: a diverged scale gets a finite gradient (see the twin).
+// exp stops at MAX_REGULARISED_LOG_SCALE: a diverged scale gets a gradient whose square is
+// finite in f32 (see the twin).
 #include "shared/common.wgsl"
 
 @group(0) @binding(0) var<storage, read> params: McmcParams;

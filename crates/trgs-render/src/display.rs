@@ -35,7 +35,11 @@ pub enum DisplayError {
 
 impl DisplayTarget {
     /// A target of `width x height` (each at least 1).
-    pub fn new(ctx: &GpuContext, width: u32, height: u32) -> Self {
+    pub fn new(ctx: &GpuContext, width: u32, height: u32) -> Result<Self, GpuError> {
+        gpu::scoped(ctx, "allocating a display target", || Ok(Self::allocate(ctx, width, height)))
+    }
+
+    fn allocate(ctx: &GpuContext, width: u32, height: u32) -> Self {
         let (width, height) = (width.max(1), height.max(1));
         let row_pixels = width.div_ceil(ROW_ALIGN_PIXELS) * ROW_ALIGN_PIXELS;
         let rgba = gpu::storage(ctx, "trgs.display.rgba", u64::from(row_pixels * height) * 4);

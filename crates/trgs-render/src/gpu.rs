@@ -113,8 +113,10 @@ pub fn read_buffer<T: bytemuck::Pod>(
         .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("trgs.readback") });
     enc.copy_buffer_to_buffer(buffer, offset, &staging, 0, size);
     ctx.queue.submit([enc.finish()]);
-    let read = map_and_read(ctx, &staging, bytes as usize);
-    scopes.close_after(read)
+    // Closed before the mapping, so that a staging buffer that could not be made is reported as
+    // the lack of memory it is, not as the mapping wgpu then refuses.
+    scopes.close()?;
+    map_and_read(ctx, &staging, bytes as usize)
 }
 
 /// The longest the CPU waits for submitted GPU work before it gives up: far beyond any frame or
@@ -125,17 +127,31 @@ pub const GPU_WAIT_LIMIT: std::time::Duration = std::time::Duration::from_secs(3
 
 /// Block until the GPU has finished everything submitted so far, at most `GPU_WAIT_LIMIT`;
 /// `what` names the wait in the error when the device is lost or does not finish in time.
+///
+/// A driver that reports the device lost (or out of memory) while it is waited for makes
+/// `wgpu::Device::poll` panic, not return an error (wgpu 30); that panic is caught here and
+/// returned as [`GpuError::Lost`] (the panic hook still prints its message). The device is gone
+/// by then, so no state that could be used afterwards is left half-updated.
 pub fn wait_for_gpu(ctx: &GpuContext, what: &str) -> Result<(), GpuError> {
     let wait = wgpu::PollType::Wait { submission_index: None, timeout: Some(GPU_WAIT_LIMIT) };
-    match ctx.device.poll(wait) {
-        Ok(_) => Ok(()),
-        Err(wgpu::PollError::Timeout) => {
+    let polled = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| ctx.device.poll(wait)));
+    let lost = |detail: String| {
+        crate::gpu_error::lost(&format!("waiting for {what}"), ctx.lost().unwrap_or(detail))
+    };
+    match polled {
+        Ok(Ok(_)) => Ok(()),
+        Ok(Err(wgpu::PollError::Timeout)) => {
             Err(GpuError::Timeout { what: what.to_string(), seconds: GPU_WAIT_LIMIT.as_secs() })
         }
-        Err(e) => Err(crate::gpu_error::lost(
-            &format!("waiting for {what}"),
-            ctx.lost().unwrap_or_else(|| e.to_string()),
-        )),
+        Ok(Err(e)) => Err(lost(e.to_string())),
+        Err(panic) => {
+            let message = panic
+                .downcast_ref::<String>()
+                .cloned()
+                .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+                .unwrap_or_else(|| "wgpu stopped while polling the device".to_string());
+            Err(lost(message))
+        }
     }
 }
 

@@ -94,12 +94,29 @@ impl ErrorScopes {
         }
     }
 
-    /// Close the scopes after `result`: its own error first, else what the scopes caught.
+    /// Close the scopes after `result`. When both failed, a caught loss or lack of memory is the
+    /// cause and wins (the operation's own error is then one of its consequences, such as a
+    /// mapping refused on a buffer that could not be made); otherwise the operation's error does.
     pub fn close_after<T, E: From<GpuError>>(self, result: Result<T, E>) -> Result<T, E> {
-        let caught = self.close();
-        let value = result?;
-        caught?;
-        Ok(value)
+        match (result, self.close()) {
+            (Ok(value), Ok(())) => Ok(value),
+            (Ok(_), Err(caught)) => Err(caught.into()),
+            (Err(e), Ok(())) => Err(e),
+            (Err(e), Err(caught)) => match caught {
+                GpuError::OutOfMemory { .. } | GpuError::Lost { .. } => Err(caught.into()),
+                GpuError::Timeout { .. } | GpuError::Rejected { .. } => Err(e),
+            },
+        }
+    }
+}
+
+impl Drop for ErrorScopes {
+    /// Unclosed (an early return), the scopes are popped innermost first, as wgpu requires (a
+    /// `Vec` would drop its guards outermost first, which wgpu refuses with a panic).
+    fn drop(&mut self) {
+        while let Some(guard) = self.guards.pop() {
+            drop(guard);
+        }
     }
 }
 

@@ -3,7 +3,7 @@
 //! where the forward wrote the value. The backward consumes them: compose_bwd adds its terms into
 //! the pass-layer gradients in place.
 use crate::frame::Frame;
-use crate::{GpuContext, gpu};
+use crate::{GpuContext, GpuError, gpu};
 use trgs_core::Image;
 use trgs_core::reference::FrameGrads;
 
@@ -45,6 +45,8 @@ pub enum LayerGradsError {
     Planes { layer: &'static str, got: usize, want: usize },
     #[error("gradient of layer {layer} at pixel ({x}, {y}) is not finite ({value})")]
     NonFinite { layer: &'static str, x: u32, y: u32, value: f64 },
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
 }
 
 /// Pack up to four channels of several images per pixel, after checking shape and finiteness.
@@ -98,7 +100,11 @@ impl LayerGrads {
     }
 
     /// All-zero gradients for `frame` (a loss kernel then writes the layers it depends on).
-    pub fn zeros(ctx: &GpuContext, frame: &Frame) -> Self {
+    pub fn zeros(ctx: &GpuContext, frame: &Frame) -> Result<Self, GpuError> {
+        gpu::scoped(ctx, "allocating layer gradients", || Ok(Self::zeroed(ctx, frame)))
+    }
+
+    fn zeroed(ctx: &GpuContext, frame: &Frame) -> Self {
         let pixels = u64::from(frame.width()) * u64::from(frame.height());
         let slots = frame.plane_slots() as u64;
         let mut enc = ctx.device.create_command_encoder(&Default::default());
@@ -148,7 +154,8 @@ impl LayerGrads {
         let up = |name: &str, data: &[[f32; 4]]| {
             gpu::storage_init(ctx, &format!("trgs.layer_grads.{name}"), data)
         };
-        Ok(Self {
+        let scopes = gpu::ErrorScopes::open(ctx, "uploading layer gradients");
+        let grads = Ok(Self {
             color: up("color", &pack(w, h, &[("color", &g.color, 3, 0)])?),
             reflection: up("reflection", &pack(w, h, &[("reflection", &g.reflection, 3, 0)])?),
             strength: up(
@@ -177,6 +184,7 @@ impl LayerGrads {
             ),
             reflection_raw: up("reflection_raw", &raw),
             size: (w, h),
-        })
+        });
+        scopes.close_after(grads)
     }
 }

@@ -266,12 +266,14 @@ impl SceneGradBuffers {
     }
 
     /// All-zero gradients for `scene` (for stages that add to gradients, outside a backward).
-    pub fn zeros(ctx: &GpuContext, scene: &GpuScene) -> Self {
-        let g = Self::new(ctx, &mut gpu::BufferPool::default(), scene);
-        let mut enc = ctx.device.create_command_encoder(&Default::default());
-        g.clear(&mut enc);
-        ctx.queue.submit([enc.finish()]);
-        g
+    pub fn zeros(ctx: &GpuContext, scene: &GpuScene) -> Result<Self, GpuError> {
+        gpu::scoped(ctx, "allocating Gaussian gradients", || {
+            let g = Self::new(ctx, &mut gpu::BufferPool::default(), scene);
+            let mut enc = ctx.device.create_command_encoder(&Default::default());
+            g.clear(&mut enc);
+            ctx.queue.submit([enc.finish()]);
+            Ok(g)
+        })
     }
 
     /// The gradient buffers in the order of [`ATTRIBUTES`].

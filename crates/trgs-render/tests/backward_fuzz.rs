@@ -102,7 +102,7 @@ fn empty_scene_has_empty_gradients() {
     let gpu_scene = GpuScene::upload(&ctx, &Gaussians::<f32>::empty(3), &scene.planes).expect("ok");
     let mut frame =
         renderer.render(&gpu_scene, &scene.camera, &RenderOptions::default()).expect("render");
-    let grads = LayerGrads::zeros(&ctx, &frame);
+    let grads = LayerGrads::zeros(&ctx, &frame).expect("allocation");
     let out = renderer.backward(&gpu_scene, &mut frame, &grads, &BackwardOptions::default());
     let out = out.expect("backward");
     assert!(out.gaussians.read(&ctx).expect("readback").is_empty());

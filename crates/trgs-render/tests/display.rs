@@ -29,7 +29,7 @@ fn every_layer_matches_the_twin() {
         let frame =
             renderer.render(&gpu_scene, &scene.camera, &RenderOptions::default()).expect("renders");
         let (w, h) = (frame.width(), frame.height());
-        let target = DisplayTarget::new(&ctx, w, h);
+        let target = DisplayTarget::new(&ctx, w, h).expect("allocation");
         for layer in Layer::ALL {
             let range = [0.5, 6.0];
             renderer.display(&frame, layer, range, &target).expect("displays");
@@ -59,7 +59,7 @@ fn a_target_of_another_size_is_refused() {
         GpuScene::upload(&ctx, &scene.gaussians.cast::<f32>(), &scene.planes).expect("valid");
     let frame =
         renderer.render(&gpu_scene, &scene.camera, &RenderOptions::default()).expect("renders");
-    let target = DisplayTarget::new(&ctx, frame.width() + 1, frame.height());
+    let target = DisplayTarget::new(&ctx, frame.width() + 1, frame.height()).expect("allocation");
     let err = renderer.display(&frame, Layer::Color, [0.5, 6.0], &target).expect_err("size");
     assert!(matches!(err, DisplayError::SizeMismatch { .. }), "{err}");
 }

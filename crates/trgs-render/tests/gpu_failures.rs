@@ -1,4 +1,4 @@
-//! GPU failures come back as errors from the call that met them, never as a panic: a lost device,
+//! GPU failures come back as errors from the call that met them, not as a panic: a lost device,
 //! and an operation wgpu refuses (here a buffer over the device's size limit, which is how an
 //! out-of-memory frame or upload also reaches the caller: through the same error scopes).
 //! Each test makes its own device, since one of them destroys it.
@@ -41,7 +41,7 @@ fn a_lost_device_fails_renders_uploads_and_readbacks_with_an_error() {
     // Uploading and displaying go through the same scopes and waits.
     let upload = GpuScene::upload(&ctx, &gaussians, &scene.planes);
     assert!(matches!(upload, Err(UploadError::Gpu(GpuError::Lost { .. }))), "{upload:?}");
-    let target = DisplayTarget::new(&ctx, frame.width(), frame.height());
+    let target = DisplayTarget::new(&ctx, frame.width(), frame.height()).expect("allocation");
     let shown = renderer.display(&frame, Layer::Color, [0.1, 10.0], &target);
     assert!(matches!(shown, Err(DisplayError::Gpu(GpuError::Lost { .. }))), "{shown:?}");
     assert!(matches!(target.read_rgba(&ctx), Err(GpuError::Lost { .. })));
@@ -67,6 +67,13 @@ fn an_operation_wgpu_refuses_is_an_error_of_the_call() {
         }
         other => panic!("expected a refused allocation, got {other:?}"),
     }
+    // Scopes dropped unclosed (an early return) pop themselves in the order wgpu requires, with
+    // or without an error caught.
+    {
+        let _dropped = ErrorScopes::open(&ctx, "dropped with an error");
+        let _buffer = gpu::storage(&ctx, "trgs.test.too_big", too_big);
+    }
+    drop(ErrorScopes::open(&ctx, "dropped empty"));
     // Scopes that caught nothing close cleanly, and nest.
     let outer = ErrorScopes::open(&ctx, "outer");
     let inner = ErrorScopes::open(&ctx, "inner");

@@ -264,7 +264,7 @@ fn frames_over_the_binding_limit_are_refused_with_a_clear_error() {
     let small = Camera::new("small", Intrinsics::from_fov_x(1.0, 8, 6), Pose::default());
     let mut frame = Frame::default();
     renderer.render_into(&big, &small, &RenderOptions::default(), &mut frame).expect("small");
-    let old_grads = LayerGrads::zeros(&ctx, &frame);
+    let old_grads = LayerGrads::zeros(&ctx, &frame).expect("allocation");
     let err = renderer
         .render_into(&big, &wide, &RenderOptions::default(), &mut frame)
         .expect_err("too many keys");
@@ -317,14 +317,14 @@ fn bad_options_too_many_tiles_and_stale_gradients_are_errors() {
     let mut frame = Frame::default();
     for (w, h) in [(8, 6), (6, 8)] {
         render_at(w, h, &mut frame);
-        let grads = LayerGrads::zeros(&ctx, &frame);
+        let grads = LayerGrads::zeros(&ctx, &frame).expect("allocation");
         render_at(8, 6, &mut frame);
         if (w, h) != (8, 6) {
             let err = backward(&mut frame, &grads);
             assert!(matches!(err, BackwardError::GradsForAnotherSize { .. }), "{err}");
         }
     }
-    let mut grads = LayerGrads::zeros(&ctx, &frame);
+    let mut grads = LayerGrads::zeros(&ctx, &frame).expect("allocation");
     render_at(16, 12, &mut frame);
     grads.size = (16, 12);
     let err = backward(&mut frame, &grads);

@@ -178,10 +178,13 @@ impl Trainer {
         t.rng = trgs_core::rng::Rng::from_state(ck.rng_state);
         if let Some(d) = densify {
             let n = ck.state.gaussians.len();
-            let stats = match &ck.densify_stats {
-                Some(s) => GpuDensifyStats::from_stats(ctx, s),
-                None => GpuDensifyStats::new(ctx, n),
-            };
+            let stats =
+                trgs_render::gpu::scoped(ctx, "restoring densification statistics", || {
+                    Ok::<_, trgs_render::GpuError>(match &ck.densify_stats {
+                        Some(s) => GpuDensifyStats::from_stats(ctx, s),
+                        None => GpuDensifyStats::new(ctx, n),
+                    })
+                })?;
             t.densify = Some((d, stats));
         }
         Ok(t)
@@ -402,7 +405,7 @@ impl Trainer {
         };
         let shape = (self.frame.width(), self.frame.height(), self.frame.plane_slots());
         if self.layer_grads.as_ref().is_none_or(|(s, _)| *s != shape) {
-            self.layer_grads = Some((shape, LayerGrads::zeros(ctx, &self.frame)));
+            self.layer_grads = Some((shape, LayerGrads::zeros(ctx, &self.frame)?));
         }
         #[allow(clippy::expect_used)]
         let layer_grads = &self.layer_grads.as_ref().expect("allocated above").1;

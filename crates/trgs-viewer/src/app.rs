@@ -398,7 +398,13 @@ impl ViewerApp {
         };
         let Some(rs) = frame.wgpu_render_state() else { return };
         if self.target.as_ref().is_none_or(|(t, _)| t.size() != (rw, rh)) {
-            let target = DisplayTarget::new(&self.ctx, rw, rh);
+            let target = match DisplayTarget::new(&self.ctx, rw, rh) {
+                Ok(t) => t,
+                Err(e) => {
+                    self.message = Some((format!("display: {e}"), true));
+                    return;
+                }
+            };
             let mut egui_renderer = rs.renderer.write();
             let id = match self.target.take() {
                 Some((_, id)) => {

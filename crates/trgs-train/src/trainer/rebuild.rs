@@ -23,6 +23,11 @@ impl Trainer {
     /// Rebuild the Gaussians and their moments by `plan` on the GPU (stage `gather_rows`); the
     /// densification statistics start over.
     pub fn apply_plan(&mut self, plan: &RowPlan) -> Result<()> {
+        let ctx = self.ctx.clone();
+        trgs_render::gpu::scoped(&ctx, "densifying", || self.apply_plan_scoped(plan))
+    }
+
+    fn apply_plan_scoped(&mut self, plan: &RowPlan) -> Result<()> {
         self.check_plan(plan)?;
         let (scene, moments) = self.gather.apply(&self.ctx, &self.scene, &self.moments, plan)?;
         self.scene = scene;
