@@ -13,8 +13,10 @@ use crate::perturb::{perturb_opacities, seen_through_planes};
 use crate::plane_adam::{PlaneRates, plane_adam};
 use crate::settings::{Stage, TrainSettings};
 
+mod phase_clock;
 mod rebuild;
 use anyhow::{Context, Result};
+use phase_clock::PhaseClock;
 use std::collections::HashMap;
 use trgs_core::reference::{AdamSettings, RegulariserWeights};
 use trgs_core::scene::{Camera, Gaussians, ReflectionPlane};
@@ -563,27 +565,6 @@ impl Trainer {
         }
         self.scene.set_planes(&planes).context("a plane step left an invalid plane")?;
         Ok(())
-    }
-}
-
-/// Laps of wall-clock time that wait for the GPU to go idle first, so that work submitted in
-/// one phase is not billed to the next.
-struct PhaseClock {
-    last: std::time::Instant,
-}
-
-impl PhaseClock {
-    fn start() -> Self {
-        Self { last: std::time::Instant::now() }
-    }
-
-    /// Milliseconds since the previous lap.
-    fn lap(&mut self, ctx: &GpuContext) -> Result<f64, trgs_render::GpuError> {
-        trgs_render::gpu::wait_for_gpu(ctx, "a training phase")?;
-        let now = std::time::Instant::now();
-        let ms = 1e3 * (now - self.last).as_secs_f64();
-        self.last = now;
-        Ok(ms)
     }
 }
 
