@@ -39,10 +39,10 @@ pub fn storage(ctx: &GpuContext, label: &str, size: u64) -> wgpu::Buffer {
 }
 
 /// A buffer of `size` bytes holding `bytes` and then `rest` in every byte after them, written
-/// while it is mapped at creation (one copy of the data on the host). When the buffer could not be made (a lost device, no memory
-/// left) there is no mapping to write: the buffer is returned unwritten, and the failure reaches
-/// the caller through the operation's error scopes or its next wait, not as a panic here (as
-/// `wgpu::util::DeviceExt::create_buffer_init` would).
+/// while it is mapped at creation (one copy of the data on the host). When the buffer could not
+/// be made (a lost device, no memory left) there is no mapping to write: the buffer is returned
+/// unwritten, and the failure reaches the caller through the operation's error scopes or its
+/// next wait, not as a panic here (as `wgpu::util::DeviceExt::create_buffer_init` would).
 fn filled_at_creation(
     ctx: &GpuContext,
     label: &str,

@@ -173,6 +173,18 @@ impl Trainer {
         extent: f64,
         densify: Option<ClassicSettings>,
     ) -> Result<Self> {
+        trgs_render::gpu::scoped(ctx, "resuming from a checkpoint", || {
+            Self::resume_scoped(ctx, ck, settings, extent, densify)
+        })
+    }
+
+    fn resume_scoped(
+        ctx: &GpuContext,
+        ck: &Checkpoint,
+        settings: TrainSettings,
+        extent: f64,
+        densify: Option<ClassicSettings>,
+    ) -> Result<Self> {
         let mut t = Self::new(ctx, &ck.state.gaussians, &ck.planes, settings, extent)?;
         t.set_state(&ck.state)?;
         t.plane_moments = ck.plane_moments.clone();
@@ -180,13 +192,10 @@ impl Trainer {
         t.rng = trgs_core::rng::Rng::from_state(ck.rng_state);
         if let Some(d) = densify {
             let n = ck.state.gaussians.len();
-            let stats =
-                trgs_render::gpu::scoped(ctx, "restoring densification statistics", || {
-                    Ok::<_, trgs_render::GpuError>(match &ck.densify_stats {
-                        Some(s) => GpuDensifyStats::from_stats(ctx, s),
-                        None => GpuDensifyStats::new(ctx, n),
-                    })
-                })?;
+            let stats = match &ck.densify_stats {
+                Some(s) => GpuDensifyStats::from_stats(ctx, s),
+                None => GpuDensifyStats::new(ctx, n),
+            };
             t.densify = Some((d, stats));
         }
         Ok(t)
