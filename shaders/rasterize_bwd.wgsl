@@ -1,14 +1,28 @@
 // Stage `rasterize_bwd`, the adjoint of pass 1 (twin: trgs_core::reference::rasterize_bwd): one
-// workgroup per tile, one thread per pixel, a back-to-front replay of the tile's list in
-// batches of TILE_PIXELS from the last entry any pixel blended. Each pixel recovers its transmittances by
-// division (T_j = T_{j+1} / (1 - alpha_j), alpha <= 0.99) from the final ones the forward kept,
-// with the forward's skip and stop rules, and carries the suffix sums that dL/dalpha needs. Every
-// batch entry's per-pixel gradients (colour, depth with the depth-variance term, mask value,
-// opacity, 2D mean and conic) are summed over the subgroup and added to the Gaussian's record of
-// `grads` (PROJECTED_GRAD_FLOATS per Gaussian) once per subgroup that touched it.
+// workgroup per tile, each thread ROWS pixels of one column (ROWS consecutive rows), a
+// back-to-front replay of the tile's list in batches of TILE_PIXELS from the last entry any
+// pixel blended. Each pixel recovers its transmittances by division (T_j = T_{j+1} / (1 -
+// alpha_j), alpha <= 0.99) from the final ones the forward kept, with the forward's skip and
+// stop rules, and carries the suffix sums that dL/dalpha needs. Every batch entry's per-pixel
+// gradients (colour, depth with the depth-variance term, mask value, opacity, 2D mean and conic)
+// are summed over the thread's pixels, then over the subgroup, and added to the Gaussian's
+// record of `grads` (PROJECTED_GRAD_FLOATS per Gaussian) once per subgroup that touched it.
+//
+// Why several pixels per thread on CPU adapters (the define ROWS_PER_THREAD_4): there a subgroup
+// is one SIMD vector, its reduction a loop over the lanes and each atomic a loop too, and those
+// were 60% of the kernel's time with one pixel per thread (lavapipe, 100k Gaussians). With four
+// rows per thread a reduction and its atomics serve 32 pixels instead of 8. A GPU keeps one
+// pixel per thread: there the reduction is a few shuffles and threads are what fills it.
 #include "shared/common.wgsl"
 #include "shared/splat.wgsl"
 #include "shared/accumulate.wgsl"
+
+#ifdef ROWS_PER_THREAD_4
+const ROWS: u32 = 4u;
+#else
+const ROWS: u32 = 1u;
+#endif
+const THREADS: u32 = TILE_PIXELS / ROWS;
 
 @group(0) @binding(0) var<storage, read> params: RasterParams;
 @group(0) @binding(1) var<storage, read> projected: array<ProjectedGaussian>;
@@ -33,66 +47,96 @@ var<workgroup> s_color: array<vec4<f32>, TILE_PIXELS>;
 var<workgroup> s_index: array<u32, TILE_PIXELS>;
 var<workgroup> max_last: atomic<u32>;
 
-@compute @workgroup_size(TILE_SIZE, TILE_SIZE)
+// One pixel's replay: what it read at the start and what it carries from entry to entry.
+struct Pixel {
+    inside: bool,
+    last_t: u32,
+    last_m: u32,
+    at: vec2<f32>,
+    // dL/dC_t, dL/dM, dL/dV, D_t, and dL/d(sum z w), dL/d(sum w) of D_t = sum z w / sum w.
+    gc: vec3<f32>,
+    g_m: f32,
+    g_v: f32,
+    d: f32,
+    g_zsum: f32,
+    g_wsum: f32,
+    // The transmittances before the current entry and the suffix sums of dL/dalpha.
+    t: f32,
+    acc_t: f32,
+    tm: f32,
+    acc_m: f32,
+}
+
+fn start_pixel(x: u32, y: u32) -> Pixel {
+    var px: Pixel;
+    px.inside = x < params.width && y < params.height;
+    px.at = vec2<f32>(f32(x) + 0.5, f32(y) + 0.5);
+    let p = select(0u, y * params.width + x, px.inside);
+    var st: RasterState;
+    if px.inside {
+        st = states[p];
+    }
+    px.last_t = st.last_t;
+    px.last_m = st.last_m;
+    px.gc = g_transmission[p].xyz;
+    let gg = g_geometry[p];
+    px.g_m = gg.z;
+    if params.depth_variance != 0u {
+        px.g_v = gg.y;
+    }
+    px.d = geometry[p].x;
+    // D_t = sum z w / sum w, and V depends on D_t too: dV/dD = -sum w sign(z - D).
+    let g_d_total = gg.x - px.g_v * st.depth_sign_sum;
+    if st.weight_sum > 0.0 {
+        px.g_zsum = g_d_total / st.weight_sum;
+        px.g_wsum = -g_d_total * px.d / st.weight_sum;
+    }
+    // T_final appears in alpha = 1 - T and in the background term of C_t.
+    let g_tfinal = -g_transmission[p].w + dot(px.gc, params.background.xyz);
+    px.t = st.t_final;
+    px.acc_t = g_tfinal * st.t_final;
+    px.tm = st.tm_final;
+    return px;
+}
+
+@compute @workgroup_size(TILE_SIZE, TILE_SIZE / ROWS)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
-    let tx = wid.x;
-    let ty = wid.y;
-    let x = tx * TILE_SIZE + lid % TILE_SIZE;
-    let y = ty * TILE_SIZE + lid / TILE_SIZE;
-    let inside = x < params.width && y < params.height;
-    let tile = ty * params.tiles_x + tx;
+    let x = wid.x * TILE_SIZE + lid % TILE_SIZE;
+    let y0 = wid.y * TILE_SIZE + (lid / TILE_SIZE) * ROWS;
+    let tile = wid.y * params.tiles_x + wid.x;
     let start = ranges[2u * tile];
     let end = max(ranges[2u * tile + 1u], start);
     if lid == 0u {
         atomicStore(&max_last, 0u);
     }
     workgroupBarrier();
-    let p = select(0u, y * params.width + x, inside);
-    var st: RasterState;
-    if inside {
-        st = states[p];
-        atomicMax(&max_last, st.last_t);
+    var px: array<Pixel, ROWS>;
+    var my_last = 0u;
+    for (var k = 0u; k < ROWS; k++) {
+        px[k] = start_pixel(x, y0 + k);
+        my_last = max(my_last, px[k].last_t);
     }
-    let gc = g_transmission[p].xyz;
-    let gg = g_geometry[p];
-    let g_m = gg.z;
-    var g_v = 0.0;
-    if params.depth_variance != 0u {
-        g_v = gg.y;
-    }
-    let d = geometry[p].x;
-    // D_t = sum z w / sum w, and V depends on D_t too: dV/dD = -sum w sign(z - D).
-    let g_d_total = gg.x - g_v * st.depth_sign_sum;
-    var g_zsum = 0.0;
-    var g_wsum = 0.0;
-    if st.weight_sum > 0.0 {
-        g_zsum = g_d_total / st.weight_sum;
-        g_wsum = -g_d_total * d / st.weight_sum;
-    }
-    // T_final appears in alpha = 1 - T and in the background term of C_t.
-    let g_tfinal = -g_transmission[p].w + dot(gc, params.background.xyz);
-    var t = st.t_final;
-    var acc_t = g_tfinal * st.t_final;
-    var tm = st.tm_final;
-    var acc_m = 0.0;
-    let pixel = vec2<f32>(f32(x) + 0.5, f32(y) + 0.5);
+    atomicMax(&max_last, my_last);
 
     let last = workgroupUniformLoad(&max_last);
     // The subgroup's own last entry: its lanes skip the entries none of them blended (a subgroup
     // runs its own trip count; on a CPU adapter it is one SIMD vector).
-    let sg_last = subgroup_max(st.last_t);
+    let sg_last = subgroup_max(my_last);
     let rounds = (last + TILE_PIXELS - 1u) / TILE_PIXELS;
     for (var rr = 0u; rr < rounds; rr++) {
         let r = rounds - 1u - rr;
         workgroupBarrier();
-        let idx = start + r * TILE_PIXELS + lid;
-        if idx < end {
-            let gi = values[idx];
-            let g = projected[gi];
-            s_mean[lid] = vec4<f32>(g.mean2d, g.mask, f32((g.flags & FLAG_GLASS) != 0u));
-            s_conic[lid] = g.conic;
-            s_color[lid] = g.color;
-            s_index[lid] = gi;
+        for (var q = 0u; q < ROWS; q++) {
+            let slot = lid + q * THREADS;
+            let idx = start + r * TILE_PIXELS + slot;
+            if idx < end {
+                let gi = values[idx];
+                let g = projected[gi];
+                s_mean[slot] = vec4<f32>(g.mean2d, g.mask, f32((g.flags & FLAG_GLASS) != 0u));
+                s_conic[slot] = g.conic;
+                s_color[slot] = g.color;
+                s_index[slot] = gi;
+            }
         }
         workgroupBarrier();
         let batch = min(TILE_PIXELS, last - r * TILE_PIXELS);
@@ -101,47 +145,53 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         for (var jj = batch - mine; jj < batch; jj++) {
             let j = batch - 1u - jj;
             let li = r * TILE_PIXELS + j;
+            let mean = s_mean[j];
+            let conic = s_conic[j];
+            let color = s_color[j];
+            let glass = mean.w != 0.0;
             var g: array<vec4<f32>, 3>;
             var blended = false;
-            if inside && li < st.last_t {
-                let mean = s_mean[j];
-                let conic = s_conic[j];
-                let dd = pixel - mean.xy;
+            for (var k = 0u; k < ROWS; k++) {
+                if !px[k].inside || li >= px[k].last_t {
+                    continue;
+                }
+                let dd = px[k].at - mean.xy;
                 let terms = alpha_terms(conic, dd);
                 let alpha = terms.x;
-                if alpha >= 0.0 {
-                    blended = true;
-                    // 1 / (1 - alpha) recovers each transmittance before this Gaussian.
-                    let ra = 1.0 / (1.0 - alpha);
-                    let glass = mean.w != 0.0;
-                    var g_alpha = 0.0;
-                    if !glass {
-                        let tj = t * ra;
-                        let wgt = alpha * tj;
-                        let z = s_color[j].w;
-                        let dz = z - d;
-                        let phi = dot(gc, s_color[j].xyz) + g_zsum * z + g_wsum + g_v * abs(dz);
-                        g[2] = vec4<f32>(gc * wgt, 0.0);
-                        g[0].w = g_zsum * wgt + g_v * wgt * sign(dz);
-                        g_alpha += phi * tj - acc_t * ra;
-                        acc_t += phi * wgt;
-                        t = tj;
-                    }
-                    if li < st.last_m {
-                        let tmj = tm * ra;
-                        var psi = 0.0;
-                        if glass {
-                            psi = g_m * mean.z;
-                            g[1].w = g_m * alpha * tmj;
-                        }
-                        g_alpha += psi * tmj - acc_m * ra;
-                        acc_m += psi * alpha * tmj;
-                        tm = tmj;
-                    }
-                    let ga = alpha_bwd(conic, dd, terms, g_alpha);
-                    g[0] = vec4<f32>(ga[0].xyz, g[0].w);
-                    g[1] = vec4<f32>(ga[1].xyz, g[1].w);
+                if alpha < 0.0 {
+                    continue;
                 }
+                blended = true;
+                // 1 / (1 - alpha) recovers each transmittance before this Gaussian.
+                let ra = 1.0 / (1.0 - alpha);
+                var g_alpha = 0.0;
+                if !glass {
+                    let tj = px[k].t * ra;
+                    let wgt = alpha * tj;
+                    let z = color.w;
+                    let dz = z - px[k].d;
+                    let phi = dot(px[k].gc, color.xyz) + px[k].g_zsum * z + px[k].g_wsum
+                        + px[k].g_v * abs(dz);
+                    g[2] += vec4<f32>(px[k].gc * wgt, 0.0);
+                    g[0].w += px[k].g_zsum * wgt + px[k].g_v * wgt * sign(dz);
+                    g_alpha += phi * tj - px[k].acc_t * ra;
+                    px[k].acc_t += phi * wgt;
+                    px[k].t = tj;
+                }
+                if li < px[k].last_m {
+                    let tmj = px[k].tm * ra;
+                    var psi = 0.0;
+                    if glass {
+                        psi = px[k].g_m * mean.z;
+                        g[1].w += px[k].g_m * alpha * tmj;
+                    }
+                    g_alpha += psi * tmj - px[k].acc_m * ra;
+                    px[k].acc_m += psi * alpha * tmj;
+                    px[k].tm = tmj;
+                }
+                let ga = alpha_bwd(conic, dd, terms, g_alpha);
+                g[0] += vec4<f32>(ga[0].xyz, 0.0);
+                g[1] += vec4<f32>(ga[1].xyz, 0.0);
             }
             if subgroup_any(blended) {
                 accumulate_subgroup12(PROJECTED_GRAD_FLOATS * s_index[j], g);

@@ -1,12 +1,22 @@
 // Stage `rasterize_reflection_bwd`, the adjoint of pass 2 (twin:
 // trgs_core::reference::rasterize_reflection_bwd): the back-to-front replay of rasterize_bwd with
-// one transmittance, over the tiles of the plane's footprint (tile_x0, tile_y0 is its corner).
-// Pixels whose ray misses the plane kept the cleared state (last = 0) and replay nothing. Adds
-// each mirrored Gaussian's colour, reflection-intensity, opacity, 2D mean and conic gradients
-// into `grads` (PROJECTED_GRAD_FLOATS per Gaussian) once per subgroup that touched it.
+// one transmittance, over the tiles of the plane's footprint (tile_x0, tile_y0 is its corner),
+// each thread ROWS pixels of one column as in rasterize_bwd (four on CPU adapters, where a
+// subgroup reduction is a loop over the lanes). Pixels whose ray misses the plane kept the
+// cleared state (last = 0) and replay nothing. Adds each mirrored Gaussian's colour,
+// reflection-intensity, opacity, 2D mean and conic gradients into `grads`
+// (PROJECTED_GRAD_FLOATS per Gaussian), summed over the thread's pixels and then the subgroup,
+// once per subgroup that touched it.
 #include "shared/common.wgsl"
 #include "shared/splat.wgsl"
 #include "shared/accumulate.wgsl"
+
+#ifdef ROWS_PER_THREAD_4
+const ROWS: u32 = 4u;
+#else
+const ROWS: u32 = 1u;
+#endif
+const THREADS: u32 = TILE_PIXELS / ROWS;
 
 @group(0) @binding(0) var<storage, read> params: RasterParams;
 @group(0) @binding(1) var<storage, read> projected: array<ProjectedGaussian>;
@@ -28,13 +38,36 @@ var<workgroup> s_color: array<vec4<f32>, TILE_PIXELS>;
 var<workgroup> s_index: array<u32, TILE_PIXELS>;
 var<workgroup> max_last: atomic<u32>;
 
-@compute @workgroup_size(TILE_SIZE, TILE_SIZE)
-fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
-    let tx = wid.x + params.tile_x0;
-    let ty = wid.y + params.tile_y0;
-    let x = tx * TILE_SIZE + lid % TILE_SIZE;
-    let y = ty * TILE_SIZE + lid / TILE_SIZE;
+// One pixel's replay: what it read at the start and what it carries from entry to entry.
+struct Pixel {
+    last: u32,
+    at: vec2<f32>,
+    // dL/d(C_raw, A).
+    gr: vec4<f32>,
+    // The transmittance before the current entry and the suffix sum of dL/dalpha.
+    t: f32,
+    acc: f32,
+}
+
+fn start_pixel(x: u32, y: u32) -> Pixel {
+    var px: Pixel;
     let inside = x < params.width && y < params.height;
+    px.at = vec2<f32>(f32(x) + 0.5, f32(y) + 0.5);
+    let p = select(0u, params.slot * params.width * params.height + y * params.width + x, inside);
+    var st: ReflectionState;
+    if inside {
+        st = states[p];
+    }
+    px.last = st.last;
+    px.gr = g_reflection_raw[p];
+    px.t = st.t_final;
+    return px;
+}
+
+@compute @workgroup_size(TILE_SIZE, TILE_SIZE / ROWS)
+fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let x = (wid.x + params.tile_x0) * TILE_SIZE + lid % TILE_SIZE;
+    let y0 = (wid.y + params.tile_y0) * TILE_SIZE + (lid / TILE_SIZE) * ROWS;
     let tile = params.tile_base + wid.y * params.tiles_w + wid.x;
     let start = ranges[2u * tile];
     let end = max(ranges[2u * tile + 1u], start);
@@ -42,33 +75,33 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         atomicStore(&max_last, 0u);
     }
     workgroupBarrier();
-    let p = select(0u, params.slot * params.width * params.height + y * params.width + x, inside);
-    var st: ReflectionState;
-    if inside {
-        st = states[p];
-        atomicMax(&max_last, st.last);
+    var px: array<Pixel, ROWS>;
+    var my_last = 0u;
+    for (var k = 0u; k < ROWS; k++) {
+        px[k] = start_pixel(x, y0 + k);
+        my_last = max(my_last, px[k].last);
     }
-    let gr = g_reflection_raw[p];
-    var t = st.t_final;
-    var acc = 0.0;
-    let pixel = vec2<f32>(f32(x) + 0.5, f32(y) + 0.5);
+    atomicMax(&max_last, my_last);
 
     let last = workgroupUniformLoad(&max_last);
     // The subgroup's own last entry: its lanes skip the entries none of them blended (a subgroup
     // runs its own trip count; on a CPU adapter it is one SIMD vector).
-    let sg_last = subgroup_max(st.last);
+    let sg_last = subgroup_max(my_last);
     let rounds = (last + TILE_PIXELS - 1u) / TILE_PIXELS;
     for (var rr = 0u; rr < rounds; rr++) {
         let r = rounds - 1u - rr;
         workgroupBarrier();
-        let idx = start + r * TILE_PIXELS + lid;
-        if idx < end {
-            let gi = values[idx];
-            let g = projected[gi];
-            s_mean[lid] = g.mean2d;
-            s_conic[lid] = g.conic;
-            s_color[lid] = vec4<f32>(g.color.xyz, g.reflection);
-            s_index[lid] = gi;
+        for (var q = 0u; q < ROWS; q++) {
+            let slot = lid + q * THREADS;
+            let idx = start + r * TILE_PIXELS + slot;
+            if idx < end {
+                let gi = values[idx];
+                let g = projected[gi];
+                s_mean[slot] = g.mean2d;
+                s_conic[slot] = g.conic;
+                s_color[slot] = vec4<f32>(g.color.xyz, g.reflection);
+                s_index[slot] = gi;
+            }
         }
         workgroupBarrier();
         let batch = min(TILE_PIXELS, last - r * TILE_PIXELS);
@@ -77,27 +110,33 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         for (var jj = batch - mine; jj < batch; jj++) {
             let j = batch - 1u - jj;
             let li = r * TILE_PIXELS + j;
+            let conic = s_conic[j];
+            let mean = s_mean[j];
+            let color = s_color[j];
             var g: array<vec4<f32>, 3>;
             var blended = false;
-            if inside && li < st.last {
-                let conic = s_conic[j];
-                let dd = pixel - s_mean[j];
+            for (var k = 0u; k < ROWS; k++) {
+                if li >= px[k].last {
+                    continue;
+                }
+                let dd = px[k].at - mean;
                 let terms = alpha_terms(conic, dd);
                 let alpha = terms.x;
-                if alpha >= 0.0 {
-                    blended = true;
-                    let ra = 1.0 / (1.0 - alpha);
-                    let tj = t * ra;
-                    let wgt = alpha * tj;
-                    let phi = dot(gr, s_color[j]);
-                    g[2] = gr * wgt;
-                    let g_alpha = phi * tj - acc * ra;
-                    acc += phi * wgt;
-                    t = tj;
-                    let ga = alpha_bwd(conic, dd, terms, g_alpha);
-                    g[0] = ga[0];
-                    g[1] = ga[1];
+                if alpha < 0.0 {
+                    continue;
                 }
+                blended = true;
+                let ra = 1.0 / (1.0 - alpha);
+                let tj = px[k].t * ra;
+                let wgt = alpha * tj;
+                let phi = dot(px[k].gr, color);
+                g[2] += px[k].gr * wgt;
+                let g_alpha = phi * tj - px[k].acc * ra;
+                px[k].acc += phi * wgt;
+                px[k].t = tj;
+                let ga = alpha_bwd(conic, dd, terms, g_alpha);
+                g[0] += ga[0];
+                g[1] += ga[1];
             }
             if subgroup_any(blended) {
                 accumulate_subgroup12(PROJECTED_GRAD_FLOATS * s_index[j], g);

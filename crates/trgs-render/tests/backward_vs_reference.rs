@@ -1,8 +1,10 @@
 //! GPU adjoint stages against their CPU twins, stage by stage, on lavapipe (or whatever adapter
 //! the machine has): the same forward frame and the same random upstream gradients in, gradients
 //! within atol 1e-5 + rtol 1e-3 of the twin's out (plane sums relative to their scale). Each runs
-//! twice: with the adapter's float atomics and subgroup reduction, and with the optional features
-//! off (the compare-exchange fallback without subgroups). Fresh buffers are poison-filled.
+//! three times: with the adapter's float atomics and subgroup reduction in each replay layout (one
+//! pixel per thread as on a GPU, four rows per thread as on a CPU adapter), and with the optional
+//! features off (the compare-exchange fallback without subgroups). Fresh buffers are
+//! poison-filled.
 //!
 //! `rasterize_bwd` is checked twice: as a stage, the twin run on the GPU's own forward results
 //! (projected records, lists, pixel states, D_t) and upstream gradients, to 1e-4 of each
@@ -21,19 +23,28 @@ use trgs_core::rng::Rng;
 use trgs_core::scene::Gaussians;
 use trgs_render::gpu;
 use trgs_render::layout::RasterState;
-use trgs_render::{BackwardOptions, DeviceOptions, GpuContext, GpuScene, RenderOptions, Renderer};
+use trgs_render::{
+    BackwardOptions, DeviceOptions, GpuContext, GpuScene, RenderOptions, Renderer, ReplayLayout,
+};
 use trgs_render::{Layer, LayerGrads};
 
 mod common;
 use common::{compare_values, spec, to_reference};
 
+/// The adapter's features with each replay layout (one pixel per thread is what a GPU runs, four
+/// rows what a CPU adapter runs), and the fallback without them.
 fn contexts() -> Vec<(&'static str, GpuContext)> {
     let fast = DeviceOptions { poison_fresh_buffers: true, ..Default::default() };
+    let layout = |l| DeviceOptions { replay_layout: Some(l), ..fast.clone() };
     let fallback = DeviceOptions { disable_optional_features: true, ..fast.clone() };
-    vec![("native", fast), ("fallback", fallback)]
-        .into_iter()
-        .map(|(n, o)| (n, GpuContext::with_options(&o).unwrap_or_else(|e| panic!("{e}"))))
-        .collect()
+    vec![
+        ("native, one pixel per thread", layout(ReplayLayout::PixelPerThread)),
+        ("native, four rows per thread", layout(ReplayLayout::FourRowsPerThread)),
+        ("fallback", fallback),
+    ]
+    .into_iter()
+    .map(|(n, o)| (n, GpuContext::with_options(&o).unwrap_or_else(|e| panic!("{e}"))))
+    .collect()
 }
 
 /// Pixels of up to four single- or multi-channel images packed as vec4 per pixel.
@@ -515,4 +526,13 @@ fn backward_edge_on() {
 #[test]
 fn backward_stop_gradient() {
     check_backward("2 planes, stage-2 block", random_scene(&spec(56, 600, 2, 30.0)), true);
+}
+
+/// An image whose size is not a multiple of the tile: the last column and row of tiles are
+/// partial, so some threads of the replays hold pixels outside the image (in the four-rows
+/// layout, a thread may hold pixels on both sides of the bottom edge).
+#[test]
+fn backward_partial_tiles() {
+    let s = SceneSpec { width: 93, height: 70, ..spec(57, 600, 2, 35.0) };
+    check_backward("93x70, 2 planes", random_scene(&s), false);
 }
