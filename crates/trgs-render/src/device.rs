@@ -28,19 +28,22 @@ pub enum DeviceError {
 /// a device must allow this many per shader stage (a test checks every shader against it).
 pub const STORAGE_BUFFERS_PER_STAGE: u32 = 17;
 
-/// How the backward replays (`rasterize_bwd`, `rasterize_reflection_bwd`) give pixels to threads.
+/// How `rasterize_reflection` and the adjoints of both passes (`rasterize_bwd`,
+/// `rasterize_reflection_bwd`) give a tile's pixels to threads. (`rasterize` keeps one pixel per
+/// thread everywhere: it was slower on lavapipe in four rows.)
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum ReplayLayout {
+pub enum TileLayout {
     /// One pixel per thread: what fills a GPU.
     #[default]
     PixelPerThread,
-    /// Four rows of one tile column per thread, for CPU adapters: there a subgroup is one SIMD
-    /// vector whose reduction and atomics are loops over its lanes, and one reduction then
-    /// serves four times the pixels.
+    /// Four rows of one tile column per thread, for CPU adapters. There a workgroup's subgroups
+    /// (SIMD vectors) run one after another, each paying its loads of a batch entry and loop
+    /// control however few of its pixels still blend, and a subgroup reduction and its atomics
+    /// are loops over the lanes: four rows share all of these.
     FourRowsPerThread,
 }
 
-impl ReplayLayout {
+impl TileLayout {
     /// The layout that is faster on an adapter of this type.
     pub fn for_adapter(device_type: wgpu::DeviceType) -> Self {
         match device_type {
@@ -59,8 +62,8 @@ pub struct Capabilities {
     pub subgroups: bool,
     /// Timestamp queries (per-stage timings in benchmarks).
     pub timestamps: bool,
-    /// Pixels per thread of the backward replays.
-    pub replay_layout: ReplayLayout,
+    /// Pixels per thread of the per-tile kernels that have a choice ([`TileLayout`]).
+    pub tile_layout: TileLayout,
 }
 
 /// How to choose the device.
@@ -74,9 +77,9 @@ pub struct DeviceOptions {
     /// Fill every buffer the renderer allocates with 0xff bytes (NaN as f32), so that code that
     /// relies on zeroed memory fails; also on when the environment sets `TRGS_POISON_BUFFERS=1`.
     pub poison_fresh_buffers: bool,
-    /// The backward replays' layout; None: the faster one for the adapter
-    /// ([`ReplayLayout::for_adapter`]). Tests on a CPU adapter set it to check the GPU's too.
-    pub replay_layout: Option<ReplayLayout>,
+    /// The layout of the per-tile kernels that have a choice; None: the faster one for the adapter
+    /// ([`TileLayout::for_adapter`]). Tests on a CPU adapter set it to check the GPU's too.
+    pub tile_layout: Option<TileLayout>,
 }
 
 /// A wgpu device and queue with what they can do. Cloning shares the device.
@@ -223,9 +226,9 @@ impl GpuContext {
             float_atomics: features.contains(Features::SHADER_FLOAT32_ATOMIC),
             subgroups: features.contains(Features::SUBGROUP),
             timestamps: features.contains(Features::TIMESTAMP_QUERY),
-            replay_layout: options
-                .replay_layout
-                .unwrap_or_else(|| ReplayLayout::for_adapter(adapter.get_info().device_type)),
+            tile_layout: options
+                .tile_layout
+                .unwrap_or_else(|| TileLayout::for_adapter(adapter.get_info().device_type)),
         };
         let poison_fresh_buffers = options.poison_fresh_buffers
             || std::env::var("TRGS_POISON_BUFFERS").is_ok_and(|v| v == "1");

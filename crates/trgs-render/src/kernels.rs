@@ -39,21 +39,23 @@ pub fn accumulation_defines(caps: &crate::Capabilities) -> Vec<&'static str> {
     d
 }
 
-/// Defines of the backward replays (`rasterize_bwd`, `rasterize_reflection_bwd`): the
-/// accumulation's and the layout's. Four rows per thread ran `rasterize_bwd` 2.4x faster on
-/// lavapipe than one pixel per thread (100k Gaussians; two rows 1.6x, eight no better than four).
-pub fn replay_defines(caps: &crate::Capabilities) -> Vec<&'static str> {
-    let mut d = accumulation_defines(caps);
-    if caps.replay_layout == crate::ReplayLayout::FourRowsPerThread {
-        d.push("ROWS_PER_THREAD_4");
+/// The define of the layout of `rasterize_reflection`, `rasterize_bwd` and
+/// `rasterize_reflection_bwd` (none for one pixel per thread). On lavapipe at 100k Gaussians
+/// four rows per thread ran `rasterize_bwd` 2.4x faster than one pixel per thread (two rows
+/// 1.6x, eight no better than four) and `rasterize_reflection` 2.2x faster. `rasterize` keeps
+/// one pixel per thread: written for four rows (or two, or one) it ran 1.3-1.7x slower there.
+pub fn tile_defines(caps: &crate::Capabilities) -> &'static [&'static str] {
+    match caps.tile_layout {
+        crate::TileLayout::PixelPerThread => &[],
+        crate::TileLayout::FourRowsPerThread => &["ROWS_PER_THREAD_4"],
     }
-    d
 }
 
 impl Kernels {
     pub fn new(ctx: &GpuContext) -> Self {
         let acc = accumulation_defines(&ctx.capabilities);
-        let replay = replay_defines(&ctx.capabilities);
+        let tiles = tile_defines(&ctx.capabilities);
+        let replay = [acc.as_slice(), tiles].concat();
         Self {
             project_candidates: Kernel::new(
                 ctx,
@@ -92,7 +94,7 @@ impl Kernels {
                 ctx,
                 "rasterize_reflection",
                 "rasterize_reflection.wgsl",
-                &[],
+                tiles,
             ),
             compose: Kernel::new(ctx, "compose", "compose.wgsl", &[]),
             compose_bwd: Kernel::new(ctx, "compose_bwd", "compose_bwd.wgsl", &acc),

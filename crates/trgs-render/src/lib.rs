@@ -45,7 +45,7 @@ pub mod stages;
 
 pub use backward::{BackwardError, BackwardOptions, Gradients};
 pub use device::{
-    Capabilities, DeviceError, DeviceOptions, GpuContext, ReplayLayout, STORAGE_BUFFERS_PER_STAGE,
+    Capabilities, DeviceError, DeviceOptions, GpuContext, STORAGE_BUFFERS_PER_STAGE, TileLayout,
     device_descriptor, pick_adapter,
 };
 pub use display::{DisplayError, DisplayTarget, layer_mapping};

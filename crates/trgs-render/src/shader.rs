@@ -70,6 +70,7 @@ pub const VARIANTS: &[(&str, &[&str])] = &[
     ("rasterize.wgsl", &[]),
     ("rasterize.wgsl", &["DEPTH_VARIANCE"]),
     ("rasterize_reflection.wgsl", &[]),
+    ("rasterize_reflection.wgsl", &["ROWS_PER_THREAD_4"]),
     ("compose.wgsl", &[]),
     ("display.wgsl", &[]),
     ("compose_bwd.wgsl", &[]),

@@ -24,7 +24,7 @@ use trgs_core::scene::Gaussians;
 use trgs_render::gpu;
 use trgs_render::layout::RasterState;
 use trgs_render::{
-    BackwardOptions, DeviceOptions, GpuContext, GpuScene, RenderOptions, Renderer, ReplayLayout,
+    BackwardOptions, DeviceOptions, GpuContext, GpuScene, RenderOptions, Renderer, TileLayout,
 };
 use trgs_render::{Layer, LayerGrads};
 
@@ -35,11 +35,11 @@ use common::{compare_values, spec, to_reference};
 /// rows what a CPU adapter runs), and the fallback without them.
 fn contexts() -> Vec<(&'static str, GpuContext)> {
     let fast = DeviceOptions { poison_fresh_buffers: true, ..Default::default() };
-    let layout = |l| DeviceOptions { replay_layout: Some(l), ..fast.clone() };
+    let layout = |l| DeviceOptions { tile_layout: Some(l), ..fast.clone() };
     let fallback = DeviceOptions { disable_optional_features: true, ..fast.clone() };
     vec![
-        ("native, one pixel per thread", layout(ReplayLayout::PixelPerThread)),
-        ("native, four rows per thread", layout(ReplayLayout::FourRowsPerThread)),
+        ("native, one pixel per thread", layout(TileLayout::PixelPerThread)),
+        ("native, four rows per thread", layout(TileLayout::FourRowsPerThread)),
         ("fallback", fallback),
     ]
     .into_iter()

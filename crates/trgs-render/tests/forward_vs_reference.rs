@@ -2,7 +2,8 @@
 //! by stage from the same inputs: the twin's binning, keys, sort and tile ranges run on the GPU's
 //! projected Gaussians and must match exactly; projection, both rasterize passes and compose
 //! agree within atol 1e-5 + rtol 1e-3. Fresh buffers are poison-filled. The end-to-end render is
-//! compared with the reference renderer too.
+//! compared with the reference renderer too. Every scene runs in both tile layouts (one pixel
+//! per thread as on a GPU, four rows per thread as on a CPU adapter).
 use trgs_core::Image;
 use trgs_core::fixtures::{SceneSpec, random_scene};
 use trgs_core::reference::{
@@ -10,13 +11,17 @@ use trgs_core::reference::{
     prefix_sum, rasterize, rasterize_reflection, sort_keys, tile_counts, tile_ranges,
 };
 use trgs_core::scene::Gaussians;
-use trgs_render::{DeviceOptions, GpuContext, GpuScene, RenderOptions, Renderer};
+use trgs_render::{DeviceOptions, GpuContext, GpuScene, RenderOptions, Renderer, TileLayout};
 
 mod common;
 use common::{ATOL, RTOL, close, compare_values, spec, to_reference};
 
-fn ctx() -> GpuContext {
-    let opts = DeviceOptions { poison_fresh_buffers: true, ..Default::default() };
+fn ctx(layout: TileLayout) -> GpuContext {
+    let opts = DeviceOptions {
+        poison_fresh_buffers: true,
+        tile_layout: Some(layout),
+        ..Default::default()
+    };
     GpuContext::with_options(&opts).unwrap_or_else(|e| panic!("{e}"))
 }
 
@@ -31,12 +36,17 @@ fn compare(what: &str, gpu: &Image<f32>, cpu: &Image<f64>) -> usize {
 }
 
 fn check_scene(name: &str, spec: SceneSpec, chunk: Option<u32>) {
-    let ctx = ctx();
-    let renderer = Renderer::new(&ctx);
+    for layout in [TileLayout::PixelPerThread, TileLayout::FourRowsPerThread] {
+        check_scene_in(&format!("{name} ({layout:?})"), spec.clone(), chunk, &ctx(layout));
+    }
+}
+
+fn check_scene_in(name: &str, spec: SceneSpec, chunk: Option<u32>, ctx: &GpuContext) {
+    let renderer = Renderer::new(ctx);
     let scene = random_scene(&spec);
     let g32: Gaussians<f32> = scene.gaussians.cast();
     let g = g32.cast::<f64>();
-    let mut gpu_scene = GpuScene::upload(&ctx, &g32, &scene.planes).expect("valid scene");
+    let mut gpu_scene = GpuScene::upload(ctx, &g32, &scene.planes).expect("valid scene");
     if let Some(c) = chunk {
         gpu_scene.set_chunk_size(c);
     }
@@ -49,14 +59,13 @@ fn check_scene(name: &str, spec: SceneSpec, chunk: Option<u32>) {
     let frame = renderer.render(&gpu_scene, &scene.camera, &options).expect("render");
     let k = &scene.camera.intrinsics;
     let grid = TileGrid::new(k.width, k.height);
-    let images = frame.read_images(&ctx).expect("readback");
+    let images = frame.read_images(ctx).expect("readback");
     let n = g.len();
     let mut bad = 0;
     let mut all_counts = Vec::new();
     for (vi, view) in frame.views().iter().enumerate() {
         let what = format!("{name} view {vi}");
-        let inter =
-            frame.read_intermediates(&ctx, vi, n).expect("readback").expect("intermediates");
+        let inter = frame.read_intermediates(ctx, vi, n).expect("readback").expect("intermediates");
         // project: against the twin in f64 from the same f32 parameters.
         let filter = match view.plane {
             Some(p) => ProjectionFilter::FrontOf(&scene.planes[p]),
@@ -128,7 +137,7 @@ fn check_scene(name: &str, spec: SceneSpec, chunk: Option<u32>) {
                 bad += compare(&format!("{what} V"), &images.depth_variance, &out.depth_variance);
                 bad += compare(&format!("{what} M"), &images.mask, &out.mask);
                 bad += compare(&format!("{what} alpha"), &images.alpha, &out.alpha);
-                let states = frame.read_states(&ctx).expect("readback");
+                let states = frame.read_states(ctx).expect("readback");
                 let stops = states
                     .iter()
                     .zip(&out.pixels)
@@ -154,10 +163,10 @@ fn check_scene(name: &str, spec: SceneSpec, chunk: Option<u32>) {
         }
     }
     // The depth order of all views together, and the scan of its counts: exact.
-    let depth = frame.read_depth_order(&ctx).expect("readback").expect("depth order");
+    let depth = frame.read_depth_order(ctx).expect("readback").expect("depth order");
     let mut expected: Vec<(u32, u32, u32)> = Vec::new();
     for (vi, counts) in all_counts.iter().enumerate() {
-        let projected = frame.read_projected(&ctx, vi).expect("readback").expect("projected");
+        let projected = frame.read_projected(ctx, vi).expect("readback").expect("projected");
         for (i, &c) in counts.iter().enumerate() {
             if c > 0 {
                 let entry = (vi * n + i) as u32;
@@ -248,4 +257,11 @@ fn many_gaussians_match_reference() {
     // Enough Gaussians that the depth order spans several sort blocks (4096 entries each) with
     // its count known on the GPU only, and the key list several blocks of every pass.
     check_scene("many", spec(107, 12_000, 1, 30.0), None);
+}
+
+#[test]
+fn partial_tiles_match_reference() {
+    // 93x70: the last column and row of tiles are partial, and in the four-rows layout a thread
+    // holds pixels on both sides of the bottom edge.
+    check_scene("93x70", SceneSpec { width: 93, height: 70, ..spec(108, 1500, 2, 35.0) }, None);
 }
