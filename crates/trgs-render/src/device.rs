@@ -252,11 +252,12 @@ impl GpuContext {
             .map(|(_, n)| *n)
             .collect();
         format!(
-            "{} ({:?}, {:?}); optional features: [{}]",
+            "{} ({:?}, {:?}); optional features: [{}]; tile layout: {:?}",
             self.info.name,
             self.info.backend,
             self.info.device_type,
-            on.join(", ")
+            on.join(", "),
+            self.capabilities.tile_layout,
         )
     }
 }

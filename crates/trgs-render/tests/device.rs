@@ -1,6 +1,6 @@
 //! The device layer on whatever adapter the machine has (lavapipe in CI): a device is created, a
 //! compute kernel runs and its result reads back, with and without the optional features.
-use trgs_render::{DeviceOptions, GpuContext};
+use trgs_render::{DeviceOptions, GpuContext, TileLayout};
 
 const KERNEL: &str = r"
 @group(0) @binding(0) var<storage, read_write> out: array<f32>;
@@ -71,9 +71,12 @@ fn compute_kernel_runs_and_reads_back() {
         let opts = DeviceOptions { disable_optional_features: disable, ..Default::default() };
         let ctx = GpuContext::with_options(&opts).unwrap_or_else(|e| panic!("{e}"));
         println!("{}", ctx.describe());
+        let c = ctx.capabilities;
         if disable {
-            assert_eq!(ctx.capabilities, Default::default());
+            assert!(!c.float_atomics && !c.subgroups && !c.timestamps, "{c:?}");
         }
+        // The layout follows the adapter, whatever its features.
+        assert_eq!(c.tile_layout, TileLayout::for_adapter(ctx.info.device_type));
         let out = run_kernel(&ctx, 1000);
         assert!(out.iter().enumerate().all(|(i, &v)| v == i as f32 * 0.5 + 1.0));
     }
