@@ -21,7 +21,7 @@ OPTIONS:
                         glass lit dimmer, so the reflection is a larger share of the pane) or
                         no-glass
     --out DIR           output folder (default: runs/demo)
-    --iterations N      training steps (default 1000: about 20 minutes for the demo scene on a
+    --iterations N      training steps (default 1000: about 3 minutes for the demo scene on a
                         2-core lavapipe; the paper uses 30000)
     --resolution W      train at width W (the height keeps the aspect ratio)
     --downscale F       train at 1/F of the image size
