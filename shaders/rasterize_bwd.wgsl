@@ -7,22 +7,12 @@
 // gradients (colour, depth with the depth-variance term, mask value, opacity, 2D mean and conic)
 // are summed over the thread's pixels, then over the subgroup, and added to the Gaussian's
 // record of `grads` (PROJECTED_GRAD_FLOATS per Gaussian) once per subgroup that touched it.
-//
-// Why several pixels per thread on CPU adapters (the define ROWS_PER_THREAD_4): there a subgroup
-// is one SIMD vector, its reduction a loop over the lanes and each atomic a loop too, and those
-// were 60% of the kernel's time with one pixel per thread (lavapipe, 100k Gaussians). With four
-// rows per thread a reduction and its atomics serve 32 pixels instead of 8. A GPU keeps one
-// pixel per thread: there the reduction is a few shuffles and threads are what fills it.
+// With one pixel per thread on lavapipe those reductions and atomics were 60% of the kernel's
+// time (100k Gaussians); with four rows per thread one of them serves 32 pixels instead of 8.
 #include "shared/common.wgsl"
 #include "shared/splat.wgsl"
 #include "shared/accumulate.wgsl"
-
-#ifdef ROWS_PER_THREAD_4
-const ROWS: u32 = 4u;
-#else
-const ROWS: u32 = 1u;
-#endif
-const THREADS: u32 = TILE_PIXELS / ROWS;
+#include "shared/tile_rows.wgsl"
 
 @group(0) @binding(0) var<storage, read> params: RasterParams;
 @group(0) @binding(1) var<storage, read> projected: array<ProjectedGaussian>;

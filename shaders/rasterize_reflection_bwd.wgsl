@@ -10,13 +10,7 @@
 #include "shared/common.wgsl"
 #include "shared/splat.wgsl"
 #include "shared/accumulate.wgsl"
-
-#ifdef ROWS_PER_THREAD_4
-const ROWS: u32 = 4u;
-#else
-const ROWS: u32 = 1u;
-#endif
-const THREADS: u32 = TILE_PIXELS / ROWS;
+#include "shared/tile_rows.wgsl"
 
 @group(0) @binding(0) var<storage, read> params: RasterParams;
 @group(0) @binding(1) var<storage, read> projected: array<ProjectedGaussian>;

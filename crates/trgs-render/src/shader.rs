@@ -14,6 +14,7 @@ macro_rules! sources {
 pub const SOURCES: &[(&str, &str)] = sources!(
     "shared/common.wgsl",
     "shared/tiles.wgsl",
+    "shared/tile_rows.wgsl",
     "shared/splat.wgsl",
     "shared/sort_digit.wgsl",
     "shared/plane_hit.wgsl",

@@ -1,0 +1,14 @@
+// How a per-tile kernel gives the tile's pixels to threads (trgs_render::TileLayout): each
+// thread takes ROWS consecutive rows of one column, so a workgroup is TILE_SIZE x
+// (TILE_SIZE / ROWS) threads and a batch of TILE_PIXELS entries takes ROWS loads per thread.
+// One row on a GPU. Four on a CPU adapter (the define ROWS_PER_THREAD_4): there a subgroup is
+// one SIMD vector and a workgroup's subgroups run one after another, each paying every batch
+// entry's loads from workgroup memory and loop control, and in the adjoints a subgroup reduction
+// and its atomics (loops over the lanes), however few of its pixels use the entry; four rows
+// share them (docs/gpu-renderer.md, "Pixels per thread").
+#ifdef ROWS_PER_THREAD_4
+const ROWS: u32 = 4u;
+#else
+const ROWS: u32 = 1u;
+#endif
+const THREADS: u32 = TILE_PIXELS / ROWS;
