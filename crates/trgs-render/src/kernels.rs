@@ -40,10 +40,8 @@ pub fn accumulation_defines(caps: &crate::Capabilities) -> Vec<&'static str> {
 }
 
 /// The define of the layout of `rasterize_reflection`, `rasterize_bwd` and
-/// `rasterize_reflection_bwd` (none for one pixel per thread). On lavapipe at 100k Gaussians
-/// four rows per thread ran `rasterize_bwd` 2.4x faster than one pixel per thread (two rows
-/// 1.6x, eight no better than four) and `rasterize_reflection` 2.2x faster. `rasterize` keeps
-/// one pixel per thread: written for four rows (or two, or one) it ran 1.3-1.7x slower there.
+/// `rasterize_reflection_bwd` (none for one pixel per thread); why and what it measured:
+/// `shaders/shared/tile_rows.wgsl` and docs/gpu-renderer.md, "Pixels per thread".
 pub fn tile_defines(caps: &crate::Capabilities) -> &'static [&'static str] {
     match caps.tile_layout {
         crate::TileLayout::PixelPerThread => &[],
