@@ -14,7 +14,7 @@
 @group(0) @binding(2) var<storage, read_write> counts: array<u32>;
 @group(0) @binding(3) var<storage, read> candidates: array<u32>;
 @group(0) @binding(4) var<storage, read> work: array<u32, 4>;
-// Per entry: the tile rectangle, (x0 | y0 << 16, x1 | y1 << 16); the f32 depth bits; 1 when
+// Per entry: the tile rectangle, (x0 | y0 << 16, x1 | y1 << 16); its depth-order key; 1 when
 // the Gaussian touches a tile (cleared to 0 before).
 @group(0) @binding(5) var<storage, read_write> rects: array<vec2<u32>>;
 @group(0) @binding(6) var<storage, read_write> depths: array<u32>;
@@ -22,6 +22,18 @@
 // Per view: its key total as two words, the low 32 bits and the carries out of them (a total
 // of 2^32 keys or more is refused, not wrapped).
 @group(0) @binding(8) var<storage, read_write> key_totals: array<atomic<u32>>;
+
+// The depth-order key (twin: reference::depth_key): the depth's f32 bits counted from `base`,
+// the near plane's; DEPTH_KEY_BITS bits, so that `depth_order` sorts them in one radix pass
+// fewer than the raw 32 bits.
+fn depth_key(depth: f32, base: u32) -> u32 {
+    let bits = bitcast<u32>(depth);
+    if bits >= 0x80000000u {
+        return 0u;
+    }
+    let max_key = (1u << DEPTH_KEY_BITS) - 1u;
+    return min(select(0u, bits - base, bits > base), max_key);
+}
 
 @compute @workgroup_size(256)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -42,7 +54,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let entry = tiles.entry_base + tiles.first + i;
     rects[entry] = vec2<u32>(r.x | (r.y << 16u), r.z | (r.w << 16u));
-    depths[entry] = bitcast<u32>(g.color.w);
+    depths[entry] = depth_key(g.color.w, tiles.depth_base);
     present[entry] = 1u;
     let before = atomicAdd(&key_totals[2u * tiles.view], n);
     if before > 0xffffffffu - n {

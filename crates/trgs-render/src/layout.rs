@@ -126,6 +126,12 @@ gpu_struct! {
         pub entry_base: u32,
         /// Index of the view (its key total is `key_totals[2 view]`, with its carries after).
         pub view: u32,
+        /// The f32 bits the depth-order keys count from
+        /// (`trgs_core::reference::depth_key_base` of the near plane).
+        pub depth_base: u32,
+        pub pad0: u32,
+        pub pad1: u32,
+        pub pad2: u32,
     }
 }
 
@@ -401,9 +407,9 @@ pub const SORT_THREADS: u32 = 64;
 pub const MAX_WORKGROUPS: u32 = 65_535;
 pub const SORT_ITEMS: u32 = 64;
 /// Bits per radix-sort digit. Six: a pass costs about the same with 16 or 64 digits on lavapipe
-/// (moving the keys is the cost), and 64 digits sort the 32 depth bits in 6 passes instead of 8
-/// and the tile indices of a 256x192 or 512x384 frame in 2 instead of 3. Each thread keeps one
-/// 16-bit counter per digit (SORT_PACKED words).
+/// (moving the keys is the cost), and 64 digits sort the 30 bits of the depth keys in 5 passes
+/// instead of 8 and the tile indices of a 256x192 or 512x384 frame in 2 instead of 3. Each thread
+/// keeps one 16-bit counter per digit (SORT_PACKED words).
 pub const SORT_RADIX_BITS: u32 = 6;
 pub const SORT_RADIX: u32 = 1 << SORT_RADIX_BITS;
 pub const SORT_PACKED: u32 = SORT_RADIX / 2;
@@ -481,6 +487,7 @@ pub fn prelude() -> String {
         ("MODEL_NO_INTENSITY", MODEL_NO_INTENSITY),
         ("LOSS_STRIP", LOSS_STRIP),
         ("GATHER_ZERO", GATHER_ZERO),
+        ("DEPTH_KEY_BITS", trgs_core::reference::DEPTH_KEY_BITS),
     ];
     for (name, v) in consts_u32 {
         s.push_str(&format!("const {name}: u32 = {v}u;\n"));

@@ -243,7 +243,7 @@ impl Renderer {
             let tparams = TileParams {
                 entry_base: vi as u32 * scene.len(),
                 view: vi as u32,
-                ..tile_counts::params(&grid, &spec.limit)
+                ..tile_counts::params(&grid, &spec.limit, options.near)
             };
             let c = &candidates;
             tile_counts::record(s, &mut rec, scene, &tparams, &projected, c, &counts, &entries);

@@ -7,8 +7,9 @@
 use trgs_core::Image;
 use trgs_core::fixtures::{SceneSpec, random_scene};
 use trgs_core::reference::{
-    self, ProjectionFilter, ReflectionModel, RenderSettings, TileGrid, depth_order, emit_keys,
-    prefix_sum, rasterize, rasterize_reflection, sort_keys, tile_counts, tile_ranges,
+    self, ProjectionFilter, ReflectionModel, RenderSettings, TileGrid, depth_key, depth_key_base,
+    depth_order, emit_keys, prefix_sum, rasterize, rasterize_reflection, sort_keys, tile_counts,
+    tile_ranges,
 };
 use trgs_core::scene::Gaussians;
 use trgs_render::{DeviceOptions, GpuContext, GpuScene, RenderOptions, Renderer, TileLayout};
@@ -113,7 +114,7 @@ fn check_scene_in(name: &str, spec: SceneSpec, chunk: Option<u32>, ctx: &GpuCont
         // Binning, depth order, scan, keys, sort, ranges: exact, from the GPU's projected values.
         let counts = tile_counts(&gpu, &grid, &view.limit);
         assert_eq!(inter.counts, counts, "{what}: tile_counts");
-        let order = depth_order(&gpu, &counts);
+        let order = depth_order(&gpu, &counts, options.near);
         assert_eq!(inter.order, order, "{what}: depth_order");
         let ordered: Vec<u32> = order.iter().map(|&i| counts[i as usize]).collect();
         let (offsets, total) = prefix_sum(&ordered);
@@ -164,13 +165,14 @@ fn check_scene_in(name: &str, spec: SceneSpec, chunk: Option<u32>, ctx: &GpuCont
     }
     // The depth order of all views together, and the scan of its counts: exact.
     let depth = frame.read_depth_order(ctx).expect("readback").expect("depth order");
+    let base = depth_key_base(options.near);
     let mut expected: Vec<(u32, u32, u32)> = Vec::new();
     for (vi, counts) in all_counts.iter().enumerate() {
         let projected = frame.read_projected(ctx, vi).expect("readback").expect("projected");
         for (i, &c) in counts.iter().enumerate() {
             if c > 0 {
                 let entry = (vi * n + i) as u32;
-                expected.push((projected[i].color[3].to_bits(), entry, c));
+                expected.push((depth_key(projected[i].color[3], base), entry, c));
             }
         }
     }

@@ -37,7 +37,7 @@ pub use backward::{
 };
 pub use compose::{ComposeOutput, ReflectionModel, compose};
 pub use compose_bwd::{ComposeGrads, compose_bwd};
-pub use depth_order::depth_order;
+pub use depth_order::{DEPTH_KEY_BITS, DEPTH_KEY_FLOOR, depth_key, depth_key_base, depth_order};
 pub use display::{DisplayMapping, display, display_pixel, pack4x8unorm};
 pub use emit_keys::emit_keys;
 pub use footprint::{TileRect, footprint};

@@ -52,7 +52,7 @@ pub fn render_view(
     let grid = TileGrid::new(k.width, k.height);
     let projected = project(g, view, k, filter, limit, near);
     let counts = tile_counts(&projected, &grid, limit);
-    let order = depth_order(&projected, &counts);
+    let order = depth_order(&projected, &counts, near);
     let ordered: Vec<u32> = order.iter().map(|&i| counts[i as usize]).collect();
     let (offsets, total) = prefix_sum(&ordered);
     let (mut keys, mut values) = emit_keys(&projected, &grid, limit, &order, &offsets, total);

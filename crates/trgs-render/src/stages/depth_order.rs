@@ -1,7 +1,8 @@
 //! Stage `depth_order` (shaders/depth_order_compact.wgsl, the `sort` kernels, then
 //! shaders/depth_order_counts.wgsl; twin `trgs_core::reference::depth_order`): the entries that
 //! `tile_counts` marked present, every view's together, listed in entry order (a scan of the
-//! flags), sorted front to back by their f32 depth bits, and their tile counts in that order.
+//! flags), sorted front to back by their depth keys (`trgs_core::reference::depth_key`: 30 bits, five
+//! radix passes), and their tile counts in that order.
 //!
 //! Why: sorting every key by (tile, depth) sorts the 32 depth bits once per key, and a
 //! Gaussian has one key per tile it touches (about 3.5 on the room benchmark). Sorting the
@@ -15,6 +16,7 @@ use super::tile_counts::DepthEntries;
 use super::{Stage, prefix_sum};
 use crate::gpu::{self, BufferPool, Recorder, grid_1d};
 use crate::layout::ScanParams;
+use trgs_core::reference::DEPTH_KEY_BITS;
 
 /// The sorted entries and their count.
 #[derive(Debug)]
@@ -61,7 +63,7 @@ pub fn record(
     );
     let groups = grid_1d(capacity.div_ceil(256));
     rec.dispatch("depth_order", k, &bind, groups);
-    let passes: Vec<_> = digits(32).collect();
+    let passes: Vec<_> = digits(DEPTH_KEY_BITS).collect();
     let count = SortCount::OnGpu { counter: &total, capacity };
     let list = sort::record(s, rec, "depth_order", pool, "trgs.depth_order", &list, count, &passes);
     let k = &s.kernels.depth_order_counts;

@@ -6,13 +6,14 @@ use super::project::{Candidates, WORK_STRIDE};
 use crate::gpu::{self, BufferPool, Recorder, range};
 use crate::layout::{ProjectedGaussian, TileParams};
 use crate::scene::GpuScene;
-use trgs_core::reference::{TileGrid, TileRect};
+use trgs_core::reference::{TileGrid, TileRect, depth_key_base};
 
 const PROJECTED: u64 = std::mem::size_of::<ProjectedGaussian>() as u64;
 
 /// The parameter block of a view's binning, limited to `limit` (a footprint, or the whole grid).
-pub fn params(grid: &TileGrid, limit: &TileRect) -> TileParams {
+pub fn params(grid: &TileGrid, limit: &TileRect, near: f64) -> TileParams {
     TileParams {
+        depth_base: depth_key_base(near),
         width: grid.width,
         height: grid.height,
         tiles_x: grid.tiles_x,
