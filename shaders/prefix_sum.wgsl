@@ -3,6 +3,7 @@
 // thread totals), writing each block's total to `block_sums`. Blocks are joined by scanning
 // `block_sums` the same way and adding it back (prefix_sum_add.wgsl).
 #include "shared/common.wgsl"
+#include "shared/block_width.wgsl"
 
 @group(0) @binding(0) var<storage, read> params: ScanParams;
 @group(0) @binding(1) var<storage, read_write> data: array<u32>;

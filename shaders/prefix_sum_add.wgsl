@@ -1,5 +1,6 @@
 // Stage `prefix_sum`, join: add each block's scanned offset to its values.
 #include "shared/common.wgsl"
+#include "shared/block_width.wgsl"
 
 @group(0) @binding(0) var<storage, read> params: ScanParams;
 @group(0) @binding(1) var<storage, read_write> data: array<u32>;

@@ -3,6 +3,7 @@
 // digit-major (`hist[digit * num_blocks + block]`) so that its exclusive scan is every block's
 // first output slot per digit.
 #include "shared/common.wgsl"
+#include "shared/block_width.wgsl"
 #include "shared/sort_digit.wgsl"
 
 @group(0) @binding(0) var<storage, read> params: SortParams;

@@ -4,6 +4,7 @@
 // slot per digit comes from the scanned histogram. Keys keep their order within a digit: the sort
 // is stable, as the twin's.
 #include "shared/common.wgsl"
+#include "shared/block_width.wgsl"
 #include "shared/sort_digit.wgsl"
 
 @group(0) @binding(0) var<storage, read> params: SortParams;

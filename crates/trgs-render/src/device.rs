@@ -1,6 +1,9 @@
 //! Device setup: pick the best adapter, enable the optional features it has (float atomics,
 //! subgroups, timestamp queries) and record which ones the stages may use, so that each stage can
 //! choose its fast path or its fallback.
+use crate::layout::{
+    SCAN_ITEMS, SCAN_ITEMS_WIDE, SCAN_THREADS, SORT_ITEMS, SORT_ITEMS_WIDE, SORT_THREADS,
+};
 use wgpu::{Features, Limits};
 
 #[derive(Debug, thiserror::Error)]
@@ -53,6 +56,57 @@ impl TileLayout {
     }
 }
 
+/// How many values a workgroup of the prefix sum and the radix sort takes (`prefix_sum`,
+/// `sort_count`, `sort_scatter`; constants in `layout.rs`, the WGSL side in
+/// `shaders/shared/block_width.wgsl`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BlockWidth {
+    /// 16 values per thread in the scan (1024 per workgroup), 64 in the sort (4096): enough
+    /// workgroups to fill a GPU at the key counts of a frame, and few registers per thread.
+    #[default]
+    Narrow,
+    /// Four times as many, for CPU adapters. There each workgroup pays its barriers (lavapipe
+    /// switches every invocation's context at each one) while its serial loops are cheap: the
+    /// depth sort at 100k Gaussians took 0.8x the time, the scans 0.85x (docs/gpu-renderer.md).
+    Wide,
+}
+
+impl BlockWidth {
+    /// The width that is faster on an adapter of this type.
+    pub fn for_adapter(device_type: wgpu::DeviceType) -> Self {
+        match device_type {
+            wgpu::DeviceType::Cpu => Self::Wide,
+            _ => Self::Narrow,
+        }
+    }
+
+    /// Values per workgroup of the prefix sum.
+    pub fn scan_block(self) -> u32 {
+        SCAN_THREADS * self.scan_items()
+    }
+
+    /// Values per thread of the prefix sum.
+    pub fn scan_items(self) -> u32 {
+        match self {
+            Self::Narrow => SCAN_ITEMS,
+            Self::Wide => SCAN_ITEMS_WIDE,
+        }
+    }
+
+    /// Keys per workgroup (block) of a radix pass.
+    pub fn sort_block(self) -> u32 {
+        SORT_THREADS * self.sort_items()
+    }
+
+    /// Keys per thread of a radix pass.
+    pub fn sort_items(self) -> u32 {
+        match self {
+            Self::Narrow => SORT_ITEMS,
+            Self::Wide => SORT_ITEMS_WIDE,
+        }
+    }
+}
+
 /// Optional features the adapter granted, and how the kernels use the device.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Capabilities {
@@ -64,6 +118,8 @@ pub struct Capabilities {
     pub timestamps: bool,
     /// Pixels per thread of the per-tile kernels that have a choice ([`TileLayout`]).
     pub tile_layout: TileLayout,
+    /// Values per workgroup of the prefix sum and the radix sort ([`BlockWidth`]).
+    pub block_width: BlockWidth,
 }
 
 /// How to choose the device.
@@ -80,6 +136,9 @@ pub struct DeviceOptions {
     /// The layout of the per-tile kernels that have a choice; None: the faster one for the adapter
     /// ([`TileLayout::for_adapter`]). Tests on a CPU adapter set it to check the GPU's too.
     pub tile_layout: Option<TileLayout>,
+    /// The width of the scan and sort blocks; None: the faster one for the adapter
+    /// ([`BlockWidth::for_adapter`]). Tests on a CPU adapter set it to check the GPU's too.
+    pub block_width: Option<BlockWidth>,
 }
 
 /// A wgpu device and queue with what they can do. Cloning shares the device.
@@ -229,6 +288,9 @@ impl GpuContext {
             tile_layout: options
                 .tile_layout
                 .unwrap_or_else(|| TileLayout::for_adapter(adapter.get_info().device_type)),
+            block_width: options
+                .block_width
+                .unwrap_or_else(|| BlockWidth::for_adapter(adapter.get_info().device_type)),
         };
         let poison_fresh_buffers = options.poison_fresh_buffers
             || std::env::var("TRGS_POISON_BUFFERS").is_ok_and(|v| v == "1");
@@ -252,12 +314,13 @@ impl GpuContext {
             .map(|(_, n)| *n)
             .collect();
         format!(
-            "{} ({:?}, {:?}); optional features: [{}]; tile layout: {:?}",
+            "{} ({:?}, {:?}); optional features: [{}]; tile layout: {:?}; scan and sort blocks: {:?}",
             self.info.name,
             self.info.backend,
             self.info.device_type,
             on.join(", "),
             self.capabilities.tile_layout,
+            self.capabilities.block_width,
         )
     }
 }

@@ -49,11 +49,21 @@ pub fn tile_defines(caps: &crate::Capabilities) -> &'static [&'static str] {
     }
 }
 
+/// The define of the scan and sort block width (none for [`crate::BlockWidth::Narrow`]); why:
+/// [`crate::BlockWidth`].
+pub fn block_defines(caps: &crate::Capabilities) -> &'static [&'static str] {
+    match caps.block_width {
+        crate::BlockWidth::Narrow => &[],
+        crate::BlockWidth::Wide => &["WIDE_BLOCKS"],
+    }
+}
+
 impl Kernels {
     pub fn new(ctx: &GpuContext) -> Self {
         let acc = accumulation_defines(&ctx.capabilities);
         let tiles = tile_defines(&ctx.capabilities);
         let replay = [acc.as_slice(), tiles].concat();
+        let blocks = block_defines(&ctx.capabilities);
         Self {
             project_candidates: Kernel::new(
                 ctx,
@@ -75,11 +85,11 @@ impl Kernels {
                 "depth_order_counts.wgsl",
                 &[],
             ),
-            prefix_sum: Kernel::new(ctx, "prefix_sum", "prefix_sum.wgsl", &[]),
-            prefix_sum_add: Kernel::new(ctx, "prefix_sum_add", "prefix_sum_add.wgsl", &[]),
+            prefix_sum: Kernel::new(ctx, "prefix_sum", "prefix_sum.wgsl", blocks),
+            prefix_sum_add: Kernel::new(ctx, "prefix_sum_add", "prefix_sum_add.wgsl", blocks),
             emit_keys: Kernel::new(ctx, "emit_keys", "emit_keys.wgsl", &[]),
-            sort_count: Kernel::new(ctx, "sort_count", "sort_count.wgsl", &[]),
-            sort_scatter: Kernel::new(ctx, "sort_scatter", "sort_scatter.wgsl", &[]),
+            sort_count: Kernel::new(ctx, "sort_count", "sort_count.wgsl", blocks),
+            sort_scatter: Kernel::new(ctx, "sort_scatter", "sort_scatter.wgsl", blocks),
             tile_ranges: Kernel::new(ctx, "tile_ranges", "tile_ranges.wgsl", &[]),
             rasterize: Kernel::new(ctx, "rasterize", "rasterize.wgsl", &[]),
             rasterize_depth_variance: Kernel::new(

@@ -392,20 +392,24 @@ pub const MODEL_NO_FRESNEL: u32 = 1;
 pub const MODEL_NO_INTENSITY: u32 = 2;
 /// `Population::Glass` as stored in the population buffer.
 pub const POPULATION_GLASS: u32 = 1;
-/// Threads, values per thread and values per workgroup of the prefix sum (few threads, many
-/// values each, for the reason given at SORT_THREADS).
+/// Threads and values per thread of the prefix sum (few threads, many values each, for the
+/// reason given at SORT_THREADS); a workgroup takes SCAN_THREADS times the items of the device's
+/// [`crate::BlockWidth`].
 pub const SCAN_THREADS: u32 = 64;
 pub const SCAN_ITEMS: u32 = 16;
-pub const SCAN_BLOCK: u32 = SCAN_THREADS * SCAN_ITEMS;
-/// Threads, keys per thread and keys per workgroup of a radix pass. Few threads with many keys
-/// each: the scatter's in-workgroup scan costs log2(threads) barrier rounds, and a barrier is
-/// expensive on CPU adapters (lavapipe switches every invocation's context at each one), while
-/// the per-thread serial part is cheap everywhere. 16-bit packed counters need SORT_ITEMS and
-/// SORT_BLOCK below 65536.
+/// Values per thread of the prefix sum with [`crate::BlockWidth::Wide`] (CPU adapters).
+pub const SCAN_ITEMS_WIDE: u32 = 64;
+/// Threads and keys per thread of a radix pass (a block is SORT_THREADS times the items of the
+/// device's [`crate::BlockWidth`]). Few threads with many keys each: the scatter's in-workgroup
+/// scan costs log2(threads) barrier rounds, and a barrier is expensive on CPU adapters (lavapipe
+/// switches every invocation's context at each one), while the per-thread serial part is cheap
+/// everywhere. 16-bit packed counters need a block below 65536 keys.
 pub const SORT_THREADS: u32 = 64;
 /// The most workgroups along one dimension of a dispatch (WebGPU's and Vulkan's minimum limit).
 pub const MAX_WORKGROUPS: u32 = 65_535;
 pub const SORT_ITEMS: u32 = 64;
+/// Keys per thread of a radix pass with [`crate::BlockWidth::Wide`] (CPU adapters).
+pub const SORT_ITEMS_WIDE: u32 = 256;
 /// Bits per radix-sort digit. Six: a pass costs about the same with 16 or 64 digits on lavapipe
 /// (moving the keys is the cost), and 64 digits sort the 30 bits of the depth keys in 5 passes
 /// instead of 8 and the tile indices of a 256x192 or 512x384 frame in 2 instead of 3. Each thread
@@ -414,7 +418,6 @@ pub const SORT_RADIX_BITS: u32 = 6;
 pub const SORT_RADIX: u32 = 1 << SORT_RADIX_BITS;
 pub const SORT_PACKED: u32 = SORT_RADIX / 2;
 pub const SORT_PACKED_VECS: u32 = SORT_PACKED / 4;
-pub const SORT_BLOCK: u32 = SORT_THREADS * SORT_ITEMS;
 
 /// One GPU struct: (name, WGSL declaration, Rust field offsets, Rust size).
 pub type StructInfo = (&'static str, String, Vec<(&'static str, usize)>, usize);
@@ -469,12 +472,12 @@ pub fn prelude() -> String {
         ("FLAG_CLAMPED_G", FLAG_CLAMPED_G),
         ("FLAG_CLAMPED_B", FLAG_CLAMPED_B),
         ("POPULATION_GLASS", POPULATION_GLASS),
-        ("SCAN_ITEMS", SCAN_ITEMS),
-        ("SCAN_BLOCK", SCAN_BLOCK),
-        ("SORT_ITEMS", SORT_ITEMS),
+        ("SCAN_ITEMS_NARROW", SCAN_ITEMS),
+        ("SCAN_ITEMS_WIDE", SCAN_ITEMS_WIDE),
+        ("SORT_ITEMS_NARROW", SORT_ITEMS),
+        ("SORT_ITEMS_WIDE", SORT_ITEMS_WIDE),
         ("SORT_THREADS", SORT_THREADS),
         ("SCAN_THREADS", SCAN_THREADS),
-        ("SORT_BLOCK", SORT_BLOCK),
         ("SORT_RADIX", SORT_RADIX),
         ("SORT_PACKED", SORT_PACKED),
         ("SORT_PACKED_VECS", SORT_PACKED_VECS),

@@ -45,8 +45,8 @@ pub mod stages;
 
 pub use backward::{BackwardError, BackwardOptions, Gradients};
 pub use device::{
-    Capabilities, DeviceError, DeviceOptions, GpuContext, STORAGE_BUFFERS_PER_STAGE, TileLayout,
-    device_descriptor, pick_adapter,
+    BlockWidth, Capabilities, DeviceError, DeviceOptions, GpuContext, STORAGE_BUFFERS_PER_STAGE,
+    TileLayout, device_descriptor, pick_adapter,
 };
 pub use display::{DisplayError, DisplayTarget, layer_mapping};
 pub use frame::{

@@ -1,6 +1,6 @@
 //! The device layer on whatever adapter the machine has (lavapipe in CI): a device is created, a
 //! compute kernel runs and its result reads back, with and without the optional features.
-use trgs_render::{DeviceOptions, GpuContext, TileLayout};
+use trgs_render::{BlockWidth, DeviceOptions, GpuContext, TileLayout};
 
 const KERNEL: &str = r"
 @group(0) @binding(0) var<storage, read_write> out: array<f32>;
@@ -77,6 +77,7 @@ fn compute_kernel_runs_and_reads_back() {
         }
         // The layout follows the adapter, whatever its features.
         assert_eq!(c.tile_layout, TileLayout::for_adapter(ctx.info.device_type));
+        assert_eq!(c.block_width, BlockWidth::for_adapter(ctx.info.device_type));
         let out = run_kernel(&ctx, 1000);
         assert!(out.iter().enumerate().all(|(i, &v)| v == i as f32 * 0.5 + 1.0));
     }

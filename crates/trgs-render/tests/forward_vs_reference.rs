@@ -12,15 +12,25 @@ use trgs_core::reference::{
     tile_ranges,
 };
 use trgs_core::scene::Gaussians;
-use trgs_render::{DeviceOptions, GpuContext, GpuScene, RenderOptions, Renderer, TileLayout};
+use trgs_render::{
+    BlockWidth, DeviceOptions, GpuContext, GpuScene, RenderOptions, Renderer, TileLayout,
+};
 
 mod common;
 use common::{ATOL, RTOL, close, compare_values, spec, to_reference};
 
+/// A context with `layout`, and the scan and sort block width that goes with it on a device of
+/// that kind (narrow blocks with one pixel per thread, as on a GPU; wide ones with four rows, as
+/// on a CPU adapter), so that both devices' kernels are checked here.
 fn ctx(layout: TileLayout) -> GpuContext {
+    let width = match layout {
+        TileLayout::PixelPerThread => BlockWidth::Narrow,
+        TileLayout::FourRowsPerThread => BlockWidth::Wide,
+    };
     let opts = DeviceOptions {
         poison_fresh_buffers: true,
         tile_layout: Some(layout),
+        block_width: Some(width),
         ..Default::default()
     };
     GpuContext::with_options(&opts).unwrap_or_else(|e| panic!("{e}"))
@@ -256,9 +266,11 @@ fn chunked_bindings_match_reference() {
 
 #[test]
 fn many_gaussians_match_reference() {
-    // Enough Gaussians that the depth order spans several sort blocks (4096 entries each) with
-    // its count known on the GPU only, and the key list several blocks of every pass.
-    check_scene("many", spec(107, 12_000, 1, 30.0), None);
+    // Enough Gaussians that the depth order (19716 entries over three views) spans several sort
+    // blocks (4096 entries each, 16384 with wide blocks) with its count known on the GPU only,
+    // the key list several blocks of every pass, and the scans two levels (1024 and 4096 values
+    // a block).
+    check_scene("many", spec(107, 12_000, 2, 30.0), None);
 }
 
 #[test]

@@ -3,7 +3,7 @@
 //! with the block totals scanned recursively and added back.
 use super::Stage;
 use crate::gpu::{self, BufferPool, Recorder, grid_1d};
-use crate::layout::{SCAN_BLOCK, ScanParams};
+use crate::layout::ScanParams;
 
 /// Scan `count` values of `data` in place; returns the buffer whose first u32 is the total.
 /// `label` names the temporaries in `pool`.
@@ -27,7 +27,7 @@ fn scan_level(
     count: u32,
     level: u32,
 ) -> wgpu::Buffer {
-    let blocks = count.div_ceil(SCAN_BLOCK);
+    let blocks = count.div_ceil(s.ctx.capabilities.block_width.scan_block());
     let sums = pool.get(s.ctx, &format!("{label}.block_sums{level}"), u64::from(blocks.max(1)) * 4);
     if count == 0 {
         rec.encoder.clear_buffer(&sums, 0, None);

@@ -6,7 +6,7 @@
 //! stably.
 use super::{Stage, prefix_sum};
 use crate::gpu::{self, BufferPool, Recorder, grid_1d};
-use crate::layout::{SORT_BLOCK, SORT_RADIX, SORT_RADIX_BITS, SortParams};
+use crate::layout::{SORT_RADIX, SORT_RADIX_BITS, SortParams};
 
 /// Keys and their values, sorted together.
 #[derive(Clone, Debug)]
@@ -61,7 +61,7 @@ pub fn record(
         keys: pool.get(s.ctx, &format!("{label}.alt_keys"), bytes),
         values: pool.get(s.ctx, &format!("{label}.alt_values"), bytes),
     };
-    let num_blocks = capacity.div_ceil(SORT_BLOCK);
+    let num_blocks = capacity.div_ceil(s.ctx.capabilities.block_width.sort_block());
     let hist = pool.get(s.ctx, &format!("{label}.hist"), u64::from(num_blocks * SORT_RADIX) * 4);
     let (mut src, mut dst) = (list.clone(), alt);
     for &shift in shifts {
