@@ -61,13 +61,14 @@ impl TileLayout {
 /// `shaders/shared/block_width.wgsl`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum BlockWidth {
-    /// 16 values per thread in the scan (1024 per workgroup), 64 in the sort (4096): enough
-    /// workgroups to fill a GPU at the key counts of a frame, and few registers per thread.
+    /// `SCAN_ITEMS` values per thread in the scan, `SORT_ITEMS` keys in a radix pass: as many
+    /// workgroups as a frame's keys give, to spread over a GPU's cores, and few registers per
+    /// thread.
     #[default]
     Narrow,
-    /// Four times as many, for CPU adapters. There each workgroup pays its barriers (lavapipe
-    /// switches every invocation's context at each one) while its serial loops are cheap: the
-    /// depth sort at 100k Gaussians took 0.8x the time, the scans 0.85x (docs/gpu-renderer.md).
+    /// `SCAN_ITEMS_WIDE` and `SORT_ITEMS_WIDE`, four times as many, for CPU adapters. There each
+    /// workgroup pays its barriers while its serial loops are cheap: on lavapipe the depth sort
+    /// at 100k Gaussians took about 0.8x the time and the scans 0.8-0.9x (docs/gpu-renderer.md).
     Wide,
 }
 
