@@ -2,7 +2,8 @@
 // rectangle the camera ray hits from the front side (hit mask H = k + 1), Schlick's
 // R_raw = R0 + (1 - R0) (1 - cos)^5, R = R_raw M, C_r = C_raw^k A^k and
 // C = (1 - R) C_t + R C_r. Pixels without a hit show C_t. The MODEL_* bits switch Schlick (R_raw
-// = R0) and A (C_r = C_raw) off for the ablations.
+// = R0) and A (C_r = C_raw) off for the ablations. Dispatched over `params.area` only (the
+// footprints' union); the renderer fills the other pixels by a copy of C_t and clears.
 #include "shared/common.wgsl"
 #include "shared/plane_hit.wgsl"
 
@@ -11,7 +12,7 @@
 @group(0) @binding(2) var<storage, read> transmission: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read> geometry: array<vec4<f32>>;
 @group(0) @binding(4) var<storage, read> reflection_raw: array<vec4<f32>>;
-// (C, 0)
+// (C, 1 - T_t): the alpha of `transmission`, which the renderer copies outside the area.
 @group(0) @binding(5) var<storage, read_write> color: array<vec4<f32>>;
 // (C_r, 0)
 @group(0) @binding(6) var<storage, read_write> reflection: array<vec4<f32>>;
@@ -21,13 +22,14 @@
 
 @compute @workgroup_size(16, 16)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let x = gid.x;
-    let y = gid.y;
-    if x >= params.width || y >= params.height {
+    let x = gid.x + params.area.x;
+    let y = gid.y + params.area.y;
+    if x >= params.area.z || y >= params.area.w {
         return;
     }
     let p = y * params.width + x;
-    let ct = transmission[p].xyz;
+    let trans = transmission[p];
+    let ct = trans.xyz;
     let dir = camera_ray(params, x, y);
     let origin = params.origin.xyz;
     var best = -1;
@@ -65,7 +67,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         out_strength = vec4<f32>(r_raw, r, 0.0, 0.0);
         out_hit = u32(best) + 1u;
     }
-    color[p] = vec4<f32>(out_color, 0.0);
+    color[p] = vec4<f32>(out_color, trans.w);
     reflection[p] = vec4<f32>(out_reflection, 0.0);
     strength[p] = vec4<f32>(out_strength);
     hit[p] = out_hit;

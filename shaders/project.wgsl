@@ -76,7 +76,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
 
 fn project_one(i: u32) {
     var out: ProjectedGaussian;
-    let v = view_point(i);
+    let v = in_view(view, gaussian_point(i));
     let w = transpose(mat3x3<f32>(view.row0.xyz, view.row1.xyz, view.row2.xyz));
     let p = v.p;
     let iz = 1.0 / p.z;

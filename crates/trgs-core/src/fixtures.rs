@@ -19,7 +19,7 @@ pub struct Scene {
 pub struct SceneSpec {
     pub seed: u64,
     pub gaussians: usize,
-    /// Number of planes (0, 1 or 2).
+    /// Number of planes (0 to 4).
     pub planes: usize,
     pub width: u32,
     pub height: u32,
@@ -73,6 +73,17 @@ pub fn random_scene(spec: &SceneSpec) -> Scene {
         let c2 = DVec3::new(-1.2, 0.2, 0.6);
         let n2 = DVec3::new(0.6, 0.0, 0.8).normalize();
         planes.push(ReflectionPlane::new(c2, n2, DVec3::Y.cross(n2), 1.6, 1.4, Material::Mirror));
+    }
+    if spec.planes >= 3 {
+        // A pane to the other side and a small mirror below, both facing the camera's side.
+        let c3 = DVec3::new(1.1, -0.3, 0.4);
+        let n3 = DVec3::new(-0.5, 0.1, 0.85).normalize();
+        planes.push(ReflectionPlane::new(c3, n3, DVec3::Y.cross(n3), 1.2, 1.0, Material::Glass));
+    }
+    if spec.planes >= 4 {
+        let c4 = DVec3::new(0.2, 0.7, 0.9);
+        let n4 = DVec3::new(0.0, -0.3, 0.95).normalize();
+        planes.push(ReflectionPlane::new(c4, n4, DVec3::X, 1.0, 0.6, Material::Mirror));
     }
     let mut g = Gaussians::<f64>::empty(spec.sh_degree);
     let k = g.sh_coeffs();

@@ -71,7 +71,8 @@ pub struct LayerBuffers {
     /// (C_raw^k, A^k) per plane slot.
     pub reflection_raw: wgpu::Buffer,
     pub reflection_states: wgpu::Buffer,
-    /// (C, 0)
+    /// (C, 1 - T_t): compose keeps the transmission layer's alpha, which the renderer copies
+    /// outside compose's area.
     pub color: wgpu::Buffer,
     /// (C_r, 0)
     pub reflection: wgpu::Buffer,

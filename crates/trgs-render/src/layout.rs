@@ -241,6 +241,10 @@ gpu_struct! {
         pub cam_col0: [f32; 4],
         pub cam_col1: [f32; 4],
         pub cam_col2: [f32; 4],
+        /// The pixels `compose` runs over, [x0, x1) x [y0, y1): the union of the mirrored
+        /// passes' footprints. No other pixel's ray hits a plane whose pass ran, so there C = C_t
+        /// and the other outputs are zero, which the renderer writes by a copy and clears.
+        pub area: [u32; 4],
     }
 }
 
@@ -459,6 +463,10 @@ pub fn model_bits(model: trgs_core::reference::ReflectionModel) -> u32 {
         | (if model.intensity { 0 } else { MODEL_NO_INTENSITY })
 }
 
+/// Views whose cheap culls one `project_candidates` dispatch runs (its bindings are per view:
+/// a frame with more views runs it once per group).
+pub const CULL_VIEWS: u32 = 3;
+
 /// The text every shader starts with: shared constants and struct declarations.
 pub fn prelude() -> String {
     let mut s =
@@ -491,6 +499,7 @@ pub fn prelude() -> String {
         ("LOSS_STRIP", LOSS_STRIP),
         ("GATHER_ZERO", GATHER_ZERO),
         ("DEPTH_KEY_BITS", trgs_core::reference::DEPTH_KEY_BITS),
+        ("CULL_VIEWS", CULL_VIEWS),
     ];
     for (name, v) in consts_u32 {
         s.push_str(&format!("const {name}: u32 = {v}u;\n"));

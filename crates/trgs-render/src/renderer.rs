@@ -231,14 +231,29 @@ impl Renderer {
         let entries = DepthEntries::new(s, &mut rec, pool, specs.len(), scene.len());
         let sh_degree = options.sh_degree.map_or(scene.sh_degree(), |d| d.min(scene.sh_degree()));
         let mut views = Vec::with_capacity(specs.len());
-        for (vi, spec) in specs.iter().enumerate() {
-            let plane = spec.plane.map(|p| &planes[p]);
-            let projected =
-                pool.get(ctx, &format!("trgs.project.projected.v{vi}"), n * PROJECTED_BYTES);
+        let view_params: Vec<_> = specs
+            .iter()
+            .map(|spec| {
+                let plane = spec.plane.map(|p| &planes[p]);
+                project::params(&spec.view, k, plane, &spec.limit, options.near, sh_degree)
+            })
+            .collect();
+        let projected: Vec<_> = (0..specs.len())
+            .map(|vi| pool.get(ctx, &format!("trgs.project.projected.v{vi}"), n * PROJECTED_BYTES))
+            .collect();
+        let candidates: Vec<_> =
+            (0..specs.len()).map(|vi| project::Candidates::new(s, pool, scene, vi)).collect();
+        project::record_candidates(
+            s,
+            &mut rec,
+            scene,
+            &view_params,
+            &candidates.iter().collect::<Vec<_>>(),
+            &projected.iter().collect::<Vec<_>>(),
+        );
+        let each = view_params.into_iter().zip(projected).zip(candidates);
+        for (vi, (spec, ((pparams, projected), candidates))) in specs.iter().zip(each).enumerate() {
             let counts = pool.get(ctx, &format!("trgs.tile_counts.counts.v{vi}"), n * 4);
-            let pparams =
-                project::params(&spec.view, k, plane, &spec.limit, options.near, sh_degree);
-            let candidates = project::Candidates::new(s, pool, scene, vi);
             project::record(s, &mut rec, scene, &pparams, &candidates, &projected);
             let tparams = TileParams {
                 entry_base: vi as u32 * scene.len(),
@@ -381,11 +396,14 @@ impl Renderer {
         for v in &views[1..] {
             has_pass[v.plane.unwrap_or(0)] = true;
         }
+        let footprints: Vec<_> = views[1..].iter().map(|v| v.limit).collect();
+        let area = compose::area(&grid, &footprints);
         let rays = compose::RayBuffers::new(
             s,
             camera,
             &compose::planes_gpu(planes, &has_pass),
             options.reflection,
+            area,
         );
         if views.len() == 1 {
             // No plane hit anywhere: H = 0, which compose_bwd reads.
@@ -417,7 +435,7 @@ impl Renderer {
             compose::record(
                 s,
                 &mut rec,
-                &grid,
+                area,
                 r,
                 &layers.transmission,
                 &layers.geometry,

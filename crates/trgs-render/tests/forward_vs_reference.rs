@@ -46,13 +46,16 @@ fn compare(what: &str, gpu: &Image<f32>, cpu: &Image<f64>) -> usize {
     compare_values(what, &gpu.data, &cpu.data, cpu.channels as usize)
 }
 
-fn check_scene(name: &str, spec: SceneSpec, chunk: Option<u32>) {
+/// Returns how many views (the camera and the mirrored passes) the frame had.
+fn check_scene(name: &str, spec: SceneSpec, chunk: Option<u32>) -> usize {
+    let mut views = 0;
     for layout in [TileLayout::PixelPerThread, TileLayout::FourRowsPerThread] {
-        check_scene_in(&format!("{name} ({layout:?})"), spec.clone(), chunk, &ctx(layout));
+        views = check_scene_in(&format!("{name} ({layout:?})"), spec.clone(), chunk, &ctx(layout));
     }
+    views
 }
 
-fn check_scene_in(name: &str, spec: SceneSpec, chunk: Option<u32>, ctx: &GpuContext) {
+fn check_scene_in(name: &str, spec: SceneSpec, chunk: Option<u32>, ctx: &GpuContext) -> usize {
     let renderer = Renderer::new(ctx);
     let scene = random_scene(&spec);
     let g32: Gaussians<f32> = scene.gaussians.cast();
@@ -231,6 +234,7 @@ fn check_scene_in(name: &str, spec: SceneSpec, chunk: Option<u32>, ctx: &GpuCont
         total as f64 <= 1e-3 * cpu.color.data.len() as f64,
         "{name}: end-to-end C differs beyond tolerance at {total} values"
     );
+    frame.views().len()
 }
 
 #[test]
@@ -246,6 +250,14 @@ fn one_plane_matches_reference() {
 #[test]
 fn two_planes_match_reference() {
     check_scene("two planes", spec(103, 1500, 2, 30.0), None);
+}
+
+#[test]
+fn four_planes_match_reference() {
+    // Five views: the cheap culls run in two dispatches (CULL_VIEWS views each), the second
+    // with an unused view slot.
+    let views = check_scene("four planes", spec(109, 1500, 4, 30.0), None);
+    assert_eq!(views, 5, "every plane's mirrored pass ran");
 }
 
 #[test]

@@ -2,6 +2,7 @@
 use super::Stage;
 use crate::gpu::{self, Recorder};
 use crate::layout::{ComposeParams, PlaneGpu};
+use trgs_core::reference::{TILE_SIZE, TileGrid, TileRect};
 use trgs_core::scene::{Camera, ReflectionPlane};
 
 /// Compose's output buffers.
@@ -36,11 +37,13 @@ pub struct RayBuffers {
 }
 
 impl RayBuffers {
+    /// `area`: the pixels compose runs over (`ComposeParams::area`).
     pub fn new(
         s: Stage<'_>,
         camera: &Camera,
         planes: &[PlaneGpu],
         model: trgs_core::reference::ReflectionModel,
+        area: [u32; 4],
     ) -> Self {
         let k = &camera.intrinsics;
         let to_world = camera.pose.rotation.transpose();
@@ -55,6 +58,7 @@ impl RayBuffers {
             cam_col0: v4(to_world.x_axis),
             cam_col1: v4(to_world.y_axis),
             cam_col2: v4(to_world.z_axis),
+            area,
         };
         Self {
             camera: gpu::params(s.ctx, "trgs.compose.params", &params),
@@ -63,16 +67,45 @@ impl RayBuffers {
     }
 }
 
+/// The pixels of the union of `footprints` (tile rectangles of `grid`), as `ComposeParams::area`.
+pub fn area(grid: &TileGrid, footprints: &[TileRect]) -> [u32; 4] {
+    let union = footprints.iter().filter(|r| !r.is_empty()).fold(None, |u: Option<TileRect>, r| {
+        Some(u.map_or(*r, |u| TileRect {
+            x0: u.x0.min(r.x0),
+            y0: u.y0.min(r.y0),
+            x1: u.x1.max(r.x1),
+            y1: u.y1.max(r.y1),
+        }))
+    });
+    union.map_or([0; 4], |u| {
+        [
+            u.x0 * TILE_SIZE,
+            u.y0 * TILE_SIZE,
+            (u.x1 * TILE_SIZE).min(grid.width),
+            (u.y1 * TILE_SIZE).min(grid.height),
+        ]
+    })
+}
+
+/// Compose over `area`; every other pixel gets C = C_t, and zero reflection, strength and hit.
 pub fn record(
     s: Stage<'_>,
     rec: &mut Recorder,
-    grid: &trgs_core::reference::TileGrid,
+    area: [u32; 4],
     rays: &RayBuffers,
     transmission: &wgpu::Buffer,
     geometry: &wgpu::Buffer,
     reflection_raw: &wgpu::Buffer,
     out: &ComposeOutputs<'_>,
 ) {
+    rec.encoder.copy_buffer_to_buffer(transmission, 0, out.color, 0, None);
+    for b in [out.reflection, out.strength, out.hit] {
+        rec.encoder.clear_buffer(b, 0, None);
+    }
+    let [x0, y0, x1, y1] = area;
+    if x0 >= x1 || y0 >= y1 {
+        return;
+    }
     let kern = &s.kernels.compose;
     let bind = kern.bind(
         s.ctx,
@@ -88,5 +121,5 @@ pub fn record(
             out.hit.as_entire_binding(),
         ],
     );
-    rec.dispatch("compose", kern, &bind, [grid.width.div_ceil(16), grid.height.div_ceil(16), 1]);
+    rec.dispatch("compose", kern, &bind, [(x1 - x0).div_ceil(16), (y1 - y0).div_ceil(16), 1]);
 }

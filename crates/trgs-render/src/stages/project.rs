@@ -1,9 +1,11 @@
 //! Stage `project` (shaders/project_candidates.wgsl then shaders/project.wgsl; twin
-//! `trgs_core::reference::project`): the cheap culls on every Gaussian, then the projection of the
-//! survivors only, dispatched indirectly over their list (see shared/project_cull.wgsl for why).
+//! `trgs_core::reference::project`): the cheap culls on every Gaussian, every view's in one
+//! dispatch (up to CULL_VIEWS views, so that each Gaussian is read and its view-independent
+//! terms computed once), then per view the projection of its survivors only, dispatched
+//! indirectly over their list (see shared/project_cull.wgsl for why).
 use super::Stage;
 use crate::gpu::{self, BufferPool, Recorder, grid_1d, range};
-use crate::layout::{ProjectParams, ProjectedGaussian};
+use crate::layout::{CULL_VIEWS, ProjectParams, ProjectedGaussian};
 use crate::scene::GpuScene;
 use trgs_core::reference::{GUARD_BAND, TileRect};
 use trgs_core::scene::{Intrinsics, ReflectionPlane, ViewTransform};
@@ -89,7 +91,55 @@ impl Candidates {
     }
 }
 
-/// Project every Gaussian of `scene` into `projected` (one record per Gaussian).
+/// The cheap culls of every view (`params[k]`, `candidates[k]`, `projected[k]`), up to
+/// CULL_VIEWS views per dispatch: each Gaussian is read once per group of views. Lists each
+/// view's survivors for [`record`].
+pub fn record_candidates(
+    s: Stage<'_>,
+    rec: &mut Recorder,
+    scene: &GpuScene,
+    params: &[ProjectParams],
+    candidates: &[&Candidates],
+    projected: &[&wgpu::Buffer],
+) {
+    let cull = &s.kernels.project_candidates;
+    let group = CULL_VIEWS as usize;
+    for (chunk, (first, count)) in scene.chunks().into_iter().enumerate() {
+        let (f, c) = (u64::from(first), u64::from(count));
+        let at = chunk as u64 * WORK_STRIDE;
+        for views in (0..params.len()).collect::<Vec<_>>().chunks(group) {
+            let blocks: Vec<ProjectParams> = views
+                .iter()
+                .map(|&v| ProjectParams { count, sh_coeffs: scene.sh_coeffs(), ..params[v] })
+                .collect();
+            let block = gpu::storage_init(s.ctx, "trgs.project.cull_params", &blocks);
+            let mut entries = vec![
+                block.as_entire_binding(),
+                range(&scene.means, f * 12, c * 12),
+                range(&scene.log_scales, f * 12, c * 12),
+                range(&scene.opacity_logits, f * 4, c * 4),
+                range(&scene.populations, f * 4, c * 4),
+            ];
+            // A group of fewer views binds its first view's buffers in the unused slots (the
+            // kernel touches only the views `views` holds).
+            for k in 0..group {
+                let v = views[k.min(views.len() - 1)];
+                let [list, work] = candidates[v].chunk(chunk, first, count);
+                entries.push(range(projected[v], f * PROJECTED, c * PROJECTED));
+                entries.push(list);
+                entries.push(work);
+            }
+            for &v in views {
+                rec.encoder.clear_buffer(&candidates[v].work, at, Some(16));
+            }
+            let bind = cull.bind(s.ctx, &entries);
+            rec.dispatch("project", cull, &bind, grid_1d(count.div_ceil(256)));
+        }
+    }
+}
+
+/// Project the Gaussians of `scene` that [`record_candidates`] listed for this view into
+/// `projected` (one record per Gaussian).
 pub fn record(
     s: Stage<'_>,
     rec: &mut Recorder,
@@ -98,7 +148,7 @@ pub fn record(
     candidates: &Candidates,
     projected: &wgpu::Buffer,
 ) {
-    let (cull, k) = (&s.kernels.project_candidates, &s.kernels.project);
+    let k = &s.kernels.project;
     let coeffs = u64::from(scene.sh_coeffs());
     for (chunk, (first, count)) in scene.chunks().into_iter().enumerate() {
         let [list, work] = candidates.chunk(chunk, first, count);
@@ -106,22 +156,6 @@ pub fn record(
         let block = gpu::params(s.ctx, "trgs.project.params", &p);
         let (f, c) = (u64::from(first), u64::from(count));
         let out = range(projected, f * PROJECTED, c * PROJECTED);
-        let bind = cull.bind(
-            s.ctx,
-            &[
-                block.as_entire_binding(),
-                range(&scene.means, f * 12, c * 12),
-                range(&scene.log_scales, f * 12, c * 12),
-                range(&scene.opacity_logits, f * 4, c * 4),
-                range(&scene.populations, f * 4, c * 4),
-                out.clone(),
-                list.clone(),
-                work.clone(),
-            ],
-        );
-        let at = chunk as u64 * WORK_STRIDE;
-        rec.encoder.clear_buffer(&candidates.work, at, Some(16));
-        rec.dispatch("project", cull, &bind, grid_1d(count.div_ceil(256)));
         let bind = k.bind(
             s.ctx,
             &[
@@ -139,6 +173,7 @@ pub fn record(
                 work,
             ],
         );
+        let at = chunk as u64 * WORK_STRIDE;
         rec.dispatch_indirect("project", k, &bind, &candidates.work, at);
     }
 }
