@@ -1,7 +1,7 @@
 // Stage `depth_order` (twin: trgs_core::reference::depth_order), after its sort: the tile count
 // of each entry in depth order, from the rectangle `tile_counts` kept, for `prefix_sum` to scan
-// into each entry's first key slot. Slots past the last entry (`entries[0]`) get zero, so the
-// scan may run over the list's capacity.
+// into each entry's first key slot. Slots past the last entry (`entries[0]`) are left as they
+// are: the scan reads the same count.
 #include "shared/common.wgsl"
 
 @group(0) @binding(0) var<storage, read> params: ScanParams;
@@ -13,13 +13,9 @@
 @compute @workgroup_size(256)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let slot = linear_index(gid, nwg, 256u);
-    if slot >= params.count {
+    if slot >= params.count || slot >= entries[0] {
         return;
     }
-    var n = 0u;
-    if slot < entries[0] {
-        let r = rects[order[slot]];
-        n = ((r.y & 0xffffu) - (r.x & 0xffffu)) * ((r.y >> 16u) - (r.x >> 16u));
-    }
-    ordered_counts[slot] = n;
+    let r = rects[order[slot]];
+    ordered_counts[slot] = ((r.y & 0xffffu) - (r.x & 0xffffu)) * ((r.y >> 16u) - (r.x >> 16u));
 }

@@ -18,6 +18,15 @@ fn main(
     @builtin(num_workgroups) nwg: vec3<u32>,
 ) {
     let block = wid.x + wid.y * nwg.x;
+    // A block past the count (read on the GPU, the dispatch covers the capacity) has nothing to
+    // scan and a zero total; returning before the barriers keeps it cheap. (Block 0 scans even
+    // an empty input: its total 0 is the scan's total.)
+    if block > 0u && block * SCAN_BLOCK >= params.count {
+        if lid == 0u && block < params.blocks {
+            block_sums[block] = 0u;
+        }
+        return;
+    }
     let base = block * SCAN_BLOCK + lid * SCAN_ITEMS;
     var local: array<u32, SCAN_ITEMS>;
     var total = 0u;
@@ -50,8 +59,8 @@ fn main(
     }
     // Past 65535 blocks the grid is 2D and its last row has padding blocks without values;
     // their index is past the end of `block_sums`, where a clamped write could land on a real
-    // total. (Block 0 writes even for an empty input: its total 0 is the scan's total.)
-    if lid == SCAN_THREADS - 1u && (block == 0u || block * SCAN_BLOCK < params.count) {
+    // total.
+    if lid == SCAN_THREADS - 1u && block < params.blocks {
         block_sums[block] = sums[SCAN_THREADS - 1u];
     }
 }

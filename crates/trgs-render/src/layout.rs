@@ -162,7 +162,9 @@ gpu_struct! {
     /// Parameters of `prefix_sum`, `prefix_sum_add` and `tile_ranges`.
     pub struct ScanParams {
         pub count: u32,
-        pub pad0: u32,
+        /// `prefix_sum`'s level scan: the blocks of the dispatch (of its capacity when the
+        /// count is known on the GPU only), each of which writes its total.
+        pub blocks: u32,
         pub pad1: u32,
         pub pad2: u32,
     }

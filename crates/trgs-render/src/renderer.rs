@@ -6,9 +6,10 @@ use crate::kernels::Kernels;
 use crate::layer_grads::LayerGrads;
 use crate::layout::{EmitParams, TileParams, ViewTiles};
 use crate::scene::GpuScene;
+use crate::stages::ItemCount;
 use crate::stages::compose_bwd;
 use crate::stages::rasterize::Pass1Outputs;
-use crate::stages::sort::{KeyList, SortCount};
+use crate::stages::sort::KeyList;
 use crate::stages::tile_counts::DepthEntries;
 use crate::stages::{
     Stage, compose, depth_order, emit_keys, prefix_sum, project, rasterize, rasterize_reflection,
@@ -280,8 +281,8 @@ impl Renderer {
         // The entries' tile counts in depth order, scanned in place into their first key slots.
         let offsets = pool.get(ctx, "trgs.depth_order.offsets", u64::from(entries.capacity) * 4);
         let order = depth_order::record(s, &mut rec, pool, &entries, &offsets);
-        let total =
-            prefix_sum::record(s, &mut rec, pool, "trgs.prefix_sum", &offsets, entries.capacity);
+        let in_order = ItemCount::OnGpu { counter: &order.entries, capacity: entries.capacity };
+        let total = prefix_sum::record(s, &mut rec, pool, "trgs.prefix_sum", &offsets, in_order);
         // [entries, (low word, carries) of each view's key total, key total]
         let words = 2 * specs.len() + 2;
         let totals_staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
@@ -354,7 +355,7 @@ impl Renderer {
             pool,
             "trgs.sort",
             &keys,
-            SortCount::Known(total),
+            ItemCount::Known(total),
             &tile_digits,
         );
         let ranges = pool.get(ctx, "trgs.tile_ranges.ranges", u64::from(tiles) * 8);

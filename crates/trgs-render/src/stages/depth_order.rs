@@ -11,9 +11,9 @@
 //! starts in entry order, so the stable sort leaves depth ties in index order as the twin does
 //! (an atomic append would be cheaper but would order ties differently from run to run). The
 //! entry count is known on the GPU only: the passes read it there and cover the capacity.
-use super::sort::{self, KeyList, SortCount, digits};
+use super::sort::{self, KeyList, digits};
 use super::tile_counts::DepthEntries;
-use super::{Stage, prefix_sum};
+use super::{ItemCount, Stage, prefix_sum};
 use crate::gpu::{self, BufferPool, Recorder, grid_1d};
 use crate::layout::ScanParams;
 use trgs_core::reference::DEPTH_KEY_BITS;
@@ -28,7 +28,7 @@ pub struct DepthOrder {
 }
 
 /// Lists the present entries, sorts them and writes each sorted entry's tile count into
-/// `ordered_counts` (zero past the last entry, up to the capacity).
+/// `ordered_counts` (nothing past the last entry: its scan reads the count on the GPU too).
 pub fn record(
     s: Stage<'_>,
     rec: &mut Recorder,
@@ -38,7 +38,8 @@ pub fn record(
 ) -> DepthOrder {
     let capacity = entries.capacity;
     let label = "trgs.depth_order.slots";
-    let total = prefix_sum::record(s, rec, pool, label, &entries.present, capacity);
+    let flags = ItemCount::Known(capacity);
+    let total = prefix_sum::record(s, rec, pool, label, &entries.present, flags);
     let bytes = u64::from(capacity.max(1)) * 4;
     let list = KeyList {
         keys: pool.get(s.ctx, "trgs.depth_order.keys", bytes),
@@ -64,7 +65,7 @@ pub fn record(
     let groups = grid_1d(capacity.div_ceil(256));
     rec.dispatch("depth_order", k, &bind, groups);
     let passes: Vec<_> = digits(DEPTH_KEY_BITS).collect();
-    let count = SortCount::OnGpu { counter: &total, capacity };
+    let count = ItemCount::OnGpu { counter: &total, capacity };
     let list = sort::record(s, rec, "depth_order", pool, "trgs.depth_order", &list, count, &passes);
     let k = &s.kernels.depth_order_counts;
     let bind = k.bind(

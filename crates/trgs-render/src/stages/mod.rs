@@ -25,3 +25,33 @@ pub struct Stage<'a> {
     pub ctx: &'a GpuContext,
     pub kernels: &'a Kernels,
 }
+
+/// How many values a scan or a sort covers.
+#[derive(Clone, Copy, Debug)]
+pub enum ItemCount<'a> {
+    Known(u32),
+    /// The first u32 of `counter`, known on the GPU only; the dispatches cover `capacity` and
+    /// their workgroups past the count return at once.
+    OnGpu {
+        counter: &'a wgpu::Buffer,
+        capacity: u32,
+    },
+}
+
+impl ItemCount<'_> {
+    /// The most values the count can be (what the dispatches cover).
+    pub fn capacity(&self) -> u32 {
+        match *self {
+            ItemCount::Known(n) => n,
+            ItemCount::OnGpu { capacity, .. } => capacity,
+        }
+    }
+
+    /// Copies a GPU count into the first word of `params` (where every parameter block that
+    /// takes one holds its count).
+    pub fn write_into(&self, rec: &mut crate::gpu::Recorder, params: &wgpu::Buffer) {
+        if let ItemCount::OnGpu { counter, .. } = *self {
+            rec.encoder.copy_buffer_to_buffer(counter, 0, params, 0, 4);
+        }
+    }
+}

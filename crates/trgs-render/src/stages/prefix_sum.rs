@@ -1,19 +1,20 @@
 //! Stage `prefix_sum` (shaders/prefix_sum.wgsl and prefix_sum_add.wgsl; twin
 //! `trgs_core::reference::prefix_sum`): an in-place exclusive scan of u32 values, block by block,
 //! with the block totals scanned recursively and added back.
-use super::Stage;
+use super::{ItemCount, Stage};
 use crate::gpu::{self, BufferPool, Recorder, grid_1d};
 use crate::layout::ScanParams;
 
-/// Scan `count` values of `data` in place; returns the buffer whose first u32 is the total.
-/// `label` names the temporaries in `pool`.
+/// Scan `count` values of `data` in place (a count known on the GPU only leaves the values past
+/// it untouched); returns the buffer whose first u32 is the total. `label` names the
+/// temporaries in `pool`.
 pub fn record(
     s: Stage<'_>,
     rec: &mut Recorder,
     pool: &mut BufferPool,
     label: &str,
     data: &wgpu::Buffer,
-    count: u32,
+    count: ItemCount<'_>,
 ) -> wgpu::Buffer {
     scan_level(s, rec, pool, label, data, count, 0)
 }
@@ -24,17 +25,19 @@ fn scan_level(
     pool: &mut BufferPool,
     label: &str,
     data: &wgpu::Buffer,
-    count: u32,
+    count: ItemCount<'_>,
     level: u32,
 ) -> wgpu::Buffer {
-    let blocks = count.div_ceil(s.ctx.capabilities.block_width.scan_block());
+    let capacity = count.capacity();
+    let blocks = capacity.div_ceil(s.ctx.capabilities.block_width.scan_block());
     let sums = pool.get(s.ctx, &format!("{label}.block_sums{level}"), u64::from(blocks.max(1)) * 4);
-    if count == 0 {
+    if capacity == 0 {
         rec.encoder.clear_buffer(&sums, 0, None);
         return sums;
     }
-    let block =
-        gpu::params(s.ctx, "trgs.prefix_sum.params", &ScanParams { count, ..Default::default() });
+    let params = ScanParams { count: capacity, blocks, ..Default::default() };
+    let block = gpu::params(s.ctx, "trgs.prefix_sum.params", &params);
+    count.write_into(rec, &block);
     let scan = &s.kernels.prefix_sum;
     let bind = scan.bind(
         s.ctx,
@@ -44,12 +47,12 @@ fn scan_level(
     if blocks == 1 {
         return sums;
     }
-    let total = scan_level(s, rec, pool, label, &sums, blocks, level + 1);
+    let total = scan_level(s, rec, pool, label, &sums, ItemCount::Known(blocks), level + 1);
     let add = &s.kernels.prefix_sum_add;
     let bind = add.bind(
         s.ctx,
         &[block.as_entire_binding(), data.as_entire_binding(), sums.as_entire_binding()],
     );
-    rec.dispatch("prefix_sum", add, &bind, grid_1d(count.div_ceil(256)));
+    rec.dispatch("prefix_sum", add, &bind, grid_1d(blocks));
     total
 }

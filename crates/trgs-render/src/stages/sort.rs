@@ -4,7 +4,7 @@
 //! to sort: the key list the bits a tile index can have, the depth order the 32 depth bits. Each
 //! pass counts digits per block, scans the digit-major histogram with `prefix_sum`, and scatters
 //! stably.
-use super::{Stage, prefix_sum};
+use super::{ItemCount, Stage, prefix_sum};
 use crate::gpu::{self, BufferPool, Recorder, grid_1d};
 use crate::layout::{SORT_RADIX, SORT_RADIX_BITS, SortParams};
 
@@ -13,17 +13,6 @@ use crate::layout::{SORT_RADIX, SORT_RADIX_BITS, SortParams};
 pub struct KeyList {
     pub keys: wgpu::Buffer,
     pub values: wgpu::Buffer,
-}
-
-/// How many pairs to sort.
-#[derive(Clone, Copy, Debug)]
-pub enum SortCount<'a> {
-    Known(u32),
-    /// The first u32 of `counter`, known on the GPU only; the dispatches cover `capacity`.
-    OnGpu {
-        counter: &'a wgpu::Buffer,
-        capacity: u32,
-    },
 }
 
 /// The bit offsets of the passes over the low `bits` bits of the keys.
@@ -46,13 +35,10 @@ pub fn record(
     pool: &mut BufferPool,
     label: &str,
     list: &KeyList,
-    count: SortCount<'_>,
+    count: ItemCount<'_>,
     shifts: &[u32],
 ) -> KeyList {
-    let capacity = match count {
-        SortCount::Known(n) => n,
-        SortCount::OnGpu { capacity, .. } => capacity,
-    };
+    let capacity = count.capacity();
     if capacity <= 1 || shifts.is_empty() {
         return list.clone();
     }
@@ -67,10 +53,8 @@ pub fn record(
     for &shift in shifts {
         let params = SortParams { count: capacity, shift, num_blocks, ..Default::default() };
         let block = gpu::params(s.ctx, "trgs.sort.params", &params);
-        if let SortCount::OnGpu { counter, .. } = count {
-            // SortParams::count is the block's first word.
-            rec.encoder.copy_buffer_to_buffer(counter, 0, &block, 0, 4);
-        }
+        // SortParams::count is the block's first word.
+        count.write_into(rec, &block);
         let count_k = &s.kernels.sort_count;
         let bind = count_k.bind(
             s.ctx,
@@ -78,6 +62,7 @@ pub fn record(
         );
         rec.dispatch(stage, count_k, &bind, grid_1d(num_blocks));
         let columns = num_blocks * SORT_RADIX;
+        let columns = ItemCount::Known(columns);
         prefix_sum::record(s, rec, pool, &format!("{label}.hist_scan"), &hist, columns);
         let scatter = &s.kernels.sort_scatter;
         let bind = scatter.bind(
