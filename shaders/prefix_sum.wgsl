@@ -1,7 +1,9 @@
 // Stage `prefix_sum` (twin: trgs_core::reference::prefix_sum), level scan: an in-place exclusive
 // scan of each block of SCAN_BLOCK values (SCAN_ITEMS per thread, then a workgroup scan of the
 // thread totals), writing each block's total to `block_sums`. Blocks are joined by scanning
-// `block_sums` the same way and adding it back (prefix_sum_add.wgsl).
+// `block_sums` the same way and adding it back (prefix_sum_add.wgsl). With COUNT_BITS a value
+// counts as its number of set bits (a bit mask's words scan into each word's first set bit's
+// rank; the levels above scan plain sums).
 #include "shared/common.wgsl"
 #include "shared/block_width.wgsl"
 
@@ -33,7 +35,11 @@ fn main(
     for (var k = 0u; k < SCAN_ITEMS; k++) {
         local[k] = total;
         if base + k < params.count {
+#ifdef COUNT_BITS
+            total += countOneBits(data[base + k]);
+#else
             total += data[base + k];
+#endif
         }
     }
     sums[lid] = total;

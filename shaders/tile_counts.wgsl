@@ -14,11 +14,11 @@
 @group(0) @binding(2) var<storage, read_write> counts: array<u32>;
 @group(0) @binding(3) var<storage, read> candidates: array<u32>;
 @group(0) @binding(4) var<storage, read> work: array<u32, 4>;
-// Per entry: the tile rectangle, (x0 | y0 << 16, x1 | y1 << 16); its depth-order key; 1 when
-// the Gaussian touches a tile (cleared to 0 before).
+// Per entry: the tile rectangle, (x0 | y0 << 16, x1 | y1 << 16); its depth-order key; and a
+// bit set when the Gaussian touches a tile (entry e: bit e % 32 of word e / 32, cleared before).
 @group(0) @binding(5) var<storage, read_write> rects: array<vec2<u32>>;
 @group(0) @binding(6) var<storage, read_write> depths: array<u32>;
-@group(0) @binding(7) var<storage, read_write> present: array<u32>;
+@group(0) @binding(7) var<storage, read_write> present: array<atomic<u32>>;
 // Per view: its key total as two words, the low 32 bits and the carries out of them (a total
 // of 2^32 keys or more is refused, not wrapped).
 @group(0) @binding(8) var<storage, read_write> key_totals: array<atomic<u32>>;
@@ -55,7 +55,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let entry = tiles.entry_base + tiles.first + i;
     rects[entry] = vec2<u32>(r.x | (r.y << 16u), r.z | (r.w << 16u));
     depths[entry] = depth_key(g.color.w, tiles.depth_base);
-    present[entry] = 1u;
+    atomicOr(&present[entry / 32u], 1u << (entry % 32u));
     let before = atomicAdd(&key_totals[2u * tiles.view], n);
     if before > 0xffffffffu - n {
         atomicAdd(&key_totals[2u * tiles.view + 1u], 1u);

@@ -10,6 +10,8 @@ pub struct Kernels {
     pub depth_order_compact: Kernel,
     pub depth_order_counts: Kernel,
     pub prefix_sum: Kernel,
+    /// `prefix_sum`'s level scan of the set bits of each word (COUNT_BITS).
+    pub prefix_sum_bits: Kernel,
     pub prefix_sum_add: Kernel,
     pub emit_keys: Kernel,
     pub sort_count: Kernel,
@@ -86,6 +88,12 @@ impl Kernels {
                 &[],
             ),
             prefix_sum: Kernel::new(ctx, "prefix_sum", "prefix_sum.wgsl", blocks),
+            prefix_sum_bits: Kernel::new(
+                ctx,
+                "prefix_sum",
+                "prefix_sum.wgsl",
+                &[blocks, &["COUNT_BITS"]].concat(),
+            ),
             prefix_sum_add: Kernel::new(ctx, "prefix_sum_add", "prefix_sum_add.wgsl", blocks),
             emit_keys: Kernel::new(ctx, "emit_keys", "emit_keys.wgsl", &[]),
             sort_count: Kernel::new(ctx, "sort_count", "sort_count.wgsl", blocks),

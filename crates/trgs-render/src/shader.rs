@@ -65,6 +65,8 @@ pub const VARIANTS: &[(&str, &[&str])] = &[
     ("depth_order_counts.wgsl", &[]),
     ("prefix_sum.wgsl", &[]),
     ("prefix_sum.wgsl", &["WIDE_BLOCKS"]),
+    ("prefix_sum.wgsl", &["COUNT_BITS"]),
+    ("prefix_sum.wgsl", &["WIDE_BLOCKS", "COUNT_BITS"]),
     ("prefix_sum_add.wgsl", &[]),
     ("prefix_sum_add.wgsl", &["WIDE_BLOCKS"]),
     ("emit_keys.wgsl", &[]),

@@ -1,7 +1,7 @@
 //! Stage `depth_order` (shaders/depth_order_compact.wgsl, the `sort` kernels, then
 //! shaders/depth_order_counts.wgsl; twin `trgs_core::reference::depth_order`): the entries that
 //! `tile_counts` marked present, every view's together, listed in entry order (a scan of the
-//! flags), sorted front to back by their depth keys (`trgs_core::reference::depth_key`: 30 bits,
+//! presence bits), sorted front to back by their depth keys (`trgs_core::reference::depth_key`: 30 bits,
 //! five radix passes), and their tile counts in that order.
 //!
 //! Why: sorting every key by (tile, depth) sorts the 32 depth bits once per key, and a
@@ -37,33 +37,42 @@ pub fn record(
     ordered_counts: &wgpu::Buffer,
 ) -> DepthOrder {
     let capacity = entries.capacity;
+    // Each presence word's first list slot: the scan of the words' set bits (on a copy: the
+    // compaction reads the bits too).
+    let words = entries.present_words;
     let label = "trgs.depth_order.slots";
-    let flags = ItemCount::Known(capacity);
-    let total = prefix_sum::record(s, rec, pool, label, &entries.present, flags);
+    let slots = pool.get(s.ctx, label, u64::from(words.max(1)) * 4);
+    rec.encoder.copy_buffer_to_buffer(&entries.present, 0, &slots, 0, u64::from(words) * 4);
+    let total = prefix_sum::record_bits(s, rec, pool, label, &slots, words);
     let bytes = u64::from(capacity.max(1)) * 4;
     let list = KeyList {
         keys: pool.get(s.ctx, "trgs.depth_order.keys", bytes),
         values: pool.get(s.ctx, "trgs.depth_order.values", bytes),
     };
-    let block = gpu::params(
+    let word_block = gpu::params(
         s.ctx,
-        "trgs.depth_order.params",
-        &ScanParams { count: capacity, ..Default::default() },
+        "trgs.depth_order.compact_params",
+        &ScanParams { count: words, ..Default::default() },
     );
     let k = &s.kernels.depth_order_compact;
     let bind = k.bind(
         s.ctx,
         &[
-            block.as_entire_binding(),
+            word_block.as_entire_binding(),
             entries.present.as_entire_binding(),
-            total.as_entire_binding(),
+            slots.as_entire_binding(),
             entries.depths.as_entire_binding(),
             list.keys.as_entire_binding(),
             list.values.as_entire_binding(),
         ],
     );
+    rec.dispatch("depth_order", k, &bind, grid_1d(words.div_ceil(256)));
+    let block = gpu::params(
+        s.ctx,
+        "trgs.depth_order.params",
+        &ScanParams { count: capacity, ..Default::default() },
+    );
     let groups = grid_1d(capacity.div_ceil(256));
-    rec.dispatch("depth_order", k, &bind, groups);
     let passes: Vec<_> = digits(DEPTH_KEY_BITS).collect();
     let count = ItemCount::OnGpu { counter: &total, capacity };
     let list = sort::record(s, rec, "depth_order", pool, "trgs.depth_order", &list, count, &passes);

@@ -2,7 +2,7 @@
 //! `trgs_core::reference::prefix_sum`): an in-place exclusive scan of u32 values, block by block,
 //! with the block totals scanned recursively and added back.
 use super::{ItemCount, Stage};
-use crate::gpu::{self, BufferPool, Recorder, grid_1d};
+use crate::gpu::{self, BufferPool, Kernel, Recorder, grid_1d};
 use crate::layout::ScanParams;
 
 /// Scan `count` values of `data` in place (a count known on the GPU only leaves the values past
@@ -16,7 +16,21 @@ pub fn record(
     data: &wgpu::Buffer,
     count: ItemCount<'_>,
 ) -> wgpu::Buffer {
-    scan_level(s, rec, pool, label, data, count, 0)
+    scan_level(s, rec, pool, label, data, count, &s.kernels.prefix_sum, 0)
+}
+
+/// Scan the set bits of `words` words of the bit mask `data` in place: each word becomes the
+/// number of bits set in the words before it. Returns the buffer whose first u32 is the total.
+pub fn record_bits(
+    s: Stage<'_>,
+    rec: &mut Recorder,
+    pool: &mut BufferPool,
+    label: &str,
+    data: &wgpu::Buffer,
+    words: u32,
+) -> wgpu::Buffer {
+    let count = ItemCount::Known(words);
+    scan_level(s, rec, pool, label, data, count, &s.kernels.prefix_sum_bits, 0)
 }
 
 fn scan_level(
@@ -26,6 +40,7 @@ fn scan_level(
     label: &str,
     data: &wgpu::Buffer,
     count: ItemCount<'_>,
+    scan: &Kernel,
     level: u32,
 ) -> wgpu::Buffer {
     let capacity = count.capacity();
@@ -38,7 +53,6 @@ fn scan_level(
     let params = ScanParams { count: capacity, blocks, ..Default::default() };
     let block = gpu::params(s.ctx, "trgs.prefix_sum.params", &params);
     count.write_into(rec, &block);
-    let scan = &s.kernels.prefix_sum;
     let bind = scan.bind(
         s.ctx,
         &[block.as_entire_binding(), data.as_entire_binding(), sums.as_entire_binding()],
@@ -47,7 +61,9 @@ fn scan_level(
     if blocks == 1 {
         return sums;
     }
-    let total = scan_level(s, rec, pool, label, &sums, ItemCount::Known(blocks), level + 1);
+    let sums_count = ItemCount::Known(blocks);
+    let plain = &s.kernels.prefix_sum;
+    let total = scan_level(s, rec, pool, label, &sums, sums_count, plain, level + 1);
     let add = &s.kernels.prefix_sum_add;
     let bind = add.bind(
         s.ctx,

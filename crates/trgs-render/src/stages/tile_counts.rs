@@ -27,8 +27,11 @@ pub fn params(grid: &TileGrid, limit: &TileRect, near: f64) -> TileParams {
 /// Gaussian, `view * gaussians + index`) for `depth_order` and `emit_keys`.
 #[derive(Clone, Debug)]
 pub struct DepthEntries {
-    /// Per entry: 1 when the Gaussian touches a tile of the view, else 0.
+    /// A bit per entry, set when the Gaussian touches a tile of the view: entry e is bit
+    /// e % 32 of word e / 32 (`present_words` words). A bit mask keeps the scan and compaction
+    /// that list the entries 32 times shorter than the capacity.
     pub present: wgpu::Buffer,
+    pub present_words: u32,
     /// Per entry: the f32 bits of its depth.
     pub depths: wgpu::Buffer,
     /// Per entry: the tile rectangle, two u32 (x0 | y0 << 16, x1 | y1 << 16).
@@ -50,13 +53,15 @@ impl DepthEntries {
     ) -> Self {
         let capacity = views as u32 * gaussians;
         let bytes = u64::from(capacity.max(1)) * 4;
-        let present = pool.get(s.ctx, "trgs.tile_counts.present", bytes);
+        let present_words = capacity.div_ceil(32);
+        let present_bytes = u64::from(present_words.max(1)) * 4;
+        let present = pool.get(s.ctx, "trgs.tile_counts.present", present_bytes);
         let depths = pool.get(s.ctx, "trgs.tile_counts.depths", bytes);
         let rects = pool.get(s.ctx, "trgs.tile_counts.rects", bytes * 2);
         let key_totals = pool.get(s.ctx, "trgs.tile_counts.key_totals", views as u64 * 8);
         rec.encoder.clear_buffer(&present, 0, None);
         rec.encoder.clear_buffer(&key_totals, 0, None);
-        Self { present, depths, rects, key_totals, capacity }
+        Self { present, present_words, depths, rects, key_totals, capacity }
     }
 }
 
