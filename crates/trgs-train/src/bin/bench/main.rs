@@ -284,42 +284,98 @@ fn rasterize_evaluations(ctx: &GpuContext, frame: &Frame, gaussians: usize) -> R
     Ok(evals)
 }
 
-/// The trivial tiled splat loop over `list` Gaussians of `frame`'s projection: evaluations/s.
-fn splat_loop_throughput(
-    ctx: &GpuContext,
-    frame: &Frame,
-    gaussians: usize,
-    list: usize,
-) -> Result<f64> {
-    let inter = frame.read_intermediates(ctx, 0, gaussians)?.context("frame has no views")?;
-    let visible: Vec<ProjectedGaussian> =
-        inter.projected.into_iter().filter(|g| g.flags & 1 != 0).take(list).collect();
-    let (w, h) = (frame.width(), frame.height());
-    let kernel = Kernel::new(ctx, "splat_loop", "splat_loop.wgsl", &[]);
-    let projected = gpu::storage_init(ctx, "trgs.splat_loop.projected", &visible);
-    let out = gpu::storage(ctx, "trgs.splat_loop.out", u64::from(w * h) * 16);
-    let params = RasterParams {
-        width: w,
-        height: h,
-        tiles_x: w.div_ceil(TILE_SIZE),
-        tiles_y: h.div_ceil(TILE_SIZE),
-        slot: visible.len() as u32,
-        ..Default::default()
-    };
-    let block = gpu::params(ctx, "trgs.splat_loop.params", &params);
-    let bind = kernel.bind(
-        ctx,
-        &[block.as_entire_binding(), projected.as_entire_binding(), out.as_entire_binding()],
-    );
-    let mut best = f64::MAX;
-    for _ in 0..4 {
-        let mut rec = Recorder::new(ctx, "trgs.splat_loop", true);
-        rec.dispatch("splat_loop", &kernel, &bind, [params.tiles_x, params.tiles_y, 1]);
-        rec.submit_and_wait(ctx)?;
-        let ms = rec.stage_times().and_then(|t| t.first().map(|s| s.1)).context("no timestamps")?;
-        best = best.min(ms);
+/// The trivial tiled splat loop over `list` Gaussians of `frame`'s projection, ready to time.
+struct SplatLoop {
+    kernel: Kernel,
+    bind: wgpu::BindGroup,
+    groups: [u32; 3],
+    /// Pixel-Gaussian evaluations of one dispatch.
+    evals: f64,
+}
+
+impl SplatLoop {
+    fn new(ctx: &GpuContext, frame: &Frame, gaussians: usize, list: usize) -> Result<Self> {
+        let inter = frame.read_intermediates(ctx, 0, gaussians)?.context("frame has no views")?;
+        let visible: Vec<ProjectedGaussian> =
+            inter.projected.into_iter().filter(|g| g.flags & 1 != 0).take(list).collect();
+        let (w, h) = (frame.width(), frame.height());
+        let kernel = Kernel::new(ctx, "splat_loop", "splat_loop.wgsl", &[]);
+        let projected = gpu::storage_init(ctx, "trgs.splat_loop.projected", &visible);
+        let out = gpu::storage(ctx, "trgs.splat_loop.out", u64::from(w * h) * 16);
+        let params = RasterParams {
+            width: w,
+            height: h,
+            tiles_x: w.div_ceil(TILE_SIZE),
+            tiles_y: h.div_ceil(TILE_SIZE),
+            slot: visible.len() as u32,
+            ..Default::default()
+        };
+        let block = gpu::params(ctx, "trgs.splat_loop.params", &params);
+        let bind = kernel.bind(
+            ctx,
+            &[block.as_entire_binding(), projected.as_entire_binding(), out.as_entire_binding()],
+        );
+        let evals = f64::from(w * h) * visible.len() as f64;
+        Ok(Self { kernel, bind, groups: [params.tiles_x, params.tiles_y, 1], evals })
     }
-    Ok(f64::from(w * h) * visible.len() as f64 / (best * 1e-3))
+
+    /// GPU ms of one dispatch.
+    fn time_ms(&self, ctx: &GpuContext) -> Result<f64> {
+        let mut rec = Recorder::new(ctx, "trgs.splat_loop", true);
+        rec.dispatch("splat_loop", &self.kernel, &self.bind, self.groups);
+        rec.submit_and_wait(ctx)?;
+        rec.stage_times().and_then(|t| t.first().map(|s| s.1)).context("no timestamps")
+    }
+}
+
+/// Pass 1's throughput against the trivial loop's, measured in turns: each of `pairs` rounds
+/// times one profiled frame and one dispatch of each loop, so that the machine's drift hits all
+/// alike; the ratios are medians over rounds.
+fn measure_throughput(
+    ctx: &GpuContext,
+    renderer: &Renderer,
+    spec: &RoomSpec,
+    frame: &mut Frame,
+    pairs: usize,
+) -> Result<Throughput> {
+    let (scene, camera) = upload(ctx, spec)?;
+    let options = RenderOptions::default();
+    renderer.render_into(&scene, &camera, &options, frame)?;
+    let evals = rasterize_evaluations(ctx, frame, spec.gaussians)?;
+    // The baseline blends as many Gaussians per tile as the frame's tiles hold on average (the
+    // same batch amortisation), and also a long list of 2048.
+    let tiles = spec.width.div_ceil(TILE_SIZE) * spec.height.div_ceil(TILE_SIZE);
+    let mean_list = (frame.views()[0].num_keys / tiles).max(1) as usize;
+    let matched = SplatLoop::new(ctx, frame, spec.gaussians, mean_list)?;
+    let long = SplatLoop::new(ctx, frame, spec.gaussians, 2048)?;
+    let profiled = RenderOptions { profile: true, ..options };
+    let (mut ours, mut m_rates, mut l_rates, mut m_ratios, mut l_ratios) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for _ in 0..pairs {
+        renderer.render_into(&scene, &camera, &profiled, frame)?;
+        let ms = frame.stage_times().unwrap_or_default().iter().find(|s| s.0 == "rasterize");
+        let ms = ms.map(|s| s.1).context("no rasterize timing")?;
+        let rate = evals as f64 / (ms * 1e-3);
+        let m = matched.evals / (matched.time_ms(ctx)? * 1e-3);
+        let l = long.evals / (long.time_ms(ctx)? * 1e-3);
+        ours.push(ms);
+        m_rates.push(m);
+        l_rates.push(l);
+        m_ratios.push(rate / m);
+        l_ratios.push(rate / l);
+    }
+    let raster_ms = median(ours);
+    Ok(Throughput {
+        evals,
+        raster_ms,
+        ours: evals as f64 / (raster_ms * 1e-3),
+        mean_list,
+        matched: median(m_rates),
+        long: median(l_rates),
+        matched_ratio: median(m_ratios),
+        long_ratio: median(l_ratios),
+        pairs,
+    })
 }
 
 fn main() -> Result<()> {
@@ -362,23 +418,21 @@ fn main() -> Result<()> {
                 if (density, width, height, gaussians, planes)
                     == (RoomDensity::AsCaptured, 256, 192, 100_000, 0)
                 {
-                    let evals = rasterize_evaluations(&ctx, &frame, gaussians)?;
-                    let raster_ms =
-                        row.stages.iter().find(|s| s.0 == "rasterize").map_or(f64::NAN, |s| s.1);
-                    let ours = evals as f64 / (raster_ms * 1e-3);
-                    // The baseline blends as many Gaussians per tile as the frame's tiles hold on
-                    // average (the same batch amortisation), and also a long list of 2048.
-                    let tiles = width.div_ceil(TILE_SIZE) * height.div_ceil(TILE_SIZE);
-                    let mean_list = (frame.views()[0].num_keys / tiles).max(1) as usize;
-                    let matched = splat_loop_throughput(&ctx, &frame, gaussians, mean_list)?;
-                    let long = splat_loop_throughput(&ctx, &frame, gaussians, 2048)?;
+                    let pairs = (3 * args.reps).max(9);
+                    let mut frame = frame;
+                    let t = measure_throughput(&ctx, &renderer, &spec, &mut frame, pairs)?;
                     println!(
-                        "rasterize: {evals} evaluations in {raster_ms:.2} ms = {ours:.3e}/s; trivial splat loop {matched:.3e}/s at {mean_list} per tile ({:.0}%), {long:.3e}/s at 2048 ({:.0}%)",
-                        100.0 * ours / matched,
-                        100.0 * ours / long
+                        "rasterize: {} evaluations in {:.2} ms = {:.3e}/s; trivial splat loop {:.3e}/s at {} per tile ({:.0}%), {:.3e}/s at 2048 ({:.0}%), medians over {pairs} rounds",
+                        t.evals,
+                        t.raster_ms,
+                        t.ours,
+                        t.matched,
+                        t.mean_list,
+                        100.0 * t.matched_ratio,
+                        t.long,
+                        100.0 * t.long_ratio
                     );
-                    throughput =
-                        Some(Throughput { evals, raster_ms, ours, mean_list, matched, long });
+                    throughput = Some(t);
                 }
                 rows.push(row);
             }
