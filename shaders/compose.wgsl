@@ -2,8 +2,10 @@
 // rectangle the camera ray hits from the front side (hit mask H = k + 1), Schlick's
 // R_raw = R0 + (1 - R0) (1 - cos)^5, R = R_raw M, C_r = C_raw^k A^k and
 // C = (1 - R) C_t + R C_r. Pixels without a hit show C_t. The MODEL_* bits switch Schlick (R_raw
-// = R0) and A (C_r = C_raw) off for the ablations. Dispatched over `params.area` only (the
-// footprints' union); the renderer fills the other pixels by a copy of C_t and clears.
+// = R0) and A (C_r = C_raw) off for the ablations. Dispatched once per mirrored pass over its
+// footprint's pixels, `area` (x0, y0, x1, y1): no other pixel's ray hits a plane whose pass ran,
+// so the renderer fills the others by a copy of C_t and clears. Where footprints overlap, the
+// pixels are composed twice, to the same values.
 #include "shared/common.wgsl"
 #include "shared/plane_hit.wgsl"
 
@@ -19,12 +21,13 @@
 // (R_raw, R, 0, 0)
 @group(0) @binding(7) var<storage, read_write> strength: array<vec4<f32>>;
 @group(0) @binding(8) var<storage, read_write> hit: array<u32>;
+@group(0) @binding(9) var<storage, read> area: vec4<u32>;
 
 @compute @workgroup_size(16, 16)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let x = gid.x + params.area.x;
-    let y = gid.y + params.area.y;
-    if x >= params.area.z || y >= params.area.w {
+    let x = gid.x + area.x;
+    let y = gid.y + area.y;
+    if x >= area.z || y >= area.w {
         return;
     }
     let p = y * params.width + x;

@@ -81,7 +81,7 @@ fn project_one(i: u32) {
     let p = v.p;
     let iz = 1.0 / p.z;
     let r = quat_to_mat(rotations[i]);
-    let s = exp(v.log_s);
+    let s = exp(v.g.log_s);
     let l = mat3x3<f32>(r[0] * s.x, r[1] * s.y, r[2] * s.z);
     let sc = w * (l * transpose(l)) * transpose(w);
     // Jacobian with the mean clamped to the guard band.
@@ -100,13 +100,13 @@ fn project_one(i: u32) {
         cull(i);
         return;
     }
-    let extent = vec2<f32>(sqrt(v.reach * a), sqrt(v.reach * c));
+    let extent = vec2<f32>(sqrt(v.g.reach * a), sqrt(v.g.reach * c));
     let rect = tile_rect_of(v.mean2d, extent, view.width, view.height, view.limit);
     if rect.x >= rect.z {
         cull(i);
         return;
     }
-    let offset = v.mu - view.centre.xyz;
+    let offset = v.g.mu - view.centre.xyz;
     let len = length(offset);
     var dir = vec3<f32>(0.0);
     if len > 0.0 {
@@ -114,7 +114,7 @@ fn project_one(i: u32) {
     }
     let raw = eval_sh(i, dir);
     var flags = FLAG_VISIBLE;
-    if v.glass {
+    if v.g.glass {
         flags |= FLAG_GLASS;
     }
     if raw.x < 0.0 {
@@ -128,9 +128,9 @@ fn project_one(i: u32) {
     }
     out.mean2d = v.mean2d;
     out.extent = extent;
-    out.conic = vec4<f32>(c / det, -b / det, a / det, v.opacity);
+    out.conic = vec4<f32>(c / det, -b / det, a / det, v.g.opacity);
     out.color = vec4<f32>(max(raw, vec3<f32>(0.0)), p.z);
-    if v.glass {
+    if v.g.glass {
         out.mask = sigmoid(mask_logits[i]);
     }
     out.reflection = exp(log_reflections[i]);

@@ -4,8 +4,8 @@
 // culled by project's cheap tests, stay at the zero they were cleared to.
 //
 // A Gaussian that touches a tile is also an entry of the frame's depth order (stage
-// `depth_order`), numbered `entry_base` + its index: its depth bits, tile rectangle and a
-// presence flag are kept per entry, and its count is added to the view's key total.
+// `depth_order`), numbered `entry_base` + its index: its depth key, tile rectangle and a
+// presence bit are kept per entry, and its count is added to the view's key total.
 #include "shared/common.wgsl"
 #include "shared/tiles.wgsl"
 

@@ -8,10 +8,10 @@
 // off as if it were taken, so a culled Gaussian costs the full projection and SH evaluation
 // unless it never reaches that code; a mirrored view culls most of the scene.
 
-struct ViewPoint {
+// What the culls need of one Gaussian in any view: read and computed once per Gaussian however
+// many views test it.
+struct GaussianPoint {
     mu: vec3<f32>,
-    // Camera-space position.
-    p: vec3<f32>,
     opacity: f32,
     // alpha = o G >= 1/255  <=>  the quadratic form is at most `reach` = 2 ln(255 o).
     reach: f32,
@@ -19,30 +19,36 @@ struct ViewPoint {
     // The largest 3D variance, exp(2 max log_s).
     var_max: f32,
     glass: bool,
+}
+
+// A Gaussian seen from one view.
+struct ViewPoint {
+    g: GaussianPoint,
+    // Camera-space position.
+    p: vec3<f32>,
     // Tangents of the mean clamped to the guard band, and the screen-space mean.
     tx: f32,
     ty: f32,
     mean2d: vec2<f32>,
 }
 
-// What the culls need of Gaussian i in every view (its p, tangents and mean2d are left to
-// in_view): read and computed once per Gaussian however many views test it.
-fn gaussian_point(i: u32) -> ViewPoint {
-    var v: ViewPoint;
-    v.mu = vec3<f32>(means[3u * i], means[3u * i + 1u], means[3u * i + 2u]);
-    v.glass = populations[i] == POPULATION_GLASS;
-    v.opacity = sigmoid(opacity_logits[i]);
-    v.reach = 2.0 * log(v.opacity / MIN_ALPHA);
-    v.log_s = vec3<f32>(log_scales[3u * i], log_scales[3u * i + 1u], log_scales[3u * i + 2u]);
-    v.var_max = exp(2.0 * max(v.log_s.x, max(v.log_s.y, v.log_s.z)));
-    return v;
+fn gaussian_point(i: u32) -> GaussianPoint {
+    var g: GaussianPoint;
+    g.mu = vec3<f32>(means[3u * i], means[3u * i + 1u], means[3u * i + 2u]);
+    g.glass = populations[i] == POPULATION_GLASS;
+    g.opacity = sigmoid(opacity_logits[i]);
+    g.reach = 2.0 * log(g.opacity / MIN_ALPHA);
+    g.log_s = vec3<f32>(log_scales[3u * i], log_scales[3u * i + 1u], log_scales[3u * i + 2u]);
+    g.var_max = exp(2.0 * max(g.log_s.x, max(g.log_s.y, g.log_s.z)));
+    return g;
 }
 
-// `g` (from gaussian_point) seen from `cam`.
-fn in_view(cam: ProjectParams, g: ViewPoint) -> ViewPoint {
-    var v = g;
+// `g` seen from `cam`.
+fn in_view(cam: ProjectParams, g: GaussianPoint) -> ViewPoint {
+    var v: ViewPoint;
+    v.g = g;
     let w = transpose(mat3x3<f32>(cam.row0.xyz, cam.row1.xyz, cam.row2.xyz));
-    v.p = w * v.mu + cam.translation.xyz;
+    v.p = w * g.mu + cam.translation.xyz;
     v.tx = clamp(v.p.x / v.p.z, cam.tan_limits.x, cam.tan_limits.y);
     v.ty = clamp(v.p.y / v.p.z, cam.tan_limits.z, cam.tan_limits.w);
     v.mean2d = vec2<f32>(
@@ -66,17 +72,17 @@ fn extent_bound(focal: f32, t: f32, iz: f32, var_max: f32, reach: f32) -> f32 {
 // the exact tests would reject too.
 fn passes_cheap_culls(cam: ProjectParams, v: ViewPoint) -> bool {
     if cam.front_only != 0u {
-        if v.glass || !(dot(v.mu - cam.plane_centre.xyz, cam.plane_normal.xyz) > 0.0) {
+        if v.g.glass || !(dot(v.g.mu - cam.plane_centre.xyz, cam.plane_normal.xyz) > 0.0) {
             return false;
         }
     }
-    if !(v.p.z >= cam.near) || !(v.reach > 0.0) {
+    if !(v.p.z >= cam.near) || !(v.g.reach > 0.0) {
         return false;
     }
     let iz = 1.0 / v.p.z;
     let bound = vec2<f32>(
-        extent_bound(cam.focal.x, v.tx, iz, v.var_max, v.reach),
-        extent_bound(cam.focal.y, v.ty, iz, v.var_max, v.reach),
+        extent_bound(cam.focal.x, v.tx, iz, v.g.var_max, v.g.reach),
+        extent_bound(cam.focal.y, v.ty, iz, v.g.var_max, v.g.reach),
     );
     // Only a finite or infinite bound may cull (tile_rect_of treats NaN as empty).
     if bound.x > 0.0 && bound.y > 0.0 {

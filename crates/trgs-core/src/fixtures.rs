@@ -19,7 +19,7 @@ pub struct Scene {
 pub struct SceneSpec {
     pub seed: u64,
     pub gaussians: usize,
-    /// Number of planes (0 to 4).
+    /// Number of planes (0 to 4; more is refused).
     pub planes: usize,
     pub width: u32,
     pub height: u32,
@@ -54,6 +54,7 @@ fn random_unit(rng: &mut Rng) -> DVec3 {
 /// the camera's frustum (so most are visible) on both sides of the plane, with random rotations,
 /// anisotropic scales, opacities, SH coefficients, masks and reflection intensities.
 pub fn random_scene(spec: &SceneSpec) -> Scene {
+    assert!(spec.planes <= 4, "random_scene places at most 4 planes, not {}", spec.planes);
     let mut rng = Rng::new(spec.seed);
     let centre = DVec3::new(0.0, 0.0, 0.0);
     let normal = DVec3::new(0.0, 0.0, 1.0);

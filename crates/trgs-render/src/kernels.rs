@@ -90,7 +90,7 @@ impl Kernels {
             prefix_sum: Kernel::new(ctx, "prefix_sum", "prefix_sum.wgsl", blocks),
             prefix_sum_bits: Kernel::new(
                 ctx,
-                "prefix_sum",
+                "prefix_sum_bits",
                 "prefix_sum.wgsl",
                 &[blocks, &["COUNT_BITS"]].concat(),
             ),

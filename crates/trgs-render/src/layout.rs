@@ -159,7 +159,8 @@ gpu_struct! {
 }
 
 gpu_struct! {
-    /// Parameters of `prefix_sum`, `prefix_sum_add` and `tile_ranges`.
+    /// Parameters of `prefix_sum`, `prefix_sum_add`, `tile_ranges` and the `depth_order`
+    /// kernels: `count` values (the compaction's are words of the presence bit mask).
     pub struct ScanParams {
         pub count: u32,
         /// `prefix_sum`'s level scan: the blocks of the dispatch (of its capacity when the
@@ -243,10 +244,6 @@ gpu_struct! {
         pub cam_col0: [f32; 4],
         pub cam_col1: [f32; 4],
         pub cam_col2: [f32; 4],
-        /// The pixels `compose` runs over, [x0, x1) x [y0, y1): the union of the mirrored
-        /// passes' footprints. No other pixel's ray hits a plane whose pass ran, so there C = C_t
-        /// and the other outputs are zero, which the renderer writes by a copy and clears.
-        pub area: [u32; 4],
     }
 }
 

@@ -397,14 +397,11 @@ impl Renderer {
         for v in &views[1..] {
             has_pass[v.plane.unwrap_or(0)] = true;
         }
-        let footprints: Vec<_> = views[1..].iter().map(|v| v.limit).collect();
-        let area = compose::area(&grid, &footprints);
         let rays = compose::RayBuffers::new(
             s,
             camera,
             &compose::planes_gpu(planes, &has_pass),
             options.reflection,
-            area,
         );
         if views.len() == 1 {
             // No plane hit anywhere: H = 0, which compose_bwd reads.
@@ -433,10 +430,12 @@ impl Renderer {
                     r,
                 );
             }
+            let footprints: Vec<_> = views[1..].iter().map(|v| v.limit).collect();
             compose::record(
                 s,
                 &mut rec,
-                area,
+                &grid,
+                &footprints,
                 r,
                 &layers.transmission,
                 &layers.geometry,

@@ -5,7 +5,7 @@
 //! compared with the reference renderer too. Every scene runs in both tile layouts (one pixel
 //! per thread as on a GPU, four rows per thread as on a CPU adapter).
 use trgs_core::Image;
-use trgs_core::fixtures::{SceneSpec, random_scene};
+use trgs_core::fixtures::{Scene, SceneSpec, random_scene};
 use trgs_core::reference::{
     self, ProjectionFilter, ReflectionModel, RenderSettings, TileGrid, depth_key, depth_key_base,
     depth_order, emit_keys, prefix_sum, rasterize, rasterize_reflection, sort_keys, tile_counts,
@@ -48,16 +48,19 @@ fn compare(what: &str, gpu: &Image<f32>, cpu: &Image<f64>) -> usize {
 
 /// Returns how many views (the camera and the mirrored passes) the frame had.
 fn check_scene(name: &str, spec: SceneSpec, chunk: Option<u32>) -> usize {
+    check_given_scene(name, &random_scene(&spec), chunk)
+}
+
+fn check_given_scene(name: &str, scene: &Scene, chunk: Option<u32>) -> usize {
     let mut views = 0;
     for layout in [TileLayout::PixelPerThread, TileLayout::FourRowsPerThread] {
-        views = check_scene_in(&format!("{name} ({layout:?})"), spec.clone(), chunk, &ctx(layout));
+        views = check_scene_in(&format!("{name} ({layout:?})"), scene, chunk, &ctx(layout));
     }
     views
 }
 
-fn check_scene_in(name: &str, spec: SceneSpec, chunk: Option<u32>, ctx: &GpuContext) -> usize {
+fn check_scene_in(name: &str, scene: &Scene, chunk: Option<u32>, ctx: &GpuContext) -> usize {
     let renderer = Renderer::new(ctx);
-    let scene = random_scene(&spec);
     let g32: Gaussians<f32> = scene.gaussians.cast();
     let g = g32.cast::<f64>();
     let mut gpu_scene = GpuScene::upload(ctx, &g32, &scene.planes).expect("valid scene");
@@ -258,6 +261,24 @@ fn four_planes_match_reference() {
     // with an unused view slot.
     let views = check_scene("four planes", spec(109, 1500, 4, 30.0), None);
     assert_eq!(views, 5, "every plane's mirrored pass ran");
+}
+
+#[test]
+fn chunked_four_planes_match_reference() {
+    // Several chunks and several cull groups: each (chunk, group) dispatch and its work records.
+    let views = check_scene("chunked four planes", spec(110, 700, 4, 30.0), Some(256));
+    assert_eq!(views, 5, "every plane's mirrored pass ran");
+}
+
+#[test]
+fn plane_filling_the_image_matches_reference() {
+    // A pane far larger than the view: its footprint is the whole image, so compose covers it
+    // and the renderer skips the copy and clears of the pixels outside the footprints.
+    let mut scene = random_scene(&spec(111, 1500, 1, 20.0));
+    scene.planes[0].width = 200.0;
+    scene.planes[0].height = 200.0;
+    let views = check_given_scene("plane filling the image", &scene, None);
+    assert_eq!(views, 2, "the plane's mirrored pass ran");
 }
 
 #[test]

@@ -37,13 +37,11 @@ pub struct RayBuffers {
 }
 
 impl RayBuffers {
-    /// `area`: the pixels compose runs over (`ComposeParams::area`).
     pub fn new(
         s: Stage<'_>,
         camera: &Camera,
         planes: &[PlaneGpu],
         model: trgs_core::reference::ReflectionModel,
-        area: [u32; 4],
     ) -> Self {
         let k = &camera.intrinsics;
         let to_world = camera.pose.rotation.transpose();
@@ -58,7 +56,6 @@ impl RayBuffers {
             cam_col0: v4(to_world.x_axis),
             cam_col1: v4(to_world.y_axis),
             cam_col2: v4(to_world.z_axis),
-            area,
         };
         Self {
             camera: gpu::params(s.ctx, "trgs.compose.params", &params),
@@ -67,59 +64,60 @@ impl RayBuffers {
     }
 }
 
-/// The pixels of the union of `footprints` (tile rectangles of `grid`), as `ComposeParams::area`.
-pub fn area(grid: &TileGrid, footprints: &[TileRect]) -> [u32; 4] {
-    let union = footprints.iter().filter(|r| !r.is_empty()).fold(None, |u: Option<TileRect>, r| {
-        Some(u.map_or(*r, |u| TileRect {
-            x0: u.x0.min(r.x0),
-            y0: u.y0.min(r.y0),
-            x1: u.x1.max(r.x1),
-            y1: u.y1.max(r.y1),
-        }))
-    });
-    union.map_or([0; 4], |u| {
-        [
-            u.x0 * TILE_SIZE,
-            u.y0 * TILE_SIZE,
-            (u.x1 * TILE_SIZE).min(grid.width),
-            (u.y1 * TILE_SIZE).min(grid.height),
-        ]
-    })
+/// The pixels of `footprint` (a tile rectangle of `grid`): (x0, y0, x1, y1).
+fn pixel_area(grid: &TileGrid, footprint: &TileRect) -> [u32; 4] {
+    [
+        footprint.x0 * TILE_SIZE,
+        footprint.y0 * TILE_SIZE,
+        (footprint.x1 * TILE_SIZE).min(grid.width),
+        (footprint.y1 * TILE_SIZE).min(grid.height),
+    ]
 }
 
-/// Compose over `area`; every other pixel gets C = C_t, and zero reflection, strength and hit.
+/// Compose over each of `footprints` (the mirrored passes'); every other pixel gets C = C_t,
+/// and zero reflection, strength and hit, by a copy and clears (skipped when one footprint
+/// covers the image).
+#[allow(clippy::too_many_arguments)]
 pub fn record(
     s: Stage<'_>,
     rec: &mut Recorder,
-    area: [u32; 4],
+    grid: &TileGrid,
+    footprints: &[TileRect],
     rays: &RayBuffers,
     transmission: &wgpu::Buffer,
     geometry: &wgpu::Buffer,
     reflection_raw: &wgpu::Buffer,
     out: &ComposeOutputs<'_>,
 ) {
-    rec.encoder.copy_buffer_to_buffer(transmission, 0, out.color, 0, None);
-    for b in [out.reflection, out.strength, out.hit] {
-        rec.encoder.clear_buffer(b, 0, None);
-    }
-    let [x0, y0, x1, y1] = area;
-    if x0 >= x1 || y0 >= y1 {
-        return;
+    let pixels = u64::from(grid.width) * u64::from(grid.height);
+    let whole = [0, 0, grid.width, grid.height];
+    let areas: Vec<[u32; 4]> =
+        footprints.iter().filter(|f| !f.is_empty()).map(|f| pixel_area(grid, f)).collect();
+    if !areas.contains(&whole) {
+        rec.encoder.copy_buffer_to_buffer(transmission, 0, out.color, 0, Some(pixels * 16));
+        rec.encoder.clear_buffer(out.reflection, 0, Some(pixels * 16));
+        rec.encoder.clear_buffer(out.strength, 0, Some(pixels * 16));
+        rec.encoder.clear_buffer(out.hit, 0, Some(pixels * 4));
     }
     let kern = &s.kernels.compose;
-    let bind = kern.bind(
-        s.ctx,
-        &[
-            rays.camera.as_entire_binding(),
-            rays.planes.as_entire_binding(),
-            transmission.as_entire_binding(),
-            geometry.as_entire_binding(),
-            reflection_raw.as_entire_binding(),
-            out.color.as_entire_binding(),
-            out.reflection.as_entire_binding(),
-            out.strength.as_entire_binding(),
-            out.hit.as_entire_binding(),
-        ],
-    );
-    rec.dispatch("compose", kern, &bind, [(x1 - x0).div_ceil(16), (y1 - y0).div_ceil(16), 1]);
+    for [x0, y0, x1, y1] in areas {
+        let area = gpu::storage_init(s.ctx, "trgs.compose.area", &[[x0, y0, x1, y1]]);
+        let bind = kern.bind(
+            s.ctx,
+            &[
+                rays.camera.as_entire_binding(),
+                rays.planes.as_entire_binding(),
+                transmission.as_entire_binding(),
+                geometry.as_entire_binding(),
+                reflection_raw.as_entire_binding(),
+                out.color.as_entire_binding(),
+                out.reflection.as_entire_binding(),
+                out.strength.as_entire_binding(),
+                out.hit.as_entire_binding(),
+                area.as_entire_binding(),
+            ],
+        );
+        let groups = [(x1 - x0).div_ceil(16), (y1 - y0).div_ceil(16), 1];
+        rec.dispatch("compose", kern, &bind, groups);
+    }
 }

@@ -1,8 +1,9 @@
 //! Stage `depth_order` (shaders/depth_order_compact.wgsl, the `sort` kernels, then
 //! shaders/depth_order_counts.wgsl; twin `trgs_core::reference::depth_order`): the entries that
 //! `tile_counts` marked present, every view's together, listed in entry order (a scan of the
-//! presence bits), sorted front to back by their depth keys (`trgs_core::reference::depth_key`: 30 bits,
-//! five radix passes), and their tile counts in that order.
+//! presence bits), sorted front to back by their depth keys
+//! (`trgs_core::reference::depth_key`: 30 bits, five radix passes), and their tile counts in
+//! that order.
 //!
 //! Why: sorting every key by (tile, depth) sorts the 32 depth bits once per key, and a
 //! Gaussian has one key per tile it touches (about 3.5 on the room benchmark). Sorting the

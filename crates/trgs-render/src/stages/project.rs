@@ -63,6 +63,9 @@ pub struct Candidates {
     pub work: wgpu::Buffer,
 }
 
+// project_candidates.wgsl declares the bindings of exactly this many views.
+const _: () = assert!(CULL_VIEWS == 3, "project_candidates.wgsl binds three views");
+
 /// Bytes between two chunks' (workgroups, 1, 1, length) records.
 pub const WORK_STRIDE: u64 = 256;
 
@@ -73,7 +76,7 @@ impl Candidates {
             &format!("trgs.project.candidates.v{view}"),
             u64::from(scene.len()) * 4,
         );
-        // Cleared chunk by chunk before its first kernel (see `record`).
+        // Cleared chunk by chunk before the cull that fills it (see `record_candidates`).
         let work = pool.get(
             s.ctx,
             &format!("trgs.project.work.v{view}"),
@@ -102,12 +105,14 @@ pub fn record_candidates(
     candidates: &[&Candidates],
     projected: &[&wgpu::Buffer],
 ) {
+    debug_assert!(params.len() == candidates.len() && params.len() == projected.len());
     let cull = &s.kernels.project_candidates;
     let group = CULL_VIEWS as usize;
+    let all: Vec<usize> = (0..params.len()).collect();
     for (chunk, (first, count)) in scene.chunks().into_iter().enumerate() {
         let (f, c) = (u64::from(first), u64::from(count));
         let at = chunk as u64 * WORK_STRIDE;
-        for views in (0..params.len()).collect::<Vec<_>>().chunks(group) {
+        for views in all.chunks(group) {
             let blocks: Vec<ProjectParams> = views
                 .iter()
                 .map(|&v| ProjectParams { count, sh_coeffs: scene.sh_coeffs(), ..params[v] })
@@ -123,7 +128,7 @@ pub fn record_candidates(
             // A group of fewer views binds its first view's buffers in the unused slots (the
             // kernel touches only the views `views` holds).
             for k in 0..group {
-                let v = views[k.min(views.len() - 1)];
+                let v = views.get(k).copied().unwrap_or(views[0]);
                 let [list, work] = candidates[v].chunk(chunk, first, count);
                 entries.push(range(projected[v], f * PROJECTED, c * PROJECTED));
                 entries.push(list);

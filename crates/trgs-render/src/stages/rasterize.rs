@@ -2,7 +2,11 @@
 use super::Stage;
 use crate::gpu::{self, Recorder};
 use crate::layout::RasterParams;
-use trgs_core::reference::TileGrid;
+use trgs_core::reference::{TILE_SIZE, TileGrid};
+
+// rasterize.wgsl gives eight consecutive threads a 4 x 2 block of pixels of the tile.
+const _: () =
+    assert!(TILE_SIZE.is_multiple_of(4), "rasterize.wgsl tiles rows in blocks of 4 x 2 pixels");
 
 /// Pass 1's output buffers.
 #[derive(Clone, Debug)]

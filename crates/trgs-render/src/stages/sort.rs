@@ -61,8 +61,7 @@ pub fn record(
             &[block.as_entire_binding(), src.keys.as_entire_binding(), hist.as_entire_binding()],
         );
         rec.dispatch(stage, count_k, &bind, grid_1d(num_blocks));
-        let columns = num_blocks * SORT_RADIX;
-        let columns = ItemCount::Known(columns);
+        let columns = ItemCount::Known(num_blocks * SORT_RADIX);
         prefix_sum::record(s, rec, pool, &format!("{label}.hist_scan"), &hist, columns);
         let scatter = &s.kernels.sort_scatter;
         let bind = scatter.bind(

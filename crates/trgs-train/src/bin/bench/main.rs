@@ -328,7 +328,7 @@ impl SplatLoop {
     }
 }
 
-/// Pass 1's throughput against the trivial loop's, measured in turns: each of `pairs` rounds
+/// Pass 1's throughput against the trivial loop's, measured in turns: each of `rounds` rounds
 /// times one profiled frame and one dispatch of each loop, so that the machine's drift hits all
 /// alike; the ratios are medians over rounds.
 fn measure_throughput(
@@ -336,7 +336,7 @@ fn measure_throughput(
     renderer: &Renderer,
     spec: &RoomSpec,
     frame: &mut Frame,
-    pairs: usize,
+    rounds: usize,
 ) -> Result<Throughput> {
     let (scene, camera) = upload(ctx, spec)?;
     let options = RenderOptions::default();
@@ -351,7 +351,7 @@ fn measure_throughput(
     let profiled = RenderOptions { profile: true, ..options };
     let (mut ours, mut m_rates, mut l_rates, mut m_ratios, mut l_ratios) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    for _ in 0..pairs {
+    for _ in 0..rounds {
         renderer.render_into(&scene, &camera, &profiled, frame)?;
         let ms = frame.stage_times().unwrap_or_default().iter().find(|s| s.0 == "rasterize");
         let ms = ms.map(|s| s.1).context("no rasterize timing")?;
@@ -374,7 +374,7 @@ fn measure_throughput(
         long: median(l_rates),
         matched_ratio: median(m_ratios),
         long_ratio: median(l_ratios),
-        pairs,
+        rounds,
     })
 }
 
@@ -418,11 +418,11 @@ fn main() -> Result<()> {
                 if (density, width, height, gaussians, planes)
                     == (RoomDensity::AsCaptured, 256, 192, 100_000, 0)
                 {
-                    let pairs = (3 * args.reps).max(9);
+                    let rounds = (3 * args.reps).max(9);
                     let mut frame = frame;
-                    let t = measure_throughput(&ctx, &renderer, &spec, &mut frame, pairs)?;
+                    let t = measure_throughput(&ctx, &renderer, &spec, &mut frame, rounds)?;
                     println!(
-                        "rasterize: {} evaluations in {:.2} ms = {:.3e}/s; trivial splat loop {:.3e}/s at {} per tile ({:.0}%), {:.3e}/s at 2048 ({:.0}%), medians over {pairs} rounds",
+                        "rasterize: {} evaluations in {:.2} ms = {:.3e}/s; trivial splat loop {:.3e}/s at {} per tile ({:.0}%), {:.3e}/s at 2048 ({:.0}%), medians over {rounds} rounds",
                         t.evals,
                         t.raster_ms,
                         t.ours,

@@ -24,7 +24,7 @@ pub struct Throughput {
     /// Medians over rounds of rasterize's rate / the loop's, timed in turns.
     pub matched_ratio: f64,
     pub long_ratio: f64,
-    pub pairs: usize,
+    pub rounds: usize,
 }
 
 /// Every measurement of one run.
@@ -165,7 +165,7 @@ pub fn report(ctx: &GpuContext, m: &Measured<'_>, args: &Args) -> String {
              tile with one transmittance, no early exit and no sorting. Timed in turns over {} rounds \
              (a profiled frame, then one dispatch of each loop), so that the machine's drift hits all \
              alike: rates are medians over rounds, the percentages medians over rounds of the ratio.\n",
-            t.pairs
+            t.rounds
         );
         let _ = writeln!(s, "| kernel | pixel-Gaussian evaluations/s | rasterize vs this |");
         let _ = writeln!(s, "|---|---:|---:|");
