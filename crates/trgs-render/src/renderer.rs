@@ -244,14 +244,7 @@ impl Renderer {
             .collect();
         let candidates: Vec<_> =
             (0..specs.len()).map(|vi| project::Candidates::new(s, pool, scene, vi)).collect();
-        project::record_candidates(
-            s,
-            &mut rec,
-            scene,
-            &view_params,
-            &candidates.iter().collect::<Vec<_>>(),
-            &projected.iter().collect::<Vec<_>>(),
-        );
+        project::record_candidates(s, &mut rec, scene, &view_params, &candidates, &projected);
         let each = view_params.into_iter().zip(projected).zip(candidates);
         for (vi, (spec, ((pparams, projected), candidates))) in specs.iter().zip(each).enumerate() {
             let counts = pool.get(ctx, &format!("trgs.tile_counts.counts.v{vi}"), n * 4);

@@ -102,8 +102,8 @@ pub fn record_candidates(
     rec: &mut Recorder,
     scene: &GpuScene,
     params: &[ProjectParams],
-    candidates: &[&Candidates],
-    projected: &[&wgpu::Buffer],
+    candidates: &[Candidates],
+    projected: &[wgpu::Buffer],
 ) {
     debug_assert!(params.len() == candidates.len() && params.len() == projected.len());
     let cull = &s.kernels.project_candidates;
@@ -130,7 +130,7 @@ pub fn record_candidates(
             for k in 0..group {
                 let v = views.get(k).copied().unwrap_or(views[0]);
                 let [list, work] = candidates[v].chunk(chunk, first, count);
-                entries.push(range(projected[v], f * PROJECTED, c * PROJECTED));
+                entries.push(range(&projected[v], f * PROJECTED, c * PROJECTED));
                 entries.push(list);
                 entries.push(work);
             }
