@@ -7,6 +7,7 @@
 // V = sum w |z - D_t| (it needs the final D_t); without, V is written as zero.
 #include "shared/common.wgsl"
 #include "shared/splat.wgsl"
+#include "shared/block_walk.wgsl"
 
 @group(0) @binding(0) var<storage, read> params: RasterParams;
 @group(0) @binding(1) var<storage, read> projected: array<ProjectedGaussian>;
@@ -23,17 +24,24 @@ var<workgroup> s_mean: array<vec4<f32>, TILE_PIXELS>;
 var<workgroup> s_conic: array<vec4<f32>, TILE_PIXELS>;
 // (colour, depth)
 var<workgroup> s_color: array<vec4<f32>, TILE_PIXELS>;
+#ifdef BLOCK_WALK
+// The 4 x 2 blocks of the tile each entry can reach (block_reach).
+var<workgroup> s_blocks: array<u32, TILE_PIXELS>;
+#endif
 var<workgroup> num_done: atomic<u32>;
 var<workgroup> max_last: atomic<u32>;
 var<workgroup> num_walked: atomic<u32>;
 
-fn load_batch(start: u32, end: u32, round: u32, lid: u32) {
+fn load_batch(start: u32, end: u32, round: u32, lid: u32, corner: vec2<f32>) {
     let idx = start + round * TILE_PIXELS + lid;
     if idx < end {
         let g = projected[values[idx]];
         s_mean[lid] = vec4<f32>(g.mean2d, g.mask, f32((g.flags & FLAG_GLASS) != 0u));
         s_conic[lid] = g.conic;
         s_color[lid] = g.color;
+#ifdef BLOCK_WALK
+        s_blocks[lid] = block_reach(g.conic, g.mean2d, corner, vec2<u32>(4u, 2u));
+#endif
     }
 }
 
@@ -65,6 +73,12 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         atomicAdd(&num_done, 1u);
     }
     let pixel = vec2<f32>(f32(x) + 0.5, f32(y) + 0.5);
+    let corner = vec2<f32>(f32(tx * TILE_SIZE) + 0.5, f32(ty * TILE_SIZE) + 0.5);
+#ifdef BLOCK_WALK
+    // Whether this subgroup lies in one block (it does on lavapipe, where it is the block's SIMD
+    // vector): only then may it skip the entries its block does not reach, all lanes together.
+    let one_block = subgroupAll(subgroupBroadcastFirst(block) == block);
+#endif
     var t = 1.0;
     var tm = 1.0;
     var m_active = true;
@@ -78,10 +92,23 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         if workgroupUniformLoad(&num_done) == TILE_PIXELS {
             break;
         }
-        load_batch(start, end, r, lid);
+        load_batch(start, end, r, lid, corner);
         workgroupBarrier();
         let batch = min(TILE_PIXELS, n - r * TILE_PIXELS);
-        for (var j = 0u; j < batch && !done; j++) {
+#ifdef BLOCK_WALK
+        // The batch's entries that reach this block, as a 64-bit mask; the walk steps from one
+        // to the next. The step is broadcast from the subgroup's first lane (every lane has the
+        // same one) so that the compiler sees a uniform index: the loads of the entry stay
+        // single loads instead of one per lane.
+        let reach = reaching(batch, block, one_block);
+        var j = subgroupBroadcastFirst(next_in(reach.x, reach.y, 0u));
+#else
+        var j = 0u;
+#endif
+        loop {
+            if j >= batch || done {
+                break;
+            }
             let mean = s_mean[j];
             let alpha = alpha_at(s_conic[j], pixel - mean.xy);
             if alpha < 0.0 {
@@ -114,6 +141,13 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
                     mask += mean.z * alpha * tm;
                     tm = next_m;
                 }
+            }
+            continuing {
+#ifdef BLOCK_WALK
+                j = subgroupBroadcastFirst(next_in(reach.x, reach.y, j + 1u));
+#else
+                j++;
+#endif
             }
         }
     }
@@ -149,7 +183,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         if workgroupUniformLoad(&num_walked) == TILE_PIXELS {
             break;
         }
-        load_batch(start, end, r, lid);
+        load_batch(start, end, r, lid, corner);
         workgroupBarrier();
         let batch = min(TILE_PIXELS, n - r * TILE_PIXELS);
         for (var j = 0u; j < batch && !walked; j++) {

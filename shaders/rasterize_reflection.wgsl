@@ -9,6 +9,7 @@
 #include "shared/plane_hit.wgsl"
 // ROWS pixels per thread (2.2x faster in four rows on lavapipe, 100k Gaussians).
 #include "shared/tile_rows.wgsl"
+#include "shared/block_walk.wgsl"
 
 @group(0) @binding(0) var<storage, read> params: RasterParams;
 @group(0) @binding(1) var<storage, read> projected: array<ProjectedGaussian>;
@@ -25,6 +26,10 @@ var<workgroup> s_mean: array<vec2<f32>, TILE_PIXELS>;
 var<workgroup> s_conic: array<vec4<f32>, TILE_PIXELS>;
 // (colour, reflection intensity a)
 var<workgroup> s_color: array<vec4<f32>, TILE_PIXELS>;
+#ifdef BLOCK_WALK
+// The blocks of the tile (8 columns by ROWS rows: 8 threads' pixels) each entry can reach.
+var<workgroup> s_blocks: array<u32, TILE_PIXELS>;
+#endif
 var<workgroup> num_done: atomic<u32>;
 
 // One pixel's walk: where it is, what it has blended and where it stopped.
@@ -69,6 +74,12 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         }
     }
     atomicAdd(&num_done, ROWS - awake);
+#ifdef BLOCK_WALK
+    let block = lid / 8u;
+    let corner = vec2<f32>(f32(tx * TILE_SIZE) + 0.5, f32(ty * TILE_SIZE) + 0.5);
+    // Whether this subgroup lies in one block (see shared/block_walk.wgsl).
+    let one_block = subgroupAll(subgroupBroadcastFirst(block) == block);
+#endif
     for (var r = 0u; r < rounds; r++) {
         if workgroupUniformLoad(&num_done) == TILE_PIXELS {
             break;
@@ -81,11 +92,23 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
                 s_mean[slot] = g.mean2d;
                 s_conic[slot] = g.conic;
                 s_color[slot] = vec4<f32>(g.color.xyz, g.reflection);
+#ifdef BLOCK_WALK
+                s_blocks[slot] = block_reach(g.conic, g.mean2d, corner, vec2<u32>(8u, ROWS));
+#endif
             }
         }
         workgroupBarrier();
         let batch = min(TILE_PIXELS, n - r * TILE_PIXELS);
-        for (var j = 0u; j < batch && awake > 0u; j++) {
+#ifdef BLOCK_WALK
+        let reach = reaching(batch, block, one_block);
+        var j = subgroupBroadcastFirst(next_in(reach.x, reach.y, 0u));
+#else
+        var j = 0u;
+#endif
+        loop {
+            if j >= batch || awake == 0u {
+                break;
+            }
             let mean = s_mean[j];
             let conic = s_conic[j];
             let c = s_color[j];
@@ -109,6 +132,13 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
                 px[k].color += c.xyz * wgt;
                 px[k].intensity += c.w * wgt;
                 px[k].t = next_t;
+            }
+            continuing {
+#ifdef BLOCK_WALK
+                j = subgroupBroadcastFirst(next_in(reach.x, reach.y, j + 1u));
+#else
+                j++;
+#endif
             }
         }
     }

@@ -121,6 +121,11 @@ pub struct Capabilities {
     pub tile_layout: TileLayout,
     /// Values per workgroup of the prefix sum and the radix sort ([`BlockWidth`]).
     pub block_width: BlockWidth,
+    /// `rasterize` (pass 1) walks each 4 x 2 pixel block's entries only (shaders/rasterize.wgsl,
+    /// the define `BLOCK_WALK`): needs subgroups of at most 8 lanes, so that a subgroup lies in
+    /// one block and skips together. On a CPU adapter a subgroup is one SIMD vector, which
+    /// otherwise pays for every entry of its tile's list, reaching its pixels or not.
+    pub block_walk: bool,
 }
 
 /// How to choose the device.
@@ -140,6 +145,9 @@ pub struct DeviceOptions {
     /// The width of the scan and sort blocks; None: the faster one for the adapter
     /// ([`BlockWidth::for_adapter`]). Tests on a CPU adapter set it to check the GPU's too.
     pub block_width: Option<BlockWidth>,
+    /// Whether pass 1 walks by 4 x 2 blocks ([`Capabilities::block_walk`]); None: where the
+    /// adapter's subgroups allow it. Some(true) still needs subgroups (without them it is off).
+    pub block_walk: Option<bool>,
 }
 
 /// A wgpu device and queue with what they can do. Cloning shares the device.
@@ -292,6 +300,11 @@ impl GpuContext {
             block_width: options
                 .block_width
                 .unwrap_or_else(|| BlockWidth::for_adapter(adapter.get_info().device_type)),
+            block_walk: features.contains(Features::SUBGROUP)
+                && options.block_walk.unwrap_or_else(|| {
+                    let info = adapter.get_info();
+                    info.subgroup_max_size > 0 && info.subgroup_max_size <= 8
+                }),
         };
         let poison_fresh_buffers = options.poison_fresh_buffers
             || std::env::var("TRGS_POISON_BUFFERS").is_ok_and(|v| v == "1");
@@ -315,13 +328,14 @@ impl GpuContext {
             .map(|(_, n)| *n)
             .collect();
         format!(
-            "{} ({:?}, {:?}); optional features: [{}]; tile layout: {:?}; scan and sort blocks: {:?}",
+            "{} ({:?}, {:?}); optional features: [{}]; tile layout: {:?}; scan and sort blocks: {:?}; block walk: {}",
             self.info.name,
             self.info.backend,
             self.info.device_type,
             on.join(", "),
             self.capabilities.tile_layout,
             self.capabilities.block_width,
+            if self.capabilities.block_walk { "on" } else { "off" },
         )
     }
 }

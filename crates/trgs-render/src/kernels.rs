@@ -66,6 +66,7 @@ impl Kernels {
         let tiles = tile_defines(&ctx.capabilities);
         let replay = [acc.as_slice(), tiles].concat();
         let blocks = block_defines(&ctx.capabilities);
+        let walk: &[&str] = if ctx.capabilities.block_walk { &["BLOCK_WALK"] } else { &[] };
         Self {
             project_candidates: Kernel::new(
                 ctx,
@@ -99,18 +100,18 @@ impl Kernels {
             sort_count: Kernel::new(ctx, "sort_count", "sort_count.wgsl", blocks),
             sort_scatter: Kernel::new(ctx, "sort_scatter", "sort_scatter.wgsl", blocks),
             tile_ranges: Kernel::new(ctx, "tile_ranges", "tile_ranges.wgsl", &[]),
-            rasterize: Kernel::new(ctx, "rasterize", "rasterize.wgsl", &[]),
+            rasterize: Kernel::new(ctx, "rasterize", "rasterize.wgsl", walk),
             rasterize_depth_variance: Kernel::new(
                 ctx,
                 "rasterize",
                 "rasterize.wgsl",
-                &["DEPTH_VARIANCE"],
+                &[walk, &["DEPTH_VARIANCE"]].concat(),
             ),
             rasterize_reflection: Kernel::new(
                 ctx,
                 "rasterize_reflection",
                 "rasterize_reflection.wgsl",
-                tiles,
+                &[tiles, walk].concat(),
             ),
             compose: Kernel::new(ctx, "compose", "compose.wgsl", &[]),
             compose_bwd: Kernel::new(ctx, "compose_bwd", "compose_bwd.wgsl", &acc),

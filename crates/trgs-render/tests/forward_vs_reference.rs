@@ -19,18 +19,20 @@ use trgs_render::{
 mod common;
 use common::{ATOL, RTOL, close, compare_values, spec, to_reference};
 
-/// A context with `layout`, and the scan and sort block width that goes with it on a device of
-/// that kind (narrow blocks with one pixel per thread, as on a GPU; wide ones with four rows, as
-/// on a CPU adapter), so that both devices' kernels are checked here.
+/// A context with `layout`, and the scan and sort block width and pass 1's walk that go with it
+/// on a device of that kind (narrow blocks and the plain walk with one pixel per thread, as on a
+/// GPU; wide blocks and the walk by 4 x 2 blocks with four rows, as on a CPU adapter, where the
+/// subgroups allow it), so that both devices' kernels are checked here.
 fn ctx(layout: TileLayout) -> GpuContext {
-    let width = match layout {
-        TileLayout::PixelPerThread => BlockWidth::Narrow,
-        TileLayout::FourRowsPerThread => BlockWidth::Wide,
+    let (width, walk) = match layout {
+        TileLayout::PixelPerThread => (BlockWidth::Narrow, false),
+        TileLayout::FourRowsPerThread => (BlockWidth::Wide, true),
     };
     let opts = DeviceOptions {
         poison_fresh_buffers: true,
         tile_layout: Some(layout),
         block_width: Some(width),
+        block_walk: Some(walk),
         ..Default::default()
     };
     GpuContext::with_options(&opts).unwrap_or_else(|e| panic!("{e}"))

@@ -9,6 +9,7 @@
 //! plane's centre, normal and R0 logit).
 mod adam;
 mod backward;
+mod block_reach;
 mod compose;
 mod compose_bwd;
 mod depth_order;
@@ -35,6 +36,7 @@ pub use adam::{AdamRate, AdamSettings, adam};
 pub use backward::{
     BackwardOptions, PlaneGrad, SceneGrads, backward, mirrored_view_bwd, plane_grad,
 };
+pub use block_reach::{block_reach, reaches_f32};
 pub use compose::{ComposeOutput, ReflectionModel, compose};
 pub use compose_bwd::{ComposeGrads, compose_bwd};
 pub use depth_order::{DEPTH_KEY_BITS, DEPTH_KEY_FLOOR, depth_key, depth_key_base, depth_order};

@@ -1,0 +1,76 @@
+// The walk by pixel blocks of the rasterize passes on devices whose subgroups hold at most 8 lanes
+// (the define BLOCK_WALK; trgs_render::Capabilities::block_walk): a tile's pixels are split into
+// blocks of 8 threads' pixels, an entry's mask says which blocks it can reach, and a subgroup
+// lying in one block steps from one reaching entry to the next. On a CPU adapter a subgroup is a
+// SIMD vector, which leaves a loop together but runs a skipped branch's body anyway, so without
+// this it pays for every entry of the tile's list whether it reaches its pixels or not. Empty
+// without BLOCK_WALK; with it the including shader declares `s_blocks` (an entry's block mask
+// per batch slot).
+#ifdef BLOCK_WALK
+
+// Which blocks of a tile one Gaussian can reach (twin: reference::rasterize::block_reach): the
+// tile is split row by row into blocks of `block` pixels (x, y), and bit k (block k) is clear only
+// when o G < MIN_ALPHA at all of the block's pixels, so that alpha_at returns -1 there and the walk
+// may skip the entry for the block. `corner` is the tile's first pixel centre. The test is the
+// bounding box of the ellipse o G = MIN_ALPHA, half-extents sqrt(r C_xx) and sqrt(r C_yy) with C
+// the conic's inverse and r = 2 ln(o / MIN_ALPHA), widened by 2% and 0.05 px plus 1e-6 of the
+// coordinates: with the conic's condition number under 1e4 the f32 rounding of an evaluation
+// moves its exponent by well under 1% of r, which the widening covers. Any other conic
+// (ill-conditioned, not positive definite, not finite) reaches every block.
+fn block_reach(conic: vec4<f32>, mean: vec2<f32>, corner: vec2<f32>, block: vec2<u32>) -> u32 {
+    let per_row = TILE_SIZE / block.x;
+    let blocks = per_row * (TILE_SIZE / block.y);
+    let all = (1u << blocks) - 1u;
+    let a = conic.x;
+    let b = conic.y;
+    let c = conic.z;
+    let det = a * c - b * b;
+    let r = 2.0 * log(conic.w / MIN_ALPHA);
+    let trace = a + c;
+    if !(det > 0.0) || !(a > 0.0) || !(r > 0.0) || !(trace * trace <= 1e4 * det)
+        || !(abs(mean.x) + abs(mean.y) <= 1e7) {
+        return all;
+    }
+    let slack = 0.05 + 1e-6 * (abs(mean.x) + abs(mean.y) + abs(corner.x) + abs(corner.y));
+    let half = vec2<f32>(sqrt(r * c / det), sqrt(r * a / det)) * 1.02 + slack;
+    if !(half.x < 1e30) || !(half.y < 1e30) {
+        return all;
+    }
+    let lo = mean - half;
+    let hi = mean + half;
+    // A block's pixel centres span block - 1 px from its first.
+    let span = vec2<f32>(block - vec2<u32>(1u));
+    var bits = 0u;
+    for (var k = 0u; k < blocks; k++) {
+        let first = corner + vec2<f32>(f32((k % per_row) * block.x), f32((k / per_row) * block.y));
+        if hi.x >= first.x && lo.x <= first.x + span.x && hi.y >= first.y && lo.y <= first.y + span.y {
+            bits |= 1u << k;
+        }
+    }
+    return bits;
+}
+
+// The first set bit at or after j of the 64-bit mask (lo, hi), or 64.
+fn next_in(lo: u32, hi: u32, j: u32) -> u32 {
+    let m_lo = select(0u, lo & (0xffffffffu << min(j, 31u)), j < 32u);
+    let m_hi = select(0u, hi & (0xffffffffu << (max(j, 32u) - 32u)), j < 64u);
+    let in_hi = select(64u, 32u + firstTrailingBit(m_hi), m_hi != 0u);
+    return select(in_hi, firstTrailingBit(m_lo), m_lo != 0u);
+}
+
+// The mask of the batch's entries (the first `batch` of `masks`) whose bit `block` is set, as
+// (lo, hi); every entry when `one_block` is false (the subgroup spans several blocks).
+fn reaching(batch: u32, block: u32, one_block: bool) -> vec2<u32> {
+    if !one_block {
+        return vec2<u32>(0xffffffffu);
+    }
+    var m = vec2<u32>(0u);
+    for (var e = 0u; e < min(batch, 32u); e++) {
+        m.x |= ((s_blocks[e] >> block) & 1u) << e;
+    }
+    for (var e = 32u; e < batch; e++) {
+        m.y |= ((s_blocks[e] >> block) & 1u) << (e - 32u);
+    }
+    return m;
+}
+#endif
