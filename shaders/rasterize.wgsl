@@ -77,7 +77,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
 #ifdef BLOCK_WALK
     // Whether this subgroup lies in one block (it does on lavapipe, where it is the block's SIMD
     // vector): only then may it skip the entries its block does not reach, all lanes together.
-    let one_block = subgroupAll(subgroupBroadcastFirst(block) == block);
+    let one_block = in_one_block(block);
 #endif
     var t = 1.0;
     var tm = 1.0;
@@ -96,12 +96,9 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         workgroupBarrier();
         let batch = min(TILE_PIXELS, n - r * TILE_PIXELS);
 #ifdef BLOCK_WALK
-        // The batch's entries that reach this block, as a 64-bit mask; the walk steps from one
-        // to the next. The step is broadcast from the subgroup's first lane (every lane has the
-        // same one) so that the compiler sees a uniform index: the loads of the entry stay
-        // single loads instead of one per lane.
+        // The batch's entries that reach this block; the walk steps from one to the next.
         let reach = reaching(batch, block, one_block);
-        var j = subgroupBroadcastFirst(next_in(reach.x, reach.y, 0u));
+        var j = next_entry(reach, 0u);
 #else
         var j = 0u;
 #endif
@@ -144,7 +141,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
             }
             continuing {
 #ifdef BLOCK_WALK
-                j = subgroupBroadcastFirst(next_in(reach.x, reach.y, j + 1u));
+                j = next_entry(reach, j + 1u);
 #else
                 j++;
 #endif

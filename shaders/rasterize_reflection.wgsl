@@ -78,7 +78,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
     let block = lid / 8u;
     let corner = vec2<f32>(f32(tx * TILE_SIZE) + 0.5, f32(ty * TILE_SIZE) + 0.5);
     // Whether this subgroup lies in one block (see shared/block_walk.wgsl).
-    let one_block = subgroupAll(subgroupBroadcastFirst(block) == block);
+    let one_block = in_one_block(block);
 #endif
     for (var r = 0u; r < rounds; r++) {
         if workgroupUniformLoad(&num_done) == TILE_PIXELS {
@@ -101,7 +101,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         let batch = min(TILE_PIXELS, n - r * TILE_PIXELS);
 #ifdef BLOCK_WALK
         let reach = reaching(batch, block, one_block);
-        var j = subgroupBroadcastFirst(next_in(reach.x, reach.y, 0u));
+        var j = next_entry(reach, 0u);
 #else
         var j = 0u;
 #endif
@@ -135,7 +135,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
             }
             continuing {
 #ifdef BLOCK_WALK
-                j = subgroupBroadcastFirst(next_in(reach.x, reach.y, j + 1u));
+                j = next_entry(reach, j + 1u);
 #else
                 j++;
 #endif

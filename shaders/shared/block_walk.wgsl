@@ -58,6 +58,18 @@ fn next_in(lo: u32, hi: u32, j: u32) -> u32 {
     return select(in_hi, firstTrailingBit(m_lo), m_lo != 0u);
 }
 
+// Whether this invocation's subgroup lies in one block (the walk may skip only then).
+fn in_one_block(block: u32) -> bool {
+    return subgroupAll(subgroupBroadcastFirst(block) == block);
+}
+
+// The walk's next entry at or after j in `reach` (from `reaching`), or 64. Broadcast from the
+// subgroup's first lane (every lane has the same one) so that the compiler sees a uniform index:
+// the loads of the entry stay single loads instead of one per lane.
+fn next_entry(reach: vec2<u32>, j: u32) -> u32 {
+    return subgroupBroadcastFirst(next_in(reach.x, reach.y, j));
+}
+
 // The mask of the batch's entries (the first `batch` of `masks`) whose bit `block` is set, as
 // (lo, hi); every entry when `one_block` is false (the subgroup spans several blocks).
 fn reaching(batch: u32, block: u32, one_block: bool) -> vec2<u32> {
