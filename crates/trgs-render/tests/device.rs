@@ -78,9 +78,23 @@ fn compute_kernel_runs_and_reads_back() {
         // The layout follows the adapter, whatever its features.
         assert_eq!(c.tile_layout, TileLayout::for_adapter(ctx.info.device_type));
         assert_eq!(c.block_width, BlockWidth::for_adapter(ctx.info.device_type));
+        // The walk by pixel blocks needs subgroups that fit in a block (at most 8 lanes).
+        let small = ctx.info.subgroup_max_size > 0 && ctx.info.subgroup_max_size <= 8;
+        assert_eq!(c.block_walk, c.subgroups && small, "{c:?}, {:?}", ctx.info);
         let out = run_kernel(&ctx, 1000);
         assert!(out.iter().enumerate().all(|(i, &v)| v == i as f32 * 0.5 + 1.0));
     }
+}
+
+#[test]
+fn block_walk_is_off_without_subgroups_even_when_asked_for() {
+    let opts = DeviceOptions {
+        disable_optional_features: true,
+        block_walk: Some(true),
+        ..Default::default()
+    };
+    let ctx = GpuContext::with_options(&opts).unwrap_or_else(|e| panic!("{e}"));
+    assert!(!ctx.capabilities.block_walk, "{:?}", ctx.capabilities);
 }
 
 #[test]
