@@ -7,6 +7,8 @@ use trgs_core::reference::{TILE_SIZE, TileGrid};
 // rasterize.wgsl gives eight consecutive threads a 4 x 2 block of pixels of the tile.
 const _: () =
     assert!(TILE_SIZE.is_multiple_of(4), "rasterize.wgsl tiles rows in blocks of 4 x 2 pixels");
+// shared/block_walk.wgsl keeps a batch's reaching entries as a 64-bit mask.
+const _: () = assert!(TILE_SIZE * TILE_SIZE <= 64, "a batch of TILE_PIXELS entries fits 64 bits");
 
 /// Pass 1's output buffers.
 #[derive(Clone, Debug)]
