@@ -11,8 +11,14 @@
 @group(0) @binding(4) var<storage, read_write> ordered_counts: array<u32>;
 
 @compute @workgroup_size(256)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let slot = linear_index(gid, nwg, 256u);
+fn main(
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+) {
+    // The dispatch covers the capacity and the entries fill its first slots: spread the
+    // workgroups over them (common.wgsl).
+    let slot = spread_block(wid, nwg, params.spread) * 256u + lid;
     if slot >= params.count || slot >= entries[0] {
         return;
     }

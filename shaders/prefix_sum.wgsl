@@ -19,7 +19,8 @@ fn main(
     @builtin(local_invocation_index) lid: u32,
     @builtin(num_workgroups) nwg: vec3<u32>,
 ) {
-    let block = wid.x + wid.y * nwg.x;
+    // Blocks past a GPU count are empty: `params.spread` deals the full ones out evenly.
+    let block = spread_block(wid, nwg, params.spread);
     // A block past the count (read on the GPU, the dispatch covers the capacity) has nothing to
     // scan and a zero total; returning before the barriers keeps it cheap. (Block 0 scans even
     // an empty input: its total 0 is the scan's total.)

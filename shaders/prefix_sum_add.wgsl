@@ -15,7 +15,8 @@ fn main(
     @builtin(local_invocation_index) lid: u32,
     @builtin(num_workgroups) nwg: vec3<u32>,
 ) {
-    let block = wid.x + wid.y * nwg.x;
+    // Blocks past a GPU count are empty: `params.spread` deals the full ones out evenly.
+    let block = spread_block(wid, nwg, params.spread);
     if block * SCAN_BLOCK >= params.count {
         return;
     }

@@ -19,7 +19,8 @@ fn main(
     @builtin(local_invocation_index) lid: u32,
     @builtin(num_workgroups) nwg: vec3<u32>,
 ) {
-    let block = wid.x + wid.y * nwg.x;
+    // Blocks past a GPU count are empty: `params.spread` deals the full ones out evenly.
+    let block = spread_block(wid, nwg, params.spread);
     // A block past the last key (the count may come from the GPU, the dispatch covers the
     // capacity) has an empty histogram; returning before the barrier keeps it cheap.
     if block * SORT_BLOCK >= params.count {

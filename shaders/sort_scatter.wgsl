@@ -25,7 +25,8 @@ fn main(
     @builtin(local_invocation_index) lid: u32,
     @builtin(num_workgroups) nwg: vec3<u32>,
 ) {
-    let block = wid.x + wid.y * nwg.x;
+    // Blocks past a GPU count are empty: `params.spread` deals the full ones out evenly.
+    let block = spread_block(wid, nwg, params.spread);
     // Nothing to move past the last key; returning before the scan's barriers keeps it cheap.
     if block * SORT_BLOCK >= params.count {
         return;

@@ -8,6 +8,21 @@ fn linear_index(gid: vec3<u32>, nwg: vec3<u32>, workgroup_size: u32) -> u32 {
     return gid.x + gid.y * nwg.x * workgroup_size;
 }
 
+// The block that workgroup `wid` of a 1D dispatch (split into rows of `nwg.x` past 65,535
+// workgroups) takes: a permutation of the workgroups that steps through the blocks by `step`,
+// coprime to the spread dimension's size (trgs_render::gpu::spread_step says why; 0: no
+// permutation). A split dispatch spreads its rows, not the blocks within a row. (n is at most
+// 65,535, a dispatch dimension's limit, so w step fits in 32 bits.)
+fn spread_block(wid: vec3<u32>, nwg: vec3<u32>, step: u32) -> u32 {
+    if step == 0u {
+        return wid.x + wid.y * nwg.x;
+    }
+    if nwg.y == 1u {
+        return (wid.x * step) % nwg.x;
+    }
+    return ((wid.y * step) % nwg.y) * nwg.x + wid.x;
+}
+
 fn sigmoid(x: f32) -> f32 {
     return 1.0 / (1.0 + exp(-x));
 }

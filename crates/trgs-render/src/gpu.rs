@@ -254,6 +254,34 @@ pub fn grid_1d(groups: u32) -> [u32; 3] {
     if groups <= MAX { [groups, 1, 1] } else { [MAX, groups.div_ceil(MAX), 1] }
 }
 
+/// The step of the workgroup permutation of a dispatch of `groups` (`spread_block` in
+/// shaders/shared/common.wgsl): the step coprime to the spread dimension's size n (the rows of a
+/// split 1D dispatch, else its workgroups) nearest above n / golden ratio, so that every run of
+/// consecutive workgroups takes blocks spread over the whole range.
+///
+/// Why: lavapipe hands each of its threads one contiguous run of a dispatch's workgroups
+/// (workgroups / threads each, no stealing), so a dispatch that covers a capacity while its
+/// count is known on the GPU only, all its work in the first blocks, ran on one thread while the
+/// others passed over empty blocks (the depth order's sort at 100k Gaussians with a plane: 6 of
+/// 13 workgroups full, all in the first thread's run).
+pub fn spread_step(groups: [u32; 3]) -> u32 {
+    let n = if groups[1] > 1 { groups[1] } else { groups[0] };
+    if n <= 2 {
+        return 1;
+    }
+    let gcd = |mut a: u32, mut b: u32| {
+        while b != 0 {
+            (a, b) = (b, a % b);
+        }
+        a
+    };
+    let mut step = (f64::from(n) / 1.618_033_988_749_895) as u32;
+    while gcd(step, n) != 1 {
+        step += 1;
+    }
+    step
+}
+
 /// The timestamp writes of the next pass, while the query set has room.
 fn timestamps<'a>(
     profiler: &'a mut Option<Profiler>,
@@ -441,5 +469,54 @@ impl BufferPool {
     /// Total bytes held.
     pub fn bytes(&self) -> u64 {
         self.buffers.values().map(wgpu::Buffer::size).sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `spread_block` of shaders/shared/common.wgsl, workgroup by workgroup in lavapipe's order
+    /// (x fastest).
+    fn spread_blocks(groups: [u32; 3]) -> Vec<u32> {
+        let step = spread_step(groups);
+        let (nx, ny) = (groups[0], groups[1]);
+        (0..ny)
+            .flat_map(|y| (0..nx).map(move |x| (x, y)))
+            .map(|(x, y)| if ny == 1 { (x * step) % nx } else { ((y * step) % ny) * nx + x })
+            .collect()
+    }
+
+    #[test]
+    fn spread_is_a_permutation_that_deals_the_first_blocks_out_evenly() {
+        let mut shapes: Vec<[u32; 3]> = (1..=3000).map(grid_1d).collect();
+        shapes.extend([[65_535, 1, 1], [7, 3, 1], [5, 40, 1], [3, 65_535, 1]]);
+        for groups in shapes {
+            let blocks = spread_blocks(groups);
+            let n = blocks.len();
+            let mut seen = vec![false; n];
+            for &b in &blocks {
+                assert!(!std::mem::replace(&mut seen[b as usize], true), "{groups:?}: {b} twice");
+            }
+            // Lavapipe gives each of its threads one run of n / threads workgroups: with only
+            // the first `full` blocks doing work, every run gets close to its share of them.
+            if groups[1] > 1 || n < 64 {
+                continue;
+            }
+            for threads in [2, 3, 4, 8, 16] {
+                let run = n / threads;
+                for full in [n / 7, n / 3, n / 2, (2 * n) / 3] {
+                    for chunk in blocks.chunks_exact(run) {
+                        let got = chunk.iter().filter(|&&b| (b as usize) < full).count();
+                        let share = (full * run) as f64 / n as f64;
+                        assert!(
+                            (got as f64 - share).abs() <= 0.2 * share + 3.0,
+                            "{n} workgroups, {threads} threads, {full} full: {got} in a run, \
+                             share {share:.1}"
+                        );
+                    }
+                }
+            }
+        }
     }
 }

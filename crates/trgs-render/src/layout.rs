@@ -166,7 +166,8 @@ gpu_struct! {
         /// `prefix_sum`'s level scan: the blocks of the dispatch (of its capacity when the
         /// count is known on the GPU only), each of which writes its total.
         pub blocks: u32,
-        pub pad1: u32,
+        /// The workgroup permutation's step ([`crate::gpu::spread_step`]; 0: none).
+        pub spread: u32,
         pub pad2: u32,
     }
 }
@@ -177,7 +178,8 @@ gpu_struct! {
         pub count: u32,
         /// Bit offset of the digit (SORT_RADIX_BITS wide) in its word.
         pub shift: u32,
-        pub pad0: u32,
+        /// The workgroup permutation's step ([`crate::gpu::spread_step`]; 0: none).
+        pub spread: u32,
         pub num_blocks: u32,
     }
 }

@@ -68,12 +68,14 @@ pub fn record(
         ],
     );
     rec.dispatch("depth_order", k, &bind, grid_1d(words.div_ceil(256)));
+    // The entries fill the first slots of the capacity: spread the workgroups over them.
+    let groups = grid_1d(capacity.div_ceil(256));
+    let spread = gpu::spread_step(groups);
     let block = gpu::params(
         s.ctx,
         "trgs.depth_order.params",
-        &ScanParams { count: capacity, ..Default::default() },
+        &ScanParams { count: capacity, spread, ..Default::default() },
     );
-    let groups = grid_1d(capacity.div_ceil(256));
     let passes: Vec<_> = digits(DEPTH_KEY_BITS).collect();
     let count = ItemCount::OnGpu { counter: &total, capacity };
     let list = sort::record(s, rec, "depth_order", pool, "trgs.depth_order", &list, count, &passes);

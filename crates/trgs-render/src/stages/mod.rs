@@ -47,6 +47,15 @@ impl ItemCount<'_> {
         }
     }
 
+    /// The workgroup permutation's step for a dispatch of `groups` over the capacity
+    /// ([`crate::gpu::spread_step`]): none for a known count, whose blocks are all full.
+    pub fn spread(&self, groups: [u32; 3]) -> u32 {
+        match *self {
+            ItemCount::Known(_) => 0,
+            ItemCount::OnGpu { .. } => crate::gpu::spread_step(groups),
+        }
+    }
+
     /// Copies a GPU count into the first word of `params` (where every parameter block that
     /// takes one holds its count: checked below for the two that do).
     pub fn write_into(&self, rec: &mut crate::gpu::Recorder, params: &wgpu::Buffer) {

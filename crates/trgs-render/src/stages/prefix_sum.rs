@@ -50,14 +50,16 @@ fn scan_level(
         rec.encoder.clear_buffer(&sums, 0, None);
         return sums;
     }
-    let params = ScanParams { count: capacity, blocks, ..Default::default() };
+    let groups = grid_1d(blocks);
+    let params =
+        ScanParams { count: capacity, blocks, spread: count.spread(groups), ..Default::default() };
     let block = gpu::params(s.ctx, "trgs.prefix_sum.params", &params);
     count.write_into(rec, &block);
     let bind = scan.bind(
         s.ctx,
         &[block.as_entire_binding(), data.as_entire_binding(), sums.as_entire_binding()],
     );
-    rec.dispatch("prefix_sum", scan, &bind, grid_1d(blocks));
+    rec.dispatch("prefix_sum", scan, &bind, groups);
     if blocks == 1 {
         return sums;
     }
@@ -69,6 +71,6 @@ fn scan_level(
         s.ctx,
         &[block.as_entire_binding(), data.as_entire_binding(), sums.as_entire_binding()],
     );
-    rec.dispatch("prefix_sum", add, &bind, grid_1d(blocks));
+    rec.dispatch("prefix_sum", add, &bind, groups);
     total
 }

@@ -51,7 +51,9 @@ pub fn record(
     let hist = pool.get(s.ctx, &format!("{label}.hist"), u64::from(num_blocks * SORT_RADIX) * 4);
     let (mut src, mut dst) = (list.clone(), alt);
     for &shift in shifts {
-        let params = SortParams { count: capacity, shift, num_blocks, ..Default::default() };
+        let groups = grid_1d(num_blocks);
+        let spread = count.spread(groups);
+        let params = SortParams { count: capacity, shift, num_blocks, spread };
         let block = gpu::params(s.ctx, "trgs.sort.params", &params);
         // SortParams::count is the block's first word.
         count.write_into(rec, &block);
@@ -60,7 +62,7 @@ pub fn record(
             s.ctx,
             &[block.as_entire_binding(), src.keys.as_entire_binding(), hist.as_entire_binding()],
         );
-        rec.dispatch(stage, count_k, &bind, grid_1d(num_blocks));
+        rec.dispatch(stage, count_k, &bind, groups);
         let columns = ItemCount::Known(num_blocks * SORT_RADIX);
         prefix_sum::record(s, rec, pool, &format!("{label}.hist_scan"), &hist, columns);
         let scatter = &s.kernels.sort_scatter;
@@ -75,7 +77,7 @@ pub fn record(
                 dst.values.as_entire_binding(),
             ],
         );
-        rec.dispatch(stage, scatter, &bind, grid_1d(num_blocks));
+        rec.dispatch(stage, scatter, &bind, groups);
         std::mem::swap(&mut src, &mut dst);
     }
     src
