@@ -17,11 +17,12 @@ fn main(
     @builtin(num_workgroups) nwg: vec3<u32>,
 ) {
     // The dispatch covers the capacity and the entries fill its first slots: spread the
-    // workgroups over them (common.wgsl).
-    let slot = spread_block(wid, nwg, params.spread) * 256u + lid;
-    if slot >= params.count || slot >= entries[0] {
-        return;
+    // workgroups over them (common.wgsl). DEPTH_COUNTS_BLOCK / 256 slots a thread, 256 apart:
+    // a CPU adapter pays for every workgroup, empty or not (with a plane, half of them are).
+    let first = spread_block(wid, nwg, params.spread) * DEPTH_COUNTS_BLOCK + lid;
+    let end = min(params.count, entries[0]);
+    for (var slot = first; slot < min(end, first + DEPTH_COUNTS_BLOCK); slot += 256u) {
+        let r = rects[order[slot]];
+        ordered_counts[slot] = ((r.y & 0xffffu) - (r.x & 0xffffu)) * ((r.y >> 16u) - (r.x >> 16u));
     }
-    let r = rects[order[slot]];
-    ordered_counts[slot] = ((r.y & 0xffffu) - (r.x & 0xffffu)) * ((r.y >> 16u) - (r.x >> 16u));
 }

@@ -5,7 +5,7 @@
 //! and project_bwd of its mirrored view, whose view gradient then chains into the plane on the CPU
 //! (a dozen numbers per plane, the twin's own `mirrored_view_bwd`).
 use crate::frame::Frame;
-use crate::gpu::{self, GpuError, Recorder};
+use crate::gpu::{self, GpuError, KernelTime, Recorder};
 use crate::layer_grads::LayerGrads;
 use crate::layout::{BWD_ADD, BWD_NO_GAUSSIANS, BWD_VIEW, PROJECTED_GRAD_FLOATS, VIEW_GRAD_FLOATS};
 use crate::renderer::Renderer;
@@ -36,6 +36,7 @@ pub struct Gradients {
     projected_grads: Vec<wgpu::Buffer>,
     gaussian_count: u32,
     stage_times: Option<Vec<(&'static str, f64)>>,
+    kernel_times: Option<Vec<KernelTime>>,
 }
 
 impl Gradients {
@@ -61,6 +62,11 @@ impl Gradients {
     /// Milliseconds per stage, with `profile` on an adapter with timestamps.
     pub fn stage_times(&self) -> Option<&[(&'static str, f64)]> {
         self.stage_times.as_deref()
+    }
+
+    /// The stage times split by kernel, with `profile`.
+    pub fn kernel_times(&self) -> Option<&[KernelTime]> {
+        self.kernel_times.as_deref()
     }
 }
 
@@ -272,6 +278,7 @@ impl Renderer {
             projected_grads: bufs.projected_grads,
             gaussian_count: scene.len(),
             stage_times: rec.stage_times(),
+            kernel_times: rec.kernel_times(),
         })
     }
 }

@@ -1,7 +1,7 @@
 //! A rendered view on the GPU: every layer, what the backward pass will need (projected
 //! Gaussians, sorted lists, per-pixel states), and readback to images.
 use crate::GpuContext;
-use crate::gpu::{self, BufferPool, GpuError};
+use crate::gpu::{self, BufferPool, GpuError, KernelTime};
 use crate::layout::{ProjectParams, RasterState, ReflectionState};
 use crate::stages::sort::KeyList;
 use trgs_core::Image;
@@ -97,6 +97,7 @@ pub struct Frame {
     binning: Option<Binning>,
     has_pass: Vec<bool>,
     stage_times: Option<Vec<(&'static str, f64)>>,
+    kernel_times: Option<Vec<KernelTime>>,
 }
 
 /// A layer of a frame.
@@ -198,6 +199,7 @@ impl Frame {
         self.views.clear();
         self.binning = None;
         self.stage_times = None;
+        self.kernel_times = None;
         // Until this render finishes the frame holds no image: a render that fails part way
         // leaves it "not rendered" (empty reads, BackwardError::NotRendered), never the previous
         // frame's buffers read with this frame's size.
@@ -236,13 +238,14 @@ impl Frame {
         binning: Binning,
         has_pass: Vec<bool>,
         rays: Option<crate::stages::compose::RayBuffers>,
-        stage_times: Option<Vec<(&'static str, f64)>>,
+        rec: &crate::gpu::Recorder,
     ) {
         self.views = views;
         self.binning = Some(binning);
         self.rays = rays;
         self.has_pass = has_pass;
-        self.stage_times = stage_times;
+        self.stage_times = rec.stage_times();
+        self.kernel_times = rec.kernel_times();
     }
 
     pub(crate) fn rays(&self) -> Option<&crate::stages::compose::RayBuffers> {
@@ -308,6 +311,11 @@ impl Frame {
     /// Milliseconds per stage, when rendered with `profile` on an adapter with timestamps.
     pub fn stage_times(&self) -> Option<&[(&'static str, f64)]> {
         self.stage_times.as_deref()
+    }
+
+    /// The stage times split by kernel, when rendered with `profile`.
+    pub fn kernel_times(&self) -> Option<&[KernelTime]> {
+        self.kernel_times.as_deref()
     }
 
     /// Total keys sorted over all views.

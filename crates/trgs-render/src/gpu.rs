@@ -286,11 +286,12 @@ pub fn spread_step(groups: [u32; 3]) -> u32 {
 fn timestamps<'a>(
     profiler: &'a mut Option<Profiler>,
     stage: &'static str,
+    kernel: &'static str,
 ) -> Option<wgpu::ComputePassTimestampWrites<'a>> {
     match profiler {
         Some(p) if (p.labels.len() as u32 + 1) * 2 <= p.capacity => {
             let i = p.labels.len() as u32;
-            p.labels.push(stage);
+            p.labels.push((stage, kernel));
             Some(wgpu::ComputePassTimestampWrites {
                 query_set: &p.queries,
                 beginning_of_pass_write_index: Some(2 * i),
@@ -301,15 +302,27 @@ fn timestamps<'a>(
     }
 }
 
+/// GPU time of one kernel's dispatches within one stage, from timestamp queries.
+#[derive(Clone, Debug, PartialEq)]
+pub struct KernelTime {
+    pub stage: &'static str,
+    /// The kernel's name in `Kernels` (its WGSL file's stem, or the stem and the variant).
+    pub kernel: &'static str,
+    pub ms: f64,
+    pub dispatches: u32,
+}
+
 /// Timestamp queries around every pass, resolved per submission.
 #[derive(Debug)]
 struct Profiler {
     queries: wgpu::QuerySet,
     capacity: u32,
-    /// Stage name of every recorded (begin, end) pair, in query order.
-    labels: Vec<&'static str>,
+    /// (Stage, kernel) of every recorded (begin, end) pair, in query order.
+    labels: Vec<(&'static str, &'static str)>,
     /// Durations per stage name in milliseconds, accumulated over resolved submissions.
     totals: Vec<(&'static str, f64)>,
+    /// The same per kernel within a stage.
+    kernels: Vec<KernelTime>,
 }
 
 const PROFILER_CAPACITY: u32 = 512;
@@ -336,6 +349,7 @@ impl Recorder {
             capacity: PROFILER_CAPACITY,
             labels: Vec::new(),
             totals: Vec::new(),
+            kernels: Vec::new(),
         });
         Self { encoder, profiler }
     }
@@ -374,7 +388,7 @@ impl Recorder {
         kernel: &Kernel,
         bind: &wgpu::BindGroup,
     ) -> wgpu::ComputePass<'_> {
-        let timestamp_writes = timestamps(&mut self.profiler, stage);
+        let timestamp_writes = timestamps(&mut self.profiler, stage, kernel.name);
         let mut pass = self.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some(stage),
             timestamp_writes,
@@ -419,11 +433,15 @@ impl Recorder {
         if let (Some(p), Some((n, _, staging))) = (&mut self.profiler, resolve) {
             let stamps: Vec<u64> = map_and_read(ctx, &staging, n as usize * 8)?;
             let period = f64::from(ctx.queue.get_timestamp_period());
-            for (i, stage) in p.labels.drain(..).enumerate() {
+            for (i, (stage, kernel)) in p.labels.drain(..).enumerate() {
                 let ms = stamps[2 * i + 1].saturating_sub(stamps[2 * i]) as f64 * period * 1e-6;
                 match p.totals.iter_mut().find(|(s, _)| *s == stage) {
                     Some((_, t)) => *t += ms,
                     None => p.totals.push((stage, ms)),
+                }
+                match p.kernels.iter_mut().find(|k| k.stage == stage && k.kernel == kernel) {
+                    Some(k) => (k.ms, k.dispatches) = (k.ms + ms, k.dispatches + 1),
+                    None => p.kernels.push(KernelTime { stage, kernel, ms, dispatches: 1 }),
                 }
             }
         } else {
@@ -435,6 +453,11 @@ impl Recorder {
     /// Milliseconds per stage (in first-recorded order), when profiling.
     pub fn stage_times(&self) -> Option<Vec<(&'static str, f64)>> {
         self.profiler.as_ref().map(|p| p.totals.clone())
+    }
+
+    /// Milliseconds per kernel within each stage (in first-recorded order), when profiling.
+    pub fn kernel_times(&self) -> Option<Vec<KernelTime>> {
+        self.profiler.as_ref().map(|p| p.kernels.clone())
     }
 }
 

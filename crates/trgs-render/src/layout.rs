@@ -420,6 +420,8 @@ pub const SORT_ITEMS_WIDE: u32 = 256;
 /// instead of 8 and the tile indices of a 256x192 or 512x384 frame in 2 instead of 3. Each thread
 /// keeps one 16-bit counter per digit (SORT_PACKED words).
 pub const SORT_RADIX_BITS: u32 = 6;
+/// Entries per workgroup of `depth_order_counts` (256 threads, four entries each).
+pub const DEPTH_COUNTS_BLOCK: u32 = 1024;
 pub const SORT_RADIX: u32 = 1 << SORT_RADIX_BITS;
 pub const SORT_PACKED: u32 = SORT_RADIX / 2;
 pub const SORT_PACKED_VECS: u32 = SORT_PACKED / 4;
@@ -501,6 +503,7 @@ pub fn prelude() -> String {
         ("GATHER_ZERO", GATHER_ZERO),
         ("DEPTH_KEY_BITS", trgs_core::reference::DEPTH_KEY_BITS),
         ("CULL_VIEWS", CULL_VIEWS),
+        ("DEPTH_COUNTS_BLOCK", DEPTH_COUNTS_BLOCK),
     ];
     for (name, v) in consts_u32 {
         s.push_str(&format!("const {name}: u32 = {v}u;\n"));

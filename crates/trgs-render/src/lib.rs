@@ -53,6 +53,7 @@ pub use frame::{
     DepthOrderIntermediates, Frame, FrameImages, Layer, LayerBuffers, PlaneImages, ViewBuffers,
     ViewIntermediates,
 };
+pub use gpu::KernelTime;
 pub use gpu_error::GpuError;
 pub use layer_grads::{LayerGrads, LayerGradsError};
 pub use renderer::{RenderError, RenderOptions, Renderer};

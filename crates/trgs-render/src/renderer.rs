@@ -442,7 +442,7 @@ impl Renderer {
             );
         }
         rec.submit_and_wait(ctx)?;
-        frame.finish(views, binning, has_pass, Some(rays), rec.stage_times());
+        frame.finish(views, binning, has_pass, Some(rays), &rec);
         Ok(())
     }
 

@@ -314,3 +314,39 @@ fn partial_tiles_match_reference() {
     // holds pixels on both sides of the bottom edge.
     check_scene("93x70", SceneSpec { width: 93, height: 70, ..spec(108, 1500, 2, 35.0) }, None);
 }
+
+#[test]
+fn profiled_frame_times_each_kernel_within_its_stage() {
+    let ctx = ctx(TileLayout::FourRowsPerThread);
+    if !ctx.capabilities.timestamps {
+        eprintln!("no timestamp queries on this adapter: nothing to time");
+        return;
+    }
+    let scene = random_scene(&spec(110, 1500, 1, 25.0));
+    let g32: Gaussians<f32> = scene.gaussians.cast();
+    let gpu_scene = GpuScene::upload(&ctx, &g32, &scene.planes).expect("valid scene");
+    let renderer = Renderer::new(&ctx);
+    let plain = renderer.render(&gpu_scene, &scene.camera, &RenderOptions::default());
+    let options = RenderOptions { profile: true, ..Default::default() };
+    let profiled = renderer.render(&gpu_scene, &scene.camera, &options).expect("render");
+    // Timing changes nothing drawn.
+    let (a, b) = (plain.expect("render").read_images(&ctx), profiled.read_images(&ctx));
+    assert_eq!(a.expect("readback").color.data, b.expect("readback").color.data);
+    let stages = profiled.stage_times().expect("profiled");
+    let kernels = profiled.kernel_times().expect("profiled");
+    for &(stage, ms) in stages {
+        let sum: f64 = kernels.iter().filter(|k| k.stage == stage).map(|k| k.ms).sum();
+        assert!((sum - ms).abs() <= 1e-9 * ms.max(1.0), "{stage}: kernels {sum} ms, stage {ms}");
+    }
+    let find = |stage: &str, kernel: &str| {
+        kernels.iter().find(|k| k.stage == stage && k.kernel == kernel).map(|k| k.dispatches)
+    };
+    // The depth order: its compaction, five radix passes of count and scatter, its counts.
+    let passes =
+        trgs_core::reference::DEPTH_KEY_BITS.div_ceil(trgs_render::layout::SORT_RADIX_BITS);
+    assert_eq!(find("depth_order", "depth_order_compact"), Some(1));
+    assert_eq!(find("depth_order", "sort_count"), Some(passes));
+    assert_eq!(find("depth_order", "sort_scatter"), Some(passes));
+    assert_eq!(find("depth_order", "depth_order_counts"), Some(1));
+    assert_eq!(find("rasterize_reflection", "rasterize_reflection"), Some(1));
+}

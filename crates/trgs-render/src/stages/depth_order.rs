@@ -16,7 +16,7 @@ use super::sort::{self, KeyList, digits};
 use super::tile_counts::DepthEntries;
 use super::{ItemCount, Stage, prefix_sum};
 use crate::gpu::{self, BufferPool, Recorder, grid_1d};
-use crate::layout::ScanParams;
+use crate::layout::{DEPTH_COUNTS_BLOCK, ScanParams};
 use trgs_core::reference::DEPTH_KEY_BITS;
 
 /// The sorted entries and their count.
@@ -69,7 +69,7 @@ pub fn record(
     );
     rec.dispatch("depth_order", k, &bind, grid_1d(words.div_ceil(256)));
     // The entries fill the first slots of the capacity: spread the workgroups over them.
-    let groups = grid_1d(capacity.div_ceil(256));
+    let groups = grid_1d(capacity.div_ceil(DEPTH_COUNTS_BLOCK));
     let spread = gpu::spread_step(groups);
     let block = gpu::params(
         s.ctx,

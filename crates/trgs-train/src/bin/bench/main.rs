@@ -164,8 +164,9 @@ struct PlaneCost {
     with_ms: f64,
     ratio: f64,
     pairs: usize,
-    /// Median GPU ms per stage, without and with the plane (profiled frames alternate too).
-    stages: Vec<(&'static str, f64, f64)>,
+    /// Median GPU ms per kernel ("stage / kernel"), without and with the plane (profiled
+    /// frames alternate too).
+    kernels: Vec<(String, f64, f64)>,
 }
 
 /// Median GPU time of each stage over `reps` profiled frames.
@@ -177,28 +178,30 @@ fn stage_medians(
     reps: usize,
     frame: &mut Frame,
 ) -> Result<Vec<(&'static str, f64)>> {
-    let mut all = stage_medians_alternating(renderer, scene, camera, &[options], reps, frame)?;
+    let stages = |f: &Frame| f.stage_times().unwrap_or_default().to_vec();
+    let mut all = medians_alternating(renderer, scene, camera, &[options], reps, frame, stages)?;
     Ok(all.pop().unwrap_or_default())
 }
 
-/// Per-stage medians of each of `options`, profiled in turns (each rep renders every option once,
-/// starting from a different one each time), so that the machine's drift hits all alike.
-fn stage_medians_alternating(
+/// Medians of the timings that `timings` takes from a profiled frame, for each of `options`,
+/// profiled in turns (each rep renders every option once, starting from a different one each
+/// time), so that the machine's drift hits all alike.
+fn medians_alternating<K: PartialEq + Clone>(
     renderer: &Renderer,
     scene: &GpuScene,
     camera: &trgs_core::scene::Camera,
     options: &[&RenderOptions],
     reps: usize,
     frame: &mut Frame,
-) -> Result<Vec<Vec<(&'static str, f64)>>> {
-    type Samples = Vec<(&'static str, Vec<f64>)>;
-    let mut samples: Vec<Samples> = vec![Vec::new(); options.len()];
+    timings: impl Fn(&Frame) -> Vec<(K, f64)>,
+) -> Result<Vec<Vec<(K, f64)>>> {
+    let mut samples: Vec<Vec<(K, Vec<f64>)>> = vec![Vec::new(); options.len()];
     for rep in 0..reps {
         for k in 0..options.len() {
             let which = (rep + k) % options.len();
             let profiled = RenderOptions { profile: true, ..options[which].clone() };
             renderer.render_into(scene, camera, &profiled, frame)?;
-            for &(name, ms) in frame.stage_times().unwrap_or_default() {
+            for (name, ms) in timings(frame) {
                 match samples[which].iter_mut().find(|s| s.0 == name) {
                     Some(s) => s.1.push(ms),
                     None => samples[which].push((name, vec![ms])),
@@ -249,16 +252,21 @@ fn plane_cost(
         with.push(t[1]);
         ratios.push(t[1] / t[0]);
     }
+    let by_kernel = |f: &Frame| {
+        let times = f.kernel_times().unwrap_or_default();
+        times.iter().map(|k| (format!("{} / {}", k.stage, k.kernel), k.ms)).collect()
+    };
+    let options = [&off, &on];
     let medians =
-        stage_medians_alternating(renderer, &scene, &camera, &[&off, &on], pairs, &mut frame)?;
+        medians_alternating(renderer, &scene, &camera, &options, pairs, &mut frame, by_kernel)?;
     let (base, plane) = (&medians[0], &medians[1]);
-    let stages = plane
+    let kernels = plane
         .iter()
-        .map(|&(n, w)| (n, base.iter().find(|b| b.0 == n).map_or(0.0, |b| b.1), w))
+        .map(|(n, w)| (n.clone(), base.iter().find(|b| &b.0 == n).map_or(0.0, |b| b.1), *w))
         .collect();
     Ok(PlaneCost {
         density,
-        stages,
+        kernels,
         without_ms: median(without),
         with_ms: median(with),
         ratio: median(ratios),
@@ -467,8 +475,8 @@ fn main() -> Result<()> {
             "plane cost, {density:?} 256x192 100k: {:.1} ms without, {:.1} ms with, median pair ratio {:.3}x over {pairs} pairs",
             c.without_ms, c.with_ms, c.ratio
         );
-        for (n, a, b) in &c.stages {
-            println!("    {n:22} {a:8.2} -> {b:8.2} ms GPU");
+        for (n, a, b) in &c.kernels {
+            println!("    {n:42} {a:8.2} -> {b:8.2} ms GPU");
         }
         costs.push(c);
     }

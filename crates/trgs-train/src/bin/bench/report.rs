@@ -121,6 +121,23 @@ pub fn report(ctx: &GpuContext, m: &Measured<'_>, args: &Args) -> String {
                 c.ratio
             );
         }
+        for c in costs {
+            let _ = writeln!(
+                s,
+                "\nWhere the plane's time goes, {} room: median GPU ms of each kernel within its \
+                 stage over {} profiled frames of each kind, in turns.\n",
+                density_name(c.density),
+                c.pairs
+            );
+            let _ = writeln!(s, "| stage / kernel | without | with | added |");
+            let _ = writeln!(s, "|---|---:|---:|---:|");
+            let (mut without, mut with) = (0.0, 0.0);
+            for (name, a, b) in &c.kernels {
+                let _ = writeln!(s, "| {name} | {a:.2} | {b:.2} | {:+.2} |", b - a);
+                (without, with) = (without + a, with + b);
+            }
+            let _ = writeln!(s, "| sum | {without:.2} | {with:.2} | {:+.2} |", with - without);
+        }
     }
     if !rows.is_empty() {
         let _ = writeln!(s, "\n### Stage breakdown (GPU ms, median per stage)\n");
