@@ -64,9 +64,9 @@ fn main(
             data[base + k] = before + local[k];
         }
     }
-    // Past 65535 blocks the grid is 2D and its last row has padding blocks without values;
-    // their index is past the end of `block_sums`, where a clamped write could land on a real
-    // total.
+    // Past 65535 blocks the grid is 2D and its last row of blocks has padding blocks without
+    // values (with a spread, whichever row of workgroups takes that row); their index is past
+    // the end of `block_sums`, where a clamped write could land on a real total.
     if lid == SCAN_THREADS - 1u && block < params.blocks {
         block_sums[block] = sums[SCAN_THREADS - 1u];
     }

@@ -238,7 +238,7 @@ impl Frame {
         binning: Binning,
         has_pass: Vec<bool>,
         rays: Option<crate::stages::compose::RayBuffers>,
-        rec: &crate::gpu::Recorder,
+        rec: &gpu::Recorder,
     ) {
         self.views = views;
         self.binning = Some(binning);

@@ -2,8 +2,14 @@
 //! it, so that code relying on zeroed memory fails in tests), readback, compute kernels with their
 //! bind groups, and a recorder that puts every dispatch in its own labelled pass with optional
 //! timestamp queries.
+mod grid;
+mod profiler;
+
 use crate::GpuContext;
 pub use crate::gpu_error::{ErrorScopes, GpuError, scoped};
+pub use grid::{grid_1d, spread_block, spread_step};
+pub use profiler::KernelTime;
+use profiler::Profiler;
 use std::collections::HashMap;
 
 /// The byte pattern fresh buffers get in poison mode: NaN as f32, 0xffffffff as u32.
@@ -247,86 +253,6 @@ pub fn range(buffer: &wgpu::Buffer, offset: u64, size: u64) -> wgpu::BindingReso
     })
 }
 
-/// Workgroup counts for `groups` workgroups of a 1D dispatch, split into 2D past the 65,535 limit
-/// (the kernels rebuild the linear index with `linear_index`).
-pub fn grid_1d(groups: u32) -> [u32; 3] {
-    const MAX: u32 = crate::layout::MAX_WORKGROUPS;
-    if groups <= MAX { [groups, 1, 1] } else { [MAX, groups.div_ceil(MAX), 1] }
-}
-
-/// The step of the workgroup permutation of a dispatch of `groups` (`spread_block` in
-/// shaders/shared/common.wgsl): the step coprime to the spread dimension's size n (the rows of a
-/// split 1D dispatch, else its workgroups) nearest above n / golden ratio, so that every run of
-/// consecutive workgroups takes blocks spread over the whole range.
-///
-/// Why: lavapipe hands each of its threads one contiguous run of a dispatch's workgroups
-/// (workgroups / threads each, no stealing), so a dispatch that covers a capacity while its
-/// count is known on the GPU only, all its work in the first blocks, ran on one thread while the
-/// others passed over empty blocks (the depth order's sort at 100k Gaussians with a plane: 6 of
-/// 13 workgroups full, all in the first thread's run).
-pub fn spread_step(groups: [u32; 3]) -> u32 {
-    let n = if groups[1] > 1 { groups[1] } else { groups[0] };
-    if n <= 2 {
-        return 1;
-    }
-    let gcd = |mut a: u32, mut b: u32| {
-        while b != 0 {
-            (a, b) = (b, a % b);
-        }
-        a
-    };
-    let mut step = (f64::from(n) / 1.618_033_988_749_895) as u32;
-    while gcd(step, n) != 1 {
-        step += 1;
-    }
-    step
-}
-
-/// The timestamp writes of the next pass, while the query set has room.
-fn timestamps<'a>(
-    profiler: &'a mut Option<Profiler>,
-    stage: &'static str,
-    kernel: &'static str,
-) -> Option<wgpu::ComputePassTimestampWrites<'a>> {
-    match profiler {
-        Some(p) if (p.labels.len() as u32 + 1) * 2 <= p.capacity => {
-            let i = p.labels.len() as u32;
-            p.labels.push((stage, kernel));
-            Some(wgpu::ComputePassTimestampWrites {
-                query_set: &p.queries,
-                beginning_of_pass_write_index: Some(2 * i),
-                end_of_pass_write_index: Some(2 * i + 1),
-            })
-        }
-        _ => None,
-    }
-}
-
-/// GPU time of one kernel's dispatches within one stage, from timestamp queries.
-#[derive(Clone, Debug, PartialEq)]
-pub struct KernelTime {
-    pub stage: &'static str,
-    /// The kernel's name in `Kernels` (its WGSL file's stem, or the stem and the variant).
-    pub kernel: &'static str,
-    pub ms: f64,
-    pub dispatches: u32,
-}
-
-/// Timestamp queries around every pass, resolved per submission.
-#[derive(Debug)]
-struct Profiler {
-    queries: wgpu::QuerySet,
-    capacity: u32,
-    /// (Stage, kernel) of every recorded (begin, end) pair, in query order.
-    labels: Vec<(&'static str, &'static str)>,
-    /// Durations per stage name in milliseconds, accumulated over resolved submissions.
-    totals: Vec<(&'static str, f64)>,
-    /// The same per kernel within a stage.
-    kernels: Vec<KernelTime>,
-}
-
-const PROFILER_CAPACITY: u32 = 512;
-
 /// Records dispatches into one command encoder.
 #[derive(Debug)]
 pub struct Recorder {
@@ -340,17 +266,7 @@ impl Recorder {
         let encoder = ctx
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) });
-        let profiler = (profile && ctx.capabilities.timestamps).then(|| Profiler {
-            queries: ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("trgs.profiler.queries"),
-                ty: wgpu::QueryType::Timestamp,
-                count: PROFILER_CAPACITY,
-            }),
-            capacity: PROFILER_CAPACITY,
-            labels: Vec::new(),
-            totals: Vec::new(),
-            kernels: Vec::new(),
-        });
+        let profiler = (profile && ctx.capabilities.timestamps).then(|| Profiler::new(ctx));
         Self { encoder, profiler }
     }
 
@@ -388,7 +304,8 @@ impl Recorder {
         kernel: &Kernel,
         bind: &wgpu::BindGroup,
     ) -> wgpu::ComputePass<'_> {
-        let timestamp_writes = timestamps(&mut self.profiler, stage, kernel.name);
+        let timestamp_writes =
+            self.profiler.as_mut().and_then(|p| p.timestamp_writes(stage, kernel.name));
         let mut pass = self.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some(stage),
             timestamp_writes,
@@ -401,28 +318,7 @@ impl Recorder {
     /// Submit the recorded work and wait for it; with profiling, add this submission's stage
     /// times. Leaves a fresh encoder for what follows.
     pub fn submit_and_wait(&mut self, ctx: &GpuContext) -> Result<(), GpuError> {
-        let resolve = self.profiler.as_ref().and_then(|p| {
-            let n = p.labels.len() as u32 * 2;
-            (n > 0).then(|| {
-                let resolved = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("trgs.profiler.resolved"),
-                    size: u64::from(n) * 8,
-                    usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                    mapped_at_creation: false,
-                });
-                let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("trgs.profiler.staging"),
-                    size: u64::from(n) * 8,
-                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                });
-                (n, resolved, staging)
-            })
-        });
-        if let (Some(p), Some((n, resolved, staging))) = (&self.profiler, &resolve) {
-            self.encoder.resolve_query_set(&p.queries, 0..*n, resolved, 0);
-            self.encoder.copy_buffer_to_buffer(resolved, 0, staging, 0, u64::from(*n) * 8);
-        }
+        let staging = self.profiler.as_ref().and_then(|p| p.record_resolve(ctx, &mut self.encoder));
         let encoder = std::mem::replace(
             &mut self.encoder,
             ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -430,20 +326,8 @@ impl Recorder {
             }),
         );
         ctx.queue.submit([encoder.finish()]);
-        if let (Some(p), Some((n, _, staging))) = (&mut self.profiler, resolve) {
-            let stamps: Vec<u64> = map_and_read(ctx, &staging, n as usize * 8)?;
-            let period = f64::from(ctx.queue.get_timestamp_period());
-            for (i, (stage, kernel)) in p.labels.drain(..).enumerate() {
-                let ms = stamps[2 * i + 1].saturating_sub(stamps[2 * i]) as f64 * period * 1e-6;
-                match p.totals.iter_mut().find(|(s, _)| *s == stage) {
-                    Some((_, t)) => *t += ms,
-                    None => p.totals.push((stage, ms)),
-                }
-                match p.kernels.iter_mut().find(|k| k.stage == stage && k.kernel == kernel) {
-                    Some(k) => (k.ms, k.dispatches) = (k.ms + ms, k.dispatches + 1),
-                    None => p.kernels.push(KernelTime { stage, kernel, ms, dispatches: 1 }),
-                }
-            }
+        if let (Some(p), Some(staging)) = (&mut self.profiler, staging) {
+            p.add_resolved(ctx, &staging)?;
         } else {
             wait_for_gpu(ctx, "a recorded batch of passes")?;
         }
@@ -452,7 +336,7 @@ impl Recorder {
 
     /// Milliseconds per stage (in first-recorded order), when profiling.
     pub fn stage_times(&self) -> Option<Vec<(&'static str, f64)>> {
-        self.profiler.as_ref().map(|p| p.totals.clone())
+        self.profiler.as_ref().map(Profiler::stage_times)
     }
 
     /// Milliseconds per kernel within each stage (in first-recorded order), when profiling.
@@ -492,54 +376,5 @@ impl BufferPool {
     /// Total bytes held.
     pub fn bytes(&self) -> u64 {
         self.buffers.values().map(wgpu::Buffer::size).sum()
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// `spread_block` of shaders/shared/common.wgsl, workgroup by workgroup in lavapipe's order
-    /// (x fastest).
-    fn spread_blocks(groups: [u32; 3]) -> Vec<u32> {
-        let step = spread_step(groups);
-        let (nx, ny) = (groups[0], groups[1]);
-        (0..ny)
-            .flat_map(|y| (0..nx).map(move |x| (x, y)))
-            .map(|(x, y)| if ny == 1 { (x * step) % nx } else { ((y * step) % ny) * nx + x })
-            .collect()
-    }
-
-    #[test]
-    fn spread_is_a_permutation_that_deals_the_first_blocks_out_evenly() {
-        let mut shapes: Vec<[u32; 3]> = (1..=3000).map(grid_1d).collect();
-        shapes.extend([[65_535, 1, 1], [7, 3, 1], [5, 40, 1], [3, 65_535, 1]]);
-        for groups in shapes {
-            let blocks = spread_blocks(groups);
-            let n = blocks.len();
-            let mut seen = vec![false; n];
-            for &b in &blocks {
-                assert!(!std::mem::replace(&mut seen[b as usize], true), "{groups:?}: {b} twice");
-            }
-            // Lavapipe gives each of its threads one run of n / threads workgroups: with only
-            // the first `full` blocks doing work, every run gets close to its share of them.
-            if groups[1] > 1 || n < 64 {
-                continue;
-            }
-            for threads in [2, 3, 4, 8, 16] {
-                let run = n / threads;
-                for full in [n / 7, n / 3, n / 2, (2 * n) / 3] {
-                    for chunk in blocks.chunks_exact(run) {
-                        let got = chunk.iter().filter(|&&b| (b as usize) < full).count();
-                        let share = (full * run) as f64 / n as f64;
-                        assert!(
-                            (got as f64 - share).abs() <= 0.2 * share + 3.0,
-                            "{n} workgroups, {threads} threads, {full} full: {got} in a run, \
-                             share {share:.1}"
-                        );
-                    }
-                }
-            }
-        }
     }
 }

@@ -285,6 +285,11 @@ gpu_struct! {
     }
 }
 
+/// Entries per workgroup of `depth_order_counts`: its 256 threads take DEPTH_COUNTS_BLOCK / 256
+/// each.
+pub const DEPTH_COUNTS_BLOCK: u32 = 1024;
+const _: () = assert!(DEPTH_COUNTS_BLOCK.is_multiple_of(256), "whole rounds of 256 threads");
+
 /// Pixels per thread of `loss_sums` (the losses' readback is 32 bytes per strip).
 pub const LOSS_STRIP: u32 = 64;
 
@@ -420,8 +425,6 @@ pub const SORT_ITEMS_WIDE: u32 = 256;
 /// instead of 8 and the tile indices of a 256x192 or 512x384 frame in 2 instead of 3. Each thread
 /// keeps one 16-bit counter per digit (SORT_PACKED words).
 pub const SORT_RADIX_BITS: u32 = 6;
-/// Entries per workgroup of `depth_order_counts` (256 threads, four entries each).
-pub const DEPTH_COUNTS_BLOCK: u32 = 1024;
 pub const SORT_RADIX: u32 = 1 << SORT_RADIX_BITS;
 pub const SORT_PACKED: u32 = SORT_RADIX / 2;
 pub const SORT_PACKED_VECS: u32 = SORT_PACKED / 4;

@@ -275,7 +275,15 @@ impl Renderer {
         let offsets = pool.get(ctx, "trgs.depth_order.offsets", u64::from(entries.capacity) * 4);
         let order = depth_order::record(s, &mut rec, pool, &entries, &offsets);
         let in_order = ItemCount::OnGpu { counter: &order.entries, capacity: entries.capacity };
-        let total = prefix_sum::record(s, &mut rec, pool, "trgs.prefix_sum", &offsets, in_order);
+        let total = prefix_sum::record(
+            s,
+            &mut rec,
+            "prefix_sum",
+            pool,
+            "trgs.prefix_sum",
+            &offsets,
+            in_order,
+        );
         // [entries, (low word, carries) of each view's key total, key total]
         let words = 2 * specs.len() + 2;
         let totals_staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {

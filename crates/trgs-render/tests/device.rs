@@ -122,3 +122,32 @@ fn a_device_with_webgpu_default_limits_is_refused_by_name() {
     let text = err.to_string();
     assert!(text.contains("storage buffers") && text.contains("device_descriptor"), "{text}");
 }
+
+#[test]
+fn spread_block_in_wgsl_matches_its_twin_on_every_grid_shape() {
+    // The spread changes which workgroup takes which block, so the stage tests pass with any
+    // bijection: this checks the WGSL itself, including the rows of split dispatches (more than
+    // 65,535 workgroups), which no stage test reaches.
+    use trgs_render::gpu::{self, Kernel, Recorder, grid_1d, spread_block, spread_step};
+    use trgs_render::layout::ScanParams;
+    let ctx = GpuContext::new().expect("adapter");
+    let kernel = Kernel::new(&ctx, "spread_block_check", "spread_block_check.wgsl", &[]);
+    let shapes = [grid_1d(13), grid_1d(3000), [7, 3, 1], [4, 40, 1], [65_535, 3, 1]];
+    for groups in shapes {
+        let n = groups[0] * groups[1];
+        let spread = spread_step(groups);
+        assert_ne!(spread, 0, "{groups:?}: a shape that spreads");
+        let params = gpu::params(&ctx, "test.params", &ScanParams { spread, ..Default::default() });
+        let out = gpu::storage(&ctx, "test.blocks", u64::from(n) * 4);
+        let bind = kernel.bind(&ctx, &[params.as_entire_binding(), out.as_entire_binding()]);
+        let mut rec = Recorder::new(&ctx, "test.spread", false);
+        rec.dispatch("spread_block_check", &kernel, &bind, groups);
+        rec.submit_and_wait(&ctx).expect("GPU work");
+        let got: Vec<u32> = gpu::read_buffer(&ctx, &out, 0, n as usize).expect("readback");
+        let want: Vec<u32> = (0..groups[1])
+            .flat_map(|y| (0..groups[0]).map(move |x| [x, y]))
+            .map(|wid| spread_block(wid, groups, spread))
+            .collect();
+        assert!(got == want, "{groups:?}: the WGSL and its twin take different blocks");
+    }
+}

@@ -44,7 +44,7 @@ pub fn record(
     let label = "trgs.depth_order.slots";
     let slots = pool.get(s.ctx, label, u64::from(words.max(1)) * 4);
     rec.encoder.copy_buffer_to_buffer(&entries.present, 0, &slots, 0, u64::from(words) * 4);
-    let total = prefix_sum::record_bits(s, rec, pool, label, &slots, words);
+    let total = prefix_sum::record_bits(s, rec, "depth_order", pool, label, &slots, words);
     let bytes = u64::from(capacity.max(1)) * 4;
     let list = KeyList {
         keys: pool.get(s.ctx, "trgs.depth_order.keys", bytes),

@@ -30,8 +30,9 @@ pub struct Stage<'a> {
 #[derive(Clone, Copy, Debug)]
 pub enum ItemCount<'a> {
     Known(u32),
-    /// The first u32 of `counter`, known on the GPU only; the dispatches cover `capacity` and
-    /// their workgroups past the count return at once.
+    /// The first u32 of `counter`, known on the GPU only; the dispatches cover `capacity`, and
+    /// their blocks past the count return at once (spread over the workgroups:
+    /// [`ItemCount::spread`]).
     OnGpu {
         counter: &'a wgpu::Buffer,
         capacity: u32,

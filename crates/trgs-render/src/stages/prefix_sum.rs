@@ -6,43 +6,56 @@ use crate::gpu::{self, BufferPool, Kernel, Recorder, grid_1d};
 use crate::layout::ScanParams;
 
 /// Scan `count` values of `data` in place (a count known on the GPU only leaves the values past
-/// it untouched); returns the buffer whose first u32 is the total. `label` names the
-/// temporaries in `pool`.
+/// it untouched); returns the buffer whose first u32 is the total. `stage` names the dispatches
+/// in the stage timings (the stage the scan serves: the sorts' histograms are theirs), `label`
+/// the temporaries in `pool`.
+#[allow(clippy::too_many_arguments)]
 pub fn record(
     s: Stage<'_>,
     rec: &mut Recorder,
+    stage: &'static str,
     pool: &mut BufferPool,
     label: &str,
     data: &wgpu::Buffer,
     count: ItemCount<'_>,
 ) -> wgpu::Buffer {
-    scan_level(s, rec, pool, label, data, count, &s.kernels.prefix_sum, 0)
+    let scan = Scan { stage, label, kernel: &s.kernels.prefix_sum };
+    scan_level(s, rec, pool, &scan, data, count, 0)
 }
 
 /// Scan the set bits of `words` words of the bit mask `data` in place: each word becomes the
 /// number of bits set in the words before it. Returns the buffer whose first u32 is the total.
+#[allow(clippy::too_many_arguments)]
 pub fn record_bits(
     s: Stage<'_>,
     rec: &mut Recorder,
+    stage: &'static str,
     pool: &mut BufferPool,
     label: &str,
     data: &wgpu::Buffer,
     words: u32,
 ) -> wgpu::Buffer {
-    let count = ItemCount::Known(words);
-    scan_level(s, rec, pool, label, data, count, &s.kernels.prefix_sum_bits, 0)
+    let scan = Scan { stage, label, kernel: &s.kernels.prefix_sum_bits };
+    scan_level(s, rec, pool, &scan, data, ItemCount::Known(words), 0)
+}
+
+/// One scan's names and its first level's kernel (the levels above scan plain sums).
+struct Scan<'a> {
+    stage: &'static str,
+    label: &'a str,
+    kernel: &'a Kernel,
 }
 
 fn scan_level(
     s: Stage<'_>,
     rec: &mut Recorder,
     pool: &mut BufferPool,
-    label: &str,
+    scan: &Scan<'_>,
     data: &wgpu::Buffer,
     count: ItemCount<'_>,
-    scan: &Kernel,
     level: u32,
 ) -> wgpu::Buffer {
+    let label = scan.label;
     let capacity = count.capacity();
     let blocks = capacity.div_ceil(s.ctx.capabilities.block_width.scan_block());
     let sums = pool.get(s.ctx, &format!("{label}.block_sums{level}"), u64::from(blocks.max(1)) * 4);
@@ -55,22 +68,22 @@ fn scan_level(
         ScanParams { count: capacity, blocks, spread: count.spread(groups), ..Default::default() };
     let block = gpu::params(s.ctx, "trgs.prefix_sum.params", &params);
     count.write_into(rec, &block);
-    let bind = scan.bind(
+    let bind = scan.kernel.bind(
         s.ctx,
         &[block.as_entire_binding(), data.as_entire_binding(), sums.as_entire_binding()],
     );
-    rec.dispatch("prefix_sum", scan, &bind, groups);
+    rec.dispatch(scan.stage, scan.kernel, &bind, groups);
     if blocks == 1 {
         return sums;
     }
     let sums_count = ItemCount::Known(blocks);
-    let plain = &s.kernels.prefix_sum;
-    let total = scan_level(s, rec, pool, label, &sums, sums_count, plain, level + 1);
+    let sums_scan = Scan { kernel: &s.kernels.prefix_sum, ..*scan };
+    let total = scan_level(s, rec, pool, &sums_scan, &sums, sums_count, level + 1);
     let add = &s.kernels.prefix_sum_add;
     let bind = add.bind(
         s.ctx,
         &[block.as_entire_binding(), data.as_entire_binding(), sums.as_entire_binding()],
     );
-    rec.dispatch("prefix_sum", add, &bind, groups);
+    rec.dispatch(scan.stage, add, &bind, groups);
     total
 }

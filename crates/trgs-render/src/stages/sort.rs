@@ -64,7 +64,8 @@ pub fn record(
         );
         rec.dispatch(stage, count_k, &bind, groups);
         let columns = ItemCount::Known(num_blocks * SORT_RADIX);
-        prefix_sum::record(s, rec, pool, &format!("{label}.hist_scan"), &hist, columns);
+        let hist_label = format!("{label}.hist_scan");
+        prefix_sum::record(s, rec, stage, pool, &hist_label, &hist, columns);
         let scatter = &s.kernels.sort_scatter;
         let bind = scatter.bind(
             s.ctx,
