@@ -26,6 +26,8 @@ pub struct Kernels {
     pub rasterize_bwd: Kernel,
     pub rasterize_reflection_bwd: Kernel,
     pub project_bwd: Kernel,
+    /// `project_bwd` of a mirrored view: adds to the Gaussians' gradients (BWD_ADD).
+    pub project_bwd_add: Kernel,
 }
 
 /// Defines of the accumulating (adjoint) kernels for the device's features: float atomics or the
@@ -124,6 +126,12 @@ impl Kernels {
                 &replay,
             ),
             project_bwd: Kernel::new(ctx, "project_bwd", "project_bwd.wgsl", &acc),
+            project_bwd_add: Kernel::new(
+                ctx,
+                "project_bwd_add",
+                "project_bwd.wgsl",
+                &[acc.as_slice(), &["ADD_GRADIENTS"]].concat(),
+            ),
         }
     }
 }

@@ -375,7 +375,8 @@ pub const PROJECTED_GRAD_FLOATS: u32 = 12;
 /// (9), the translation (3), the centre (3), one pad.
 pub const VIEW_GRAD_FLOATS: u32 = 16;
 /// `ProjectParams::bwd_mode` bits. ADD: add into the Gaussian gradients (a mirrored view) instead
-/// of writing them (the primary view writes every Gaussian's, zero for culled ones). NO_GAUSSIANS:
+/// of writing them (the primary view writes every Gaussian's, zero for culled ones); it picks
+/// `project_bwd`'s ADD_GRADIENTS variant. NO_GAUSSIANS:
 /// leave them alone (stage 2's stop-gradient). VIEW: sum the view's gradient.
 pub const BWD_ADD: u32 = 1;
 pub const BWD_NO_GAUSSIANS: u32 = 2;

@@ -3,13 +3,14 @@
 use super::Stage;
 use super::project::{Candidates, WORK_STRIDE};
 use crate::gpu::{self, Recorder, range};
-use crate::layout::{PROJECTED_GRAD_FLOATS, ProjectParams, ProjectedGaussian};
+use crate::layout::{BWD_ADD, PROJECTED_GRAD_FLOATS, ProjectParams, ProjectedGaussian};
 use crate::scene::{GpuScene, SceneGradBuffers};
 
 const PROJECTED: u64 = std::mem::size_of::<ProjectedGaussian>() as u64;
 const PROJECTED_GRAD: u64 = PROJECTED_GRAD_FLOATS as u64 * 4;
 
-/// Backpropagate one view: `base` is the view's forward parameter block, `mode` its BWD_* bits.
+/// Backpropagate one view: `base` is the view's forward parameter block, `mode` its BWD_* bits
+/// (BWD_ADD picks the kernel variant that adds to the gradients, the others go to the kernel).
 #[allow(clippy::too_many_arguments)]
 pub fn record(
     s: Stage<'_>,
@@ -23,7 +24,7 @@ pub fn record(
     out: &SceneGradBuffers,
     view_grads: wgpu::BindingResource<'_>,
 ) {
-    let k = &s.kernels.project_bwd;
+    let k = if mode & BWD_ADD != 0 { &s.kernels.project_bwd_add } else { &s.kernels.project_bwd };
     let coeffs = u64::from(scene.sh_coeffs());
     for (chunk, (first, count)) in scene.chunks().into_iter().enumerate() {
         let [list, work] = candidates.chunk(chunk, first, count);
