@@ -13,6 +13,7 @@
 #include "shared/splat.wgsl"
 #include "shared/accumulate.wgsl"
 #include "shared/tile_rows.wgsl"
+#include "shared/block_walk.wgsl"
 
 @group(0) @binding(0) var<storage, read> params: RasterParams;
 @group(0) @binding(1) var<storage, read> projected: array<ProjectedGaussian>;
@@ -36,6 +37,10 @@ var<workgroup> s_conic: array<vec4<f32>, TILE_PIXELS>;
 var<workgroup> s_color: array<vec4<f32>, TILE_PIXELS>;
 var<workgroup> s_index: array<u32, TILE_PIXELS>;
 var<workgroup> max_last: atomic<u32>;
+#ifdef BLOCK_WALK
+// The blocks of the tile (8 columns by ROWS rows: 8 threads' pixels) each entry can reach.
+var<workgroup> s_blocks: array<u32, TILE_PIXELS>;
+#endif
 
 // One pixel's replay: what it read at the start and what it carries from entry to entry.
 struct Pixel {
@@ -89,6 +94,20 @@ fn start_pixel(x: u32, y: u32) -> Pixel {
     return px;
 }
 
+// The batch entry this subgroup replays before entry j (TILE_PIXELS when there is none): with the
+// block walk the previous one that can reach the subgroup's block (shared/block_walk.wgsl: the
+// others have alpha -1 at all its pixels, so replaying them changes nothing), else j - 1.
+fn entry_before(reach: vec2<u32>, j: u32) -> u32 {
+    if j == 0u {
+        return TILE_PIXELS;
+    }
+#ifdef BLOCK_WALK
+    return prev_entry(reach, j - 1u);
+#else
+    return j - 1u;
+#endif
+}
+
 @compute @workgroup_size(TILE_SIZE, TILE_SIZE / ROWS)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let x = wid.x * TILE_SIZE + lid % TILE_SIZE;
@@ -113,6 +132,11 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
     // runs its own trip count; on a CPU adapter it is one SIMD vector).
     let sg_last = subgroup_max(my_last);
     let rounds = (last + TILE_PIXELS - 1u) / TILE_PIXELS;
+#ifdef BLOCK_WALK
+    let block = lid / 8u;
+    let corner = vec2<f32>(f32(wid.x * TILE_SIZE) + 0.5, f32(wid.y * TILE_SIZE) + 0.5);
+    let one_block = in_one_block(block);
+#endif
     for (var rr = 0u; rr < rounds; rr++) {
         let r = rounds - 1u - rr;
         workgroupBarrier();
@@ -126,14 +150,25 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
                 s_conic[slot] = g.conic;
                 s_color[slot] = g.color;
                 s_index[slot] = gi;
+#ifdef BLOCK_WALK
+                s_blocks[slot] = block_reach(g.conic, g.mean2d, corner, vec2<u32>(8u, ROWS));
+#endif
             }
         }
         workgroupBarrier();
         let batch = min(TILE_PIXELS, last - r * TILE_PIXELS);
         // Entries [0, mine) of this batch come before the subgroup's last.
         let mine = min(batch, sg_last - min(sg_last, r * TILE_PIXELS));
-        for (var jj = batch - mine; jj < batch; jj++) {
-            let j = batch - 1u - jj;
+#ifdef BLOCK_WALK
+        let reach = reaching(batch, block, one_block);
+#else
+        let reach = vec2<u32>(0u);
+#endif
+        var j = entry_before(reach, mine);
+        loop {
+            if j >= batch {
+                break;
+            }
             let li = r * TILE_PIXELS + j;
             let mean = s_mean[j];
             let conic = s_conic[j];
@@ -186,6 +221,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
             if subgroup_any(blended) {
                 accumulate_subgroup12(PROJECTED_GRAD_FLOATS * s_index[j], g);
             }
+            j = entry_before(reach, j);
         }
     }
 }

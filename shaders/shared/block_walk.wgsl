@@ -58,6 +58,14 @@ fn next_in(lo: u32, hi: u32, j: u32) -> u32 {
     return select(in_hi, firstTrailingBit(m_lo), m_lo != 0u);
 }
 
+// The last set bit at or before j (j < 64) of the 64-bit mask (lo, hi), or 64 when there is none.
+fn prev_in(lo: u32, hi: u32, j: u32) -> u32 {
+    let m_hi = select(0u, hi & (0xffffffffu >> (63u - max(j, 32u))), j >= 32u);
+    let m_lo = lo & select(0xffffffffu >> (31u - min(j, 31u)), 0xffffffffu, j >= 32u);
+    let in_lo = select(64u, firstLeadingBit(m_lo), m_lo != 0u);
+    return select(in_lo, 32u + firstLeadingBit(m_hi), m_hi != 0u);
+}
+
 // Whether this invocation's subgroup lies in one block (the walk may skip only then).
 fn in_one_block(block: u32) -> bool {
     return subgroupAll(subgroupBroadcastFirst(block) == block);
@@ -68,6 +76,12 @@ fn in_one_block(block: u32) -> bool {
 // the loads of the entry stay single loads instead of one per lane.
 fn next_entry(reach: vec2<u32>, j: u32) -> u32 {
     return subgroupBroadcastFirst(next_in(reach.x, reach.y, j));
+}
+
+// The walk's previous entry at or before j in `reach`, or 64: the backward replays a batch from
+// its last entry to its first (uniform as `next_entry` is).
+fn prev_entry(reach: vec2<u32>, j: u32) -> u32 {
+    return subgroupBroadcastFirst(prev_in(reach.x, reach.y, j));
 }
 
 // The mask of the batch's entries (the first `batch` of `masks`) whose bit `block` is set, as

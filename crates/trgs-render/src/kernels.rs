@@ -118,7 +118,12 @@ impl Kernels {
             compose: Kernel::new(ctx, "compose", "compose.wgsl", &[]),
             compose_bwd: Kernel::new(ctx, "compose_bwd", "compose_bwd.wgsl", &acc),
             display: Kernel::new(ctx, "display", "display.wgsl", &[]),
-            rasterize_bwd: Kernel::new(ctx, "rasterize_bwd", "rasterize_bwd.wgsl", &replay),
+            rasterize_bwd: Kernel::new(
+                ctx,
+                "rasterize_bwd",
+                "rasterize_bwd.wgsl",
+                &[replay.as_slice(), walk].concat(),
+            ),
             rasterize_reflection_bwd: Kernel::new(
                 ctx,
                 "rasterize_reflection_bwd",
