@@ -94,20 +94,6 @@ fn start_pixel(x: u32, y: u32) -> Pixel {
     return px;
 }
 
-// The batch entry this subgroup replays before entry j (TILE_PIXELS when there is none): with the
-// block walk the previous one that can reach the subgroup's block (shared/block_walk.wgsl: the
-// others have alpha -1 at all its pixels, so replaying them changes nothing), else j - 1.
-fn entry_before(reach: vec2<u32>, j: u32) -> u32 {
-    if j == 0u {
-        return TILE_PIXELS;
-    }
-#ifdef BLOCK_WALK
-    return prev_entry(reach, j - 1u);
-#else
-    return j - 1u;
-#endif
-}
-
 @compute @workgroup_size(TILE_SIZE, TILE_SIZE / ROWS)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let x = wid.x * TILE_SIZE + lid % TILE_SIZE;

@@ -11,6 +11,7 @@
 #include "shared/splat.wgsl"
 #include "shared/accumulate.wgsl"
 #include "shared/tile_rows.wgsl"
+#include "shared/block_walk.wgsl"
 
 @group(0) @binding(0) var<storage, read> params: RasterParams;
 @group(0) @binding(1) var<storage, read> projected: array<ProjectedGaussian>;
@@ -28,6 +29,10 @@
 // mean, conic with opacity, (colour, reflection intensity a), the Gaussian's index.
 var<workgroup> s_mean: array<vec2<f32>, TILE_PIXELS>;
 var<workgroup> s_conic: array<vec4<f32>, TILE_PIXELS>;
+#ifdef BLOCK_WALK
+// The blocks of the tile (8 columns by ROWS rows: 8 threads' pixels) each entry can reach.
+var<workgroup> s_blocks: array<u32, TILE_PIXELS>;
+#endif
 var<workgroup> s_color: array<vec4<f32>, TILE_PIXELS>;
 var<workgroup> s_index: array<u32, TILE_PIXELS>;
 var<workgroup> max_last: atomic<u32>;
@@ -82,6 +87,12 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
     // runs its own trip count; on a CPU adapter it is one SIMD vector).
     let sg_last = subgroup_max(my_last);
     let rounds = (last + TILE_PIXELS - 1u) / TILE_PIXELS;
+#ifdef BLOCK_WALK
+    let block = lid / 8u;
+    let tile_px = vec2<u32>(wid.x + params.tile_x0, wid.y + params.tile_y0) * TILE_SIZE;
+    let corner = vec2<f32>(tile_px) + 0.5;
+    let one_block = in_one_block(block);
+#endif
     for (var rr = 0u; rr < rounds; rr++) {
         let r = rounds - 1u - rr;
         workgroupBarrier();
@@ -95,14 +106,25 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
                 s_conic[slot] = g.conic;
                 s_color[slot] = vec4<f32>(g.color.xyz, g.reflection);
                 s_index[slot] = gi;
+#ifdef BLOCK_WALK
+                s_blocks[slot] = block_reach(g.conic, g.mean2d, corner, vec2<u32>(8u, ROWS));
+#endif
             }
         }
         workgroupBarrier();
         let batch = min(TILE_PIXELS, last - r * TILE_PIXELS);
         // Entries [0, mine) of this batch come before the subgroup's last.
         let mine = min(batch, sg_last - min(sg_last, r * TILE_PIXELS));
-        for (var jj = batch - mine; jj < batch; jj++) {
-            let j = batch - 1u - jj;
+#ifdef BLOCK_WALK
+        let reach = reaching(batch, block, one_block);
+#else
+        let reach = vec2<u32>(0u);
+#endif
+        var j = entry_before(reach, mine);
+        loop {
+            if j >= batch {
+                break;
+            }
             let li = r * TILE_PIXELS + j;
             let conic = s_conic[j];
             let mean = s_mean[j];
@@ -135,6 +157,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
             if subgroup_any(blended) {
                 accumulate_subgroup12(PROJECTED_GRAD_FLOATS * s_index[j], g);
             }
+            j = entry_before(reach, j);
         }
     }
 }

@@ -3,9 +3,10 @@
 // blocks of 8 threads' pixels, an entry's mask says which blocks it can reach, and a subgroup
 // lying in one block steps from one reaching entry to the next. On a CPU adapter a subgroup is a
 // SIMD vector, which leaves a loop together but runs a skipped branch's body anyway, so without
-// this it pays for every entry of the tile's list whether it reaches its pixels or not. Empty
-// without BLOCK_WALK; with it the including shader declares `s_blocks` (an entry's block mask
-// per batch slot).
+// this it pays for every entry of the tile's list whether it reaches its pixels or not. Without
+// BLOCK_WALK only `entry_before` is left, stepping to the previous entry; with it the including
+// shader declares `s_blocks` (an entry's block mask per batch slot). The forward passes step
+// ahead (`next_entry`), the backward ones back (`entry_before`).
 #ifdef BLOCK_WALK
 
 // Which blocks of a tile one Gaussian can reach (twin: reference::rasterize::block_reach): the
@@ -100,3 +101,18 @@ fn reaching(batch: u32, block: u32, one_block: bool) -> vec2<u32> {
     return m;
 }
 #endif
+
+// The batch entry a subgroup of a backward pass replays before entry j (TILE_PIXELS when there is
+// none): with the block walk the previous one that can reach the subgroup's block (the others
+// have alpha -1 at all its pixels, so replaying them changes nothing), else j - 1. `reach` is
+// `reaching`'s mask (any value without BLOCK_WALK).
+fn entry_before(reach: vec2<u32>, j: u32) -> u32 {
+    if j == 0u {
+        return TILE_PIXELS;
+    }
+#ifdef BLOCK_WALK
+    return prev_entry(reach, j - 1u);
+#else
+    return j - 1u;
+#endif
+}

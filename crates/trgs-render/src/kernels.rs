@@ -128,7 +128,7 @@ impl Kernels {
                 ctx,
                 "rasterize_reflection_bwd",
                 "rasterize_reflection_bwd.wgsl",
-                &replay,
+                &[replay.as_slice(), walk].concat(),
             ),
             project_bwd: Kernel::new(ctx, "project_bwd", "project_bwd.wgsl", &acc),
             project_bwd_add: Kernel::new(

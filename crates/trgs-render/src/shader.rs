@@ -107,6 +107,13 @@ pub const VARIANTS: &[(&str, &[&str])] = &[
     ("rasterize_reflection_bwd.wgsl", &["FLOAT_ATOMICS", "SUBGROUPS"]),
     ("rasterize_reflection_bwd.wgsl", &["ROWS_PER_THREAD_4"]),
     ("rasterize_reflection_bwd.wgsl", &["FLOAT_ATOMICS", "SUBGROUPS", "ROWS_PER_THREAD_4"]),
+    ("rasterize_reflection_bwd.wgsl", &["SUBGROUPS", "BLOCK_WALK"]),
+    ("rasterize_reflection_bwd.wgsl", &["FLOAT_ATOMICS", "SUBGROUPS", "BLOCK_WALK"]),
+    ("rasterize_reflection_bwd.wgsl", &["SUBGROUPS", "ROWS_PER_THREAD_4", "BLOCK_WALK"]),
+    (
+        "rasterize_reflection_bwd.wgsl",
+        &["FLOAT_ATOMICS", "SUBGROUPS", "ROWS_PER_THREAD_4", "BLOCK_WALK"],
+    ),
     ("project_bwd.wgsl", &[]),
     ("project_bwd.wgsl", &["FLOAT_ATOMICS"]),
     ("project_bwd.wgsl", &["SUBGROUPS"]),
