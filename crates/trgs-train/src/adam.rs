@@ -107,7 +107,10 @@ impl Adam {
                     range(&moments.v, o, n),
                 ],
             );
-            rec.dispatch("adam", &self.kernel, &bind, grid_1d((count as u32).div_ceil(256)));
+            // Four floats a thread (adam.wgsl); the bindings cover the last vec4 whole, since
+            // every buffer and binding is padded to 64 bytes and ranges start 256 bytes apart.
+            let groups = grid_1d((count as u32).div_ceil(4).div_ceil(256));
+            rec.dispatch("adam", &self.kernel, &bind, groups);
             first += count;
         }
     }

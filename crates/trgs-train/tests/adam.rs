@@ -14,7 +14,9 @@ fn gpu_adam_matches_twin() {
     })
     .expect("adapter");
     let mut adam_gpu = Adam::new(&ctx, AdamSettings::default());
-    let n = 5000usize;
+    // Not a multiple of 4: the kernel takes four floats a thread, and the last vec4's floats past
+    // the count must keep what they held.
+    let n = 5003usize;
     let mut rng = Rng::new(9);
     let mut params: Vec<f64> = (0..n).map(|_| f64::from(rng.range(-2.0, 2.0) as f32)).collect();
     let values = gpu::storage_init(
@@ -38,11 +40,9 @@ fn gpu_adam_matches_twin() {
                 }
             })
             .collect();
-        let g_buf = gpu::storage_init(
-            &ctx,
-            "test.grads",
-            &grads.iter().map(|&v| v as f32).collect::<Vec<f32>>(),
-        );
+        // Large gradients past the count: a kernel that stepped the padding would move it.
+        let padded: Vec<f32> = grads.iter().map(|&v| v as f32).chain([1e3; 13]).collect();
+        let g_buf = gpu::storage_init(&ctx, "test.grads", &padded);
         // A rate pattern like the SH buffer's (records of 48 floats, the first 3 faster), whose
         // records straddle the binding ranges.
         let lr = 1e-3 * f64::from(t);
@@ -55,7 +55,9 @@ fn gpu_adam_matches_twin() {
             *s += rate.at(i);
         }
     }
-    let got: Vec<f32> = gpu::read_buffer(&ctx, &values, 0, n).expect("readback");
+    let len = (values.size() / 4) as usize;
+    let got: Vec<f32> = gpu::read_buffer(&ctx, &values, 0, len).expect("readback");
+    assert!(got[n..].iter().all(|&v| v == 0.0), "floats past the count moved: {:?}", &got[n..]);
     // f32 rounding: a few ulps of the parameter, plus a relative error of the updates (1 - beta2
     // is 0.001 + 4.7e-8 in f32, which moves sqrt(v) by 2.3e-5 relative) times their size.
     let mut worst = 0.0f64;
