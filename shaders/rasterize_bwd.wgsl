@@ -9,6 +9,8 @@
 // record of `grads` (PROJECTED_GRAD_FLOATS per Gaussian) once per subgroup that touched it.
 // With one pixel per thread on lavapipe those reductions and atomics were 60% of the kernel's
 // time (100k Gaussians); with four rows per thread one of them serves 32 pixels instead of 8.
+// With BLOCK_WALK a subgroup steps back only through the entries that can reach its block
+// (shared/block_walk.wgsl).
 #include "shared/common.wgsl"
 #include "shared/splat.wgsl"
 #include "shared/accumulate.wgsl"

@@ -6,7 +6,8 @@
 // cleared state (last = 0) and replay nothing. Adds each mirrored Gaussian's colour,
 // reflection-intensity, opacity, 2D mean and conic gradients into `grads`
 // (PROJECTED_GRAD_FLOATS per Gaussian), summed over the thread's pixels and then the subgroup,
-// once per subgroup that touched it.
+// once per subgroup that touched it. With BLOCK_WALK a subgroup steps back only through the
+// entries that can reach its block (shared/block_walk.wgsl).
 #include "shared/common.wgsl"
 #include "shared/splat.wgsl"
 #include "shared/accumulate.wgsl"
