@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Checks a real GPU with binaries built elsewhere: the release test binaries of the workspace and
-# the `bench` and `train` bins. Two steps, for a GPU machine without a Rust toolchain:
+# every bin (the CLI tests run them). Two steps, for a GPU machine without a Rust toolchain:
 #
 #   scripts/gpu-check.sh pack BUNDLE            # here: build in release, write BUNDLE (.tar.xz)
 #   scripts/gpu-check.sh run BUNDLE OUT [LOOPS] # there, from the repository root: unpack, then
@@ -34,7 +34,7 @@ for line in sys.stdin:
 ' | sed "s|^$PWD/||" | grep -v xvfb_screenshot >target/release/gpu-check-tests.txt
     echo "$PWD" >target/release/gpu-check-root.txt
     tar cf - target/release/gpu-check-tests.txt target/release/gpu-check-root.txt \
-        $(cat target/release/gpu-check-tests.txt) target/release/{bench,train,render,eval} |
+        $(cat target/release/gpu-check-tests.txt) target/release/{bench,train,render,eval,convert,report,viewer} |
         xz -T0 -6 >"$bundle"
     echo "wrote $bundle ($(wc -l <target/release/gpu-check-tests.txt) test binaries)"
 }

@@ -131,7 +131,21 @@ pub fn read_buffer<T: bytemuck::Pod>(
 /// process that never returns.
 pub const GPU_WAIT_LIMIT: std::time::Duration = std::time::Duration::from_secs(300);
 
-/// Block until the GPU has finished everything submitted so far, at most `GPU_WAIT_LIMIT`;
+/// The wait limit in force: `GPU_WAIT_LIMIT`, or `TRGS_GPU_WAIT_SECONDS` (whole seconds, at least
+/// 1) from the environment, so that a hunt for a hang can end each stuck wait in an error that
+/// names it well within a test runner's own time limit.
+pub fn gpu_wait_limit() -> std::time::Duration {
+    static LIMIT: std::sync::OnceLock<std::time::Duration> = std::sync::OnceLock::new();
+    *LIMIT.get_or_init(|| {
+        std::env::var("TRGS_GPU_WAIT_SECONDS")
+            .ok()
+            .and_then(|v| v.trim().parse::<u64>().ok())
+            .filter(|&s| s >= 1)
+            .map_or(GPU_WAIT_LIMIT, std::time::Duration::from_secs)
+    })
+}
+
+/// Block until the GPU has finished everything submitted so far, at most [`gpu_wait_limit`];
 /// `what` names the wait in the error when the device is lost or does not finish in time.
 ///
 /// A driver that reports the device lost (or out of memory) while it is waited for makes
@@ -139,7 +153,8 @@ pub const GPU_WAIT_LIMIT: std::time::Duration = std::time::Duration::from_secs(3
 /// returned as [`GpuError::Lost`] (the panic hook still prints its message). The device is gone
 /// by then, so no state that could be used afterwards is left half-updated.
 pub fn wait_for_gpu(ctx: &GpuContext, what: &str) -> Result<(), GpuError> {
-    let wait = wgpu::PollType::Wait { submission_index: None, timeout: Some(GPU_WAIT_LIMIT) };
+    let limit = gpu_wait_limit();
+    let wait = wgpu::PollType::Wait { submission_index: None, timeout: Some(limit) };
     let polled = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| ctx.device.poll(wait)));
     let lost = |detail: String| {
         crate::gpu_error::lost(&format!("waiting for {what}"), ctx.lost().unwrap_or(detail))
@@ -147,7 +162,7 @@ pub fn wait_for_gpu(ctx: &GpuContext, what: &str) -> Result<(), GpuError> {
     match polled {
         Ok(Ok(_)) => Ok(()),
         Ok(Err(wgpu::PollError::Timeout)) => {
-            Err(GpuError::Timeout { what: what.to_string(), seconds: GPU_WAIT_LIMIT.as_secs() })
+            Err(GpuError::Timeout { what: what.to_string(), seconds: limit.as_secs() })
         }
         Ok(Err(e)) => Err(lost(e.to_string())),
         Err(panic) => {

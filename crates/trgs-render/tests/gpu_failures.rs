@@ -41,10 +41,17 @@ fn a_lost_device_fails_renders_uploads_and_readbacks_with_an_error() {
     // Uploading and displaying go through the same scopes and waits.
     let upload = GpuScene::upload(&ctx, &gaussians, &scene.planes);
     assert!(matches!(upload, Err(UploadError::Gpu(GpuError::Lost { .. }))), "{upload:?}");
-    let target = DisplayTarget::new(&ctx, frame.width(), frame.height()).expect("allocation");
-    let shown = renderer.display(&frame, Layer::Color, [0.1, 10.0], &target);
-    assert!(matches!(shown, Err(DisplayError::Gpu(GpuError::Lost { .. }))), "{shown:?}");
-    assert!(matches!(target.read_rgba(&ctx), Err(GpuError::Lost { .. })));
+    // Lavapipe still hands out the texture of a lost device, NVIDIA's driver refuses it: either
+    // way nothing that uses the device succeeds.
+    match DisplayTarget::new(&ctx, frame.width(), frame.height()) {
+        Ok(target) => {
+            let shown = renderer.display(&frame, Layer::Color, [0.1, 10.0], &target);
+            assert!(matches!(shown, Err(DisplayError::Gpu(GpuError::Lost { .. }))), "{shown:?}");
+            assert!(matches!(target.read_rgba(&ctx), Err(GpuError::Lost { .. })));
+        }
+        Err(GpuError::Lost { what, .. }) => assert!(what.contains("display target"), "{what}"),
+        Err(other) => panic!("a display target on a lost device: {other:?}"),
+    }
     // The message names the failure and the operation for a person.
     let message = frame.read_layer(&ctx, Layer::Color).expect_err("lost").to_string();
     assert_eq!(
