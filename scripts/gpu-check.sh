@@ -6,6 +6,13 @@
 #   scripts/gpu-check.sh run BUNDLE OUT [LOOPS] # there, from the repository root: unpack, then
 #                                               # run every test binary (LOOPS times, default 1),
 #                                               # `bench`, and log everything under OUT
+#   scripts/gpu-check.sh hunt BUNDLE OUT SECONDS TEST...
+#                                               # there: run the named test binaries in turn for
+#                                               # SECONDS; a run still going after HUNT_AFTER
+#                                               # seconds (default 25) is a hang: record the GPU's
+#                                               # load, every thread's kernel wait and the code
+#                                               # addresses of the threads on the CPU or blocked
+#                                               # on a lock (thread_pcs), then kill it
 #
 # Test binaries find their fixtures through the absolute path of the checkout they were built
 # in; `run` links that path to the current checkout when it is missing. Every test binary runs
@@ -16,7 +23,7 @@ set -uo pipefail
 cd "$(dirname "$0")/.."
 
 usage() {
-    sed -n '2,14p' "$0" >&2
+    sed -n '2,22p' "$0" >&2
     exit 2
 }
 
@@ -33,21 +40,29 @@ for line in sys.stdin:
         print(m["executable"])
 ' | sed "s|^$PWD/||" | grep -v xvfb_screenshot >target/release/gpu-check-tests.txt
     echo "$PWD" >target/release/gpu-check-root.txt
+    # The thread sampler for `hunt`, static so that it needs nothing on the GPU machine.
+    gcc -O1 -static -o target/release/thread_pcs scripts/thread_pcs.c
     tar cf - target/release/gpu-check-tests.txt target/release/gpu-check-root.txt \
-        $(cat target/release/gpu-check-tests.txt) target/release/{bench,train,render,eval,convert,report,viewer} |
+        $(cat target/release/gpu-check-tests.txt) target/release/thread_pcs \
+        target/release/{bench,train,render,eval,convert,report,viewer} |
         xz -T0 -6 >"$bundle"
     echo "wrote $bundle ($(wc -l <target/release/gpu-check-tests.txt) test binaries)"
 }
 
-run() {
-    local bundle=$1 out=$2 loops=${3:-1}
-    mkdir -p "$out"
-    tar xJf "$bundle"
+# Unpack BUNDLE and make the test binaries' fixture paths resolve.
+unpack() {
+    tar xJf "$1"
     local root
     root=$(cat target/release/gpu-check-root.txt)
     if [ ! -e "$root" ]; then
         mkdir -p "$(dirname "$root")" && ln -s "$PWD" "$root"
     fi
+}
+
+run() {
+    local bundle=$1 out=$2 loops=${3:-1}
+    mkdir -p "$out"
+    unpack "$bundle"
     : >"$out/summary.txt"
     for i in $(seq 1 "$loops"); do
         while read -r t; do
@@ -73,8 +88,55 @@ run() {
     echo "$(wc -l <"$out/summary.txt") failed runs; logs in $out"
 }
 
+# Record where the threads of hung process $1 are, into file $2.
+record_hang() {
+    local pid=$1 out=$2
+    nvidia-smi --query-gpu=utilization.gpu,clocks.sm,power.draw --format=csv >>"$out" 2>&1
+    local spinning=()
+    for d in /proc/"$pid"/task/*; do
+        local wchan
+        wchan=$(cat "$d/wchan" 2>/dev/null)
+        echo "thread $(basename "$d") $(cat "$d/comm" 2>/dev/null): wchan ${wchan:-?}" >>"$out"
+        # On the CPU (wchan 0) or waiting for a lock (priority-inheritance futexes).
+        case "$wchan" in 0 | rt_mutex_schedule) spinning+=("$(basename "$d")") ;; esac
+    done
+    [ ${#spinning[@]} -gt 0 ] && ./target/release/thread_pcs "$pid" "${spinning[@]}" >>"$out" 2>&1
+}
+
+hunt() {
+    local bundle=$1 out=$2 seconds=$3
+    shift 3
+    mkdir -p "$out"
+    unpack "$bundle"
+    local start runs=0 hangs=0
+    start=$(date +%s)
+    while [ $(($(date +%s) - start)) -lt "$seconds" ]; do
+        for name in "$@"; do
+            local t pid
+            t=$(grep "/$name-" target/release/gpu-check-tests.txt) || { echo "no test binary $name"; return 2; }
+            runs=$((runs + 1))
+            echo "=== run $runs" >>"$out/$name.log"
+            TRGS_POISON_BUFFERS=1 "./$t" --test-threads=8 >>"$out/$name.log" 2>&1 &
+            pid=$!
+            for _ in $(seq 1 "${HUNT_AFTER:-25}"); do
+                sleep 1
+                kill -0 "$pid" 2>/dev/null || break
+            done
+            if kill -0 "$pid" 2>/dev/null; then
+                hangs=$((hangs + 1))
+                echo "run $runs: $name hung" | tee -a "$out/summary.txt"
+                record_hang "$pid" "$out/hang_${runs}_$name.txt"
+                kill -9 "$pid" 2>/dev/null
+            fi
+            wait "$pid" 2>/dev/null
+        done
+    done
+    echo "$hangs hangs in $runs runs; logs in $out" | tee -a "$out/summary.txt"
+}
+
 case "${1:-}" in
 pack) [ $# -eq 2 ] || usage; pack "$2" ;;
 run) [ $# -ge 3 ] || usage; run "$2" "$3" "${4:-1}" ;;
+hunt) [ $# -ge 5 ] || usage; hunt "$2" "$3" "$4" "${@:5}" ;;
 *) usage ;;
 esac
