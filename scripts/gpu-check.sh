@@ -41,9 +41,15 @@ for line in sys.stdin:
 ' | sed "s|^$PWD/||" | grep -v xvfb_screenshot >target/release/gpu-check-tests.txt
     echo "$PWD" >target/release/gpu-check-root.txt
     # The thread sampler for `hunt`, static so that it needs nothing on the GPU machine.
-    gcc -O1 -static -o target/release/thread_pcs scripts/thread_pcs.c
+    local sampler=()
+    if command -v gcc >/dev/null; then
+        gcc -O1 -static -o target/release/thread_pcs scripts/thread_pcs.c
+        sampler=(target/release/thread_pcs)
+    else
+        echo "no gcc: the bundle has no thread_pcs, and hunt records kernel waits only" >&2
+    fi
     tar cf - target/release/gpu-check-tests.txt target/release/gpu-check-root.txt \
-        $(cat target/release/gpu-check-tests.txt) target/release/thread_pcs \
+        $(cat target/release/gpu-check-tests.txt) "${sampler[@]}" \
         target/release/{bench,train,render,eval,convert,report,viewer} |
         xz -T0 -6 >"$bundle"
     echo "wrote $bundle ($(wc -l <target/release/gpu-check-tests.txt) test binaries)"
@@ -100,7 +106,9 @@ record_hang() {
         # On the CPU (wchan 0) or waiting for a lock (priority-inheritance futexes).
         case "$wchan" in 0 | rt_mutex_schedule) spinning+=("$(basename "$d")") ;; esac
     done
-    [ ${#spinning[@]} -gt 0 ] && ./target/release/thread_pcs "$pid" "${spinning[@]}" >>"$out" 2>&1
+    if [ ${#spinning[@]} -gt 0 ] && [ -x target/release/thread_pcs ]; then
+        ./target/release/thread_pcs "$pid" "${spinning[@]}" >>"$out" 2>&1
+    fi
 }
 
 hunt() {
