@@ -131,9 +131,9 @@ pub fn read_buffer<T: bytemuck::Pod>(
 /// process that never returns.
 pub const GPU_WAIT_LIMIT: std::time::Duration = std::time::Duration::from_secs(300);
 
-/// The wait limit in force: `GPU_WAIT_LIMIT`, or `TRGS_GPU_WAIT_SECONDS` (whole seconds, at least
-/// 1) from the environment, so that a hunt for a hang can end each stuck wait in an error that
-/// names it well within a test runner's own time limit.
+/// The wait limit in force: `GPU_WAIT_LIMIT`, or `TRGS_GPU_WAIT_SECONDS` from the environment (a
+/// whole number of seconds, one or more), so that a hunt for a hang can end each stuck wait in
+/// an error that names it well within a test runner's own time limit.
 pub fn gpu_wait_limit() -> std::time::Duration {
     static LIMIT: std::sync::OnceLock<std::time::Duration> = std::sync::OnceLock::new();
     *LIMIT.get_or_init(|| {
