@@ -23,7 +23,7 @@ set -uo pipefail
 cd "$(dirname "$0")/.."
 
 usage() {
-    sed -n '2,22p' "$0" >&2
+    sed -n '2,21p' "$0" >&2
     exit 2
 }
 
@@ -116,12 +116,18 @@ hunt() {
     shift 3
     mkdir -p "$out"
     unpack "$bundle"
-    local start runs=0 hangs=0
+    # A name may match several binaries (gpu_failures is in two crates): each one runs.
+    local name binaries=()
+    for name in "$@"; do
+        mapfile -t -O "${#binaries[@]}" binaries < <(grep "/$name-" target/release/gpu-check-tests.txt)
+    done
+    [ ${#binaries[@]} -gt 0 ] || { echo "no test binary named $*" >&2; return 2; }
+    local start runs=0 hangs=0 t pid
     start=$(date +%s)
     while [ $(($(date +%s) - start)) -lt "$seconds" ]; do
-        for name in "$@"; do
-            local t pid
-            t=$(grep "/$name-" target/release/gpu-check-tests.txt) || { echo "no test binary $name"; return 2; }
+        for t in "${binaries[@]}"; do
+            name=$(basename "$t")
+            name=${name%-*}
             runs=$((runs + 1))
             echo "=== run $runs" >>"$out/$name.log"
             TRGS_POISON_BUFFERS=1 "./$t" --test-threads=8 >>"$out/$name.log" 2>&1 &

@@ -11,29 +11,48 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-// Print "file +offset" for `addr` and return 1 when an executable mapping of `pid` holds it
-// (any mapping when `code_only` is 0); return 0 and print nothing otherwise.
-static int describe(int pid, unsigned long long addr, int code_only, const char *prefix) {
+// The mappings of a process, read once per sample.
+struct mapping {
+    unsigned long long lo, hi, off;
+    int exec;
+    char file[256];
+};
+static struct mapping maps[4096];
+static int nmaps;
+
+static void read_maps(int pid) {
     char path[64];
     snprintf(path, sizeof path, "/proc/%d/maps", pid);
-    FILE *maps = fopen(path, "r");
-    if (!maps) return 0;
+    FILE *f = fopen(path, "r");
+    nmaps = 0;
+    if (!f) return;
     char line[512];
-    int found = 0;
-    while (fgets(line, sizeof line, maps)) {
-        unsigned long long lo, hi, off;
+    while (nmaps < 4096 && fgets(line, sizeof line, f)) {
+        struct mapping *m = &maps[nmaps];
+        char perm[8], dev[16];
         unsigned long inode;
-        char perm[8], dev[16], file[400] = "";
-        int fields = sscanf(line, "%llx-%llx %7s %llx %15s %lu %399s", &lo, &hi, perm, &off, dev,
-                            &inode, file);
-        if (fields >= 6 && addr >= lo && addr < hi && (!code_only || perm[2] == 'x')) {
-            printf("%s%s +0x%llx\n", prefix, file[0] ? file : "[anonymous]", addr - lo + off);
-            found = 1;
-            break;
+        m->file[0] = 0;
+        if (sscanf(line, "%llx-%llx %7s %llx %15s %lu %255s", &m->lo, &m->hi, perm, &m->off, dev,
+                   &inode, m->file) >= 6) {
+            m->exec = perm[2] == 'x';
+            nmaps++;
         }
     }
-    fclose(maps);
-    return found;
+    fclose(f);
+}
+
+// Print "file +offset" for `addr` and return 1 when a mapping holds it (an executable one when
+// `code_only`); return 0 and print nothing otherwise.
+static int describe(unsigned long long addr, int code_only, const char *prefix) {
+    for (int i = 0; i < nmaps; i++) {
+        const struct mapping *m = &maps[i];
+        if (addr >= m->lo && addr < m->hi && (!code_only || m->exec)) {
+            printf("%s%s +0x%llx\n", prefix, m->file[0] ? m->file : "[anonymous]",
+                   addr - m->lo + m->off);
+            return 1;
+        }
+    }
+    return 0;
 }
 
 static void sample(int pid, int tid) {
@@ -44,10 +63,11 @@ static void sample(int pid, int tid) {
     ptrace(PTRACE_INTERRUPT, tid, 0, 0);
     int status;
     waitpid(tid, &status, __WALL);
+    read_maps(pid);
     struct user_regs_struct regs;
     ptrace(PTRACE_GETREGS, tid, 0, &regs);
     printf("  rip %llx: ", regs.rip);
-    if (!describe(pid, regs.rip, 0, "")) printf("not in a mapping\n");
+    if (!describe(regs.rip, 0, "")) printf("not in a mapping\n");
     int shown = 0;
     for (int i = 0; i < 4096 && shown < 24; i++) {
         errno = 0;
@@ -55,7 +75,7 @@ static void sample(int pid, int tid) {
         if (errno) break;
         char prefix[32];
         snprintf(prefix, sizeof prefix, "    stack[%d] ", i);
-        shown += describe(pid, (unsigned long long)word, 1, prefix);
+        shown += describe((unsigned long long)word, 1, prefix);
     }
     ptrace(PTRACE_DETACH, tid, 0, 0);
 }
