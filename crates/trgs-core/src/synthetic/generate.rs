@@ -7,7 +7,7 @@ use super::geom::{Ray, Rect};
 use super::points::sparse_points;
 use super::texture::Texture;
 use super::trace::{Object, Pane, Shape, World};
-use super::{GLASS_R0, MIRROR_R0, PaneKind, SyntheticConfig, SyntheticScene};
+use super::{Backdrop, GLASS_R0, MIRROR_R0, PaneKind, SyntheticConfig, SyntheticScene};
 use crate::image::Image;
 use crate::scene::{Camera, Intrinsics, Material, Pose, ReflectionPlane};
 
@@ -18,16 +18,33 @@ pub(crate) const SUPERSAMPLE: u32 = 2;
 const FOV_X_DEG: f64 = 62.0;
 
 /// Room size in the local frame: x in [-HALF_WIDTH, HALF_WIDTH], y in [0, HEIGHT], the camera
-/// room z in [0, FRONT_DEPTH], the room behind the glass z in [-BACK_DEPTH, 0].
+/// room z in [0, FRONT_DEPTH], the room behind the glass z in [-depth, 0] with the depth of
+/// [`Backdrop::depth`].
 const HALF_WIDTH: f64 = 3.0;
 const HEIGHT: f64 = 2.8;
 const FRONT_DEPTH: f64 = 5.0;
-const BACK_DEPTH: f64 = 4.5;
 
-/// Pane centre height, pane height, frame bar width.
+/// Pane centre height and frame bar width (the pane's size is [`Backdrop::pane_size`]).
 const PANE_Y: f64 = 1.2;
-const PANE_H: f64 = 1.0;
 const FRAME_W: f64 = 0.07;
+
+impl Backdrop {
+    /// Depth of the room behind the pane wall.
+    fn depth(self) -> f64 {
+        match self {
+            Backdrop::Room => 4.5,
+            Backdrop::Showcase => 1.6,
+        }
+    }
+
+    /// Width of a single pane and the height of every pane.
+    fn pane_size(self) -> (f64, f64) {
+        match self {
+            Backdrop::Room => (1.6, 1.0),
+            Backdrop::Showcase => (2.4, 1.4),
+        }
+    }
+}
 
 /// The local scene frame in the world: `x_world = rotation * x_local + translation`.
 #[derive(Clone, Copy, Debug)]
@@ -89,13 +106,128 @@ fn quad(centre: [f64; 3], u: DVec3, v: DVec3, half: [f64; 2], texture: Texture) 
     Object { shape: Shape::Quad { rect, holes: Vec::new() }, texture, gain: 1.0 }
 }
 
-/// Width of each pane and x of each pane centre: one pane is 1.6 m wide; several share 3.2 m
+/// Width of each pane and x of each pane centre: one pane is `single` wide; several share 3.2 m
 /// with 0.45 m of wall between them (the layout is meant for up to four).
-fn pane_slots(n: usize) -> (f64, Vec<f64>) {
+fn pane_slots(n: usize, single: f64) -> (f64, Vec<f64>) {
     const GAP: f64 = 0.45;
-    let w = if n == 1 { 1.6 } else { ((3.2 - GAP * (n as f64 - 1.0)) / n as f64).max(0.3) };
+    let w = if n == 1 { single } else { ((3.2 - GAP * (n as f64 - 1.0)) / n as f64).max(0.3) };
     let xs = (0..n).map(|k| (k as f64 - 0.5 * (n as f64 - 1.0)) * (w + GAP)).collect();
     (w, xs)
+}
+
+/// The room behind the pane wall, `bd` deep: floor, ceiling, side walls and a brick back wall.
+fn behind_shell(bd: f64) -> Vec<Object> {
+    let (x, y, z) = (DVec3::X, DVec3::Y, DVec3::Z);
+    let (hw, ht) = (HALF_WIDTH, HEIGHT);
+    vec![
+        quad(
+            [0.0, 0.0, -0.5 * bd],
+            x,
+            z,
+            [hw, 0.5 * bd],
+            Texture::Checker { period: 0.35, a: rgb(0.85, 0.85, 0.82), b: rgb(0.18, 0.20, 0.24) },
+        ),
+        quad(
+            [0.0, ht, -0.5 * bd],
+            x,
+            z,
+            [hw, 0.5 * bd],
+            Texture::Plain { colour: rgb(0.85, 0.85, 0.88), grain: 0.1 },
+        ),
+        quad(
+            [-hw, 0.5 * ht, -0.5 * bd],
+            z,
+            y,
+            [0.5 * bd, 0.5 * ht],
+            Texture::Noise { scale: 0.25, a: rgb(0.75, 0.80, 0.45), b: rgb(0.30, 0.45, 0.25) },
+        ),
+        quad(
+            [hw, 0.5 * ht, -0.5 * bd],
+            z,
+            y,
+            [0.5 * bd, 0.5 * ht],
+            Texture::Stripes { period: 0.4, a: rgb(0.78, 0.62, 0.75), b: rgb(0.45, 0.30, 0.55) },
+        ),
+        quad(
+            [0.0, 0.5 * ht, -bd],
+            x,
+            y,
+            [hw, 0.5 * ht],
+            Texture::Bricks {
+                width: 0.3,
+                height: 0.1,
+                brick: rgb(0.70, 0.32, 0.20),
+                mortar: rgb(0.80, 0.78, 0.72),
+            },
+        ),
+    ]
+}
+
+/// [`Backdrop::Room`]'s objects, 1 to 4 m behind the glass, so that views through the window have
+/// strong parallax.
+fn room_objects() -> Vec<Object> {
+    let ht = HEIGHT;
+    vec![
+        sphere(
+            [-0.45, 0.45, -1.1],
+            0.45,
+            Texture::Stripes { period: 0.16, a: rgb(0.85, 0.20, 0.18), b: rgb(0.92, 0.90, 0.85) },
+        ),
+        cuboid(
+            [0.45, 0.0, -2.1],
+            [1.05, 0.8, -1.5],
+            Texture::Noise { scale: 0.12, a: rgb(0.95, 0.70, 0.25), b: rgb(0.35, 0.15, 0.45) },
+        ),
+        sphere(
+            [1.1, 1.35, -3.0],
+            0.55,
+            Texture::Checker { period: 0.2, a: rgb(0.15, 0.30, 0.70), b: rgb(0.90, 0.85, 0.30) },
+        ),
+        cuboid(
+            [-1.45, 0.0, -2.8],
+            [-1.05, ht, -2.4],
+            Texture::Stripes { period: 0.1, a: rgb(0.90, 0.90, 0.90), b: rgb(0.25, 0.25, 0.30) },
+        ),
+        cuboid(
+            [-0.35, 0.0, -3.7],
+            [0.35, 1.5, -3.35],
+            Texture::Panels { width: 0.12, height: 0.38 },
+        ),
+    ]
+}
+
+/// [`Backdrop::Showcase`]'s display: a plinth the width of the window, and on it two balls, a
+/// crate and a panelled column, 0.15 to 1.45 m behind the glass. Seen through a pane that fills
+/// much of each view, they are easy to reconstruct; the camera room's reflection lies 3 to 8 m
+/// behind the pane (its mirror image), so the two layers sit at very different depths.
+fn showcase_objects() -> Vec<Object> {
+    vec![
+        cuboid(
+            [-1.6, 0.0, -1.5],
+            [1.6, 0.45, -0.1],
+            Texture::Plain { colour: rgb(0.35, 0.30, 0.28), grain: 0.1 },
+        ),
+        sphere(
+            [-0.7, 0.75, -0.5],
+            0.3,
+            Texture::Stripes { period: 0.16, a: rgb(0.85, 0.20, 0.18), b: rgb(0.92, 0.90, 0.85) },
+        ),
+        cuboid(
+            [0.2, 0.45, -1.0],
+            [0.7, 0.95, -0.55],
+            Texture::Noise { scale: 0.12, a: rgb(0.95, 0.70, 0.25), b: rgb(0.35, 0.15, 0.45) },
+        ),
+        sphere(
+            [0.95, 0.8, -0.45],
+            0.3,
+            Texture::Checker { period: 0.2, a: rgb(0.15, 0.30, 0.70), b: rgb(0.90, 0.85, 0.30) },
+        ),
+        cuboid(
+            [-0.25, 0.45, -1.45],
+            [0.05, 1.7, -1.2],
+            Texture::Panels { width: 0.12, height: 0.38 },
+        ),
+    ]
 }
 
 /// Local boxes (min, max corners).
@@ -105,7 +237,7 @@ type Boxes = Vec<(DVec3, DVec3)>;
 /// (width, height, R0).
 fn build_world(config: &SyntheticConfig) -> (World, Boxes, Vec<(f64, f64, f64)>) {
     let (x, y, z) = (DVec3::X, DVec3::Y, DVec3::Z);
-    let (hw, ht, fd, bd) = (HALF_WIDTH, HEIGHT, FRONT_DEPTH, BACK_DEPTH);
+    let (hw, ht, fd) = (HALF_WIDTH, HEIGHT, FRONT_DEPTH);
     let mut objects = vec![
         // Camera room. Floor tiles, ceiling, side walls, and the poster wall behind the cameras.
         quad(
@@ -168,81 +300,18 @@ fn build_world(config: &SyntheticConfig) -> (World, Boxes, Vec<(f64, f64, f64)>)
             Texture::Noise { scale: 0.05, a: rgb(0.55, 0.80, 0.25), b: rgb(0.10, 0.35, 0.12) },
         ),
     ];
-    let behind = [
-        // Room behind the glass: floor, ceiling, side walls, brick back wall.
-        quad(
-            [0.0, 0.0, -0.5 * bd],
-            x,
-            z,
-            [hw, 0.5 * bd],
-            Texture::Checker { period: 0.35, a: rgb(0.85, 0.85, 0.82), b: rgb(0.18, 0.20, 0.24) },
-        ),
-        quad(
-            [0.0, ht, -0.5 * bd],
-            x,
-            z,
-            [hw, 0.5 * bd],
-            Texture::Plain { colour: rgb(0.85, 0.85, 0.88), grain: 0.1 },
-        ),
-        quad(
-            [-hw, 0.5 * ht, -0.5 * bd],
-            z,
-            y,
-            [0.5 * bd, 0.5 * ht],
-            Texture::Noise { scale: 0.25, a: rgb(0.75, 0.80, 0.45), b: rgb(0.30, 0.45, 0.25) },
-        ),
-        quad(
-            [hw, 0.5 * ht, -0.5 * bd],
-            z,
-            y,
-            [0.5 * bd, 0.5 * ht],
-            Texture::Stripes { period: 0.4, a: rgb(0.78, 0.62, 0.75), b: rgb(0.45, 0.30, 0.55) },
-        ),
-        quad(
-            [0.0, 0.5 * ht, -bd],
-            x,
-            y,
-            [hw, 0.5 * ht],
-            Texture::Bricks {
-                width: 0.3,
-                height: 0.1,
-                brick: rgb(0.70, 0.32, 0.20),
-                mortar: rgb(0.80, 0.78, 0.72),
-            },
-        ),
-        // Objects behind the glass, 1 to 4 m deep.
-        sphere(
-            [-0.45, 0.45, -1.1],
-            0.45,
-            Texture::Stripes { period: 0.16, a: rgb(0.85, 0.20, 0.18), b: rgb(0.92, 0.90, 0.85) },
-        ),
-        cuboid(
-            [0.45, 0.0, -2.1],
-            [1.05, 0.8, -1.5],
-            Texture::Noise { scale: 0.12, a: rgb(0.95, 0.70, 0.25), b: rgb(0.35, 0.15, 0.45) },
-        ),
-        sphere(
-            [1.1, 1.35, -3.0],
-            0.55,
-            Texture::Checker { period: 0.2, a: rgb(0.15, 0.30, 0.70), b: rgb(0.90, 0.85, 0.30) },
-        ),
-        cuboid(
-            [-1.45, 0.0, -2.8],
-            [-1.05, ht, -2.4],
-            Texture::Stripes { period: 0.1, a: rgb(0.90, 0.90, 0.90), b: rgb(0.25, 0.25, 0.30) },
-        ),
-        cuboid(
-            [-0.35, 0.0, -3.7],
-            [0.35, 1.5, -3.35],
-            Texture::Panels { width: 0.12, height: 0.38 },
-        ),
-    ];
+    let mut behind = behind_shell(config.backdrop.depth());
+    behind.extend(match config.backdrop {
+        Backdrop::Room => room_objects(),
+        Backdrop::Showcase => showcase_objects(),
+    });
     // The room behind the glass is lit more dimly, like a shop window seen from a bright room:
     // that is what makes real reflections stand out, and it keeps R0 = 0.2 clearly visible.
     let gain = config.behind_gain;
     objects.extend(behind.into_iter().map(|o| Object { gain, ..o }));
 
-    let (w, xs) = pane_slots(config.panes.len());
+    let (single_w, pane_h) = config.backdrop.pane_size();
+    let (w, xs) = pane_slots(config.panes.len(), single_w);
     let mut panes = Vec::new();
     let mut frame_boxes = Vec::new();
     let mut holes = Vec::new();
@@ -250,7 +319,7 @@ fn build_world(config: &SyntheticConfig) -> (World, Boxes, Vec<(f64, f64, f64)>)
     let wall_y = 0.5 * ht;
     for (&kind, &cx) in config.panes.iter().zip(&xs) {
         let (x0, x1) = (cx - 0.5 * w, cx + 0.5 * w);
-        let (y0, y1) = (PANE_Y - 0.5 * PANE_H, PANE_Y + 0.5 * PANE_H);
+        let (y0, y1) = (PANE_Y - 0.5 * pane_h, PANE_Y + 0.5 * pane_h);
         let (pane_z, r0, frame_z) = match kind {
             // Glass sits in the middle of a frame that goes through the wall.
             PaneKind::Glass => (0.0, GLASS_R0, [-0.06, 0.04]),
@@ -281,10 +350,10 @@ fn build_world(config: &SyntheticConfig) -> (World, Boxes, Vec<(f64, f64, f64)>)
             u: x,
             v: y,
             half_u: 0.5 * w,
-            half_v: 0.5 * PANE_H,
+            half_v: 0.5 * pane_h,
         };
         panes.push(Pane { rect, r0 });
-        sizes.push((w, PANE_H, r0));
+        sizes.push((w, pane_h, r0));
     }
     for &(min, max) in &frame_boxes {
         objects.push(Object {

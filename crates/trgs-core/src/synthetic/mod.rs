@@ -6,7 +6,9 @@
 //!
 //! - behind the glass (transmission): a checkered floor, a brick back wall, two textured spheres,
 //!   a noise-textured crate, a striped column and a shelf of coloured panels, at 1 to 4.5 m behind
-//!   the pane, so that views through the glass have strong parallax;
+//!   the pane, so that views through the glass have strong parallax ([`Backdrop::Room`], the
+//!   default); or, with [`Backdrop::Showcase`], a display 1.6 m deep behind a larger pane: a
+//!   plinth with two balls, a crate and a panelled column 0.15 to 1.45 m behind the glass;
 //! - on the camera side (reflection): a bookshelf of coloured spines left of the window, a
 //!   checkered ball on a striped pedestal right of it, a striped left wall, a noise-textured right
 //!   wall, a poster wall behind the cameras, a tiled floor. These are seen directly near the
@@ -64,6 +66,21 @@ pub const GLASS_R0: f64 = 0.2;
 /// learnt, and the wall behind still shows faintly (transmission) as with a real silvered mirror.
 pub const MIRROR_R0: f64 = 0.95;
 
+/// What stands behind the pane wall.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Backdrop {
+    /// A second room, 4.5 m deep, behind a 1.6 m x 1.0 m window (about 18% of a loop view's
+    /// pixels): a floor, walls and objects 1 to 4.5 m behind the pane, seen from a narrow range
+    /// of angles, so the transmitted view is itself hard to reconstruct.
+    #[default]
+    Room,
+    /// A shop window: one 2.4 m x 1.4 m pane (about 40% of a loop view's pixels) in front of a
+    /// display 1.6 m deep whose objects stand on a plinth 0.15 to 1.45 m behind the glass, as in
+    /// the paper's showcase scenes. The transmitted view is easy; what is hard is the
+    /// reflection, which lies at a very different depth over much of the image.
+    Showcase,
+}
+
 /// Settings of [`generate`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct SyntheticConfig {
@@ -85,6 +102,8 @@ pub struct SyntheticConfig {
     /// Light level of the room behind the glass relative to the camera room:
     /// [`DAY_BEHIND_GAIN`] by default, [`NIGHT_BEHIND_GAIN`] for [`SyntheticConfig::night`].
     pub behind_gain: f64,
+    /// What stands behind the pane wall.
+    pub backdrop: Backdrop,
 }
 
 /// The room behind the glass in the default scene: a shop window seen from a brighter room,
@@ -107,6 +126,7 @@ impl Default for SyntheticConfig {
             masked_views: 6,
             sparse_points: 4000,
             behind_gain: DAY_BEHIND_GAIN,
+            backdrop: Backdrop::Room,
         }
     }
 }
@@ -135,6 +155,11 @@ impl SyntheticConfig {
     /// outside the panes is unchanged, and the reflection is a larger share of the glass pixels.
     pub fn night(self) -> Self {
         Self { behind_gain: NIGHT_BEHIND_GAIN, ..self }
+    }
+
+    /// The same camera room and cameras with [`Backdrop::Showcase`] behind the wall.
+    pub fn showcase(self) -> Self {
+        Self { backdrop: Backdrop::Showcase, ..self }
     }
 }
 

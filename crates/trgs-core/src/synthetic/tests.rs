@@ -355,3 +355,38 @@ fn night_variant_dims_only_the_room_behind_the_glass() {
     assert!(ratio < 0.8, "the room behind the glass is not dimmer at night: ratio {ratio}");
     assert!(r_night > r_day, "the reflection's share did not grow: {r_day} -> {r_night}");
 }
+
+/// Fraction of the masked views' pixels that show glass.
+fn glass_share(s: &SyntheticScene) -> f64 {
+    let (mut glass, mut all) = (0usize, 0usize);
+    for mask in s.masks.iter().flatten() {
+        glass += mask.data.iter().filter(|&&k| k > 0).count();
+        all += mask.data.len();
+    }
+    glass as f64 / all.max(1) as f64
+}
+
+/// The showcase: a larger pane (its plane has the pane's size), a glass share of the views about
+/// twice the window's, a visible reflection on all of it, and a display within 1.6 m behind the
+/// glass, whose sparse points (seen through the pane) lie no deeper.
+#[test]
+fn showcase_has_a_large_pane_and_a_shallow_display() {
+    let room = generate(&SyntheticConfig::small());
+    let showcase = generate(&SyntheticConfig::small().showcase());
+    let plane = &showcase.planes[0];
+    assert!((plane.width - 2.4).abs() < 1e-9 && (plane.height - 1.4).abs() < 1e-9);
+    let (share_room, share_showcase) = (glass_share(&room), glass_share(&showcase));
+    println!("glass share: room {share_room:.3}, showcase {share_showcase:.3}");
+    assert!(share_showcase > 1.8 * share_room, "{share_showcase} against {share_room}");
+    check_reflection(&showcase);
+    check_points(&showcase);
+    let behind: Vec<f64> = showcase
+        .points
+        .iter()
+        .map(|(p, _)| plane.signed_distance(DVec3::from(*p)))
+        .filter(|&d| d < -0.02)
+        .collect();
+    assert!(behind.len() >= 20, "{} sparse points behind the pane", behind.len());
+    let deepest = behind.iter().copied().fold(0.0, f64::min);
+    assert!(deepest > -1.65, "a sparse point {deepest} m behind the pane");
+}

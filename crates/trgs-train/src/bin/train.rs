@@ -70,10 +70,14 @@ fn dataset_dir(args: &Args) -> Result<PathBuf> {
     if let Some(d) = &args.data {
         return Ok(d.clone());
     }
-    let (kind, description) = match (args.demo_no_glass, args.demo_night) {
-        (true, _) => ("no-glass", "scene without glass"),
-        (false, true) => ("night-glass", "glass scene at night"),
-        (false, false) => ("glass", "glass scene"),
+    let (kind, description, config) = if args.demo_no_glass {
+        ("no-glass", "scene without glass", SyntheticConfig::default().without_glass())
+    } else if args.demo_night {
+        ("night-glass", "glass scene at night", SyntheticConfig::default().night())
+    } else if args.demo_showcase {
+        ("showcase", "showcase scene", SyntheticConfig::default().showcase())
+    } else {
+        ("glass", "glass scene", SyntheticConfig::default())
     };
     let dir = args.out.join("dataset");
     let marker = dir.join(DEMO_SCENE_MARKER);
@@ -88,11 +92,6 @@ fn dataset_dir(args: &Args) -> Result<PathBuf> {
         }
         return Ok(dir);
     }
-    let config = match kind {
-        "no-glass" => SyntheticConfig::default().without_glass(),
-        "night-glass" => SyntheticConfig::default().night(),
-        _ => SyntheticConfig::default(),
-    };
     write_dataset(&generate(&config), &dir)
         .with_context(|| format!("writing the demo scene to {}", dir.display()))?;
     write_atomic(&marker, format!("{kind}\n").as_bytes())?;

@@ -18,7 +18,8 @@ OPTIONS:
                         optional glass_masks/, planes.json and test_views.txt. Default: the
                         built-in synthetic scene, written to <out>/dataset
     --demo-scene KIND   the built-in scene: glass (default), night-glass (the room behind the
-                        glass lit dimmer, so the reflection is a larger share of the pane) or
+                        glass lit dimmer, so the reflection is a larger share of the pane),
+                        showcase (a shop window: a larger pane, a display just behind it) or
                         no-glass
     --out DIR           output folder (default: runs/demo)
     --iterations N      training steps (default 1000: about 3 minutes for the demo scene on a
@@ -58,6 +59,9 @@ pub struct Args {
     /// The night variant of the demo scene (`--demo-scene night-glass`).
     #[serde(default)]
     pub demo_night: bool,
+    /// The showcase variant of the demo scene (`--demo-scene showcase`).
+    #[serde(default)]
+    pub demo_showcase: bool,
     pub out: PathBuf,
     pub iterations: u32,
     pub resolution: Resolution,
@@ -123,6 +127,7 @@ impl Default for Args {
             data: None,
             demo_no_glass: false,
             demo_night: false,
+            demo_showcase: false,
             out: PathBuf::from("runs/demo"),
             iterations: 1000,
             resolution: Resolution::Original,
@@ -165,14 +170,17 @@ pub fn parse_args() -> Result<(Command, bool)> {
             "--data" => args.data = Some(PathBuf::from(value("--data")?)),
             "--demo-scene" => {
                 demo_scene = true;
-                (args.demo_no_glass, args.demo_night) = match value("--demo-scene")?.as_str() {
-                    "glass" => (false, false),
-                    "night-glass" => (false, true),
-                    "no-glass" => (true, false),
-                    other => {
-                        bail!("--demo-scene {other:?}: expected glass, night-glass or no-glass")
+                (args.demo_no_glass, args.demo_night, args.demo_showcase) =
+                    match value("--demo-scene")?.as_str() {
+                        "glass" => (false, false, false),
+                        "night-glass" => (false, true, false),
+                        "showcase" => (false, false, true),
+                        "no-glass" => (true, false, false),
+                        other => bail!(
+                            "--demo-scene {other:?}: expected glass, night-glass, showcase or \
+                             no-glass"
+                        ),
                     }
-                }
             }
             "--out" => args.out = PathBuf::from(value("--out")?),
             "--resume" => resume = true,
