@@ -88,7 +88,7 @@ pub(crate) struct Layout {
     pub frame_boxes: Boxes,
 }
 
-fn rgb(r: f64, g: f64, b: f64) -> DVec3 {
+const fn rgb(r: f64, g: f64, b: f64) -> DVec3 {
     DVec3::new(r, g, b)
 }
 
@@ -163,36 +163,30 @@ fn behind_shell(bd: f64) -> Vec<Object> {
     ]
 }
 
+/// Textures of the objects behind the glass, which both backdrops share: the showcase displays
+/// the same objects as the room, nearer the glass.
+const RED_STRIPES: Texture =
+    Texture::Stripes { period: 0.16, a: rgb(0.85, 0.20, 0.18), b: rgb(0.92, 0.90, 0.85) };
+const AMBER_NOISE: Texture =
+    Texture::Noise { scale: 0.12, a: rgb(0.95, 0.70, 0.25), b: rgb(0.35, 0.15, 0.45) };
+const BLUE_CHECKER: Texture =
+    Texture::Checker { period: 0.2, a: rgb(0.15, 0.30, 0.70), b: rgb(0.90, 0.85, 0.30) };
+const PANELS: Texture = Texture::Panels { width: 0.12, height: 0.38 };
+
 /// [`Backdrop::Room`]'s objects, 1 to 4 m behind the glass, so that views through the window have
 /// strong parallax.
 fn room_objects() -> Vec<Object> {
     let ht = HEIGHT;
     vec![
-        sphere(
-            [-0.45, 0.45, -1.1],
-            0.45,
-            Texture::Stripes { period: 0.16, a: rgb(0.85, 0.20, 0.18), b: rgb(0.92, 0.90, 0.85) },
-        ),
-        cuboid(
-            [0.45, 0.0, -2.1],
-            [1.05, 0.8, -1.5],
-            Texture::Noise { scale: 0.12, a: rgb(0.95, 0.70, 0.25), b: rgb(0.35, 0.15, 0.45) },
-        ),
-        sphere(
-            [1.1, 1.35, -3.0],
-            0.55,
-            Texture::Checker { period: 0.2, a: rgb(0.15, 0.30, 0.70), b: rgb(0.90, 0.85, 0.30) },
-        ),
+        sphere([-0.45, 0.45, -1.1], 0.45, RED_STRIPES),
+        cuboid([0.45, 0.0, -2.1], [1.05, 0.8, -1.5], AMBER_NOISE),
+        sphere([1.1, 1.35, -3.0], 0.55, BLUE_CHECKER),
         cuboid(
             [-1.45, 0.0, -2.8],
             [-1.05, ht, -2.4],
             Texture::Stripes { period: 0.1, a: rgb(0.90, 0.90, 0.90), b: rgb(0.25, 0.25, 0.30) },
         ),
-        cuboid(
-            [-0.35, 0.0, -3.7],
-            [0.35, 1.5, -3.35],
-            Texture::Panels { width: 0.12, height: 0.38 },
-        ),
+        cuboid([-0.35, 0.0, -3.7], [0.35, 1.5, -3.35], PANELS),
     ]
 }
 
@@ -207,26 +201,10 @@ fn showcase_objects() -> Vec<Object> {
             [1.6, 0.45, -0.1],
             Texture::Plain { colour: rgb(0.35, 0.30, 0.28), grain: 0.1 },
         ),
-        sphere(
-            [-0.7, 0.75, -0.5],
-            0.3,
-            Texture::Stripes { period: 0.16, a: rgb(0.85, 0.20, 0.18), b: rgb(0.92, 0.90, 0.85) },
-        ),
-        cuboid(
-            [0.2, 0.45, -1.0],
-            [0.7, 0.95, -0.55],
-            Texture::Noise { scale: 0.12, a: rgb(0.95, 0.70, 0.25), b: rgb(0.35, 0.15, 0.45) },
-        ),
-        sphere(
-            [0.95, 0.8, -0.45],
-            0.3,
-            Texture::Checker { period: 0.2, a: rgb(0.15, 0.30, 0.70), b: rgb(0.90, 0.85, 0.30) },
-        ),
-        cuboid(
-            [-0.25, 0.45, -1.45],
-            [0.05, 1.7, -1.2],
-            Texture::Panels { width: 0.12, height: 0.38 },
-        ),
+        sphere([-0.7, 0.75, -0.5], 0.3, RED_STRIPES),
+        cuboid([0.2, 0.45, -1.0], [0.7, 0.95, -0.55], AMBER_NOISE),
+        sphere([0.95, 0.8, -0.45], 0.3, BLUE_CHECKER),
+        cuboid([-0.25, 0.45, -1.45], [0.05, 1.7, -1.2], PANELS),
     ]
 }
 
