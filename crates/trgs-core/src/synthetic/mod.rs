@@ -1,8 +1,9 @@
 //! The procedural glass scene: the built-in demo of `train` and the quality fixture of trgs.
 //!
 //! A room (6 m wide, 2.8 m high, 5 m deep) whose far wall holds one or more framed panes; behind
-//! the wall lies a second room, 4.5 m deep, seen only through the glass. In the scene's local frame
-//! (y up, metres) the pane wall is z = 0 and the panes face +z, towards the cameras:
+//! the wall lies a second room (4.5 m deep; 1.6 m for the showcase), seen only through the glass.
+//! In the scene's local frame (y up, metres) the pane wall is z = 0 and the panes face +z, towards
+//! the cameras:
 //!
 //! - behind the glass (transmission): a checkered floor, a brick back wall, two textured spheres,
 //!   a noise-textured crate, a striped column and a shelf of coloured panels, at 1 to 4.5 m behind
@@ -20,7 +21,8 @@
 //!   points give the plane initialisation its plane: the frame is coplanar with the wall.
 //!
 //! Mirrors hang on the wall (no hole) inside a shallow frame: what they transmit is the wall.
-//! Panes are laid out side by side, centred; one pane is 1.6 m x 1.0 m, more are narrower.
+//! Panes are laid out side by side, centred; one pane is 1.6 m x 1.0 m (2.4 m x 1.4 m
+//! for the showcase), more are narrower.
 //!
 //! Cameras follow a closed loop 2.3 to 2.9 m from the wall, up to about 52 degrees off the pane
 //! normal, between 0.9 and 1.7 m high, all looking at a point 0.8 m behind the glass; every 8th
@@ -76,7 +78,7 @@ pub enum Backdrop {
     Room,
     /// A shop window: one 2.4 m x 1.4 m pane (about 40% of a loop view's pixels) in front of a
     /// display 1.6 m deep whose objects stand on a plinth 0.15 to 1.45 m behind the glass, as in
-    /// the paper's showcase scenes. The transmitted view is easy; what is hard is the
+    /// the paper's bookcase scenes. The transmitted view is easy; what is hard is the
     /// reflection, which lies at a very different depth over much of the image.
     Showcase,
 }
