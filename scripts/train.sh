@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The main job of the README: installs what trgs needs, then runs `train` (on the built-in
-# synthetic glass scene when no dataset is given). Arguments are passed to `train`.
+# synthetic showcase scene when no dataset is given). Arguments are passed to `train`.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/ensure-vulkan.sh

@@ -13,8 +13,11 @@ fn conflicting_flags_are_refused_by_name() {
     let train = env!("CARGO_BIN_EXE_train");
     let cases: [(&[&str], &[&str]); 6] = [
         (&["--resolution", "128", "--downscale", "2"], &["--resolution", "--downscale"]),
-        (&["--demo-scene", "attic"], &["\"attic\"", "night-glass", "showcase", "no-glass"]),
-        (&["--data", "somewhere", "--demo-scene", "glass"], &["--demo-scene", "--data"]),
+        (
+            &["--demo-scene", "attic"],
+            &["\"attic\"", "showcase", "window", "night-window", "no-glass"],
+        ),
+        (&["--data", "somewhere", "--demo-scene", "window"], &["--demo-scene", "--data"]),
         (&["--cap", "1000"], &["--cap", "--densify mcmc"]),
         (&["--no-planes", "--no-fresnel"], &["--no-planes", "no Fresnel"]),
         (&["--iterations", "0"], &["--iterations"]),

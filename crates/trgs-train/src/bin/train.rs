@@ -1,5 +1,5 @@
-//! `train`: optimise Gaussians on a scene folder. With no `--data` it writes the built-in
-//! synthetic glass scene and trains on it. Writes runs/<name>/: model.ply (INRIA layout),
+//! `train`: optimise Gaussians on a scene folder. With no `--data` it writes a built-in
+//! synthetic scene (the showcase unless `--demo-scene` names another) and trains on it. Writes runs/<name>/: model.ply (INRIA layout),
 //! planes.json, metrics.json, renders of the test views and their decomposition, a JSONL log,
 //! and a checkpoint that `--resume` continues from.
 use anyhow::{Context, Result, bail};
@@ -12,7 +12,7 @@ use trgs_core::io::{
     remove_stale_temporaries, write_atomic, write_cameras_json, write_planes_json, write_ply,
 };
 use trgs_core::rng::Rng;
-use trgs_core::synthetic::{SyntheticConfig, generate, write_dataset};
+use trgs_core::synthetic::{generate, write_dataset};
 use trgs_render::GpuContext;
 use trgs_train::checkpoint::{CHECKPOINT_FILE, read_checkpoint, write_checkpoint};
 use trgs_train::data::{self, TrainingData};
@@ -33,7 +33,7 @@ const SNAPSHOT_INTERVAL: Duration = Duration::from_millis(500);
 #[path = "train/args.rs"]
 mod args;
 
-use args::{Args, Command, DensifyMode, HELP, parse_args, settings_of};
+use args::{Args, Command, DemoScene, DensifyMode, HELP, parse_args, settings_of};
 
 /// The `train` bin's own state in a checkpoint, besides the trainer's.
 #[derive(Serialize, Deserialize)]
@@ -70,32 +70,28 @@ fn dataset_dir(args: &Args) -> Result<PathBuf> {
     if let Some(d) = &args.data {
         return Ok(d.clone());
     }
-    let (kind, description, config) = if args.demo_no_glass {
-        ("no-glass", "scene without glass", SyntheticConfig::default().without_glass())
-    } else if args.demo_night {
-        ("night-glass", "glass scene at night", SyntheticConfig::default().night())
-    } else if args.demo_showcase {
-        ("showcase", "showcase scene", SyntheticConfig::default().showcase())
-    } else {
-        ("glass", "glass scene", SyntheticConfig::default())
-    };
+    let scene = args.demo_scene;
     let dir = args.out.join("dataset");
     let marker = dir.join(DEMO_SCENE_MARKER);
     if let Ok(found) = std::fs::read_to_string(&marker) {
-        if found.trim() != kind {
+        let held = DemoScene::parse(found.trim()).with_context(|| {
+            format!("{}: {:?} is not a built-in scene's name", marker.display(), found.trim())
+        })?;
+        if held != scene {
             bail!(
-                "{} holds the built-in scene `--demo-scene {}`, not `{kind}`: choose another \
-                 --out, or remove that folder",
+                "{} holds the built-in scene `--demo-scene {}`, not `{}`: choose another --out, \
+                 or remove that folder",
                 dir.display(),
-                found.trim()
+                held.name(),
+                scene.name()
             );
         }
         return Ok(dir);
     }
-    write_dataset(&generate(&config), &dir)
+    write_dataset(&generate(&scene.config()), &dir)
         .with_context(|| format!("writing the demo scene to {}", dir.display()))?;
-    write_atomic(&marker, format!("{kind}\n").as_bytes())?;
-    println!("wrote the built-in synthetic {description} to {}", dir.display());
+    write_atomic(&marker, format!("{}\n", scene.name()).as_bytes())?;
+    println!("wrote the built-in synthetic {} to {}", scene.description(), dir.display());
     Ok(dir)
 }
 
@@ -162,7 +158,11 @@ fn main() -> Result<()> {
             let ck = read_checkpoint(&path).with_context(|| {
                 format!("--resume: no checkpoint to continue from in {}", out.display())
             })?;
-            let mut state: RunState = serde_json::from_value(ck.extra.clone())
+            let mut extra = ck.extra.clone();
+            if let Some(record) = extra.get_mut("args") {
+                args::upgrade_args_record(record);
+            }
+            let mut state: RunState = serde_json::from_value(extra)
                 .with_context(|| format!("{}: the run state is not readable", path.display()))?;
             state.args.out = out;
             if ck.step >= state.args.iterations {
