@@ -1,7 +1,7 @@
 //! `train`: optimise Gaussians on a scene folder. With no `--data` it writes a built-in
-//! synthetic scene (the showcase unless `--demo-scene` names another) and trains on it. Writes runs/<name>/: model.ply (INRIA layout),
-//! planes.json, metrics.json, renders of the test views and their decomposition, a JSONL log,
-//! and a checkpoint that `--resume` continues from.
+//! synthetic scene (the showcase unless `--demo-scene` names another) and trains on it. Writes
+//! runs/<name>/: model.ply (INRIA layout), planes.json, metrics.json, renders of the test views
+//! and their decomposition, a JSONL log, and a checkpoint that `--resume` continues from.
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};

@@ -80,7 +80,7 @@ pub enum DemoScene {
     /// A shop window: a 2.4 m x 1.4 m pane, 41% of the test pixels, with a display 0.15-1.45 m
     /// behind it (the case of the paper's largest gains).
     Showcase,
-    /// Two smaller panes onto a second room 4.5 m deep (18% of the test pixels).
+    /// A 1.6 m x 1.0 m pane onto a second room 4.5 m deep (18% of the test pixels).
     Window,
     /// The window scene with the room behind the glass lit dimmer.
     NightWindow,
