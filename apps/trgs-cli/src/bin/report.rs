@@ -3,7 +3,7 @@
 use anyhow::{Context, Result, bail};
 use std::path::PathBuf;
 use trgs_core::io::write_png_rgb;
-use trgs_train::report::{curve_of, markdown_table, plot};
+use trgs_cli::plot::{curve_of, markdown_table, plot};
 
 const HELP: &str = "\
 trgs report: test PSNR against training time of several runs
@@ -38,11 +38,11 @@ fn main() -> Result<()> {
     if runs.is_empty() {
         bail!("no run folders given\n\n{HELP}");
     }
-    if runs.len() > trgs_train::report::COLOURS.len() {
+    if runs.len() > trgs_cli::plot::COLOURS.len() {
         bail!(
             "{} runs: at most {} fit one plot with a colour each",
             runs.len(),
-            trgs_train::report::COLOURS.len()
+            trgs_cli::plot::COLOURS.len()
         );
     }
     if let Some(n) = &names

@@ -9,7 +9,7 @@ use trgs_core::io::{SceneFolder, Split, read_transforms, write_png_rgb};
 use trgs_core::plane_math::{flip_horizontal, mirror_camera, mirrored_pass_gaussians};
 use trgs_core::scene::Camera;
 use trgs_render::{GpuContext, GpuScene, Layer, RenderOptions, Renderer};
-use trgs_train::exr_layers::write_exr;
+use trgs_cli::exr_layers::write_exr;
 use trgs_train::model::{Model, load_model};
 
 const HELP: &str = "\

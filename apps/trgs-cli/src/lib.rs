@@ -1,0 +1,4 @@
+//! What the trgs commands share: the layers of `render` as OpenEXR ([`exr_layers`]) and the
+//! speed-against-error plot of `report` ([`plot`]). Each command is a bin of this package.
+pub mod exr_layers;
+pub mod plot;
