@@ -57,5 +57,5 @@ pub use gpu::KernelTime;
 pub use gpu_error::GpuError;
 pub use layer_grads::{LayerGrads, LayerGradsError};
 pub use renderer::{RenderError, RenderOptions, Renderer};
-pub use scene::{ATTRIBUTES, GpuScene, SceneGradBuffers, UploadError, attribute_widths};
+pub use scene::{GpuScene, SceneGradBuffers, UploadError};
 pub use trgs_core::reference::ReflectionModel;

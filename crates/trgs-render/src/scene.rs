@@ -5,7 +5,8 @@
 use crate::GpuContext;
 use crate::gpu::{self, GpuError};
 use trgs_core::scene::{
-    Gaussians, InvalidInput, ReflectionPlane, validate_gaussians, validate_planes,
+    Attribute, Gaussians, InvalidInput, PerAttribute, ReflectionPlane, validate_gaussians,
+    validate_planes,
 };
 
 /// Why [`GpuScene::upload`] failed.
@@ -23,13 +24,8 @@ pub struct GpuScene {
     len: u32,
     sh_degree: u32,
     sh_coeffs: u32,
-    pub(crate) means: wgpu::Buffer,
-    pub(crate) rotations: wgpu::Buffer,
-    pub(crate) log_scales: wgpu::Buffer,
-    pub(crate) opacity_logits: wgpu::Buffer,
-    pub(crate) sh: wgpu::Buffer,
-    pub(crate) mask_logits: wgpu::Buffer,
-    pub(crate) log_reflections: wgpu::Buffer,
+    /// One buffer per learnable attribute, laid out as `Gaussians` holds it.
+    pub(crate) buffers: PerAttribute<wgpu::Buffer>,
     pub(crate) populations: wgpu::Buffer,
     planes: Vec<ReflectionPlane>,
     chunk: u32,
@@ -68,29 +64,24 @@ impl GpuScene {
         // one-thread-per-Gaussian dispatches stay within the workgroup limit.
         let most = u64::from(crate::layout::MAX_WORKGROUPS) * 256;
         let chunk = ((limit / widest) / 256 * 256).clamp(256, most) as u32;
+        let g = gaussians;
+        let buffers = PerAttribute::from_fn(|a| {
+            let label = format!("trgs.scene.{}", a.name());
+            match a {
+                Attribute::Means => gpu::storage_init(ctx, &label, &flat3(&g.means)),
+                Attribute::Rotations => gpu::storage_init(ctx, &label, &g.rotations),
+                Attribute::LogScales => gpu::storage_init(ctx, &label, &flat3(&g.log_scales)),
+                Attribute::OpacityLogits => gpu::storage_init(ctx, &label, &g.opacity_logits),
+                Attribute::Sh => gpu::storage_init(ctx, &label, &flat3(&g.sh)),
+                Attribute::MaskLogits => gpu::storage_init(ctx, &label, &g.mask_logits),
+                Attribute::LogReflections => gpu::storage_init(ctx, &label, &g.log_reflections),
+            }
+        });
         Self {
             len,
             sh_degree: gaussians.sh_degree,
             sh_coeffs,
-            means: gpu::storage_init(ctx, "trgs.scene.means", &flat3(&gaussians.means)),
-            rotations: gpu::storage_init(ctx, "trgs.scene.rotations", &gaussians.rotations),
-            log_scales: gpu::storage_init(
-                ctx,
-                "trgs.scene.log_scales",
-                &flat3(&gaussians.log_scales),
-            ),
-            opacity_logits: gpu::storage_init(
-                ctx,
-                "trgs.scene.opacity_logits",
-                &gaussians.opacity_logits,
-            ),
-            sh: gpu::storage_init(ctx, "trgs.scene.sh", &flat3(&gaussians.sh)),
-            mask_logits: gpu::storage_init(ctx, "trgs.scene.mask_logits", &gaussians.mask_logits),
-            log_reflections: gpu::storage_init(
-                ctx,
-                "trgs.scene.log_reflections",
-                &gaussians.log_reflections,
-            ),
+            buffers,
             populations: gpu::storage_init(ctx, "trgs.scene.populations", &pops),
             planes: planes.to_vec(),
             chunk,
@@ -98,28 +89,25 @@ impl GpuScene {
     }
 
     /// The scene rebuilt with `len` Gaussians: `rebuild(current buffer, words per Gaussian,
-    /// label)` makes each new attribute buffer from the current one, the seven of [`ATTRIBUTES`]
-    /// and then the populations (one word each). The planes and binding ranges stay. Densification
+    /// label)` makes each new attribute buffer from the current one, every [`Attribute`] and then
+    /// the populations (one word each). The planes and binding ranges stay. Densification
     /// gathers rows this way on the GPU. Nothing is validated here, unlike [`GpuScene::upload`]:
     /// rows copied from this scene are as valid as they are now, and whoever writes new values
     /// checks them (the trainer refuses a plan that gives a non-finite one).
     pub fn rebuilt(
         &self,
         len: u32,
-        mut rebuild: impl FnMut(&wgpu::Buffer, u32, &'static str) -> wgpu::Buffer,
+        mut rebuild: impl FnMut(&wgpu::Buffer, u32, &str) -> wgpu::Buffer,
     ) -> GpuScene {
         let w = self.attribute_widths();
+        let buffers = PerAttribute::from_fn(|a| {
+            rebuild(&self.buffers[a], w[a], &format!("trgs.scene.{}", a.name()))
+        });
         GpuScene {
             len,
             sh_degree: self.sh_degree,
             sh_coeffs: self.sh_coeffs,
-            means: rebuild(&self.means, w[0], "trgs.scene.means"),
-            rotations: rebuild(&self.rotations, w[1], "trgs.scene.rotations"),
-            log_scales: rebuild(&self.log_scales, w[2], "trgs.scene.log_scales"),
-            opacity_logits: rebuild(&self.opacity_logits, w[3], "trgs.scene.opacity_logits"),
-            sh: rebuild(&self.sh, w[4], "trgs.scene.sh"),
-            mask_logits: rebuild(&self.mask_logits, w[5], "trgs.scene.mask_logits"),
-            log_reflections: rebuild(&self.log_reflections, w[6], "trgs.scene.log_reflections"),
+            buffers,
             populations: rebuild(&self.populations, 1, "trgs.scene.populations"),
             planes: self.planes.clone(),
             chunk: self.chunk,
@@ -150,7 +138,8 @@ impl GpuScene {
         self.sh_degree
     }
 
-    pub(crate) fn sh_coeffs(&self) -> u32 {
+    /// SH coefficients per colour channel stored per Gaussian.
+    pub fn sh_coeffs(&self) -> u32 {
         self.sh_coeffs
     }
 
@@ -165,23 +154,19 @@ impl GpuScene {
         Ok(())
     }
 
-    /// Floats per Gaussian of each of [`ATTRIBUTES`].
-    pub fn attribute_widths(&self) -> [u32; 7] {
-        attribute_widths(self.sh_coeffs)
+    /// Floats per Gaussian of every attribute.
+    pub fn attribute_widths(&self) -> PerAttribute<u32> {
+        PerAttribute::from_fn(|a| a.width(self.sh_coeffs as usize) as u32)
     }
 
-    /// The buffers of the learnable attributes, in the order of [`ATTRIBUTES`] (an optimiser
-    /// steps them in place).
-    pub fn parameters(&self) -> [&wgpu::Buffer; 7] {
-        [
-            &self.means,
-            &self.rotations,
-            &self.log_scales,
-            &self.opacity_logits,
-            &self.sh,
-            &self.mask_logits,
-            &self.log_reflections,
-        ]
+    /// The buffer of attribute `a` (an optimiser steps it in place).
+    pub fn parameter(&self, a: Attribute) -> &wgpu::Buffer {
+        &self.buffers[a]
+    }
+
+    /// The buffers of every learnable attribute.
+    pub fn parameters(&self) -> PerAttribute<&wgpu::Buffer> {
+        self.buffers.as_ref()
     }
 
     /// Each Gaussian's `Population` as a u32 (fixed during training; optimiser-side stages read
@@ -214,27 +199,11 @@ impl GpuScene {
     }
 }
 
-/// The learnable attributes of a Gaussian, in the order of [`GpuScene::parameters`] and
-/// [`SceneGradBuffers::parameters`].
-pub const ATTRIBUTES: [&str; 7] =
-    ["means", "rotations", "log_scales", "opacity_logits", "sh", "mask_logits", "log_reflections"];
-
-/// Floats per Gaussian of each of [`ATTRIBUTES`] for `sh_coeffs` SH coefficients per channel.
-pub fn attribute_widths(sh_coeffs: u32) -> [u32; 7] {
-    [3, 4, 3, 1, 3 * sh_coeffs, 1, 1]
-}
-
 /// Gradients of a [`GpuScene`]'s Gaussians, one buffer per attribute in the scene's own layout
 /// (so an optimiser steps each attribute buffer with its gradient buffer).
 #[derive(Clone, Debug)]
 pub struct SceneGradBuffers {
-    pub means: wgpu::Buffer,
-    pub rotations: wgpu::Buffer,
-    pub log_scales: wgpu::Buffer,
-    pub opacity_logits: wgpu::Buffer,
-    pub sh: wgpu::Buffer,
-    pub mask_logits: wgpu::Buffer,
-    pub log_reflections: wgpu::Buffer,
+    buffers: PerAttribute<wgpu::Buffer>,
     len: u32,
     sh_degree: u32,
 }
@@ -242,7 +211,7 @@ pub struct SceneGradBuffers {
 impl SceneGradBuffers {
     /// Zero every gradient (the camera's project_bwd writes only the Gaussians it lists).
     pub(crate) fn clear(&self, encoder: &mut wgpu::CommandEncoder) {
-        for b in self.parameters() {
+        for b in &self.buffers.0 {
             encoder.clear_buffer(b, 0, None);
         }
     }
@@ -250,16 +219,11 @@ impl SceneGradBuffers {
     /// Buffers for `scene`'s Gaussians (uninitialised: the backward clears them first).
     pub(crate) fn new(ctx: &GpuContext, pool: &mut gpu::BufferPool, scene: &GpuScene) -> Self {
         let n = u64::from(scene.len);
-        let coeffs = u64::from(scene.sh_coeffs);
-        let mut get = |name: &str, bytes: u64| pool.get(ctx, &format!("trgs.grads.{name}"), bytes);
+        let widths = scene.attribute_widths();
         Self {
-            means: get("means", n * 12),
-            rotations: get("rotations", n * 16),
-            log_scales: get("log_scales", n * 12),
-            opacity_logits: get("opacity_logits", n * 4),
-            sh: get("sh", n * coeffs * 12),
-            mask_logits: get("mask_logits", n * 4),
-            log_reflections: get("log_reflections", n * 4),
+            buffers: PerAttribute::from_fn(|a| {
+                pool.get(ctx, &format!("trgs.grads.{}", a.name()), n * u64::from(widths[a]) * 4)
+            }),
             len: scene.len,
             sh_degree: scene.sh_degree,
         }
@@ -276,17 +240,14 @@ impl SceneGradBuffers {
         })
     }
 
-    /// The gradient buffers in the order of [`ATTRIBUTES`].
-    pub fn parameters(&self) -> [&wgpu::Buffer; 7] {
-        [
-            &self.means,
-            &self.rotations,
-            &self.log_scales,
-            &self.opacity_logits,
-            &self.sh,
-            &self.mask_logits,
-            &self.log_reflections,
-        ]
+    /// The gradient buffer of attribute `a`.
+    pub fn parameter(&self, a: Attribute) -> &wgpu::Buffer {
+        &self.buffers[a]
+    }
+
+    /// The gradient buffers of every attribute.
+    pub fn parameters(&self) -> PerAttribute<&wgpu::Buffer> {
+        self.buffers.as_ref()
     }
 
     /// Read every gradient back, shaped like the scene's Gaussians (populations are not
@@ -296,22 +257,21 @@ impl SceneGradBuffers {
     }
 }
 
-/// The seven attribute buffers (in [`ATTRIBUTES`] order) of `n` Gaussians read back; populations
-/// are left Primary.
+/// Every attribute buffer of `n` Gaussians read back; populations are left Primary.
 fn read_attributes(
     ctx: &GpuContext,
-    b: [&wgpu::Buffer; 7],
+    b: PerAttribute<&wgpu::Buffer>,
     n: usize,
     sh_degree: u32,
 ) -> Result<Gaussians<f32>, GpuError> {
     let mut g = Gaussians::<f32>::zeros(n, sh_degree);
     let coeffs = g.sh_coeffs();
-    g.means = gpu::read_buffer(ctx, b[0], 0, n)?;
-    g.rotations = gpu::read_buffer(ctx, b[1], 0, n)?;
-    g.log_scales = gpu::read_buffer(ctx, b[2], 0, n)?;
-    g.opacity_logits = gpu::read_buffer(ctx, b[3], 0, n)?;
-    g.sh = gpu::read_buffer(ctx, b[4], 0, n * coeffs)?;
-    g.mask_logits = gpu::read_buffer(ctx, b[5], 0, n)?;
-    g.log_reflections = gpu::read_buffer(ctx, b[6], 0, n)?;
+    g.means = gpu::read_buffer(ctx, b[Attribute::Means], 0, n)?;
+    g.rotations = gpu::read_buffer(ctx, b[Attribute::Rotations], 0, n)?;
+    g.log_scales = gpu::read_buffer(ctx, b[Attribute::LogScales], 0, n)?;
+    g.opacity_logits = gpu::read_buffer(ctx, b[Attribute::OpacityLogits], 0, n)?;
+    g.sh = gpu::read_buffer(ctx, b[Attribute::Sh], 0, n * coeffs)?;
+    g.mask_logits = gpu::read_buffer(ctx, b[Attribute::MaskLogits], 0, n)?;
+    g.log_reflections = gpu::read_buffer(ctx, b[Attribute::LogReflections], 0, n)?;
     Ok(g)
 }

@@ -10,7 +10,9 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 use trgs_core::io::{FormatError, write_atomic};
-use trgs_core::scene::{Gaussians, Material, Population, ReflectionPlane};
+use trgs_core::scene::{
+    Attribute, Gaussians, Material, PerAttribute, Population, ReflectionPlane, attribute_widths,
+};
 
 /// The checkpoint's file name in a run folder.
 pub const CHECKPOINT_FILE: &str = "checkpoint.trgs";
@@ -117,10 +119,10 @@ fn chunks<const N: usize>(v: &[f32]) -> Vec<[f32; N]> {
 pub fn check_state(state: &TrainState) -> Result<(), String> {
     trgs_core::scene::validate_gaussians(&state.gaussians).map_err(|e| e.to_string())?;
     let n = state.gaussians.len().max(1);
-    for (a, (m, v)) in state.m.iter().zip(&state.v).enumerate() {
-        for (which, moments) in [("first", m), ("second", v)] {
+    for a in Attribute::ALL {
+        for (which, moments) in [("first", &state.m[a]), ("second", &state.v[a])] {
             if let Some(k) = moments.iter().position(|x| !x.is_finite()) {
-                let name = trgs_render::ATTRIBUTES.get(a).copied().unwrap_or("an attribute");
+                let name = a.name();
                 let gaussian = k / (moments.len() / n).max(1);
                 return Err(format!(
                     "Gaussian {gaussian}: the {which} Adam moment of {name} is not finite ({})",
@@ -157,9 +159,11 @@ pub fn write_checkpoint(path: &Path, ck: &Checkpoint) -> Result<(), FormatError>
         ("log_reflections".into(), Array::F32(g.log_reflections.clone())),
         ("populations".into(), Array::U32(g.populations.iter().map(|&p| p as u32).collect())),
     ];
-    for (k, (m, v)) in ck.state.m.iter().zip(&ck.state.v).enumerate() {
-        arrays.push((format!("adam_m_{k}"), Array::F32(m.clone())));
-        arrays.push((format!("adam_v_{k}"), Array::F32(v.clone())));
+    // Moments by the attribute's position in `Attribute::ALL` (the file format's names).
+    for a in Attribute::ALL {
+        let k = a.index();
+        arrays.push((format!("adam_m_{k}"), Array::F32(ck.state.m[a].clone())));
+        arrays.push((format!("adam_v_{k}"), Array::F32(ck.state.v[a].clone())));
     }
     if let Some(s) = &ck.densify_stats {
         arrays.push(("densify_grad_sum".into(), Array::F64(s.grad_sum.clone())));
@@ -269,12 +273,13 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, FormatError> {
     let sh = chunks::<3>(&take_f32("sh", 3 * coeffs * n)?);
     let mask_logits = take_f32("mask_logits", n)?;
     let log_reflections = take_f32("log_reflections", n)?;
-    let widths = trgs_render::attribute_widths(coeffs as u32);
-    let mut m = Vec::new();
-    let mut v = Vec::new();
-    for (k, w) in widths.iter().enumerate() {
-        m.push(take_f32(&format!("adam_m_{k}"), n * *w as usize)?);
-        v.push(take_f32(&format!("adam_v_{k}"), n * *w as usize)?);
+    let widths = attribute_widths(coeffs);
+    let mut m = PerAttribute::<Vec<f32>>::default();
+    let mut v = PerAttribute::<Vec<f32>>::default();
+    for a in Attribute::ALL {
+        let k = a.index();
+        m[a] = take_f32(&format!("adam_m_{k}"), n * widths[a])?;
+        v[a] = take_f32(&format!("adam_v_{k}"), n * widths[a])?;
     }
     let mut take_u32 = |name: &str| match arrays.remove(name) {
         Some(Array::U32(v)) if v.len() == n => Ok(v),
@@ -357,10 +362,9 @@ mod tests {
         }
         g.rotations.fill([1.0, 0.0, 0.0, 0.0]);
         g.populations[2] = Population::Glass;
-        let widths = trgs_render::attribute_widths(g.sh_coeffs() as u32);
-        let m: Vec<Vec<f32>> =
-            widths.iter().map(|&w| (0..5 * w).map(|i| i as f32 * 0.5).collect()).collect();
-        let v = m.iter().map(|a| a.iter().map(|x| x * x).collect()).collect();
+        let widths = attribute_widths(g.sh_coeffs());
+        let m = PerAttribute::from_fn(|a| (0..5 * widths[a]).map(|i| i as f32 * 0.5).collect());
+        let v = m.clone().map(|a: Vec<f32>| a.iter().map(|x| x * x).collect());
         let plane = ReflectionPlane::new(
             DVec3::new(0.1, 0.2, 0.3),
             DVec3::new(0.0, 0.0, 2.0),
@@ -419,8 +423,9 @@ mod tests {
             ("Gaussian 1: mean is not finite", |s| s.gaussians.means[1][2] = f32::NAN),
             ("Gaussian 0: rotation (zero quaternion)", |s| s.gaussians.rotations[0] = [0.0; 4]),
             ("Gaussian 4: the second Adam moment of sh", |s| {
-                let k = s.v[4].len() - 1;
-                s.v[4][k] = f32::INFINITY;
+                let sh = &mut s.v[Attribute::Sh];
+                let k = sh.len() - 1;
+                sh[k] = f32::INFINITY;
             }),
         ];
         for (expected, spoil) in cases {

@@ -8,7 +8,7 @@
 use crate::settings::scale_len;
 use glam::{DMat3, DQuat, DVec3};
 use trgs_core::rng::Rng;
-use trgs_core::scene::{Gaussians, Population};
+use trgs_core::scene::{Attribute, Gaussians, PerAttribute, Population, attribute_widths};
 use trgs_render::layout::{FLAG_VISIBLE, PROJECTED_GRAD_FLOATS, ProjectedGaussian};
 
 /// The schedule and thresholds (3DGS defaults for 30k steps; lengths scale with the run).
@@ -116,9 +116,9 @@ impl DensifyStats {
 #[derive(Clone, Debug)]
 pub struct TrainState {
     pub gaussians: Gaussians<f32>,
-    /// First and second moments per attribute (`trgs_render::ATTRIBUTES` order), flat.
-    pub m: Vec<Vec<f32>>,
-    pub v: Vec<Vec<f32>>,
+    /// First and second moments of every attribute, flat.
+    pub m: PerAttribute<Vec<f32>>,
+    pub v: PerAttribute<Vec<f32>>,
 }
 
 /// What one densification step did: the count went from n to n + cloned + split - pruned (a
@@ -130,30 +130,25 @@ pub struct DensifyReport {
     pub pruned: usize,
 }
 
-pub fn widths(g: &Gaussians<f32>) -> [usize; 7] {
-    [3, 4, 3, 1, 3 * g.sh_coeffs(), 1, 1]
-}
-
 /// The state made of `sources` (an index into `state` each, in order); moments are copied for
 /// `keep_moments` entries and zero for the others.
 pub(crate) fn gather(state: &TrainState, sources: &[(usize, bool)]) -> TrainState {
     let g = &state.gaussians;
     let out = g.gather(sources.iter().map(|&(i, _)| i));
-    let w = widths(g);
-    let moments = |src: &[Vec<f32>]| -> Vec<Vec<f32>> {
-        (0..7)
-            .map(|a| {
-                let mut v = Vec::with_capacity(sources.len() * w[a]);
-                for &(i, keep) in sources {
-                    if keep {
-                        v.extend_from_slice(&src[a][i * w[a]..(i + 1) * w[a]]);
-                    } else {
-                        v.extend(std::iter::repeat_n(0.0, w[a]));
-                    }
+    let w = attribute_widths(g.sh_coeffs());
+    let moments = |src: &PerAttribute<Vec<f32>>| -> PerAttribute<Vec<f32>> {
+        PerAttribute::from_fn(|a| {
+            let (w, src) = (w[a], &src[a]);
+            let mut v = Vec::with_capacity(sources.len() * w);
+            for &(i, keep) in sources {
+                if keep {
+                    v.extend_from_slice(&src[i * w..(i + 1) * w]);
+                } else {
+                    v.extend(std::iter::repeat_n(0.0, w));
                 }
-                v
-            })
-            .collect()
+            }
+            v
+        })
     };
     TrainState { m: moments(&state.m), v: moments(&state.v), gaussians: out }
 }
@@ -223,18 +218,18 @@ impl RowPlan {
         out
     }
 
-    /// The attributes given whole, as GPU words by attribute name (`trgs_render::ATTRIBUTES`).
-    pub fn given_words(&self) -> Vec<(&'static str, Vec<u32>)> {
+    /// The attributes given whole, as GPU words.
+    pub fn given_words(&self) -> Vec<(Attribute, Vec<u32>)> {
         let words = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<u32>>();
         let mut out = Vec::new();
         if let Some(v) = &self.means {
-            out.push(("means", words(v.as_flattened())));
+            out.push((Attribute::Means, words(v.as_flattened())));
         }
         if let Some(v) = &self.log_scales {
-            out.push(("log_scales", words(v.as_flattened())));
+            out.push((Attribute::LogScales, words(v.as_flattened())));
         }
         if let Some(v) = &self.opacity_logits {
-            out.push(("opacity_logits", words(v)));
+            out.push((Attribute::OpacityLogits, words(v)));
         }
         out
     }
@@ -376,9 +371,9 @@ mod tests {
             g.log_reflections.push(0.0);
             g.populations.push(Population::Primary);
         }
-        let w = widths(&g);
-        let m = (0..7).map(|a| vec![1.0; n * w[a]]).collect();
-        let v = (0..7).map(|a| vec![2.0; n * w[a]]).collect();
+        let w = attribute_widths(g.sh_coeffs());
+        let m = PerAttribute::from_fn(|a| vec![1.0; n * w[a]]);
+        let v = PerAttribute::from_fn(|a| vec![2.0; n * w[a]]);
         TrainState { gaussians: g, m, v }
     }
 
@@ -425,9 +420,10 @@ mod tests {
         assert_eq!(report, DensifyReport { cloned: 1, split: 1, pruned: 1 });
         // Survivors 0, 2; the clone of 0 (3 is pruned, so not cloned); two children of 1.
         assert_eq!(out.gaussians.len(), 5);
-        assert_eq!(out.m[0].len(), 15);
-        assert_eq!(&out.m[0][..6], &[1.0; 6]);
-        assert_eq!(&out.m[0][6..], &[0.0; 9]);
+        let means = &out.m[Attribute::Means];
+        assert_eq!(means.len(), 15);
+        assert_eq!(&means[..6], &[1.0; 6]);
+        assert_eq!(&means[6..], &[0.0; 9]);
         assert_eq!(out.gaussians.means[2], [0.0, 0.0, 0.0]);
         let child = out.gaussians.log_scales[3][0];
         assert!((f64::from(child) + 1.6f64.ln()).abs() < 1e-6);

@@ -7,9 +7,10 @@
 //! 30k-step run.
 use crate::adam::AdamMoments;
 use crate::densify::RowPlan;
+use trgs_core::scene::PerAttribute;
 use trgs_render::gpu::{self, Kernel, Recorder, grid_1d, range};
 use trgs_render::layout::{GATHER_ZERO, GatherParams};
-use trgs_render::{ATTRIBUTES, GpuContext, GpuScene};
+use trgs_render::{GpuContext, GpuScene};
 
 /// The kernel and the binding limit it works under.
 #[derive(Debug)]
@@ -129,33 +130,30 @@ impl GpuRowGather {
         &self,
         ctx: &GpuContext,
         scene: &GpuScene,
-        moments: &[AdamMoments],
+        moments: &PerAttribute<AdamMoments>,
         plan: &RowPlan,
-    ) -> Result<(GpuScene, Vec<AdamMoments>), gpu::GpuError> {
+    ) -> Result<(GpuScene, PerAttribute<AdamMoments>), gpu::GpuError> {
         let scopes = gpu::ErrorScopes::open(ctx, "rebuilding the Gaussians");
         let sources = GatherSources::new(ctx, &plan.sources);
         let n_src = scene.len();
         let mut rec = Recorder::new(ctx, "trgs.gather_rows", false);
         let given = plan.given_words();
         let rebuilt = scene.rebuilt(sources.len(), |buffer, width, label| {
-            match given.iter().find(|(name, _)| label == format!("trgs.scene.{name}")) {
+            match given.iter().find(|(a, _)| label == format!("trgs.scene.{}", a.name())) {
                 Some((_, words)) => gpu::storage_init(ctx, label, words),
                 None => self.record(ctx, &mut rec, label, buffer, n_src, width, &sources, false),
             }
         });
-        let moments = moments
-            .iter()
-            .zip(scene.attribute_widths())
-            .zip(ATTRIBUTES)
-            .map(|((mo, width), name)| {
-                let gather = |rec: &mut Recorder, b: &wgpu::Buffer, which: &str| {
-                    let label = format!("trgs.adam.{name}.{which}");
-                    self.record(ctx, rec, &label, b, n_src, width, &sources, true)
-                };
-                let (m, v) = (gather(&mut rec, &mo.m, "m"), gather(&mut rec, &mo.v, "v"));
-                AdamMoments { m, v, len: u64::from(sources.len()) * u64::from(width) }
-            })
-            .collect();
+        let widths = scene.attribute_widths();
+        let moments = PerAttribute::from_fn(|a| {
+            let (mo, width) = (&moments[a], widths[a]);
+            let mut gather = |b: &wgpu::Buffer, which: &str| {
+                let label = format!("trgs.adam.{}.{which}", a.name());
+                self.record(ctx, &mut rec, &label, b, n_src, width, &sources, true)
+            };
+            let (m, v) = (gather(&mo.m, "m"), gather(&mo.v, "v"));
+            AdamMoments { m, v, len: u64::from(sources.len()) * u64::from(width) }
+        });
         let waited = rec.submit_and_wait(ctx);
         scopes.close_after(waited.map(|()| (rebuilt, moments)))
     }

@@ -15,7 +15,7 @@ use crate::densify::{Geometry, RowPlan, TrainState, sigmoid};
 use crate::settings::scale_len;
 use trgs_core::reference::AdamRate;
 use trgs_core::rng::Rng;
-use trgs_core::scene::Population;
+use trgs_core::scene::{Attribute, Population};
 use trgs_render::gpu::{self, Kernel, Recorder, grid_1d, range};
 use trgs_render::layout::McmcParams;
 use trgs_render::{GpuContext, GpuScene, SceneGradBuffers};
@@ -280,6 +280,7 @@ impl McmcKernels {
             ..Default::default()
         };
         let p = scene.parameters();
+        let (log_scales, opacities) = (p[Attribute::LogScales], p[Attribute::OpacityLogits]);
         for (first, count) in scene.chunks() {
             let block =
                 gpu::params(ctx, "trgs.mcmc_regularise.params", &McmcParams { count, ..base });
@@ -288,11 +289,11 @@ impl McmcKernels {
                 ctx,
                 &[
                     block.as_entire_binding(),
-                    range(p[2], f * 12, c * 12),
-                    range(p[3], f * 4, c * 4),
+                    range(log_scales, f * 12, c * 12),
+                    range(opacities, f * 4, c * 4),
                     range(scene.populations(), f * 4, c * 4),
-                    range(&grads.log_scales, f * 12, c * 12),
-                    range(&grads.opacity_logits, f * 4, c * 4),
+                    range(grads.parameter(Attribute::LogScales), f * 12, c * 12),
+                    range(grads.parameter(Attribute::OpacityLogits), f * 4, c * 4),
                 ],
             );
             rec.dispatch("mcmc_regularise", &self.regularise, &bind, grid_1d(count.div_ceil(256)));
@@ -323,10 +324,10 @@ impl McmcKernels {
                 ctx,
                 &[
                     block.as_entire_binding(),
-                    range(p[0], f * 12, c * 12),
-                    range(p[1], f * 16, c * 16),
-                    range(p[2], f * 12, c * 12),
-                    range(p[3], f * 4, c * 4),
+                    range(p[Attribute::Means], f * 12, c * 12),
+                    range(p[Attribute::Rotations], f * 16, c * 16),
+                    range(p[Attribute::LogScales], f * 12, c * 12),
+                    range(p[Attribute::OpacityLogits], f * 4, c * 4),
                     range(scene.populations(), f * 4, c * 4),
                 ],
             );
@@ -338,7 +339,7 @@ impl McmcKernels {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use trgs_core::scene::Gaussians;
+    use trgs_core::scene::{Gaussians, PerAttribute};
 
     /// N copies at the relocated opacity composite to the old opacity where they overlap
     /// (1 - (1 - o')^N = o), and one share leaves a Gaussian unchanged.
@@ -369,9 +370,9 @@ mod tests {
         for (i, m) in g.means.iter_mut().enumerate() {
             *m = [i as f32, 0.0, 0.0];
         }
-        let w = crate::densify::widths(&g);
-        let ones = |k: usize| vec![1.0f32; opacities.len() * w[k]];
-        TrainState { m: (0..7).map(ones).collect(), v: (0..7).map(ones).collect(), gaussians: g }
+        let w = trgs_core::scene::attribute_widths(g.sh_coeffs());
+        let ones = |a: Attribute| vec![1.0f32; opacities.len() * w[a]];
+        TrainState { m: PerAttribute::from_fn(ones), v: PerAttribute::from_fn(ones), gaussians: g }
     }
 
     /// Growing 5% per relocation from 4000 to a 20 times larger cap (the synthetic scene's
@@ -416,12 +417,12 @@ mod tests {
             assert!(o > settings.min_opacity, "slot {d} is still dead: {o}");
             let copy_of = (0..12).find(|&j| j != d && g.means[j] == g.means[d]);
             assert!(copy_of.is_some(), "slot {d} holds a copy of a live Gaussian");
-            assert_eq!(out.m[0][3 * d], 0.0, "moved Gaussians restart Adam");
+            assert_eq!(out.m[Attribute::Means][3 * d], 0.0, "moved Gaussians restart Adam");
         }
         // The glass Gaussian is never a source, a slot or touched.
         assert_eq!(g.opacity_logits[11], s.gaussians.opacity_logits[11]);
         assert!(g.means[12..].iter().all(|m| *m != s.gaussians.means[11]));
-        assert_eq!(out.m[0][3 * 11], 1.0);
+        assert_eq!(out.m[Attribute::Means][3 * 11], 1.0);
     }
 
     #[test]

@@ -1,6 +1,7 @@
 //! Every setting of a training run, with the paper's and 3DGS's values as defaults. Lengths are
 //! given for the paper's 30k iterations and scale with `iterations`.
 use trgs_core::reference::{AdamRate, DSSIM_LAMBDA, ReflectionModel};
+use trgs_core::scene::{Attribute, PerAttribute};
 
 /// The paper's iteration budget, which the default lengths below refer to.
 pub const PAPER_ITERATIONS: u32 = 30_000;
@@ -60,23 +61,26 @@ impl LearningRates {
         ln.exp() * extent
     }
 
-    /// The rate of every attribute buffer (in `trgs_render::ATTRIBUTES` order) at `step`.
+    /// The rate of every attribute at `step`.
     pub fn attribute_rates(
         &self,
         step: u32,
         iterations: u32,
         extent: f64,
         sh_coeffs: u32,
-    ) -> [AdamRate; 7] {
-        [
-            AdamRate::uniform(self.position_at(step, iterations, extent)),
-            AdamRate::uniform(self.rotation),
-            AdamRate::uniform(self.scale),
-            AdamRate::uniform(self.opacity),
-            AdamRate { lr: self.sh_rest, lead_lr: self.sh_dc, lead: 3, stride: 3 * sh_coeffs },
-            AdamRate::uniform(self.mask),
-            AdamRate::uniform(self.reflection),
-        ]
+    ) -> PerAttribute<AdamRate> {
+        PerAttribute::from_fn(|a| match a {
+            Attribute::Means => AdamRate::uniform(self.position_at(step, iterations, extent)),
+            Attribute::Rotations => AdamRate::uniform(self.rotation),
+            Attribute::LogScales => AdamRate::uniform(self.scale),
+            Attribute::OpacityLogits => AdamRate::uniform(self.opacity),
+            // The DC colour (the first 3 floats of each Gaussian's record) has its own rate.
+            Attribute::Sh => {
+                AdamRate { lr: self.sh_rest, lead_lr: self.sh_dc, lead: 3, stride: 3 * sh_coeffs }
+            }
+            Attribute::MaskLogits => AdamRate::uniform(self.mask),
+            Attribute::LogReflections => AdamRate::uniform(self.reflection),
+        })
     }
 }
 

@@ -19,10 +19,12 @@ use anyhow::{Context, Result};
 use phase_clock::PhaseClock;
 use std::collections::HashMap;
 use trgs_core::reference::{AdamSettings, RegulariserWeights};
-use trgs_core::scene::{Camera, Gaussians, ReflectionPlane};
+use trgs_core::scene::{
+    Attribute, Camera, Gaussians, PerAttribute, ReflectionPlane, attribute_widths,
+};
 use trgs_render::gpu::Recorder;
 use trgs_render::{
-    ATTRIBUTES, BackwardOptions, Frame, GpuContext, GpuScene, LayerGrads, RenderOptions, Renderer,
+    BackwardOptions, Frame, GpuContext, GpuScene, LayerGrads, RenderOptions, Renderer,
 };
 
 /// What one step measured.
@@ -91,7 +93,7 @@ pub struct Trainer {
     renderer: Renderer,
     scene: GpuScene,
     adam: Adam,
-    moments: Vec<AdamMoments>,
+    moments: PerAttribute<AdamMoments>,
     plane_moments: Vec<PlaneMoments>,
     frame: Frame,
     losses: LossKernels,
@@ -260,11 +262,12 @@ impl Trainer {
         let read = |b: &wgpu::Buffer, len: u64| {
             trgs_render::gpu::read_buffer::<f32>(&self.ctx, b, 0, len as usize)
         };
-        Ok(TrainState {
-            gaussians: self.gaussians()?,
-            m: self.moments.iter().map(|mo| read(&mo.m, mo.len)).collect::<Result<_, _>>()?,
-            v: self.moments.iter().map(|mo| read(&mo.v, mo.len)).collect::<Result<_, _>>()?,
-        })
+        let (mut m, mut v) = (PerAttribute::default(), PerAttribute::default());
+        for (a, mo) in self.moments.iter() {
+            m[a] = read(&mo.m, mo.len)?;
+            v[a] = read(&mo.v, mo.len)?;
+        }
+        Ok(TrainState { gaussians: self.gaussians()?, m, v })
     }
 
     /// Replace the parameters and moments (after an edit such as densification).
@@ -279,11 +282,9 @@ impl Trainer {
         let planes = self.scene.planes().to_vec();
         self.scene = GpuScene::upload(&self.ctx, &state.gaussians, &planes)
             .context("uploading the edited Gaussians")?;
-        self.moments = ATTRIBUTES
-            .iter()
-            .enumerate()
-            .map(|(a, name)| AdamMoments::from_values(&self.ctx, name, &state.m[a], &state.v[a]))
-            .collect();
+        self.moments = PerAttribute::from_fn(|a| {
+            AdamMoments::from_values(&self.ctx, a.name(), &state.m[a], &state.v[a])
+        });
         if let Some((_, stats)) = &mut self.densify {
             stats.reset(&self.ctx, state.gaussians.len());
         }
@@ -292,7 +293,7 @@ impl Trainer {
 
     /// Replace the opacity logits on the GPU (the other parameters and all moments stay).
     fn write_opacity_logits(&self, logits: &[f32]) {
-        let opacity = self.scene.parameters()[3];
+        let opacity = self.scene.parameter(Attribute::OpacityLogits);
         self.ctx.queue.write_buffer(opacity, 0, bytemuck::cast_slice(logits));
     }
 
@@ -316,14 +317,15 @@ impl Trainer {
             // In place: only the opacities and their moments change, so the densification
             // statistics gathered since the last densification stay (rebuilding the state, as
             // a densification does, used to clear them).
-            let opacity = self.scene.parameters()[3];
+            let opacity = self.scene.parameter(Attribute::OpacityLogits);
             let mut logits: Vec<f32> =
                 trgs_render::gpu::read_buffer(&self.ctx, opacity, 0, self.scene.len() as usize)?;
             cap_opacity_logits(&mut logits);
             self.write_opacity_logits(&logits);
             let mut enc = self.ctx.device.create_command_encoder(&Default::default());
-            enc.clear_buffer(&self.moments[3].m, 0, None);
-            enc.clear_buffer(&self.moments[3].v, 0, None);
+            let moments = &self.moments[Attribute::OpacityLogits];
+            enc.clear_buffer(&moments.m, 0, None);
+            enc.clear_buffer(&moments.v, 0, None);
             self.ctx.queue.submit([enc.finish()]);
         }
         Ok(report)
@@ -467,29 +469,27 @@ impl Trainer {
             t - 1,
             self.settings.iterations,
             self.extent,
-            self.scene.attribute_widths()[4] / 3,
+            self.scene.sh_coeffs(),
         );
         let mut rec = Recorder::new(ctx, "trgs.train.adam", false);
         if let Some((settings, kernels)) = &self.mcmc {
             kernels.record_regularise(ctx, &mut rec, &self.scene, &g.gaussians, settings);
         }
-        let values = self.scene.parameters();
-        let grad_buffers = g.gaussians.parameters();
-        for k in 0..ATTRIBUTES.len() {
-            self.adam.record(
-                ctx,
-                &mut rec,
-                values[k],
-                grad_buffers[k],
-                &self.moments[k],
-                &rates[k],
-                t,
-            );
+        for a in Attribute::ALL {
+            let (values, grads) = (self.scene.parameter(a), g.gaussians.parameter(a));
+            self.adam.record(ctx, &mut rec, values, grads, &self.moments[a], &rates[a], t);
         }
         if let Some((settings, kernels)) = &self.mcmc {
             // A seed per step (the step survives a resume, so the noise does too).
             let seed = (self.settings.seed as u32).wrapping_mul(0x9e37_79b9) ^ t;
-            kernels.record_noise(ctx, &mut rec, &self.scene, settings, &rates[0], seed);
+            kernels.record_noise(
+                ctx,
+                &mut rec,
+                &self.scene,
+                settings,
+                &rates[Attribute::Means],
+                seed,
+            );
         }
         if let Some((settings, stats)) = &self.densify
             && t <= settings.until
@@ -532,9 +532,9 @@ impl Trainer {
         g.mask_logits.extend_from_slice(&glass.mask_logits);
         g.log_reflections.extend_from_slice(&glass.log_reflections);
         g.populations.extend_from_slice(&glass.populations);
-        let widths = trgs_render::attribute_widths(g.sh_coeffs() as u32);
-        for (a, w) in widths.iter().enumerate() {
-            let len = (n_old + glass.len()) * *w as usize;
+        let widths = attribute_widths(g.sh_coeffs());
+        for a in Attribute::ALL {
+            let len = (n_old + glass.len()) * widths[a];
             state.m[a].resize(len, 0.0);
             state.v[a].resize(len, 0.0);
         }
@@ -577,13 +577,10 @@ impl Trainer {
     }
 }
 
-fn zero_moments(ctx: &GpuContext, scene: &GpuScene) -> Vec<AdamMoments> {
+fn zero_moments(ctx: &GpuContext, scene: &GpuScene) -> PerAttribute<AdamMoments> {
     let n = u64::from(scene.len());
-    ATTRIBUTES
-        .iter()
-        .zip(scene.attribute_widths())
-        .map(|(name, w)| AdamMoments::zeros(ctx, name, n * u64::from(w)))
-        .collect()
+    let widths = scene.attribute_widths();
+    PerAttribute::from_fn(|a| AdamMoments::zeros(ctx, a.name(), n * u64::from(widths[a])))
 }
 
 /// PSNR for data range 1 (infinite for a perfect match).

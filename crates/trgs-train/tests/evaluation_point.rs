@@ -1,5 +1,6 @@
 //! `Trainer::train_step_then` calls its hook after the step's update and before the step's
 //! maintenance: an evaluation there sees the model the step made, not an opacity reset.
+use trgs_core::scene::Attribute;
 use trgs_core::synthetic::{SyntheticConfig, generate, write_dataset};
 use trgs_render::GpuContext;
 use trgs_train::data::{self, Resolution};
@@ -47,6 +48,7 @@ fn hook_runs_after_the_update_and_before_the_opacity_reset() {
     assert!(max_logit(&trainer) <= cap, "the reset did not follow the hook");
     // The reset clears the opacities' moments only.
     let state = trainer.read_state().expect("readback");
-    assert!(state.m[3].iter().chain(&state.v[3]).all(|&x| x == 0.0));
-    assert!(state.m[0].iter().any(|&x| x != 0.0), "the means' moments stay");
+    let opacity = Attribute::OpacityLogits;
+    assert!(state.m[opacity].iter().chain(&state.v[opacity]).all(|&x| x == 0.0));
+    assert!(state.m[Attribute::Means].iter().any(|&x| x != 0.0), "the means' moments stay");
 }

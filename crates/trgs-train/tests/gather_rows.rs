@@ -4,13 +4,13 @@
 //! relocation through the trainer against the whole state read back and rebuilt on the CPU.
 use trgs_core::fixtures::{SceneSpec, random_scene};
 use trgs_core::rng::Rng;
-use trgs_core::scene::{Gaussians, ReflectionPlane};
+use trgs_core::scene::{Attribute, Gaussians, PerAttribute, ReflectionPlane, attribute_widths};
 use trgs_render::gpu::read_buffer;
 use trgs_render::{DeviceOptions, GpuContext, GpuScene};
 use trgs_train::adam::AdamMoments;
 use trgs_train::checkpoint::Checkpoint;
 use trgs_train::densify::{
-    ClassicSettings, DensifyStats, Geometry, RowPlan, TrainState, plan_densify, widths,
+    ClassicSettings, DensifyStats, Geometry, RowPlan, TrainState, plan_densify,
 };
 use trgs_train::gather_rows::GpuRowGather;
 use trgs_train::mcmc::{McmcSettings, plan_relocation};
@@ -37,9 +37,11 @@ fn state(n: usize, seed: u64) -> (TrainState, Vec<ReflectionPlane>) {
     };
     let scene = random_scene(&spec);
     let g: Gaussians<f32> = scene.gaussians.cast();
-    let w = widths(&g);
-    let moments = |base: f32| -> Vec<Vec<f32>> {
-        (0..7).map(|a| (0..n * w[a]).map(|k| base + (a * 100_000 + k) as f32).collect()).collect()
+    let w = attribute_widths(g.sh_coeffs());
+    let moments = |base: f32| {
+        PerAttribute::from_fn(|a| {
+            (0..n * w[a]).map(|k| base + (a.index() * 100_000 + k) as f32).collect()
+        })
     };
     (TrainState { m: moments(0.5), v: moments(-0.25), gaussians: g }, scene.planes)
 }
@@ -62,29 +64,34 @@ fn upload(
     ctx: &GpuContext,
     s: &TrainState,
     planes: &[ReflectionPlane],
-) -> (GpuScene, Vec<AdamMoments>) {
+) -> (GpuScene, PerAttribute<AdamMoments>) {
     let scene = GpuScene::upload(ctx, &s.gaussians, planes).expect("valid scene");
-    let moments = (0..7).map(|a| AdamMoments::from_values(ctx, "test", &s.m[a], &s.v[a])).collect();
+    let moments =
+        PerAttribute::from_fn(|a| AdamMoments::from_values(ctx, "test", &s.m[a], &s.v[a]));
     (scene, moments)
 }
 
-fn read_back(ctx: &GpuContext, scene: &GpuScene, moments: &[AdamMoments]) -> TrainState {
+fn read_back(
+    ctx: &GpuContext,
+    scene: &GpuScene,
+    moments: &PerAttribute<AdamMoments>,
+) -> TrainState {
     let read = |b: &wgpu::Buffer, len: u64| -> Vec<f32> {
         read_buffer(ctx, b, 0, len as usize).expect("readback")
     };
     TrainState {
         gaussians: scene.read(ctx).expect("readback"),
-        m: moments.iter().map(|mo| read(&mo.m, mo.len)).collect(),
-        v: moments.iter().map(|mo| read(&mo.v, mo.len)).collect(),
+        m: moments.as_ref().map(|mo| read(&mo.m, mo.len)),
+        v: moments.as_ref().map(|mo| read(&mo.v, mo.len)),
     }
 }
 
 fn assert_same(gpu: &TrainState, twin: &TrainState, what: &str) {
     assert_eq!(gpu.gaussians.len(), twin.gaussians.len(), "{what}: count");
     assert!(gpu.gaussians == twin.gaussians, "{what}: the Gaussians differ");
-    for a in 0..7 {
-        assert!(gpu.m[a] == twin.m[a], "{what}: first moments of attribute {a} differ");
-        assert!(gpu.v[a] == twin.v[a], "{what}: second moments of attribute {a} differ");
+    for a in Attribute::ALL {
+        assert!(gpu.m[a] == twin.m[a], "{what}: first moments of {a:?} differ");
+        assert!(gpu.v[a] == twin.v[a], "{what}: second moments of {a:?} differ");
     }
 }
 
@@ -113,7 +120,7 @@ fn gather_rows_matches_twin_in_one_range_and_in_many() {
     let (empty, moments0) =
         gather.apply(&ctx, &scene, &moments, &RowPlan::default()).expect("rebuild");
     assert_eq!(empty.len(), 0);
-    assert!(moments0.iter().all(|m| m.len == 0));
+    assert!(moments0.iter().all(|(_, m)| m.len == 0));
 }
 
 /// Two trainers in the same state (a checkpoint) with classic densification statistics.

@@ -3,7 +3,7 @@
 //! Gaussians (which both must leave alone) and opacities on both sides of the noise gate.
 use trgs_core::reference::{AdamRate, mcmc_noise, mcmc_regularise};
 use trgs_core::rng::Rng;
-use trgs_core::scene::{Gaussians, Population};
+use trgs_core::scene::{Attribute, Gaussians, Population};
 use trgs_render::gpu::{self, Recorder};
 use trgs_render::{DeviceOptions, GpuContext, GpuScene, SceneGradBuffers};
 use trgs_train::mcmc::{McmcKernels, McmcSettings};
@@ -51,8 +51,16 @@ fn gpu_mcmc_stages_match_twins() {
     let g_scales: Vec<f32> = (0..3 * n).map(|_| rng.normal() as f32 * 1e-3).collect();
     let g_opacity: Vec<f32> = (0..n).map(|_| rng.normal() as f32 * 1e-3).collect();
     let grads = SceneGradBuffers::zeros(&ctx, &reg_scene).expect("allocation");
-    ctx.queue.write_buffer(&grads.log_scales, 0, bytemuck::cast_slice(&g_scales));
-    ctx.queue.write_buffer(&grads.opacity_logits, 0, bytemuck::cast_slice(&g_opacity));
+    ctx.queue.write_buffer(
+        grads.parameter(Attribute::LogScales),
+        0,
+        bytemuck::cast_slice(&g_scales),
+    );
+    ctx.queue.write_buffer(
+        grads.parameter(Attribute::OpacityLogits),
+        0,
+        bytemuck::cast_slice(&g_opacity),
+    );
     let mut rec = Recorder::new(&ctx, "test.mcmc", false);
     kernels.record_regularise(&ctx, &mut rec, &reg_scene, &grads, &settings);
     rec.submit_and_wait(&ctx).expect("GPU work");
@@ -67,8 +75,10 @@ fn gpu_mcmc_stages_match_twins() {
         &mut want_o,
         &mut want_s,
     );
-    let got_o: Vec<f32> = gpu::read_buffer(&ctx, &grads.opacity_logits, 0, n).expect("readback");
-    let got_s: Vec<f32> = gpu::read_buffer(&ctx, &grads.log_scales, 0, 3 * n).expect("readback");
+    let got_o: Vec<f32> =
+        gpu::read_buffer(&ctx, grads.parameter(Attribute::OpacityLogits), 0, n).expect("readback");
+    let got_s: Vec<f32> =
+        gpu::read_buffer(&ctx, grads.parameter(Attribute::LogScales), 0, 3 * n).expect("readback");
     let close = |a: f32, b: f64| (f64::from(a) - b).abs() <= 1e-6 * b.abs() + 1e-12;
     for i in 0..n {
         assert!(close(got_o[i], want_o[i]), "opacity gradient {i}: {} vs {}", got_o[i], want_o[i]);

@@ -5,11 +5,11 @@ use anyhow::{Context, Result, anyhow, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+use trgs_cli::exr_layers::write_exr;
 use trgs_core::io::{SceneFolder, Split, read_transforms, write_png_rgb};
 use trgs_core::plane_math::{flip_horizontal, mirror_camera, mirrored_pass_gaussians};
 use trgs_core::scene::Camera;
 use trgs_render::{GpuContext, GpuScene, Layer, RenderOptions, Renderer};
-use trgs_cli::exr_layers::write_exr;
 use trgs_train::model::{Model, load_model};
 
 const HELP: &str = "\

@@ -2,8 +2,8 @@
 //! seconds of training — as a Markdown table (printed) and a PNG plot.
 use anyhow::{Context, Result, bail};
 use std::path::PathBuf;
-use trgs_core::io::write_png_rgb;
 use trgs_cli::plot::{curve_of, markdown_table, plot};
+use trgs_core::io::write_png_rgb;
 
 const HELP: &str = "\
 trgs report: test PSNR against training time of several runs

@@ -8,6 +8,7 @@ use crate::gpu::{self, BufferPool, Recorder, grid_1d, range};
 use crate::layout::{CULL_VIEWS, ProjectParams, ProjectedGaussian};
 use crate::scene::GpuScene;
 use trgs_core::reference::{GUARD_BAND, TileRect};
+use trgs_core::scene::Attribute;
 use trgs_core::scene::{Intrinsics, ReflectionPlane, ViewTransform};
 
 const PROJECTED: u64 = std::mem::size_of::<ProjectedGaussian>() as u64;
@@ -120,9 +121,9 @@ pub fn record_candidates(
             let block = gpu::storage_init(s.ctx, "trgs.project.cull_params", &blocks);
             let mut entries = vec![
                 block.as_entire_binding(),
-                range(&scene.means, f * 12, c * 12),
-                range(&scene.log_scales, f * 12, c * 12),
-                range(&scene.opacity_logits, f * 4, c * 4),
+                range(scene.parameter(Attribute::Means), f * 12, c * 12),
+                range(scene.parameter(Attribute::LogScales), f * 12, c * 12),
+                range(scene.parameter(Attribute::OpacityLogits), f * 4, c * 4),
                 range(&scene.populations, f * 4, c * 4),
             ];
             // A group of fewer views binds its first view's buffers in the unused slots (the
@@ -165,13 +166,13 @@ pub fn record(
             s.ctx,
             &[
                 block.as_entire_binding(),
-                range(&scene.means, f * 12, c * 12),
-                range(&scene.rotations, f * 16, c * 16),
-                range(&scene.log_scales, f * 12, c * 12),
-                range(&scene.opacity_logits, f * 4, c * 4),
-                range(&scene.sh, f * coeffs * 12, c * coeffs * 12),
-                range(&scene.mask_logits, f * 4, c * 4),
-                range(&scene.log_reflections, f * 4, c * 4),
+                range(scene.parameter(Attribute::Means), f * 12, c * 12),
+                range(scene.parameter(Attribute::Rotations), f * 16, c * 16),
+                range(scene.parameter(Attribute::LogScales), f * 12, c * 12),
+                range(scene.parameter(Attribute::OpacityLogits), f * 4, c * 4),
+                range(scene.parameter(Attribute::Sh), f * coeffs * 12, c * coeffs * 12),
+                range(scene.parameter(Attribute::MaskLogits), f * 4, c * 4),
+                range(scene.parameter(Attribute::LogReflections), f * 4, c * 4),
                 range(&scene.populations, f * 4, c * 4),
                 out,
                 list,

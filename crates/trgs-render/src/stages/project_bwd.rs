@@ -5,6 +5,7 @@ use super::project::{Candidates, WORK_STRIDE};
 use crate::gpu::{self, Recorder, range};
 use crate::layout::{BWD_ADD, PROJECTED_GRAD_FLOATS, ProjectParams, ProjectedGaussian};
 use crate::scene::{GpuScene, SceneGradBuffers};
+use trgs_core::scene::Attribute;
 
 const PROJECTED: u64 = std::mem::size_of::<ProjectedGaussian>() as u64;
 const PROJECTED_GRAD: u64 = PROJECTED_GRAD_FLOATS as u64 * 4;
@@ -35,19 +36,19 @@ pub fn record(
             s.ctx,
             &[
                 block.as_entire_binding(),
-                range(&scene.means, f * 12, c * 12),
-                range(&scene.rotations, f * 16, c * 16),
-                range(&scene.log_scales, f * 12, c * 12),
-                range(&scene.sh, f * coeffs * 12, c * coeffs * 12),
+                range(scene.parameter(Attribute::Means), f * 12, c * 12),
+                range(scene.parameter(Attribute::Rotations), f * 16, c * 16),
+                range(scene.parameter(Attribute::LogScales), f * 12, c * 12),
+                range(scene.parameter(Attribute::Sh), f * coeffs * 12, c * coeffs * 12),
                 range(projected, f * PROJECTED, c * PROJECTED),
                 range(projected_grads, f * PROJECTED_GRAD, c * PROJECTED_GRAD),
-                range(&out.means, f * 12, c * 12),
-                range(&out.rotations, f * 16, c * 16),
-                range(&out.log_scales, f * 12, c * 12),
-                range(&out.opacity_logits, f * 4, c * 4),
-                range(&out.sh, f * coeffs * 12, c * coeffs * 12),
-                range(&out.mask_logits, f * 4, c * 4),
-                range(&out.log_reflections, f * 4, c * 4),
+                range(out.parameter(Attribute::Means), f * 12, c * 12),
+                range(out.parameter(Attribute::Rotations), f * 16, c * 16),
+                range(out.parameter(Attribute::LogScales), f * 12, c * 12),
+                range(out.parameter(Attribute::OpacityLogits), f * 4, c * 4),
+                range(out.parameter(Attribute::Sh), f * coeffs * 12, c * coeffs * 12),
+                range(out.parameter(Attribute::MaskLogits), f * 4, c * 4),
+                range(out.parameter(Attribute::LogReflections), f * 4, c * 4),
                 view_grads.clone(),
                 list,
                 work,

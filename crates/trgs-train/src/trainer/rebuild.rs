@@ -4,6 +4,7 @@ use super::Trainer;
 use crate::densify::{DensifyReport, Geometry, RowPlan, plan_densify};
 use crate::mcmc::{McmcReport, plan_relocation};
 use anyhow::Result;
+use trgs_core::scene::Attribute;
 
 impl Trainer {
     /// The attributes densification and relocation decide from, read back (15 words per
@@ -12,10 +13,10 @@ impl Trainer {
         let (ctx, n) = (&self.ctx, self.scene.len() as usize);
         let p = self.scene.parameters();
         Ok(Geometry {
-            means: trgs_render::gpu::read_buffer(ctx, p[0], 0, n)?,
-            rotations: trgs_render::gpu::read_buffer(ctx, p[1], 0, n)?,
-            log_scales: trgs_render::gpu::read_buffer(ctx, p[2], 0, n)?,
-            opacity_logits: trgs_render::gpu::read_buffer(ctx, p[3], 0, n)?,
+            means: trgs_render::gpu::read_buffer(ctx, p[Attribute::Means], 0, n)?,
+            rotations: trgs_render::gpu::read_buffer(ctx, p[Attribute::Rotations], 0, n)?,
+            log_scales: trgs_render::gpu::read_buffer(ctx, p[Attribute::LogScales], 0, n)?,
+            opacity_logits: trgs_render::gpu::read_buffer(ctx, p[Attribute::OpacityLogits], 0, n)?,
             populations: self.scene.read_populations(ctx)?,
         })
     }
