@@ -10,9 +10,9 @@ pub mod densify;
 pub mod densify_stats;
 pub mod eval;
 pub mod gather_rows;
+pub mod gaussian_state;
 pub mod init;
 pub mod losses;
-pub mod mcmc;
 /// Loading a trained model (moved to trgs-core so that the viewer reads models without training code).
 pub use trgs_core::io::model;
 pub mod perturb;

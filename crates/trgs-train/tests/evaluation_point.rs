@@ -4,7 +4,7 @@ use trgs_core::scene::Attribute;
 use trgs_core::synthetic::{SyntheticConfig, generate, write_dataset};
 use trgs_render::GpuContext;
 use trgs_train::data::{self, Resolution};
-use trgs_train::densify::ClassicSettings;
+use trgs_train::densify::{ClassicSettings, Densification};
 use trgs_train::init::{InitialShape, SeedPoint, gaussians_from_points};
 use trgs_train::settings::TrainSettings;
 use trgs_train::trainer::Trainer;
@@ -25,7 +25,7 @@ fn hook_runs_after_the_update_and_before_the_opacity_reset() {
     // An opacity reset at step 3 and no densification before the end.
     let mut densify = ClassicSettings::scaled(100);
     (densify.from, densify.until, densify.every, densify.opacity_reset_every) = (50, 60, 50, 3);
-    trainer.enable_densification(densify);
+    trainer.set_densification(&Densification::Classic(densify));
     let cap = (0.01f32 / 0.99).ln();
     let max_logit = |t: &Trainer| {
         t.gaussians().expect("readback").opacity_logits.iter().copied().fold(f32::MIN, f32::max)

@@ -9,11 +9,12 @@ use trgs_render::gpu::read_buffer;
 use trgs_render::{DeviceOptions, GpuContext, GpuScene};
 use trgs_train::adam::AdamMoments;
 use trgs_train::checkpoint::Checkpoint;
+use trgs_train::densify::mcmc::{McmcDensification, McmcSettings, plan_relocation};
+use trgs_train::densify::{ClassicDensification, Densification};
 use trgs_train::densify::{
-    ClassicSettings, DensifyStats, Geometry, RowPlan, TrainState, plan_densify,
+    ClassicSettings, DensifyStats, Geometry, RowPlan, TrainState, classic::plan_densify,
 };
 use trgs_train::gather_rows::GpuRowGather;
-use trgs_train::mcmc::{McmcSettings, plan_relocation};
 use trgs_train::settings::TrainSettings;
 use trgs_train::trainer::Trainer;
 
@@ -155,7 +156,8 @@ fn trainers(ctx: &GpuContext) -> (Trainer, Trainer, Checkpoint) {
     densify.max_screen_radius = 20.0;
     let make = || {
         let s = settings.clone();
-        Trainer::from_checkpoint(ctx, &ck, s, 1.0, Some(densify.clone())).expect("trainer")
+        let classic = Densification::Classic(densify.clone());
+        Trainer::from_checkpoint(ctx, &ck, s, 1.0, &classic).expect("trainer")
     };
     (make(), make(), ck)
 }
@@ -169,13 +171,17 @@ fn densification_on_the_gpu_matches_the_cpu_rebuild() {
         Geometry::of(&ck.state.gaussians),
         "the geometry read back"
     );
-    let report = gpu.densify_now(true).expect("densify on the GPU");
     let stats = ck.densify_stats.as_ref().expect("statistics");
     let settings = {
         let mut d = ClassicSettings::scaled(30_000);
         d.max_screen_radius = 20.0;
         d
     };
+    let n = ck.state.gaussians.len();
+    let mut classic = ClassicDensification::resumed(&ctx, settings.clone(), n, Some(stats));
+    let report = gpu
+        .edit_gaussians(|g, rng, extent| classic.densify_now(g, rng, extent, true))
+        .expect("densify on the GPU");
     let mut rng = Rng::from_state(ck.rng_state);
     let geometry = Geometry::of(&ck.state.gaussians);
     let (plan, twin_report) = plan_densify(&geometry, stats, &settings, 1.0, true, &mut rng);
@@ -201,8 +207,8 @@ fn relocation_on_the_gpu_matches_the_cpu_rebuild() {
     let ctx = ctx();
     let (mut gpu, mut cpu, ck) = trainers(&ctx);
     let settings = McmcSettings::scaled(30_000, 1600);
-    gpu.enable_mcmc(settings.clone());
-    let report = gpu.relocate_now().expect("relocate on the GPU");
+    let mut mcmc = McmcDensification::new(&ctx, settings.clone());
+    let report = gpu.edit_gaussians(|g, rng, _| mcmc.relocate_now(g, rng)).expect("relocate");
     let mut rng = Rng::from_state(ck.rng_state);
     let geometry = Geometry::of(&ck.state.gaussians);
     let (plan, twin_report) = plan_relocation(&geometry, &settings, &mut rng);

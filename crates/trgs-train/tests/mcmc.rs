@@ -6,7 +6,7 @@ use trgs_core::rng::Rng;
 use trgs_core::scene::{Attribute, Gaussians, Population};
 use trgs_render::gpu::{self, Recorder};
 use trgs_render::{DeviceOptions, GpuContext, GpuScene, SceneGradBuffers};
-use trgs_train::mcmc::{McmcKernels, McmcSettings};
+use trgs_train::densify::mcmc::{McmcKernels, McmcSettings};
 
 fn scene(n: usize, rng: &mut Rng) -> Gaussians<f32> {
     let mut g = Gaussians::<f32>::zeros(n, 1);

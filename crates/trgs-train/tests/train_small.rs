@@ -5,7 +5,7 @@ use trgs_core::metrics::psnr;
 use trgs_core::synthetic::{SyntheticConfig, generate, write_dataset};
 use trgs_render::{GpuContext, Layer};
 use trgs_train::data::{self, Resolution};
-use trgs_train::densify::ClassicSettings;
+use trgs_train::densify::{ClassicSettings, Densification};
 use trgs_train::init::{InitialShape, SeedPoint, gaussians_from_points};
 use trgs_train::plane_init::{PlaneInitSettings, initialise_planes};
 use trgs_train::settings::TrainSettings;
@@ -42,7 +42,7 @@ fn small_scene_trains_and_finds_its_plane() {
     densify.every = 20;
     densify.from = 20;
     densify.until = 100;
-    trainer.enable_densification(densify);
+    trainer.set_densification(&Densification::Classic(densify));
     let before = test_psnr(&trainer, &data);
     let mut rng = trgs_core::rng::Rng::new(1);
     while trainer.step < iterations {

@@ -16,13 +16,12 @@ use trgs_core::synthetic::{generate, write_dataset};
 use trgs_render::GpuContext;
 use trgs_train::checkpoint::{CHECKPOINT_FILE, read_checkpoint, write_checkpoint};
 use trgs_train::data::{self, TrainingData};
-use trgs_train::densify::ClassicSettings;
+use trgs_train::densify::{ClassicSettings, Densification, McmcSettings};
 use trgs_train::eval::{
     Evaluation, Renderable, TruthComparison, compare_with_truth, evaluate, render_fps,
     write_renders,
 };
-use trgs_train::init::{InitialShape, SeedPoint, gaussians_from_points, random_points};
-use trgs_train::mcmc::McmcSettings;
+use trgs_train::init::{SeedPoint, gaussians_from_points, random_points};
 use trgs_train::plane_init::{PlaneInitSettings, initialise_planes};
 use trgs_train::trainer::{StepTimes, Trainer};
 use trgs_viewer::{LiveFeed, Snapshot, Source, ViewerOptions};
@@ -218,10 +217,11 @@ fn train(
     let data = load_data(&args, &data_dir)?;
     let ctx = GpuContext::new()?;
     let settings = settings_of(&args);
-    let densify =
-        (args.densify == DensifyMode::Classic).then(|| ClassicSettings::scaled(args.iterations));
-    let mcmc = (args.densify == DensifyMode::Mcmc)
-        .then(|| McmcSettings::scaled(args.iterations, args.cap));
+    let densification = match args.densify {
+        DensifyMode::Classic => Densification::Classic(ClassicSettings::scaled(args.iterations)),
+        DensifyMode::Mcmc => Densification::Mcmc(McmcSettings::scaled(args.iterations, args.cap)),
+        DensifyMode::None => Densification::None,
+    };
     let log_path = args.out.join("log.jsonl");
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating the output folder {}", args.out.display()))?;
@@ -237,10 +237,8 @@ fn train(
                 state.train_views = data.train.iter().map(|v| v.camera.name.clone()).collect();
             }
             truncate_log(&log_path, ck.step)?;
-            let mut trainer = Trainer::from_checkpoint(&ctx, &ck, settings, data.extent, densify)?;
-            if let Some(m) = mcmc.clone() {
-                trainer.enable_mcmc(m);
-            }
+            let trainer =
+                Trainer::from_checkpoint(&ctx, &ck, settings, data.extent, &densification)?;
             (trainer, state)
         }
         None => {
@@ -255,15 +253,10 @@ fn train(
             } else {
                 data.points.iter().map(|&(position, color)| SeedPoint { position, color }).collect()
             };
-            let shape = if mcmc.is_some() { InitialShape::MCMC } else { InitialShape::CLASSIC };
+            let shape = densification.initial_shape();
             let gaussians = gaussians_from_points(&seeds, args.sh_degree, shape);
             let mut trainer = Trainer::new(&ctx, &gaussians, &[], settings, data.extent)?;
-            if let Some(d) = densify {
-                trainer.enable_densification(d);
-            }
-            if let Some(m) = mcmc {
-                trainer.enable_mcmc(m);
-            }
+            trainer.set_densification(&densification);
             // A previous run's checkpoint in this folder would be what `--resume` continues if
             // this run stopped before its own first one.
             let old = args.out.join(CHECKPOINT_FILE);

@@ -9,8 +9,9 @@ use std::time::Instant;
 use trgs_core::fixtures::{RoomDensity, RoomSpec, room_scene};
 use trgs_core::rng::Rng;
 use trgs_render::GpuContext;
-use trgs_train::densify::{ClassicSettings, DensifyStats, Geometry, RowPlan, plan_densify};
-use trgs_train::mcmc::{McmcSettings, plan_relocation};
+use trgs_train::densify::classic::plan_densify;
+use trgs_train::densify::mcmc::{McmcSettings, plan_relocation};
+use trgs_train::densify::{ClassicSettings, DensifyStats, Geometry, RowPlan};
 use trgs_train::settings::TrainSettings;
 use trgs_train::trainer::Trainer;
 

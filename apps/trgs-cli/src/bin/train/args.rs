@@ -352,7 +352,7 @@ pub fn settings_of(args: &Args) -> TrainSettings {
     s.reflection.intensity = !ab.no_intensity;
     s.reflection.fresnel = !ab.no_fresnel;
     if args.densify == DensifyMode::Mcmc {
-        s.rates.opacity = trgs_train::mcmc::OPACITY_LEARNING_RATE;
+        s.rates.opacity = trgs_train::densify::mcmc::OPACITY_LEARNING_RATE;
     }
     s
 }

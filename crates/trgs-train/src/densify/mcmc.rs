@@ -11,8 +11,10 @@
 //!
 //! There is no pruning and no opacity reset. Glass Gaussians are never moved, sampled or noised:
 //! they belong to their plane.
-use crate::densify::{Geometry, RowPlan, TrainState, sigmoid};
+use super::{DensifyEvent, DensifyStrategy, Geometry, RowPlan, StepView, TrainState, sigmoid};
+use crate::gaussian_state::GaussianState;
 use crate::settings::scale_len;
+use anyhow::Result;
 use trgs_core::reference::AdamRate;
 use trgs_core::rng::Rng;
 use trgs_core::scene::{Attribute, Population};
@@ -247,6 +249,65 @@ pub fn plan_relocation(
         opacity_logits: Some(rows.opacity_logits),
     };
     (plan, McmcReport { relocated, added: added_from.len() })
+}
+
+/// MCMC densification as a [`DensifyStrategy`].
+#[derive(Debug)]
+pub struct McmcDensification {
+    settings: McmcSettings,
+    kernels: McmcKernels,
+}
+
+impl McmcDensification {
+    pub fn new(ctx: &GpuContext, settings: McmcSettings) -> Self {
+        Self { settings, kernels: McmcKernels::new(ctx) }
+    }
+
+    pub fn settings(&self) -> &McmcSettings {
+        &self.settings
+    }
+
+    /// A relocation and growth step now (the schedule calls it every `every` steps).
+    pub fn relocate_now(
+        &mut self,
+        gaussians: &mut GaussianState,
+        rng: &mut Rng,
+    ) -> Result<McmcReport> {
+        let (plan, report) = plan_relocation(&gaussians.geometry()?, &self.settings, rng);
+        gaussians.apply_plan(&plan)?;
+        Ok(report)
+    }
+}
+
+impl DensifyStrategy for McmcDensification {
+    fn name(&self) -> &'static str {
+        "mcmc"
+    }
+
+    fn record_before_adam(&self, step: &StepView<'_>, rec: &mut Recorder) {
+        let grads = &step.grads.gaussians;
+        self.kernels.record_regularise(step.ctx, rec, step.scene, grads, &self.settings);
+    }
+
+    fn record_after_adam(&self, step: &StepView<'_>, rec: &mut Recorder) {
+        // A seed per step (the step survives a resume, so the noise does too).
+        let seed = (step.seed as u32).wrapping_mul(0x9e37_79b9) ^ step.step;
+        let position = &step.rates[Attribute::Means];
+        self.kernels.record_noise(step.ctx, rec, step.scene, &self.settings, position, seed);
+    }
+
+    fn maintain(
+        &mut self,
+        step: u32,
+        gaussians: &mut GaussianState,
+        rng: &mut Rng,
+        _extent: f64,
+    ) -> Result<Vec<DensifyEvent>> {
+        if !self.settings.relocates_at(step) {
+            return Ok(Vec::new());
+        }
+        Ok(vec![DensifyEvent::Relocated(self.relocate_now(gaussians, rng)?)])
+    }
 }
 
 /// The two per-step GPU stages.

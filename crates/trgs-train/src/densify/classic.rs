@@ -5,10 +5,15 @@
 //! on the CPU from a few attributes read back ([`Geometry`]) into a [`RowPlan`], which the GPU
 //! carries out over every parameter and Adam moment (`gather_rows`): survivors keep their
 //! moments, new Gaussians start from zero moments, as in the reference code.
-use crate::settings::scale_len;
+use super::{DensifyEvent, DensifyStrategy, Geometry, RowPlan, StepView, TrainState, sigmoid};
+use crate::densify_stats::GpuDensifyStats;
+use crate::gaussian_state::GaussianState;
+use crate::settings::{Stage, scale_len};
+use anyhow::Result;
 use glam::{DMat3, DQuat, DVec3};
 use trgs_core::rng::Rng;
-use trgs_core::scene::{Attribute, Gaussians, PerAttribute, Population, attribute_widths};
+use trgs_render::GpuContext;
+use trgs_render::gpu::Recorder;
 use trgs_render::layout::{FLAG_VISIBLE, PROJECTED_GRAD_FLOATS, ProjectedGaussian};
 
 /// The schedule and thresholds (3DGS defaults for 30k steps; lengths scale with the run).
@@ -112,15 +117,6 @@ impl DensifyStats {
     }
 }
 
-/// Parameters and Adam moments of a set of Gaussians, edited together.
-#[derive(Clone, Debug)]
-pub struct TrainState {
-    pub gaussians: Gaussians<f32>,
-    /// First and second moments of every attribute, flat.
-    pub m: PerAttribute<Vec<f32>>,
-    pub v: PerAttribute<Vec<f32>>,
-}
-
 /// What one densification step did: the count went from n to n + cloned + split - pruned (a
 /// split replaces one Gaussian by two; children pruned at once count as pruned).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -130,114 +126,102 @@ pub struct DensifyReport {
     pub pruned: usize,
 }
 
-/// The state made of `sources` (an index into `state` each, in order); moments are copied for
-/// `keep_moments` entries and zero for the others.
-pub(crate) fn gather(state: &TrainState, sources: &[(usize, bool)]) -> TrainState {
-    let g = &state.gaussians;
-    let out = g.gather(sources.iter().map(|&(i, _)| i));
-    let w = attribute_widths(g.sh_coeffs());
-    let moments = |src: &PerAttribute<Vec<f32>>| -> PerAttribute<Vec<f32>> {
-        PerAttribute::from_fn(|a| {
-            let (w, src) = (w[a], &src[a]);
-            let mut v = Vec::with_capacity(sources.len() * w);
-            for &(i, keep) in sources {
-                if keep {
-                    v.extend_from_slice(&src[i * w..(i + 1) * w]);
-                } else {
-                    v.extend(std::iter::repeat_n(0.0, w));
-                }
-            }
-            v
-        })
-    };
-    TrainState { m: moments(&state.m), v: moments(&state.v), gaussians: out }
+/// Classic densification as a [`DensifyStrategy`]: statistics gathered on the GPU every step,
+/// densify and prune every `every` steps, opacity resets.
+#[derive(Debug)]
+pub struct ClassicDensification {
+    ctx: GpuContext,
+    settings: ClassicSettings,
+    stats: GpuDensifyStats,
 }
 
-pub(crate) fn sigmoid(x: f64) -> f64 {
-    1.0 / (1.0 + (-x).exp())
-}
-
-/// The attributes densification decides from (classic and MCMC), read back on their own: 15
-/// words per Gaussian, where the parameters and their Adam moments are about 180 at SH degree 3.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Geometry {
-    pub means: Vec<[f32; 3]>,
-    pub rotations: Vec<[f32; 4]>,
-    pub log_scales: Vec<[f32; 3]>,
-    pub opacity_logits: Vec<f32>,
-    pub populations: Vec<Population>,
-}
-
-impl Geometry {
-    pub fn of(g: &Gaussians<f32>) -> Self {
-        Self {
-            means: g.means.clone(),
-            rotations: g.rotations.clone(),
-            log_scales: g.log_scales.clone(),
-            opacity_logits: g.opacity_logits.clone(),
-            populations: g.populations.clone(),
-        }
+impl ClassicDensification {
+    /// For a set of `n` Gaussians, with `stats` (a checkpoint's) or zero statistics.
+    pub fn resumed(
+        ctx: &GpuContext,
+        settings: ClassicSettings,
+        n: usize,
+        stats: Option<&DensifyStats>,
+    ) -> Self {
+        let stats = match stats {
+            Some(s) => GpuDensifyStats::from_stats(ctx, s),
+            None => GpuDensifyStats::new(ctx, n),
+        };
+        Self { ctx: ctx.clone(), settings, stats }
     }
 
-    pub fn len(&self) -> usize {
-        self.opacity_logits.len()
+    pub fn settings(&self) -> &ClassicSettings {
+        &self.settings
     }
 
-    pub fn is_empty(&self) -> bool {
-        self.opacity_logits.is_empty()
+    /// Densify and prune now, from the statistics gathered since the last time (the schedule
+    /// calls it every `every` steps); the statistics start over.
+    pub fn densify_now(
+        &mut self,
+        gaussians: &mut GaussianState,
+        rng: &mut Rng,
+        extent: f64,
+        prune_large: bool,
+    ) -> Result<DensifyReport> {
+        let stats = self.stats.read(&self.ctx)?;
+        let geometry = gaussians.geometry()?;
+        let (plan, report) =
+            plan_densify(&geometry, &stats, &self.settings, extent, prune_large, rng);
+        gaussians.apply_plan(&plan)?;
+        self.stats.reset(&self.ctx, plan.sources.len());
+        Ok(report)
     }
 }
 
-/// A rebuild of the Gaussian set: output row j is a copy of input row `sources[j].0`, with its
-/// Adam moments when `sources[j].1` and zero moments otherwise; the attributes given here are
-/// replaced whole (e.g. the split children's means and scales). Densification and relocation
-/// plan on the CPU from a [`Geometry`]; the plan runs on the GPU (`gather_rows`), or on the CPU
-/// with [`RowPlan::apply`], its twin.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct RowPlan {
-    pub sources: Vec<(usize, bool)>,
-    pub means: Option<Vec<[f32; 3]>>,
-    pub log_scales: Option<Vec<[f32; 3]>>,
-    pub opacity_logits: Option<Vec<f32>>,
-}
-
-impl RowPlan {
-    /// The state this plan makes of `state`, on the CPU.
-    pub fn apply(&self, state: &TrainState) -> TrainState {
-        let mut out = gather(state, &self.sources);
-        let g = &mut out.gaussians;
-        if let Some(v) = &self.means {
-            g.means.clone_from(v);
-        }
-        if let Some(v) = &self.log_scales {
-            g.log_scales.clone_from(v);
-        }
-        if let Some(v) = &self.opacity_logits {
-            g.opacity_logits.clone_from(v);
-        }
-        out
+impl DensifyStrategy for ClassicDensification {
+    fn name(&self) -> &'static str {
+        "classic"
     }
 
-    /// The attributes given whole, as GPU words.
-    pub fn given_words(&self) -> Vec<(Attribute, Vec<u32>)> {
-        let words = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<u32>>();
-        let mut out = Vec::new();
-        if let Some(v) = &self.means {
-            out.push((Attribute::Means, words(v.as_flattened())));
+    fn record_after_adam(&self, step: &StepView<'_>, rec: &mut Recorder) {
+        if step.step > self.settings.until {
+            return;
         }
-        if let Some(v) = &self.log_scales {
-            out.push((Attribute::LogScales, words(v.as_flattened())));
-        }
-        if let Some(v) = &self.opacity_logits {
-            out.push((Attribute::OpacityLogits, words(v)));
-        }
-        out
+        // The camera's pass, and in the joint stage each plane's mirrored pass too (see
+        // `DensifyStats::add`). In stage 2 the reflection's gradient does not reach the
+        // Gaussians: its passes hold zeros.
+        let views = if step.stage == Stage::Joint { step.frame.views().len() } else { 1 };
+        self.stats.record_add(step.ctx, rec, step.frame, step.grads, views);
     }
 
-    /// Whether every attribute the plan gives is finite (an upload's check; the gathered rows
-    /// come from a checked set).
-    pub fn given_are_finite(&self) -> bool {
-        self.given_words().iter().all(|(_, w)| w.iter().all(|&b| f32::from_bits(b).is_finite()))
+    fn maintain(
+        &mut self,
+        step: u32,
+        gaussians: &mut GaussianState,
+        rng: &mut Rng,
+        extent: f64,
+    ) -> Result<Vec<DensifyEvent>> {
+        let s = &self.settings;
+        let mut events = Vec::new();
+        if step > s.from && step < s.until && step.is_multiple_of(s.every) {
+            let prune_large = step > s.opacity_reset_every;
+            let report = self.densify_now(gaussians, rng, extent, prune_large)?;
+            events.push(DensifyEvent::Densified(report));
+        }
+        if self.settings.resets_opacity_at(step) {
+            // In place: only the opacities and their moments change, so the statistics
+            // gathered since the last densification stay.
+            gaussians.reset_opacities(cap_opacity_logits)?;
+            events.push(DensifyEvent::OpacityReset);
+        }
+        Ok(events)
+    }
+
+    fn resets_opacity_at(&self, step: u32) -> bool {
+        self.settings.resets_opacity_at(step)
+    }
+
+    fn restart(&mut self, n: usize) {
+        self.stats.reset(&self.ctx, n);
+    }
+
+    fn statistics(&self) -> Result<Option<DensifyStats>> {
+        Ok(Some(self.stats.read(&self.ctx)?))
     }
 }
 
@@ -358,6 +342,7 @@ pub fn cap_opacity_logits(logits: &mut [f32]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use trgs_core::scene::{Attribute, Gaussians, PerAttribute, Population, attribute_widths};
 
     fn state(n: usize) -> TrainState {
         let mut g = Gaussians::<f32>::empty(0);

@@ -1,0 +1,241 @@
+//! One training step on the GPU: render the view, the image loss and its gradient, the backward
+//! pass, then Adam on every attribute buffer in place (the Gaussians never leave the GPU) and on
+//! the planes (a few numbers each, on the CPU), then the densification strategy's maintenance.
+//! The whole run (stages, plane initialisation, evaluation, checkpoints) is
+//! [`crate::run::TrainingRun`]; this is the step it repeats.
+use crate::adam::Adam;
+use crate::checkpoint::{Checkpoint, PlaneMoments};
+use crate::densify::{Densification, Geometry, RowPlan};
+use crate::densify::{DensifyEvent, DensifyStrategy, NoDensification, TrainState};
+use crate::gaussian_state::GaussianState;
+use crate::losses::{GpuTarget, LossKernels};
+use crate::settings::TrainSettings;
+
+mod phase_clock;
+mod planes;
+mod step;
+mod step_times;
+
+pub use step_times::StepTimes;
+
+use anyhow::{Context, Result};
+use std::collections::HashMap;
+use trgs_core::reference::AdamSettings;
+use trgs_core::rng::Rng;
+use trgs_core::scene::{Camera, Gaussians, ReflectionPlane};
+use trgs_render::{Frame, GpuContext, GpuScene, LayerGrads, RenderOptions, Renderer};
+
+/// What one step measured and did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StepStats {
+    pub loss: f64,
+    pub l1: f64,
+    pub ssim: f64,
+    /// PSNR of the rendered training view.
+    pub psnr: f64,
+    /// Where the step's wall-clock time went.
+    pub times: StepTimes,
+    /// With [`Trainer::profile`]: GPU milliseconds of every render and backward stage, from
+    /// timestamp queries (empty when off or when the adapter has none).
+    pub gpu_stages: Vec<(&'static str, f64)>,
+    /// What the densification strategy did to the set after the step (usually nothing).
+    pub densified: Vec<DensifyEvent>,
+    /// Gaussians whose opacity the perturbation changed after this step (0 on most steps).
+    pub perturbed: usize,
+}
+
+/// The optimisation state on the GPU.
+#[derive(Debug)]
+pub struct Trainer {
+    ctx: GpuContext,
+    renderer: Renderer,
+    gaussians: GaussianState,
+    adam: Adam,
+    plane_moments: Vec<PlaneMoments>,
+    frame: Frame,
+    losses: LossKernels,
+    /// Every training view's image and glass labels, uploaded on first use.
+    targets: HashMap<String, GpuTarget>,
+    /// dL/d(layer) buffers, reused while the frame size and plane count stay.
+    layer_grads: Option<((u32, u32, usize), LayerGrads)>,
+    /// Steps taken so far.
+    pub step: u32,
+    pub settings: TrainSettings,
+    /// The scene extent (scales the position and plane-centre rates).
+    pub extent: f64,
+    /// How the set changes: none, classic or MCMC ([`Trainer::set_densification`]).
+    densification: Box<dyn DensifyStrategy>,
+    /// Densification's and the perturbation's random draws.
+    rng: Rng,
+    /// Time every GPU stage of each step with timestamp queries ([`StepStats::gpu_stages`]).
+    pub profile: bool,
+    /// Centres of the training cameras (the opacity perturbation selects what they see through
+    /// a plane).
+    camera_centres: Vec<glam::DVec3>,
+}
+
+impl Trainer {
+    /// Upload `gaussians` and `planes` and start from zero moments, without densification.
+    pub fn new(
+        ctx: &GpuContext,
+        gaussians: &Gaussians<f32>,
+        planes: &[ReflectionPlane],
+        settings: TrainSettings,
+        extent: f64,
+    ) -> Result<Self> {
+        trgs_render::gpu::scoped(ctx, "setting up training", || {
+            Ok(Self {
+                ctx: ctx.clone(),
+                renderer: Renderer::new(ctx),
+                adam: Adam::new(ctx, AdamSettings::default()),
+                gaussians: GaussianState::new(ctx, gaussians, planes)?,
+                plane_moments: vec![PlaneMoments::default(); planes.len()],
+                frame: Frame::default(),
+                losses: LossKernels::new(ctx),
+                targets: HashMap::new(),
+                layer_grads: None,
+                step: 0,
+                rng: Rng::new(settings.seed ^ 0x5eed),
+                settings,
+                extent,
+                densification: Box::new(NoDensification),
+                profile: false,
+                camera_centres: Vec::new(),
+            })
+        })
+    }
+
+    /// Continue from `ck` (written by [`Trainer::checkpoint`]) with `settings`, which should be
+    /// those of the interrupted run, and its densification (its statistics from `ck`).
+    pub fn from_checkpoint(
+        ctx: &GpuContext,
+        ck: &Checkpoint,
+        settings: TrainSettings,
+        extent: f64,
+        densification: &Densification,
+    ) -> Result<Self> {
+        trgs_render::gpu::scoped(ctx, "resuming from a checkpoint", || {
+            let mut t = Self::new(ctx, &ck.state.gaussians, &ck.planes, settings, extent)?;
+            t.gaussians.replace(&ck.state)?;
+            t.plane_moments = ck.plane_moments.clone();
+            t.step = ck.step;
+            t.rng = Rng::from_state(ck.rng_state);
+            let n = ck.state.gaussians.len();
+            t.densification = densification.strategy(ctx, n, ck.densify_stats.as_ref());
+            Ok(t)
+        })
+    }
+
+    /// Everything needed to continue this run later, with `extra` for the caller's own state.
+    pub fn checkpoint(&self, extra: serde_json::Value) -> Result<Checkpoint> {
+        Ok(Checkpoint {
+            step: self.step,
+            state: self.read_state()?,
+            planes: self.planes().to_vec(),
+            plane_moments: self.plane_moments.clone(),
+            densify_stats: self.densification.statistics()?,
+            rng_state: self.rng.state(),
+            extra,
+        })
+    }
+
+    /// Densify with `densification` from now on (replacing the strategy in use).
+    pub fn set_densification(&mut self, densification: &Densification) {
+        self.densification = densification.strategy(&self.ctx, self.gaussians.len(), None);
+    }
+
+    /// The strategy in use.
+    pub fn densification(&self) -> &dyn DensifyStrategy {
+        self.densification.as_ref()
+    }
+
+    /// The training cameras (for the opacity perturbation; without them it perturbs nothing).
+    pub fn set_training_cameras(&mut self, cameras: &[Camera]) {
+        self.camera_centres = cameras.iter().map(|c| c.pose.centre()).collect();
+    }
+
+    /// The parameters and Adam moments, read back.
+    pub fn read_state(&self) -> Result<TrainState> {
+        self.gaussians.read()
+    }
+
+    /// Replace the parameters and moments (after an edit such as densification); the strategy's
+    /// per-Gaussian statistics start over.
+    pub fn set_state(&mut self, state: &TrainState) -> Result<()> {
+        let ctx = self.ctx.clone();
+        trgs_render::gpu::scoped(&ctx, "uploading the training state", || {
+            self.gaussians.replace(state)?;
+            self.densification.restart(state.gaussians.len());
+            Ok(())
+        })
+    }
+
+    /// The attributes densification decides from, read back.
+    pub fn geometry(&self) -> Result<Geometry> {
+        self.gaussians.geometry()
+    }
+
+    /// Edit the set with its shared operations, the trainer's random state and the scene extent
+    /// (what a strategy's maintenance gets), outside the schedule: tests and benchmarks run a
+    /// strategy's steps this way. The strategy in use starts its statistics over.
+    pub fn edit_gaussians<R>(
+        &mut self,
+        edit: impl FnOnce(&mut GaussianState, &mut Rng, f64) -> Result<R>,
+    ) -> Result<R> {
+        let out = edit(&mut self.gaussians, &mut self.rng, self.extent)?;
+        self.densification.restart(self.gaussians.len());
+        Ok(out)
+    }
+
+    /// Rebuild the set by `plan` on the GPU (stage `gather_rows`).
+    pub fn apply_plan(&mut self, plan: &RowPlan) -> Result<()> {
+        self.edit_gaussians(|g, _, _| g.apply_plan(plan))
+    }
+
+    /// [`Trainer::apply_plan`] through the CPU (the twin), for tests and the benchmark.
+    pub fn apply_plan_on_cpu(&mut self, plan: &RowPlan) -> Result<()> {
+        self.edit_gaussians(|g, _, _| g.apply_plan_on_cpu(plan))
+    }
+
+    pub fn context(&self) -> &GpuContext {
+        &self.ctx
+    }
+
+    pub fn renderer(&self) -> &Renderer {
+        &self.renderer
+    }
+
+    pub fn scene(&self) -> &GpuScene {
+        self.gaussians.scene()
+    }
+
+    /// The current Gaussians, read back from the GPU.
+    pub fn gaussians(&self) -> Result<Gaussians<f32>> {
+        self.gaussians.gaussians()
+    }
+
+    pub fn planes(&self) -> &[ReflectionPlane] {
+        self.gaussians.scene().planes()
+    }
+
+    /// The options a render of the current state uses (the SH degree of the last step included).
+    pub fn render_options(&self) -> RenderOptions {
+        RenderOptions {
+            background: self.settings.background,
+            sh_degree: Some(self.settings.active_sh_degree(self.step)),
+            reflection: self.settings.reflection,
+            ..RenderOptions::default()
+        }
+    }
+
+    /// Render `camera` with the current state (what evaluation and the outputs see).
+    pub fn render(&self, camera: &Camera) -> Result<Frame> {
+        let options = self.render_options();
+        Ok(self.renderer.render(self.scene(), camera, &options).context("rendering a view")?)
+    }
+}
+
+/// PSNR for data range 1 (infinite for a perfect match).
+pub fn psnr_of(mse: f64) -> f64 {
+    if mse > 0.0 { -10.0 * mse.log10() } else { f64::INFINITY }
+}

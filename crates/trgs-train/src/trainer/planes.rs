@@ -1,0 +1,91 @@
+//! The trainer's reflection planes: adding them with their glass Gaussians, stepping their
+//! parameters, and the opacity perturbation of what the cameras see through them.
+use super::Trainer;
+use crate::checkpoint::PlaneMoments;
+use crate::perturb::{perturb_opacities, seen_through_planes};
+use crate::plane_adam::{PlaneRates, plane_adam};
+use crate::settings::Stage;
+use anyhow::{Context, Result};
+use trgs_core::reference::PlaneGrad;
+use trgs_core::scene::{Attribute, Gaussians, ReflectionPlane, attribute_widths};
+
+impl Trainer {
+    /// Add reflection planes and their glass Gaussians (zero moments) to the optimisation.
+    pub fn add_planes(&mut self, planes: &[ReflectionPlane], glass: &Gaussians<f32>) -> Result<()> {
+        let mut state = self.read_state()?;
+        let n_old = state.gaussians.len();
+        let g = &mut state.gaussians;
+        g.means.extend_from_slice(&glass.means);
+        g.rotations.extend_from_slice(&glass.rotations);
+        g.log_scales.extend_from_slice(&glass.log_scales);
+        g.opacity_logits.extend_from_slice(&glass.opacity_logits);
+        g.sh.extend_from_slice(&glass.with_sh_degree(g.sh_degree).sh);
+        g.mask_logits.extend_from_slice(&glass.mask_logits);
+        g.log_reflections.extend_from_slice(&glass.log_reflections);
+        g.populations.extend_from_slice(&glass.populations);
+        let widths = attribute_widths(g.sh_coeffs());
+        for a in Attribute::ALL {
+            let len = (n_old + glass.len()) * widths[a];
+            state.m[a].resize(len, 0.0);
+            state.v[a].resize(len, 0.0);
+        }
+        let mut all = self.planes().to_vec();
+        all.extend_from_slice(planes);
+        self.gaussians.scene_mut().set_planes(&all).context("initialised planes")?;
+        self.plane_moments.resize(all.len(), PlaneMoments::default());
+        self.set_state(&state)
+    }
+
+    /// Adam on the planes' offset along the normal, normal and R0 logit ([`plane_adam`]).
+    pub(super) fn step_planes(&mut self, grads: &[PlaneGrad], t: u32) -> Result<()> {
+        if grads.is_empty() {
+            return Ok(());
+        }
+        let r = &self.settings.rates;
+        // Stage 3 fine-tunes the planes' position and normal at a tenth of the rate.
+        let fine =
+            if self.settings.stage(t - 1) == Stage::Joint { r.plane_stage3_factor } else { 1.0 };
+        let mut planes = self.planes().to_vec();
+        let rates = PlaneRates {
+            offset: fine * r.plane_centre * self.extent,
+            normal: fine * r.plane_normal,
+            r0_logit: r.plane_r0,
+        };
+        let stage1 = self.settings.stage1;
+        for ((plane, g), mom) in planes.iter_mut().zip(grads).zip(&mut self.plane_moments) {
+            // Adam's bias correction counts the plane's own steps: its moments start at zero
+            // when it is created (at the end of stage 1), and with the run's step count instead
+            // the first steps would be several times the rate (1 - b2^t near 1 under a tiny v).
+            // A checkpoint from before the count started: the planes began after stage 1.
+            if mom.steps == 0 && mom.v.iter().any(|&v| v != 0.0) {
+                mom.steps = t.saturating_sub(stage1 + 1);
+            }
+            mom.steps += 1;
+            plane_adam(plane, g, mom, &rates, mom.steps);
+        }
+        let scene = self.gaussians.scene_mut();
+        scene.set_planes(&planes).context("a plane step left an invalid plane")?;
+        Ok(())
+    }
+
+    /// Opacity perturbation after step `self.step`, when its schedule says so; returns how many
+    /// Gaussians it perturbed.
+    pub(super) fn perturb_step(&mut self) -> Result<usize> {
+        let t = self.step;
+        let Some(p) = self.settings.perturb else { return Ok(0) };
+        if self.planes().is_empty()
+            || self.settings.stage(t) != Stage::Joint
+            || t >= p.until
+            || !t.is_multiple_of(p.every)
+            || self.densification.resets_opacity_at(t)
+        {
+            return Ok(0);
+        }
+        let mut g = self.gaussians()?;
+        let selected = seen_through_planes(&g, self.planes(), &self.camera_centres);
+        let n = perturb_opacities(&mut g, &selected, p.amplitude, &mut self.rng);
+        // Only the opacity buffer changes: the moments and densification statistics stay.
+        self.gaussians.write_opacity_logits(&g.opacity_logits);
+        Ok(n)
+    }
+}
