@@ -1,4 +1,6 @@
-//! What the trgs commands share: the layers of `render` as OpenEXR ([`exr_layers`]) and the
-//! speed-against-error plot of `report` ([`plot`]). Each command is a bin of this package.
+//! What the trgs commands share: argument parsers ([`args`]), the layers of `render` as OpenEXR
+//! ([`exr_layers`]) and the speed-against-error plot of `report` ([`plot`]). Each command is a
+//! bin of this package.
+pub mod args;
 pub mod exr_layers;
 pub mod plot;

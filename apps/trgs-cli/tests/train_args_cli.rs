@@ -1,5 +1,6 @@
 //! `train` refuses flag combinations where one flag would be silently ignored, before any work,
-//! and `render` refuses a malformed background colour.
+//! `render` refuses a malformed background colour, and `report` bad arguments; each error names
+//! the flags (clap's wording for what clap checks).
 use std::process::Command;
 
 fn refused(bin: &str, args: &[&str]) -> String {
@@ -11,15 +12,16 @@ fn refused(bin: &str, args: &[&str]) -> String {
 #[test]
 fn conflicting_flags_are_refused_by_name() {
     let train = env!("CARGO_BIN_EXE_train");
-    let cases: [(&[&str], &[&str]); 6] = [
+    let cases: [(&[&str], &[&str]); 7] = [
         (&["--resolution", "128", "--downscale", "2"], &["--resolution", "--downscale"]),
         (
             &["--demo-scene", "attic"],
-            &["\"attic\"", "showcase", "window", "night-window", "no-glass"],
+            &["'attic'", "showcase", "window", "night-window", "no-glass"],
         ),
         (&["--data", "somewhere", "--demo-scene", "window"], &["--demo-scene", "--data"]),
         (&["--cap", "1000"], &["--cap", "--densify mcmc"]),
-        (&["--no-planes", "--no-fresnel"], &["--no-planes", "no Fresnel"]),
+        (&["--no-planes", "--no-fresnel"], &["--no-planes", "--no-fresnel"]),
+        (&["--resume", "--iterations", "5"], &["--resume", "drop --iterations"]),
         (&["--iterations", "0"], &["--iterations"]),
     ];
     for (args, words) in cases {
@@ -43,10 +45,34 @@ fn render_background_must_be_three_numbers_in_range() {
 fn report_refuses_unknown_options_and_mismatched_names() {
     let report = env!("CARGO_BIN_EXE_report");
     let stderr = refused(report, &["runs/a", "--foo"]);
-    assert!(stderr.contains("unknown option \"--foo\""), "{stderr}");
+    assert!(stderr.contains("unexpected argument '--foo'"), "{stderr}");
     let stderr = refused(report, &["runs/a", "runs/b", "--names", "A"]);
     assert!(stderr.contains("--names has 1 names for 2 runs"), "{stderr}");
     let nine: Vec<String> = (0..9).map(|i| format!("runs/{i}")).collect();
     let args: Vec<&str> = nine.iter().map(String::as_str).collect();
     assert!(refused(report, &args).contains("at most 8"));
+}
+
+#[test]
+fn every_command_has_generated_help() {
+    let commands = [
+        env!("CARGO_BIN_EXE_train"),
+        env!("CARGO_BIN_EXE_viewer"),
+        env!("CARGO_BIN_EXE_render"),
+        env!("CARGO_BIN_EXE_eval"),
+        env!("CARGO_BIN_EXE_convert"),
+        env!("CARGO_BIN_EXE_report"),
+        env!("CARGO_BIN_EXE_bench"),
+    ];
+    for bin in commands {
+        let out = Command::new(bin).arg("--help").output().expect("run");
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(out.status.success(), "{bin} --help: {stdout}");
+        assert!(stdout.contains("Usage:") && stdout.contains("-h, --help"), "{bin}: {stdout}");
+    }
+    let help = Command::new(commands[0]).arg("--help").output().expect("run");
+    let help = String::from_utf8_lossy(&help.stdout);
+    for flag in ["--data <DIR>", "--resume", "--no-fresnel", "[default: 1000]"] {
+        assert!(help.contains(flag), "train --help lacks {flag}: {help}");
+    }
 }

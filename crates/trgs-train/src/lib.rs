@@ -1,8 +1,15 @@
-//! trgs-train: optimisation of TR-Gaussians models, and the command-line tools around it (`train`,
-//! `render`, `bench`): datasets at the training resolution ([`data`]), the initial Gaussians
-//! ([`init`]), the settings and schedules ([`settings`]), the GPU Adam step ([`adam`]), the
-//! losses and regularisers on the GPU ([`losses`]), densification ([`densify`]), plane initialisation
-//! ([`plane_init`]), the training step ([`trainer`]) and checkpoints ([`checkpoint`]).
+//! trgs-train: the optimisation of TR-Gaussians models.
+//!
+//! - [`run`]: a whole training run ([`run::TrainingRun`]), its settings and its events;
+//! - [`trainer`]: one training step on the GPU ([`trainer::Trainer`]);
+//! - [`densify`]: how the Gaussian set changes (none, classic, MCMC) behind one interface;
+//! - [`gaussian_state`]: the parameters and Adam moments on the GPU, edited together;
+//! - [`data`], [`init`], [`plane_init`]: datasets at the training resolution, the initial
+//!   Gaussians and the planes fitted from the glass masks;
+//! - [`settings`]: the schedules and rates; [`checkpoint`]: resumable state on disk;
+//! - [`eval`]: test metrics, renders and comparisons with a synthetic scene's ground truth;
+//! - the training stages on the GPU, each with its CPU twin in `trgs_core::reference`:
+//!   [`adam`], [`losses`], [`densify_stats`], [`gather_rows`] (and MCMC's in [`densify::mcmc`]).
 pub mod adam;
 pub mod checkpoint;
 pub mod data;
@@ -13,11 +20,12 @@ pub mod gather_rows;
 pub mod gaussian_state;
 pub mod init;
 pub mod losses;
-/// Loading a trained model (moved to trgs-core so that the viewer reads models without training code).
-pub use trgs_core::io::model;
 pub mod perturb;
 pub mod plane_adam;
 pub mod plane_init;
+pub mod run;
 pub mod settings;
 pub mod trainer;
 pub use trgs_core as core;
+/// Loading a trained model (in trgs-core, so that the viewer reads models without training code).
+pub use trgs_core::io::model;

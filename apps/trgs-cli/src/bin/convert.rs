@@ -1,40 +1,28 @@
 //! `convert`: a model between trgs's formats: a run folder or .ply (with its planes.json) to a
 //! .glb with `KHR_gaussian_splatting`, or a .glb back to model.ply and planes.json.
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
+use clap::Parser;
 use std::path::{Path, PathBuf};
 use trgs_core::io::{write_glb, write_planes_json, write_ply};
 use trgs_train::model::load_model;
 
-const HELP: &str = "\
-trgs convert: a model to glTF (KHR_gaussian_splatting) or back to PLY
-
-USAGE:
-    convert MODEL OUT [--planes FILE]
-
-    MODEL   a run folder of `train`, a .ply (trgs or any INRIA-layout 3DGS PLY) or a .glb
-    OUT     a .glb: Gaussians and planes in one file (planes as nodes, every parameter in
-            their extras); or a .ply: the Gaussians, with the planes in planes.json beside it
-    --planes FILE   the planes.json of MODEL (default: beside the PLY or in the run folder)
-";
+/// A model to glTF (KHR_gaussian_splatting) or back to PLY.
+#[derive(Debug, Parser)]
+#[command(name = "convert", version)]
+struct Args {
+    /// A run folder of `train`, a .ply (trgs or any INRIA-layout 3DGS PLY) or a .glb
+    model: PathBuf,
+    /// A .glb: Gaussians and planes in one file (planes as nodes, every parameter in their
+    /// extras); or a .ply: the Gaussians, with the planes in planes.json beside it
+    out: PathBuf,
+    /// The planes.json of MODEL [default: beside the PLY or in the run folder]
+    #[arg(long, value_name = "FILE")]
+    planes: Option<PathBuf>,
+}
 
 fn main() -> Result<()> {
-    let mut paths = Vec::new();
-    let mut planes: Option<PathBuf> = None;
-    let mut it = std::env::args().skip(1);
-    while let Some(a) = it.next() {
-        match a.as_str() {
-            "-h" | "--help" => {
-                print!("{HELP}");
-                return Ok(());
-            }
-            "--planes" => planes = Some(it.next().context("--planes needs a file")?.into()),
-            _ if a.starts_with("--") => bail!("unknown option {a}\n\n{HELP}"),
-            _ => paths.push(PathBuf::from(a)),
-        }
-    }
-    let [model, out] = &paths[..] else {
-        bail!("expected MODEL and OUT, got {} paths\n\n{HELP}", paths.len());
-    };
+    let Args { model, out, planes } = Args::parse();
+    let (model, out) = (&model, &out);
     let m = load_model(model, planes.as_deref())?;
     let extension = out.extension().map(|e| e.to_string_lossy().to_lowercase());
     match extension.as_deref() {

@@ -2,94 +2,66 @@
 //! (PSNR and SSIM per view and mean, render FPS, and for a synthetic scene the plane and
 //! transmission errors against its ground truth), printed and written as JSON; optionally the
 //! renders and decomposition layers of those views.
-use anyhow::{Context, Result, anyhow, bail};
+use anyhow::{Context, Result, bail};
+use clap::Parser;
 use std::path::PathBuf;
+use trgs_cli::args::{SplitArg, parse_positive};
 use trgs_core::io::{Split, write_atomic};
 use trgs_render::{GpuContext, GpuScene, RenderOptions, Renderer};
 use trgs_train::data::{self, Resolution};
 use trgs_train::eval::{Renderable, compare_with_truth, evaluate, render_fps, write_renders};
 use trgs_train::model::load_model;
 
-const HELP: &str = "\
-trgs eval: metrics of a trained model on a dataset's test (or training) views
-
-USAGE:
-    eval --model PATH [--data DIR] [OPTIONS]
-
-OPTIONS:
-    --model PATH        a run folder of `train` (model.ply, planes.json), a .ply (trgs or any
-                        INRIA-layout 3DGS PLY), a .glb (KHR_gaussian_splatting), or an INRIA
-                        output folder
-    --planes FILE       trained planes.json (default: beside the PLY or in the run folder)
-    --data DIR          the scene folder (default: the run folder's dataset/, where `train`
-                        writes the built-in scene)
-    --resolution W      evaluate at width W (default: the images' size)
-    --downscale F       evaluate at 1/F of the image size
-    --split SPLIT       the views to measure: test (default), train (how well the model fits
-                        the views it was trained on) or all
-    --out FILE          write the metrics here (default: <run folder>/eval.json, or
-                        eval_<split>.json for another split, when --model is a folder;
-                        otherwise only printed)
-    --renders DIR       also write each view's render, and with planes its layers (C_t, C_r,
-                        R, R C_r), as PNG under DIR
-    -h, --help          this text
-";
-
+/// Metrics of a trained model on a dataset's test (or training) views: PSNR and SSIM per view
+/// and their mean, render FPS, and for a synthetic scene the plane and transmission errors
+/// against its ground truth; printed and written as JSON.
+#[derive(Debug, Parser)]
+#[command(name = "eval", version)]
 struct Args {
+    /// A run folder of `train` (model.ply, planes.json), a .ply (trgs or any INRIA-layout 3DGS
+    /// PLY), a .glb (KHR_gaussian_splatting), or an INRIA output folder
+    #[arg(long, value_name = "PATH")]
     model: PathBuf,
+    /// Trained planes.json [default: beside the PLY or in the run folder]
+    #[arg(long, value_name = "FILE")]
     planes: Option<PathBuf>,
+    /// The scene folder [default: the run folder's dataset/, where `train` writes the built-in
+    /// scene]
+    #[arg(long, value_name = "DIR")]
     data: Option<PathBuf>,
-    resolution: Resolution,
-    split: Split,
+    /// Evaluate at width W [default: the images' size]
+    #[arg(long, value_name = "W", conflicts_with = "downscale",
+          value_parser = clap::value_parser!(u32).range(1..))]
+    resolution: Option<u32>,
+    /// Evaluate at 1/F of the image size
+    #[arg(long, value_name = "F", value_parser = parse_positive)]
+    downscale: Option<f64>,
+    /// The views to measure: how well the model fits the views it was trained on, or new ones
+    #[arg(long, value_enum, default_value = "test")]
+    split: SplitArg,
+    /// Write the metrics here [default: <run folder>/eval.json, or eval_<split>.json for another
+    /// split, when --model is a folder; otherwise only printed]
+    #[arg(long, value_name = "FILE")]
     out: Option<PathBuf>,
+    /// Also write each view's render, and with planes its layers (C_t, C_r, R, R C_r), as PNG
+    /// under DIR
+    #[arg(long, value_name = "DIR")]
     renders: Option<PathBuf>,
 }
 
-fn parse_args() -> Result<Option<Args>> {
-    let mut model = None;
-    let mut args = Args {
-        model: PathBuf::new(),
-        planes: None,
-        data: None,
-        resolution: Resolution::Original,
-        split: Split::Test,
-        out: None,
-        renders: None,
-    };
-    let mut it = std::env::args().skip(1);
-    while let Some(a) = it.next() {
-        let mut value = |name: &str| it.next().with_context(|| format!("{name} needs a value"));
-        fn num<T: std::str::FromStr>(name: &str, v: String) -> Result<T> {
-            v.parse().map_err(|_| anyhow::anyhow!("{name} {v:?}: expected a number"))
-        }
-        match a.as_str() {
-            "-h" | "--help" => return Ok(None),
-            "--model" => model = Some(PathBuf::from(value("--model")?)),
-            "--planes" => args.planes = Some(PathBuf::from(value("--planes")?)),
-            "--data" => args.data = Some(PathBuf::from(value("--data")?)),
-            "--resolution" => {
-                args.resolution = Resolution::Width(num("--resolution", value("--resolution")?)?)
-            }
-            "--downscale" => {
-                args.resolution = Resolution::Downscale(num("--downscale", value("--downscale")?)?)
-            }
-            "--split" => {
-                args.split = value("--split")?.parse().map_err(|e| anyhow!("--split {e}"))?
-            }
-            "--out" => args.out = Some(PathBuf::from(value("--out")?)),
-            "--renders" => args.renders = Some(PathBuf::from(value("--renders")?)),
-            other => bail!("unknown argument {other:?}\n\n{HELP}"),
+impl Args {
+    fn resolution(&self) -> Resolution {
+        match (self.resolution, self.downscale) {
+            (Some(w), _) => Resolution::Width(w),
+            (None, Some(f)) => Resolution::Downscale(f),
+            (None, None) => Resolution::Original,
         }
     }
-    args.model = model.with_context(|| format!("--model is required\n\n{HELP}"))?;
-    Ok(Some(args))
 }
 
 fn main() -> Result<()> {
-    let Some(args) = parse_args()? else {
-        print!("{HELP}");
-        return Ok(());
-    };
+    let args = Args::parse();
+    let split = Split::from(args.split);
     let run_dir = args.model.is_dir().then(|| args.model.clone());
     let data_dir = match (&args.data, &run_dir) {
         (Some(d), _) => d.clone(),
@@ -97,7 +69,7 @@ fn main() -> Result<()> {
         _ => bail!("--data is required: {} has no dataset/ folder", args.model.display()),
     };
     let model = load_model(&args.model, args.planes.as_deref())?;
-    let data = data::load(&data_dir, args.resolution)?.evaluate_on(args.split);
+    let data = data::load(&data_dir, args.resolution())?.evaluate_on(split);
     let ctx = GpuContext::new()?;
     let scene = GpuScene::upload(&ctx, &model.gaussians, &model.planes)
         .with_context(|| format!("uploading {}", model.ply.display()))?;
@@ -111,8 +83,7 @@ fn main() -> Result<()> {
     let fps = render_fps(&subject, &data)?;
     let (w, h) = data.size();
     // A scene without test views is scored on training views: say so.
-    let measured =
-        if args.split == Split::Test { data.eval_views_name() } else { args.split.name() };
+    let measured = if split == Split::Test { data.eval_views_name() } else { split.name() };
     println!(
         "mean over {} {} views: PSNR {:.2} dB, SSIM {:.4}; {} Gaussians, {} planes, {fps:.1} FPS at {w}x{h}",
         e.views.len(),
@@ -143,7 +114,7 @@ fn main() -> Result<()> {
         write_renders(&subject, &data, dir)?;
         println!("renders written to {}", dir.display());
     }
-    let default_name = match args.split {
+    let default_name = match split {
         Split::Test => "eval.json".to_string(),
         other => format!("eval_{}.json", other.name()),
     };

@@ -1,10 +1,12 @@
 //! `render`: render a model from the cameras of a dataset folder or a camera path, writing a PNG
 //! of the final image per view and an OpenEXR of its linear layers (depth, strength,
 //! transmission, reflection, mask), with a progress bar.
-use anyhow::{Context, Result, anyhow, bail};
+use anyhow::{Context, Result, bail};
+use clap::Parser;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+use trgs_cli::args::{SplitArg, parse_colour};
 use trgs_cli::exr_layers::write_exr;
 use trgs_core::io::{SceneFolder, Split, read_transforms, write_png_rgb};
 use trgs_core::plane_math::{flip_horizontal, mirror_camera, mirrored_pass_gaussians};
@@ -12,91 +14,41 @@ use trgs_core::scene::Camera;
 use trgs_render::{GpuContext, GpuScene, Layer, RenderOptions, Renderer};
 use trgs_train::model::{Model, load_model};
 
-const HELP: &str = "\
-trgs render: render a model from a dataset's cameras or a camera path
-
-USAGE:
-    render --model PATH --cameras PATH [OPTIONS]
-
-OPTIONS:
-    --model PATH        a .ply (trgs or any INRIA-layout 3DGS PLY), a .glb
-                        (KHR_gaussian_splatting, planes included), or a run folder holding
-                        model.ply or point_cloud/iteration_*/point_cloud.ply
-    --planes FILE       trained planes.json (default: planes.json beside the PLY or in the run
-                        folder; none means no planes)
-    --cameras PATH      a scene folder (COLMAP or transforms.json) or a transforms.json camera path
-    --split SPLIT       with a scene folder: test (default), train or all
-    --out DIR           output folder (default: renders)
-    --background R,G,B  background colour in [0, 1] (default 0,0,0)
-    --no-exr            only the PNGs
-    --mirror N          instead, what plane N (1 = the first in planes.json) reflects: each
-                        camera's mirrored view over the whole image, aligned with the camera's
-                        pixels (inside the plane's rectangle it is the raw reflection C_raw
-                        on the default black background),
-                        written as <view>_mirror<N>.png; cameras behind the plane are skipped
-    -h, --help          this text
-";
-
+/// Render a model from a dataset's cameras or a camera path: a PNG of the final image per view
+/// and an OpenEXR of its linear layers (transmission.RGB, reflection.RGB, strength.Y, mask.Y,
+/// depth.Z).
+#[derive(Debug, Parser)]
+#[command(name = "render", version)]
 struct Args {
+    /// A .ply (trgs or any INRIA-layout 3DGS PLY), a .glb (KHR_gaussian_splatting, planes
+    /// included), or a run folder holding model.ply or point_cloud/iteration_*/point_cloud.ply
+    #[arg(long, value_name = "PATH")]
     model: PathBuf,
+    /// Trained planes.json [default: planes.json beside the PLY or in the run folder; none
+    /// means no planes]
+    #[arg(long, value_name = "FILE")]
     planes: Option<PathBuf>,
+    /// A scene folder (COLMAP or transforms.json) or a transforms.json camera path
+    #[arg(long, value_name = "PATH")]
     cameras: PathBuf,
-    split: Split,
+    /// With a scene folder: the views to render
+    #[arg(long, value_enum, default_value = "test")]
+    split: SplitArg,
+    /// Output folder
+    #[arg(long, value_name = "DIR", default_value = "renders")]
     out: PathBuf,
+    /// Background colour in [0, 1]
+    #[arg(long, value_name = "R,G,B", default_value = "0,0,0", value_parser = parse_colour)]
     background: [f32; 3],
-    exr: bool,
-    mirror: Option<usize>,
-}
-
-fn parse_args() -> Result<Option<Args>> {
-    let (mut model, mut cameras) = (None, None);
-    let mut args = Args {
-        model: PathBuf::new(),
-        planes: None,
-        cameras: PathBuf::new(),
-        split: Split::Test,
-        out: PathBuf::from("renders"),
-        background: [0.0; 3],
-        exr: true,
-        mirror: None,
-    };
-    let mut it = std::env::args().skip(1);
-    while let Some(a) = it.next() {
-        let mut value = |name: &str| it.next().with_context(|| format!("{name} needs a value"));
-        match a.as_str() {
-            "-h" | "--help" => return Ok(None),
-            "--model" => model = Some(PathBuf::from(value("--model")?)),
-            "--planes" => args.planes = Some(PathBuf::from(value("--planes")?)),
-            "--cameras" => cameras = Some(PathBuf::from(value("--cameras")?)),
-            "--split" => {
-                args.split = value("--split")?.parse().map_err(|e| anyhow!("--split {e}"))?
-            }
-            "--out" => args.out = PathBuf::from(value("--out")?),
-            "--background" => {
-                let v = value("--background")?;
-                let parts: Vec<Option<f32>> = v
-                    .split(',')
-                    .map(|p| p.trim().parse().ok().filter(|x: &f32| (0.0..=1.0).contains(x)))
-                    .collect();
-                let [Some(r), Some(g), Some(b)] = parts[..] else {
-                    bail!("--background {v:?}: expected three numbers in [0, 1], e.g. 1,1,1");
-                };
-                args.background = [r, g, b];
-            }
-            "--no-exr" => args.exr = false,
-            "--mirror" => {
-                let v = value("--mirror")?;
-                let n = v.parse().ok().filter(|&n: &usize| n >= 1);
-                args.mirror = Some(n.with_context(|| {
-                    format!("--mirror {v:?}: expected a plane number, 1 or more")
-                })?);
-            }
-            other => bail!("unknown argument {other:?}\n\n{HELP}"),
-        }
-    }
-    args.model = model.with_context(|| format!("--model is required\n\n{HELP}"))?;
-    args.cameras = cameras.with_context(|| format!("--cameras is required\n\n{HELP}"))?;
-    Ok(Some(args))
+    /// Only the PNGs
+    #[arg(long)]
+    no_exr: bool,
+    /// Instead, what plane N (1 = the first in planes.json) reflects: each camera's mirrored view
+    /// over the whole image, aligned with the camera's pixels (inside the plane's rectangle it is
+    /// the raw reflection C_raw on the default black background), written as
+    /// <view>_mirror<N>.png; cameras behind the plane are skipped
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    mirror: Option<u32>,
 }
 
 /// The cameras to render and their output names.
@@ -178,14 +130,12 @@ fn render_mirror(
 }
 
 fn main() -> Result<()> {
-    let Some(args) = parse_args()? else {
-        print!("{HELP}");
-        return Ok(());
-    };
+    let args = Args::parse();
     let model = load_model(&args.model, args.planes.as_deref())?;
-    let cams = cameras(&args.cameras, args.split)?;
+    let split = Split::from(args.split);
+    let cams = cameras(&args.cameras, split)?;
     if cams.is_empty() {
-        bail!("{}: no cameras in the {} split", args.cameras.display(), args.split.name());
+        bail!("{}: no cameras in the {} split", args.cameras.display(), split.name());
     }
     let ctx = GpuContext::new()?;
     println!(
@@ -206,7 +156,7 @@ fn main() -> Result<()> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating the output folder {}", args.out.display()))?;
     if let Some(n) = args.mirror {
-        return render_mirror(&args, &model, &cams, &renderer, &options, n);
+        return render_mirror(&args, &model, &cams, &renderer, &options, n as usize);
     }
     let scene = GpuScene::upload(&ctx, &model.gaussians, &model.planes)
         .with_context(|| format!("{}: invalid model", model.ply.display()))?;
@@ -220,7 +170,7 @@ fn main() -> Result<()> {
         let name = stem(&cam.name, i);
         let color = frame.read_layer(&ctx, Layer::Color)?;
         write_png_rgb(&args.out.join(format!("{name}.png")), &color)?;
-        if args.exr {
+        if !args.no_exr {
             let layers: Vec<(Layer, trgs_core::Image<f32>)> = [
                 Layer::Transmission,
                 Layer::Reflection,

@@ -1,43 +1,29 @@
 //! `report`: speed against error of several training runs — their test PSNR after so many
 //! seconds of training — as a Markdown table (printed) and a PNG plot.
 use anyhow::{Context, Result, bail};
+use clap::Parser;
 use std::path::PathBuf;
 use trgs_cli::plot::{curve_of, markdown_table, plot};
 use trgs_core::io::write_png_rgb;
 
-const HELP: &str = "\
-trgs report: test PSNR against training time of several runs
-
-USAGE:
-    report RUN_DIR... [--names A,B,...] [--plot FILE]
-
-    Reads each run's metrics.json (psnr_over_time), prints a Markdown table and writes the plot
-    (default psnr_vs_time.png).
-";
+/// Test PSNR against training time of several runs: reads each run's metrics.json
+/// (psnr_over_time), prints a Markdown table and writes the plot.
+#[derive(Debug, Parser)]
+#[command(name = "report", version)]
+struct Args {
+    /// Run folders of `train`
+    #[arg(required = true, value_name = "RUN_DIR")]
+    runs: Vec<PathBuf>,
+    /// The runs' names in the table and the legend, in order [default: their folders]
+    #[arg(long, value_name = "A,B,...", value_delimiter = ',')]
+    names: Option<Vec<String>>,
+    /// The plot (PNG)
+    #[arg(long, value_name = "FILE", default_value = "psnr_vs_time.png")]
+    plot: PathBuf,
+}
 
 fn main() -> Result<()> {
-    let mut runs = Vec::new();
-    let mut names: Option<Vec<String>> = None;
-    let mut out = PathBuf::from("psnr_vs_time.png");
-    let mut it = std::env::args().skip(1);
-    while let Some(a) = it.next() {
-        match a.as_str() {
-            "-h" | "--help" => {
-                print!("{HELP}");
-                return Ok(());
-            }
-            "--names" => {
-                let v = it.next().context("--names needs a value")?;
-                names = Some(v.split(',').map(str::to_string).collect());
-            }
-            "--plot" => out = PathBuf::from(it.next().context("--plot needs a value")?),
-            other if other.starts_with("--") => bail!("unknown option {other:?}\n\n{HELP}"),
-            _ => runs.push(PathBuf::from(a)),
-        }
-    }
-    if runs.is_empty() {
-        bail!("no run folders given\n\n{HELP}");
-    }
+    let Args { runs, names, plot: out } = Args::parse();
     if runs.len() > trgs_cli::plot::COLOURS.len() {
         bail!(
             "{} runs: at most {} fit one plot with a colour each",

@@ -1,96 +1,74 @@
 //! `viewer [MODEL] [OPTIONS]`: the trgs viewer (see `viewer --help`).
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
+use clap::Parser;
 use std::path::PathBuf;
+use trgs_cli::args::parse_size;
 use trgs_render::Layer;
 use trgs_viewer::{Script, Source, ViewerOptions, load_for_viewer};
 
-const HELP: &str = "\
-trgs viewer: real-time rendering of trained TR-Gaussians and 3DGS models
+/// Real-time rendering of trained TR-Gaussians and 3DGS models.
+///
+/// MODEL is a run folder (model.ply, planes.json, cameras.json), a .ply (any INRIA-layout 3DGS
+/// file; planes.json and cameras.json beside it are used) or a .glb (KHR_gaussian_splatting).
+/// Without one, open a model from the window (Open..., or drop a file on it).
+#[derive(Debug, Parser)]
+#[command(
+    name = "viewer",
+    version,
+    after_help = "Controls:\n  orbit mode: left drag orbits, right or middle drag pans, the wheel \
+                  zooms\n  fly mode: left drag looks around\n  both: W/A/S/D move, Q/E move \
+                  down/up, shift moves faster; F12 saves a screenshot"
+)]
+struct Args {
+    /// The model to show
+    model: Option<PathBuf>,
+    /// Start from dataset view N of cameras.json
+    #[arg(long, value_name = "N")]
+    view: Option<usize>,
+    /// The layer shown
+    #[arg(long, value_name = "NAME", default_value = "color", value_parser = layer_parser())]
+    layer: Layer,
+    /// Window size in points
+    #[arg(long, value_name = "WxH", default_value = "1100x700", value_parser = parse_size)]
+    size: [f32; 2],
+    /// Start with the plane overlays off
+    #[arg(long)]
+    no_overlays: bool,
+    /// Render at 1/N of the window's pixels
+    #[arg(long, value_name = "N", default_value = "1",
+          value_parser = clap::builder::PossibleValuesParser::new(["1", "2", "4"]))]
+    scale: String,
+    /// Save a screenshot (and PNG's .json: scene rectangle and camera) once drawn
+    #[arg(long, value_name = "PNG")]
+    screenshot: Option<PathBuf>,
+    /// Re-render every frame and print the mean render and frame times of N frames
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    frames: Option<u32>,
+    /// Close after --screenshot / --frames (scripts and tests)
+    #[arg(long)]
+    exit: bool,
+}
 
-USAGE:
-    viewer [MODEL] [OPTIONS]
+/// The layers the viewer offers by name (not the depth variance, which only L_d needs).
+fn layer_parser() -> impl clap::builder::TypedValueParser<Value = Layer> {
+    use clap::builder::TypedValueParser as _;
+    let offered = || Layer::ALL.into_iter().filter(|&l| l != Layer::DepthVariance);
+    let names: Vec<&'static str> = offered().map(Layer::name).collect();
+    clap::builder::PossibleValuesParser::new(names)
+        .map(move |name| offered().find(|l| l.name() == name).unwrap_or(Layer::Color))
+}
 
-MODEL is a run folder (model.ply, planes.json, cameras.json), a .ply (any INRIA-layout 3DGS
-file; planes.json and cameras.json beside it are used) or a .glb (KHR_gaussian_splatting).
-Without one, open a model from the window (Open…, or drop a file on it).
-
-OPTIONS:
-    --view N            start from dataset view N of cameras.json (default 0)
-    --layer NAME        color (default), transmission, reflection, strength, strength_raw, mask,
-                        depth or alpha
-    --size WxH          window size in points (default 1100x700)
-    --no-overlays       start with the plane overlays off
-    --scale N           render at 1/N of the window's pixels: 1 (default), 2 or 4
-    --screenshot PNG    save a screenshot (and PNG's .json: scene rectangle and camera) once drawn
-    --frames N          re-render every frame and print the mean render and frame times of N
-    --exit              close after --screenshot / --frames (scripts and tests)
-    -h, --help          this text
-
-CONTROLS:
-    orbit mode: left drag orbits, right or middle drag pans, the wheel zooms
-    fly mode: left drag looks around
-    both: W/A/S/D move, Q/E move down/up, shift moves faster; F12 saves a screenshot
-";
-
-fn parse() -> Result<Option<ViewerOptions>> {
-    let mut o = ViewerOptions::default();
-    let mut model: Option<PathBuf> = None;
-    let mut args = std::env::args().skip(1);
-    let mut script = Script::default();
-    while let Some(a) = args.next() {
-        let mut value = |name: &str| args.next().with_context(|| format!("{name} needs a value"));
-        match a.as_str() {
-            "-h" | "--help" => return Ok(None),
-            "--view" => o.view = Some(value("--view")?.parse().context("--view: a number")?),
-            "--layer" => {
-                let v = value("--layer")?;
-                // The viewer does not render the depth-variance layer (only L_d needs it).
-                let offered = || Layer::ALL.into_iter().filter(|&l| l != Layer::DepthVariance);
-                o.layer = offered().find(|l| l.name() == v).with_context(|| {
-                    let names: Vec<_> = offered().map(|l| l.name()).collect();
-                    format!("--layer {v}: expected one of {}", names.join(", "))
-                })?;
-            }
-            "--size" => {
-                let v = value("--size")?;
-                let (w, h) = v.split_once('x').context("--size: expected WxH, e.g. 800x600")?;
-                o.window =
-                    [w.parse().context("--size: width")?, h.parse().context("--size: height")?];
-                if !o.window.iter().all(|&d| d.is_finite() && d >= 1.0) {
-                    bail!("--size {v}: width and height must be at least 1");
-                }
-            }
-            "--no-overlays" => o.overlays = false,
-            "--scale" => {
-                let v = value("--scale")?;
-                o.scale = match v.as_str() {
-                    "1" => 1,
-                    "2" => 2,
-                    "4" => 4,
-                    _ => bail!("--scale {v}: expected 1, 2 or 4"),
-                };
-            }
-            "--screenshot" => script.screenshot = Some(value("--screenshot")?.into()),
-            "--frames" => {
-                let v = value("--frames")?;
-                let n = v.parse().ok().filter(|&n| n >= 1);
-                script.frames =
-                    Some(n.with_context(|| format!("--frames {v}: a count of 1 or more"))?);
-            }
-            "--exit" => script.exit = true,
-            s if s.starts_with('-') => bail!("unknown option {s} (see --help)"),
-            s => {
-                if model.replace(PathBuf::from(s)).is_some() {
-                    bail!("one model at a time (got a second: {s})");
-                }
-            }
-        }
-    }
-    o.script = script;
-    o.source = match model {
+fn options(args: Args) -> Result<ViewerOptions> {
+    let script = Script {
+        screenshot: args.screenshot,
+        frames: args.frames,
+        exit: args.exit,
+        ..Script::default()
+    };
+    let source = match &args.model {
         Some(p) => {
-            let m = load_for_viewer(&p)?;
-            if let Some(v) = o.view
+            let m = load_for_viewer(p)?;
+            if let Some(v) = args.view
                 && v >= m.cameras.len()
             {
                 bail!(
@@ -101,22 +79,24 @@ fn parse() -> Result<Option<ViewerOptions>> {
             }
             Source::Model(Box::new(m))
         }
-        None if o.view.is_some() => bail!("--view needs a model with a cameras.json"),
+        None if args.view.is_some() => bail!("--view needs a model with a cameras.json"),
         // With nothing to draw, a scripted run would wait for a frame for ever.
-        None if o.script.screenshot.is_some() || o.script.frames.is_some() => {
+        None if script.screenshot.is_some() || script.frames.is_some() => {
             bail!("--screenshot and --frames need a model")
         }
         None => Source::Nothing,
     };
-    Ok(Some(o))
+    Ok(ViewerOptions {
+        source,
+        window: args.size,
+        view: args.view,
+        layer: args.layer,
+        overlays: !args.no_overlays,
+        scale: args.scale.parse().unwrap_or(1),
+        script,
+    })
 }
 
 fn main() -> Result<()> {
-    match parse()? {
-        None => {
-            print!("{HELP}");
-            Ok(())
-        }
-        Some(options) => trgs_viewer::run(options),
-    }
+    trgs_viewer::run(options(Args::parse())?)
 }

@@ -10,8 +10,9 @@ mod densify;
 mod report;
 mod train_step;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use backward::bench_backward;
+use clap::Parser;
 use densify::bench_densify;
 use report::{Throughput, report};
 use std::path::PathBuf;
@@ -23,62 +24,32 @@ use trgs_render::gpu::{self, Kernel, Recorder};
 use trgs_render::layout::{ProjectedGaussian, RasterParams};
 use trgs_render::{Frame, GpuContext, GpuScene, RenderOptions, Renderer};
 
-const HELP: &str = "\
-trgs bench: renderer benchmarks (forward, forward + backward, whole training steps)
-
-USAGE:
-    bench [--quick] [--plane-cost] [--backward] [--train-step] [--densify] [--reps N] [--write FILE]
-
-OPTIONS:
-    --quick       only 256x192 and at most 100k Gaussians
-    --plane-cost  only the plane-cost measurement (no grid, no throughput, no backward)
-    --backward    only the backward measurement
-    --train-step  only the training-step measurement (100k Gaussians, phase breakdown)
-    --densify     only the densification measurement (rebuild on the GPU against the CPU)
-    --reps N      timed frames per configuration (default 5; the median is reported)
-    --write FILE  also write the report as Markdown (e.g. docs/BENCHMARKS.md)
-";
-
+/// Renderer benchmarks on this machine's adapter: forward frames over scene sizes and planes,
+/// forward + backward, whole training steps and densification.
+#[derive(Debug, Parser)]
+#[command(name = "bench", version)]
 struct Args {
+    /// Only 256x192 and at most 100k Gaussians
+    #[arg(long)]
     quick: bool,
+    /// Only the plane-cost measurement (no grid, no throughput, no backward)
+    #[arg(long = "plane-cost")]
     plane_cost_only: bool,
+    /// Only the backward measurement
+    #[arg(long = "backward")]
     backward_only: bool,
+    /// Only the training-step measurement (100k Gaussians, phase breakdown)
+    #[arg(long = "train-step")]
     train_step_only: bool,
+    /// Only the densification measurement (rebuild on the GPU against the CPU)
+    #[arg(long = "densify")]
     densify_only: bool,
+    /// Timed frames per configuration (the median is reported)
+    #[arg(long, value_name = "N", default_value_t = 5)]
     reps: usize,
+    /// Also write the report as Markdown (e.g. docs/BENCHMARKS.md)
+    #[arg(long, value_name = "FILE")]
     write: Option<PathBuf>,
-}
-
-fn parse_args() -> Result<Option<Args>> {
-    let mut args = Args {
-        quick: false,
-        plane_cost_only: false,
-        backward_only: false,
-        train_step_only: false,
-        densify_only: false,
-        reps: 5,
-        write: None,
-    };
-    let mut it = std::env::args().skip(1);
-    while let Some(a) = it.next() {
-        match a.as_str() {
-            "-h" | "--help" => return Ok(None),
-            "--quick" => args.quick = true,
-            "--plane-cost" => args.plane_cost_only = true,
-            "--backward" => args.backward_only = true,
-            "--train-step" => args.train_step_only = true,
-            "--densify" => args.densify_only = true,
-            "--reps" => {
-                let v = it.next().context("--reps needs a value")?;
-                args.reps = v.parse().with_context(|| format!("--reps {v:?} is not a count"))?;
-            }
-            "--write" => {
-                args.write = Some(PathBuf::from(it.next().context("--write needs a path")?))
-            }
-            other => bail!("unknown argument {other:?}\n\n{HELP}"),
-        }
-    }
-    Ok(Some(args))
 }
 
 struct Row {
@@ -387,10 +358,7 @@ fn measure_throughput(
 }
 
 fn main() -> Result<()> {
-    let Some(args) = parse_args()? else {
-        print!("{HELP}");
-        return Ok(());
-    };
+    let args = Args::parse();
     let ctx = GpuContext::new()?;
     let renderer = Renderer::new(&ctx);
     println!("adapter: {}", ctx.describe());

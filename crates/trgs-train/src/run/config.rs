@@ -1,0 +1,383 @@
+//! The settings of a whole run: the `train` command's arguments (clap derives its parser and
+//! help from this type) and the record a checkpoint keeps, so that `--resume` continues a run
+//! with its own settings. Defaults live in the clap attributes only; [`RunConfig::default`]
+//! parses an empty command line.
+use crate::data::Resolution;
+use crate::densify::{ClassicSettings, Densification, McmcSettings};
+use crate::settings::TrainSettings;
+use anyhow::{Result, bail};
+use serde::{Deserialize, Serialize};
+use std::path::PathBuf;
+use trgs_core::synthetic::SyntheticConfig;
+
+/// MCMC's cap on the Gaussian count when `--cap` is not given.
+pub const DEFAULT_MCMC_CAP: usize = 300_000;
+
+/// Everything a training run is configured with.
+#[derive(Clone, Debug, PartialEq, clap::Args, Serialize, Deserialize)]
+pub struct RunConfig {
+    /// Scene folder: COLMAP (sparse/0 + images/) or transforms.json, with optional
+    /// glass_masks/, planes.json and test_views.txt [default: the built-in scene, written to
+    /// <OUT>/dataset]
+    #[arg(long, value_name = "DIR", conflicts_with = "demo_scene")]
+    pub data: Option<PathBuf>,
+    /// The built-in synthetic scene trained on without --data
+    #[arg(long, value_enum, value_name = "SCENE", default_value = "showcase")]
+    pub demo_scene: DemoScene,
+    /// Output folder
+    #[arg(long, value_name = "DIR", default_value = "runs/demo")]
+    pub out: PathBuf,
+    /// Training steps (1000: about 3 minutes for the demo scene on a 2-core lavapipe; the paper
+    /// trains 30000)
+    #[arg(long, value_name = "N", default_value_t = 1000,
+          value_parser = clap::value_parser!(u32).range(1..))]
+    pub iterations: u32,
+    /// Train at width W (the height keeps the aspect ratio) [default: the images' size]
+    #[arg(long, value_name = "W", conflicts_with = "downscale",
+          value_parser = clap::value_parser!(u32).range(1..))]
+    #[serde(default)]
+    pub resolution: Option<u32>,
+    /// Train at 1/F of the image size
+    #[arg(long, value_name = "F", value_parser = positive)]
+    #[serde(default)]
+    pub downscale: Option<f64>,
+    /// Largest SH degree
+    #[arg(long, value_name = "D", default_value_t = 3,
+          value_parser = clap::value_parser!(u32).range(0..=3))]
+    pub sh_degree: u32,
+    /// Evaluate the test views every N steps [default: ten times a run]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub eval_every: Option<u32>,
+    /// Write <OUT>/checkpoint.trgs every N steps [default: at each evaluation]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub checkpoint_every: Option<u32>,
+    /// Start from N random points when the scene has no sparse points
+    #[arg(long, value_name = "N", default_value_t = 10_000)]
+    pub random_init: usize,
+    /// How the Gaussian count changes
+    #[arg(long, value_enum, value_name = "MODE", default_value = "classic")]
+    pub densify: DensifyMode,
+    /// The most Gaussians of --densify mcmc [default: 300000]
+    #[arg(long, value_name = "N")]
+    pub cap: Option<usize>,
+    /// Ignore the glass masks: plain 3DGS (the baseline of the comparisons)
+    #[arg(long)]
+    pub no_planes: bool,
+    /// Order of the training views and every random draw
+    #[arg(long, value_name = "S", default_value_t = 0)]
+    pub seed: u64,
+    /// Time every GPU stage of every step (timestamp queries) into log.jsonl
+    #[arg(long)]
+    pub profile: bool,
+    #[command(flatten)]
+    pub ablations: Ablations,
+}
+
+fn positive(v: &str) -> Result<f64, String> {
+    match v.parse::<f64>() {
+        Ok(f) if f.is_finite() && f > 0.0 => Ok(f),
+        _ => Err(format!("{v:?}: expected a number above 0")),
+    }
+}
+
+/// The paper's ablations: each switches one component of TR-Gaussians off.
+#[derive(Clone, Debug, Default, PartialEq, Eq, clap::Args, Serialize, Deserialize)]
+#[command(next_help_heading = "Ablations (the paper's table; each switches one component off)")]
+pub struct Ablations {
+    /// No stage 2: joint optimisation right after stage 1
+    #[arg(long, conflicts_with = "no_planes")]
+    pub no_multi_stage: bool,
+    /// No depth variance loss L_d
+    #[arg(long, conflicts_with = "no_planes")]
+    pub no_depth_loss: bool,
+    /// No gradient conflict loss L_c
+    #[arg(long, conflicts_with = "no_planes")]
+    pub no_conflict_loss: bool,
+    /// No opacity perturbation
+    #[arg(long, conflicts_with = "no_planes")]
+    pub no_perturbation: bool,
+    /// No reflection intensity map: C_r = C_raw
+    #[arg(long, conflicts_with = "no_planes")]
+    pub no_intensity: bool,
+    /// No Schlick: a constant learnable R = R0
+    #[arg(long, conflicts_with = "no_planes")]
+    pub no_fresnel: bool,
+}
+
+impl Ablations {
+    /// The components switched off, by name.
+    pub fn names(&self) -> Vec<&'static str> {
+        [
+            (self.no_multi_stage, "no multi-stage"),
+            (self.no_depth_loss, "no L_d"),
+            (self.no_conflict_loss, "no L_c"),
+            (self.no_perturbation, "no opacity perturbation"),
+            (self.no_intensity, "no reflection intensity"),
+            (self.no_fresnel, "no Fresnel"),
+        ]
+        .into_iter()
+        .filter_map(|(on, name)| on.then_some(name))
+        .collect()
+    }
+}
+
+/// The built-in synthetic scenes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize, Deserialize)]
+pub enum DemoScene {
+    /// A shop window: a 2.4 m x 1.4 m pane, 41% of the test pixels, with a display just behind
+    Showcase,
+    /// A 1.6 m x 1.0 m pane onto a second room 4.5 m deep (18% of the test pixels)
+    #[value(alias = "glass")]
+    Window,
+    /// The window scene with the room behind the glass lit dimmer
+    #[value(alias = "night-glass")]
+    NightWindow,
+    /// The window scene's room with the wall closed: no glass, no masks
+    NoGlass,
+}
+
+impl DemoScene {
+    pub const ALL: [DemoScene; 4] =
+        [Self::Showcase, Self::Window, Self::NightWindow, Self::NoGlass];
+
+    /// The `--demo-scene` value, also written in the dataset's marker file.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Showcase => "showcase",
+            Self::Window => "window",
+            Self::NightWindow => "night-window",
+            Self::NoGlass => "no-glass",
+        }
+    }
+
+    /// The scene named `name`; `glass` and `night-glass` are the window scenes' names before
+    /// the showcase became the default, still found in older datasets' marker files.
+    pub fn parse(name: &str) -> Option<Self> {
+        <Self as clap::ValueEnum>::from_str(name, false).ok()
+    }
+
+    pub fn description(self) -> &'static str {
+        match self {
+            Self::Showcase => "showcase scene",
+            Self::Window => "window scene",
+            Self::NightWindow => "window scene at night",
+            Self::NoGlass => "scene without glass",
+        }
+    }
+
+    pub fn config(self) -> SyntheticConfig {
+        let window = SyntheticConfig::default();
+        match self {
+            Self::Showcase => window.showcase(),
+            Self::Window => window,
+            Self::NightWindow => window.night(),
+            Self::NoGlass => window.without_glass(),
+        }
+    }
+}
+
+/// How the Gaussian count changes during training.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize, Deserialize)]
+pub enum DensifyMode {
+    /// 3DGS: clone, split, prune, opacity reset
+    Classic,
+    /// 3DGS-MCMC: relocation of dead Gaussians, growth to --cap, noise, regularisers
+    Mcmc,
+    /// The count stays as initialised
+    None,
+}
+
+/// The settings of a run without arguments (the defaults of the clap attributes).
+impl Default for RunConfig {
+    fn default() -> Self {
+        #[derive(clap::Parser)]
+        struct Defaults {
+            #[command(flatten)]
+            config: RunConfig,
+        }
+        #[allow(clippy::expect_used)]
+        let parsed = <Defaults as clap::Parser>::try_parse_from(["train"])
+            .expect("the defaults of RunConfig parse");
+        parsed.config
+    }
+}
+
+impl RunConfig {
+    /// Refuse settings where one would be silently ignored.
+    pub fn check(&self) -> Result<()> {
+        if self.cap.is_some() && self.densify != DensifyMode::Mcmc {
+            bail!("--cap is the MCMC count: it needs --densify mcmc");
+        }
+        if self.no_planes && !self.ablations.names().is_empty() {
+            bail!(
+                "--no-planes trains plain 3DGS, which has none of TR-Gaussians' components to \
+                 switch off: drop the ablation flags ({})",
+                self.ablations.names().join(", ")
+            );
+        }
+        Ok(())
+    }
+
+    /// The training resolution.
+    pub fn resolution(&self) -> Resolution {
+        match (self.resolution, self.downscale) {
+            (Some(w), _) => Resolution::Width(w),
+            (None, Some(f)) => Resolution::Downscale(f),
+            (None, None) => Resolution::Original,
+        }
+    }
+
+    /// The densification, with its schedule scaled to the run.
+    pub fn densification(&self) -> Densification {
+        match self.densify {
+            DensifyMode::Classic => {
+                Densification::Classic(ClassicSettings::scaled(self.iterations))
+            }
+            DensifyMode::Mcmc => Densification::Mcmc(McmcSettings::scaled(
+                self.iterations,
+                self.cap.unwrap_or(DEFAULT_MCMC_CAP),
+            )),
+            DensifyMode::None => Densification::None,
+        }
+    }
+
+    /// The training settings these arguments select.
+    pub fn settings(&self) -> TrainSettings {
+        let mut s = TrainSettings::scaled(self.iterations);
+        s.sh_degree = self.sh_degree;
+        s.seed = self.seed;
+        let ab = &self.ablations;
+        if ab.no_multi_stage {
+            s.stage2 = 0;
+        }
+        if ab.no_depth_loss {
+            s.lambda_depth = 0.0;
+        }
+        if ab.no_conflict_loss {
+            s.lambda_conflict = 0.0;
+        }
+        if ab.no_perturbation {
+            s.perturb = None;
+        }
+        s.reflection.intensity = !ab.no_intensity;
+        s.reflection.fresnel = !ab.no_fresnel;
+        if self.densify == DensifyMode::Mcmc {
+            s.rates.opacity = crate::densify::mcmc::OPACITY_LEARNING_RATE;
+        }
+        s
+    }
+}
+
+/// Rewrites a checkpoint's record of the settings written by an older version in place, so that
+/// `--resume` continues those runs as they were configured:
+/// - the built-in scene named by three flags (all false for the window scene, then the default)
+///   instead of `demo_scene`;
+/// - the resolution as one enum value instead of `resolution` (a width) and `downscale`;
+/// - `cap` written for every densification, where it now means MCMC's cap only.
+pub fn upgrade_config_record(record: &mut serde_json::Value) {
+    let Some(fields) = record.as_object_mut() else { return };
+    if !fields.contains_key("demo_scene") {
+        let flag = |name: &str| fields.get(name).and_then(serde_json::Value::as_bool) == Some(true);
+        let scene = if flag("demo_no_glass") {
+            DemoScene::NoGlass
+        } else if flag("demo_night") {
+            DemoScene::NightWindow
+        } else if flag("demo_showcase") {
+            DemoScene::Showcase
+        } else {
+            DemoScene::Window
+        };
+        for old in ["demo_no_glass", "demo_night", "demo_showcase"] {
+            fields.remove(old);
+        }
+        fields.insert("demo_scene".into(), serde_json::json!(scene));
+    }
+    let old_resolution = fields.get("resolution").cloned();
+    if let Some(old) = old_resolution.filter(|v| !v.is_null() && !v.is_number()) {
+        let (width, factor) = match &old {
+            serde_json::Value::Object(o) => (o.get("Width").cloned(), o.get("Downscale").cloned()),
+            _ => (None, None),
+        };
+        fields.insert("resolution".into(), width.unwrap_or(serde_json::Value::Null));
+        fields.insert("downscale".into(), factor.unwrap_or(serde_json::Value::Null));
+    }
+    if fields.get("densify").and_then(serde_json::Value::as_str) != Some("Mcmc") {
+        fields.insert("cap".into(), serde_json::Value::Null);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn config(densify: DensifyMode) -> RunConfig {
+        RunConfig { densify, ..RunConfig::default() }
+    }
+
+    #[test]
+    fn defaults_are_the_help_texts() {
+        let c = RunConfig::default();
+        assert_eq!((c.iterations, c.sh_degree, c.random_init), (1000, 3, 10_000));
+        assert_eq!((c.demo_scene, c.densify), (DemoScene::Showcase, DensifyMode::Classic));
+        assert_eq!(c.out, PathBuf::from("runs/demo"));
+        assert_eq!(c.resolution(), Resolution::Original);
+        c.check().expect("the defaults are consistent");
+    }
+
+    #[test]
+    fn demo_scene_names_round_trip_and_old_names_still_parse() {
+        for scene in DemoScene::ALL {
+            assert_eq!(DemoScene::parse(scene.name()), Some(scene));
+        }
+        assert_eq!(DemoScene::parse("glass"), Some(DemoScene::Window));
+        assert_eq!(DemoScene::parse("night-glass"), Some(DemoScene::NightWindow));
+        assert_eq!(DemoScene::parse("attic"), None);
+    }
+
+    #[test]
+    fn old_checkpoints_resume_with_their_own_settings() {
+        let record = |edit: &dyn Fn(&mut serde_json::Map<String, serde_json::Value>)| {
+            let mut v = serde_json::to_value(RunConfig::default()).expect("config");
+            let fields = v.as_object_mut().expect("an object");
+            fields.remove("demo_scene");
+            fields.remove("downscale");
+            // The oldest records have only the first flag, and every record a cap.
+            fields.insert("demo_no_glass".into(), false.into());
+            fields.insert("resolution".into(), "Original".into());
+            fields.insert("cap".into(), 300_000.into());
+            edit(fields);
+            upgrade_config_record(&mut v);
+            serde_json::from_value::<RunConfig>(v).expect("readable")
+        };
+        assert_eq!(record(&|_| {}).demo_scene, DemoScene::Window);
+        assert_eq!(record(&|_| {}).cap, None, "a classic run's cap meant nothing");
+        let night = record(&|f| {
+            f.insert("demo_night".into(), true.into());
+        });
+        assert_eq!(night.demo_scene, DemoScene::NightWindow);
+        let showcase = record(&|f| {
+            f.insert("demo_showcase".into(), true.into());
+            f.insert("resolution".into(), serde_json::json!({"Width": 128}));
+        });
+        assert_eq!(showcase.demo_scene, DemoScene::Showcase);
+        assert_eq!(showcase.resolution(), Resolution::Width(128));
+        let mcmc = record(&|f| {
+            f.insert("demo_no_glass".into(), true.into());
+            f.insert("densify".into(), "Mcmc".into());
+            f.insert("resolution".into(), serde_json::json!({"Downscale": 2.0}));
+        });
+        assert_eq!((mcmc.demo_scene, mcmc.cap), (DemoScene::NoGlass, Some(300_000)));
+        assert_eq!(mcmc.resolution(), Resolution::Downscale(2.0));
+        // A current record is left as it is.
+        let mut current = serde_json::to_value(config(DensifyMode::Mcmc)).expect("config");
+        upgrade_config_record(&mut current);
+        let current: RunConfig = serde_json::from_value(current).expect("readable");
+        assert_eq!(current, config(DensifyMode::Mcmc));
+    }
+
+    #[test]
+    fn mcmc_trains_opacities_at_its_own_rate() {
+        assert_eq!(config(DensifyMode::Classic).settings().rates.opacity, 0.025);
+        assert_eq!(config(DensifyMode::Mcmc).settings().rates.opacity, 0.05);
+    }
+}

@@ -1,0 +1,467 @@
+//! A whole training run as a library type: [`TrainingRun`] owns the dataset, the trainer, the
+//! three stages and the plane initialisation at the end of stage 1, the densification schedule,
+//! evaluations, checkpoints and resume, the JSONL log and the final outputs. It reports what
+//! happens as [`RunEvent`]s, which the `train` command's progress bar, the live viewer and an
+//! embedding app consume alike.
+//!
+//! ```
+//! use trgs_core::synthetic::{SyntheticConfig, generate, write_dataset};
+//! use trgs_train::run::{RunConfig, RunEvent, TrainingRun};
+//!
+//! let dir = trgs_core::scratch::ScratchDir::new("run-doc-example");
+//! write_dataset(&generate(&SyntheticConfig::small()), &dir.join("scene"))?; // a glass scene
+//! let config = RunConfig { data: Some(dir.join("scene")), out: dir.join("run"), iterations: 40,
+//!                          ..RunConfig::default() };
+//! let mut run = TrainingRun::new(config)?;
+//! while let Some(event) = run.next_event() {
+//!     match event? {
+//!         RunEvent::PlaneCreated { label, plane } => println!("plane {label}: R0 {:.2}", plane.r0()),
+//!         RunEvent::Finished(summary) => println!("test PSNR {:.2} dB", summary.last.psnr),
+//!         _ => {}
+//!     }
+//! }
+//! let frame = run.trainer().render(&run.data().test[0].camera)?; // every layer of a test view
+//! let image = frame.read_layer(run.trainer().context(), trgs_render::Layer::Color)?;
+//! assert_eq!((run.trainer().planes().len(), image.width), (1, 64));
+//! # Ok::<(), anyhow::Error>(())
+//! ```
+mod config;
+mod dataset;
+mod log;
+mod outputs;
+mod state;
+
+pub use config::{
+    Ablations, DEFAULT_MCMC_CAP, DemoScene, DensifyMode, RunConfig, upgrade_config_record,
+};
+pub use dataset::DEMO_SCENE_MARKER;
+pub use log::LOG_FILE;
+pub use outputs::RunSummary;
+pub use state::RunState;
+
+use crate::checkpoint::{CHECKPOINT_FILE, Checkpoint, read_checkpoint, write_checkpoint};
+use crate::data::{self, TrainingData};
+use crate::eval::{Evaluation, evaluate};
+use crate::init::{SeedPoint, gaussians_from_points, random_points};
+use crate::plane_init::{PlaneInitSettings, initialise_planes};
+use crate::trainer::{StepStats, StepTimes, Trainer};
+use anyhow::{Context, Result, bail};
+use std::collections::VecDeque;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+use trgs_core::io::{remove_stale_temporaries, write_cameras_json};
+use trgs_core::rng::Rng;
+use trgs_core::scene::{Camera, ReflectionPlane};
+use trgs_render::GpuContext;
+
+/// What a run reports, in the order it happens.
+#[derive(Clone, Debug)]
+pub enum RunEvent {
+    /// A line about the set-up: the dataset, the planes to come, a resumed or replaced run.
+    Note(String),
+    /// A training step finished.
+    Step(StepEvent),
+    /// A plane was initialised from the glass masks at the end of stage 1.
+    PlaneCreated { label: u32, plane: ReflectionPlane },
+    /// A glass label's plane could not be fitted.
+    PlaneFailed { label: u32, reason: String },
+    /// The test views were evaluated.
+    Evaluation(Evaluation),
+    /// A checkpoint was written: the run can be continued from here.
+    CheckpointWritten { step: u32, path: PathBuf },
+    /// The outputs are written; the run is over.
+    Finished(RunSummary),
+}
+
+/// One finished step.
+#[derive(Clone, Debug)]
+pub struct StepEvent {
+    /// Steps taken so far (this one included) and planned.
+    pub step: u32,
+    pub iterations: u32,
+    /// The training view of the step.
+    pub view: String,
+    pub gaussians: u32,
+    pub stats: StepStats,
+}
+
+/// Files a run writes into its folder (stale temporaries of these are removed on start).
+const OUTPUTS: [&str; 5] = [CHECKPOINT_FILE, LOG_FILE, "metrics.json", "model.ply", "planes.json"];
+
+/// A training run from its start or from a checkpoint (see the module docs).
+#[derive(Debug)]
+pub struct TrainingRun {
+    data_dir: PathBuf,
+    data: TrainingData,
+    trainer: Trainer,
+    state: RunState,
+    rng: Rng,
+    log: log::RunLog,
+    /// When the run started, less the seconds of the run before a resume.
+    t0: Instant,
+    eval_every: u32,
+    checkpoint_every: u32,
+    /// Resumed from the checkpoint of a run that had finished: its results are written again.
+    was_finished: bool,
+    events: VecDeque<RunEvent>,
+    done: bool,
+}
+
+impl TrainingRun {
+    /// A new run of `config` on the best adapter (removing a previous run's checkpoint in the
+    /// same folder).
+    pub fn new(config: RunConfig) -> Result<Self> {
+        // Refused before the device is set up.
+        config.check()?;
+        Self::with_context(GpuContext::new()?, config)
+    }
+
+    /// A new run of `config` on `ctx`.
+    pub fn with_context(ctx: GpuContext, config: RunConfig) -> Result<Self> {
+        config.check()?;
+        Self::start(ctx, config, None, Vec::new())
+    }
+
+    /// Continue the run in `out` from its checkpoint, with the settings it started with.
+    pub fn resume(out: &Path) -> Result<Self> {
+        Self::resume_with_context(GpuContext::new()?, out)
+    }
+
+    /// [`TrainingRun::resume`] on `ctx`.
+    pub fn resume_with_context(ctx: GpuContext, out: &Path) -> Result<Self> {
+        let path = out.join(CHECKPOINT_FILE);
+        let ck = read_checkpoint(&path).with_context(|| {
+            format!("--resume: no checkpoint to continue from in {}", out.display())
+        })?;
+        let mut state = RunState::of_checkpoint(&ck, &path)?;
+        state.config.out = out.to_path_buf();
+        let note = if ck.step >= state.config.iterations {
+            format!(
+                "{}: the run finished at step {}; writing its results again",
+                path.display(),
+                ck.step
+            )
+        } else {
+            format!(
+                "resuming {} at step {} of {}",
+                path.display(),
+                ck.step,
+                state.config.iterations
+            )
+        };
+        let config = state.config.clone();
+        Self::start(ctx, config, Some((ck, state)), vec![RunEvent::Note(note)])
+    }
+
+    fn start(
+        ctx: GpuContext,
+        config: RunConfig,
+        resumed: Option<(Checkpoint, RunState)>,
+        mut events: Vec<RunEvent>,
+    ) -> Result<Self> {
+        let mut note = |line: String| events.push(RunEvent::Note(line));
+        let (data_dir, written) = dataset::dataset_dir(&config)?;
+        written.into_iter().for_each(&mut note);
+        let data = load_data(&config, &data_dir, &mut note)?;
+        let out = config.out.clone();
+        std::fs::create_dir_all(&out)
+            .with_context(|| format!("creating the output folder {}", out.display()))?;
+        let was_finished = resumed.as_ref().is_some_and(|(ck, _)| ck.step >= config.iterations);
+        remove_stale_temporaries(&out, &OUTPUTS);
+        let settings = config.settings();
+        let densification = config.densification();
+        let (mut trainer, state, log) = match resumed {
+            Some((ck, mut state)) => {
+                state.check_same_views(&data, &data_dir)?;
+                // A checkpoint from before the names were kept: they are known good now.
+                if state.train_views.is_empty() {
+                    state.train_views = view_names(&data);
+                }
+                let log = log::RunLog::resume(&out, ck.step)?;
+                let trainer =
+                    Trainer::from_checkpoint(&ctx, &ck, settings, data.extent, &densification)?;
+                (trainer, state, log)
+            }
+            None => {
+                let mut rng = Rng::new(config.seed);
+                let seeds: Vec<SeedPoint> = if data.points.is_empty() {
+                    let r = data.extent;
+                    note(format!(
+                        "no sparse points: {} random points within {r:.2} of the cameras' centre",
+                        config.random_init
+                    ));
+                    random_points(config.random_init, data.centre - r, data.centre + r, &mut rng)
+                } else {
+                    data.points
+                        .iter()
+                        .map(|&(position, color)| SeedPoint { position, color })
+                        .collect()
+                };
+                let shape = densification.initial_shape();
+                let gaussians = gaussians_from_points(&seeds, config.sh_degree, shape);
+                let mut trainer = Trainer::new(&ctx, &gaussians, &[], settings, data.extent)?;
+                trainer.set_densification(&densification);
+                // A previous run's checkpoint in this folder would be what `--resume` continues
+                // if this run stopped before its own first one.
+                let old = out.join(CHECKPOINT_FILE);
+                if old.is_file() {
+                    std::fs::remove_file(&old).with_context(|| {
+                        format!("removing the previous run's {}", old.display())
+                    })?;
+                    note(format!(
+                        "a new run in {}: removed the previous run's checkpoint",
+                        out.display()
+                    ));
+                }
+                let state = RunState {
+                    config: config.clone(),
+                    rng_state: rng.state(),
+                    order: Vec::new(),
+                    evaluations: Vec::new(),
+                    train_seconds: 0.0,
+                    seconds: 0.0,
+                    phase_ms: StepTimes::default(),
+                    train_views: view_names(&data),
+                };
+                (trainer, state, log::RunLog::create(&out)?)
+            }
+        };
+        trainer.profile = config.profile;
+        let cameras: Vec<_> = data.train.iter().map(|v| v.camera.clone()).collect();
+        trainer.set_training_cameras(&cameras);
+        let run = Self {
+            rng: Rng::from_state(state.rng_state),
+            eval_every: config.eval_every.unwrap_or((config.iterations / 10).max(1)),
+            checkpoint_every: config
+                .checkpoint_every
+                .or(config.eval_every)
+                .unwrap_or((config.iterations / 10).max(1)),
+            t0: Instant::now()
+                .checked_sub(Duration::from_secs_f64(state.seconds))
+                .unwrap_or_else(Instant::now),
+            data_dir,
+            data,
+            trainer,
+            state,
+            log,
+            was_finished,
+            events: events.into(),
+            done: false,
+        };
+        // Every view once, as the INRIA code writes it: viewers snap to these.
+        write_cameras_json(&out.join("cameras.json"), &run.cameras())?;
+        Ok(run)
+    }
+
+    /// The next event, running the next step (or the final outputs) when none is waiting; None
+    /// once the run has finished or failed. A failed step loses nothing saved: the error says
+    /// how to continue from the last checkpoint.
+    pub fn next_event(&mut self) -> Option<Result<RunEvent>> {
+        if self.events.is_empty() && !self.done {
+            let progress = if self.trainer.step < self.config().iterations {
+                self.advance()
+            } else {
+                self.finish()
+            };
+            if let Err(e) = progress {
+                self.done = true;
+                return Some(Err(e));
+            }
+        }
+        self.events.pop_front().map(Ok)
+    }
+
+    /// Run to the end, passing every event to `on_event`.
+    pub fn run_to_end(&mut self, mut on_event: impl FnMut(&RunEvent)) -> Result<RunSummary> {
+        let mut summary = None;
+        while let Some(event) = self.next_event() {
+            let event = event?;
+            on_event(&event);
+            if let RunEvent::Finished(s) = event {
+                summary = Some(s);
+            }
+        }
+        summary.context("the run had finished already")
+    }
+
+    pub fn config(&self) -> &RunConfig {
+        &self.state.config
+    }
+
+    pub fn trainer(&self) -> &Trainer {
+        &self.trainer
+    }
+
+    /// The dataset at the training resolution.
+    pub fn data(&self) -> &TrainingData {
+        &self.data
+    }
+
+    /// The scene folder trained on.
+    pub fn data_dir(&self) -> &Path {
+        &self.data_dir
+    }
+
+    /// Every view of the dataset, training views first (the run folder's cameras.json).
+    pub fn cameras(&self) -> Vec<Camera> {
+        let train = self.data.train.iter().map(|v| v.camera.clone());
+        train.chain(self.data.test.iter().map(|v| v.camera.clone())).collect()
+    }
+
+    /// Whether the run has finished (or failed): no more events will come.
+    pub fn is_done(&self) -> bool {
+        self.done && self.events.is_empty()
+    }
+
+    /// One step, with the plane initialisation, evaluation and checkpoint that fall on it.
+    fn advance(&mut self) -> Result<()> {
+        let iterations = self.config().iterations;
+        if self.state.order.is_empty() {
+            self.state.order = (0..self.data.train.len()).collect();
+            for i in (1..self.state.order.len()).rev() {
+                self.state.order.swap(i, self.rng.below(i + 1));
+            }
+        }
+        let Some(vi) = self.state.order.pop() else {
+            bail!("{}: no training views", self.data_dir.display())
+        };
+        let t = &self.trainer;
+        if t.step == t.settings.stage1 && !self.data.materials.is_empty() && t.planes().is_empty() {
+            // Part of training: it counts in the time that PSNR is reported against.
+            let ti = Instant::now();
+            self.init_planes()?;
+            self.state.train_seconds += ti.elapsed().as_secs_f64();
+        }
+        let ts = Instant::now();
+        let next = self.trainer.step + 1;
+        let eval_now = next.is_multiple_of(self.eval_every) || next == iterations;
+        let (mut evaluation, mut eval_time) = (None, Duration::ZERO);
+        let before = self.state.train_seconds;
+        let data = &self.data;
+        let stats = self.trainer.train_step_then(&data.train[vi], |t| {
+            // Before the step's densification, reset or perturbation (see train_step_then).
+            if eval_now {
+                let te = Instant::now();
+                let seconds = before + ts.elapsed().as_secs_f64();
+                evaluation = Some(evaluate(&outputs::model_of(t), data, t.step, seconds)?);
+                eval_time = te.elapsed();
+            }
+            Ok(())
+        });
+        let stats = stats.with_context(|| {
+            format!(
+                "training stopped at step {next}; `train --out {} --resume` continues from the \
+                 last checkpoint",
+                self.config().out.display()
+            )
+        })?;
+        self.state.train_seconds += ts.elapsed().saturating_sub(eval_time).as_secs_f64();
+        self.state.phase_ms.accumulate(&stats.times);
+        let step = self.trainer.step;
+        let gaussians = self.trainer.scene().len();
+        let view = self.data.train[vi].camera.name.clone();
+        self.log.step(step, &view, &stats, gaussians, self.t0.elapsed().as_secs_f64())?;
+        self.events.push_back(RunEvent::Step(StepEvent {
+            step,
+            iterations,
+            view,
+            gaussians,
+            stats,
+        }));
+        if let Some(e) = evaluation {
+            self.log.evaluation(&e)?;
+            self.state.evaluations.push(e.clone());
+            self.events.push_back(RunEvent::Evaluation(e));
+        }
+        if step.is_multiple_of(self.checkpoint_every) && step < iterations {
+            self.save_checkpoint()?;
+        }
+        Ok(())
+    }
+
+    /// The final checkpoint and outputs.
+    fn finish(&mut self) -> Result<()> {
+        // The finished state, so that `--resume` after the end writes the same results again
+        // instead of training on from the last intermediate checkpoint.
+        if !self.was_finished {
+            self.save_checkpoint()?;
+        }
+        let summary =
+            outputs::write_outputs(&self.trainer, &self.data, &self.data_dir, &self.state)?;
+        self.events.push_back(RunEvent::Finished(summary));
+        self.done = true;
+        Ok(())
+    }
+
+    /// Write the checkpoint: the trainer's state and the run's own.
+    fn save_checkpoint(&mut self) -> Result<()> {
+        self.state.rng_state = self.rng.state();
+        self.state.seconds = self.t0.elapsed().as_secs_f64();
+        let extra = serde_json::to_value(&self.state)?;
+        let path = self.config().out.join(CHECKPOINT_FILE);
+        write_checkpoint(&path, &self.trainer.checkpoint(extra)?)?;
+        self.log.flush()?;
+        let step = self.trainer.step;
+        self.events.push_back(RunEvent::CheckpointWritten { step, path });
+        Ok(())
+    }
+
+    /// Initialise the planes from the glass masks (the end of stage 1).
+    fn init_planes(&mut self) -> Result<()> {
+        let init = initialise_planes(
+            &self.trainer.gaussians()?,
+            &self.data.train,
+            &self.data.materials,
+            self.data.extent,
+            &PlaneInitSettings::default(),
+            &mut self.rng,
+        );
+        for (label, reason) in &init.failed {
+            self.events.push_back(RunEvent::PlaneFailed { label: *label, reason: reason.clone() });
+        }
+        for (&label, plane) in init.labels.iter().zip(&init.planes) {
+            self.events.push_back(RunEvent::PlaneCreated { label, plane: plane.clone() });
+        }
+        self.trainer.add_planes(&init.planes, &init.glass)
+    }
+}
+
+fn view_names(data: &TrainingData) -> Vec<String> {
+    data.train.iter().map(|v| v.camera.name.clone()).collect()
+}
+
+/// The dataset of `config` at its training resolution, with lines saying what it holds.
+fn load_data(
+    config: &RunConfig,
+    data_dir: &Path,
+    note: &mut impl FnMut(String),
+) -> Result<TrainingData> {
+    let mut data = data::load(data_dir, config.resolution())?;
+    if config.no_planes {
+        data.materials.clear();
+    }
+    let (w, h) = data.size();
+    note(format!(
+        "dataset {}: {} training and {} test views at {w}x{h}, {} sparse points, extent {:.2}",
+        data_dir.display(),
+        data.train.len(),
+        data.test.len(),
+        data.points.len(),
+        data.extent
+    ));
+    if config.no_planes {
+        note("--no-planes: training plain 3DGS".into());
+    } else if data.materials.is_empty() {
+        note("no glass masks: no reflection planes, training plain 3DGS".into());
+    } else {
+        note(format!(
+            "glass masks with labels {:?}: planes are initialised after stage 1",
+            data.materials
+        ));
+    }
+    let ablations = config.ablations.names();
+    if !ablations.is_empty() {
+        note(format!("ablations: {}", ablations.join(", ")));
+    }
+    Ok(data)
+}

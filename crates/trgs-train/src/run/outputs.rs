@@ -1,0 +1,121 @@
+//! What a finished run writes into its folder: model.ply, planes.json, the test renders and
+//! their layers, and metrics.json; each file written to a temporary name and renamed into place.
+use super::state::RunState;
+use crate::data::TrainingData;
+use crate::eval::{Evaluation, Renderable, TruthComparison, compare_with_truth};
+use crate::eval::{render_fps, write_renders};
+use crate::trainer::Trainer;
+use anyhow::{Context, Result};
+use std::path::{Path, PathBuf};
+use trgs_core::io::{write_atomic, write_planes_json, write_ply};
+
+/// The outcome of a finished run.
+#[derive(Clone, Debug)]
+pub struct RunSummary {
+    /// The run folder.
+    pub out: PathBuf,
+    pub steps: u32,
+    /// Seconds of training steps (not evaluations or checkpoints).
+    pub train_seconds: f64,
+    /// The last evaluation (the test views, or the first training views without a test split).
+    pub last: Evaluation,
+    pub gaussians: u32,
+    pub planes: usize,
+    /// Mean milliseconds of each step phase.
+    pub step_ms: Vec<(&'static str, f64)>,
+    /// Frames per second of the evaluation views.
+    pub render_fps: f64,
+    /// For a synthetic scene: the planes, transmission and regions against its ground truth.
+    pub truth: Option<TruthComparison>,
+    /// The ground truth's folder, when there is one.
+    pub truth_dir: Option<PathBuf>,
+}
+
+/// What outputs and evaluation need of the trainer.
+pub fn model_of(trainer: &Trainer) -> Renderable<'_> {
+    Renderable {
+        ctx: trainer.context(),
+        renderer: trainer.renderer(),
+        scene: trainer.scene(),
+        options: trainer.render_options(),
+    }
+}
+
+/// The final evaluation and outputs of a run into `state.config.out`.
+pub fn write_outputs(
+    trainer: &Trainer,
+    data: &TrainingData,
+    data_dir: &Path,
+    state: &RunState,
+) -> Result<RunSummary> {
+    let config = &state.config;
+    let last = state.evaluations.last().cloned().context("no evaluation was made")?;
+    let model = model_of(trainer);
+    let truth = compare_with_truth(&model, trainer.planes(), data, data_dir)?;
+    let steps = f64::from(trainer.step.max(1));
+    let step_ms: Vec<(&str, f64)> =
+        state.phase_ms.phases().iter().map(|&(k, v)| (k, v / steps)).collect();
+    let out = &config.out;
+    let gaussians = trainer.gaussians()?;
+    // A model other tools cannot read (a NaN, a zero quaternion) is not written as one.
+    trgs_core::scene::validate_gaussians(&gaussians)
+        .context("the trained model is not valid, so model.ply was not written")?;
+    write_ply(&out.join("model.ply"), &gaussians)?;
+    write_planes_json(&out.join("planes.json"), trainer.planes())?;
+    write_renders(&model, data, &out.join("renders"))?;
+    let fps = render_fps(&model, data)?;
+    let summary = RunSummary {
+        out: out.clone(),
+        steps: trainer.step,
+        train_seconds: state.train_seconds,
+        last,
+        gaussians: trainer.scene().len(),
+        planes: trainer.planes().len(),
+        step_ms,
+        render_fps: fps,
+        truth_dir: truth.is_some().then(|| data_dir.join("gt")),
+        truth,
+    };
+    let metrics = metrics_json(&summary, data, state);
+    write_atomic(&out.join("metrics.json"), serde_json::to_string_pretty(&metrics)?.as_bytes())?;
+    Ok(summary)
+}
+
+fn metrics_json(s: &RunSummary, data: &TrainingData, state: &RunState) -> serde_json::Value {
+    let config = &state.config;
+    let last = &s.last;
+    let views: Vec<_> = last
+        .views
+        .iter()
+        .map(|(n, p, ss)| serde_json::json!({"name": n, "psnr": p, "ssim": ss}))
+        .collect();
+    let step_ms: serde_json::Map<_, _> =
+        s.step_ms.iter().map(|(k, v)| (k.to_string(), serde_json::json!(v))).collect();
+    let over_time: Vec<_> = state
+        .evaluations
+        .iter()
+        .map(|e| {
+            serde_json::json!({"step": e.step, "seconds": e.seconds, "psnr": e.psnr, "ssim": e.ssim})
+        })
+        .collect();
+    let ab = &config.ablations;
+    serde_json::json!({
+        "psnr": last.psnr,
+        "ssim": last.ssim,
+        "eval_views": data.eval_views_name(),
+        "views": views,
+        "train_seconds": s.train_seconds,
+        "step_ms": step_ms,
+        "steps": s.steps,
+        "gaussians": s.gaussians,
+        "planes": s.planes,
+        "render_fps": s.render_fps,
+        "resolution": [data.size().0, data.size().1],
+        "ablations": ab.names(),
+        "reflection_model": {"fresnel": !ab.no_fresnel, "intensity": !ab.no_intensity},
+        "data": config.data,
+        "no_planes": config.no_planes,
+        "truth": s.truth,
+        "psnr_over_time": over_time,
+    })
+}

@@ -1,0 +1,78 @@
+//! A [`TrainingRun`] stopped after a checkpoint (dropped, as a kill would stop it) and continued
+//! with [`TrainingRun::resume`]: it goes on from the checkpoint's step with the settings it
+//! started with and the plane that stage 1 initialised, finishes at its planned step count, and
+//! logs every step once; resuming the finished run writes its results again without training.
+use std::path::Path;
+use trgs_core::scratch::ScratchDir;
+use trgs_core::synthetic::{SyntheticConfig, generate, write_dataset};
+use trgs_train::run::{LOG_FILE, RunConfig, RunEvent, TrainingRun};
+
+fn logged_steps(log: &Path) -> Vec<u64> {
+    std::fs::read_to_string(log)
+        .expect("the log")
+        .lines()
+        .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
+        .filter_map(|v| v.get("step").and_then(serde_json::Value::as_u64))
+        .collect()
+}
+
+#[test]
+fn a_stopped_run_resumes_through_the_library() {
+    let dir = ScratchDir::new("run-resume");
+    let data = dir.join("data");
+    write_dataset(&generate(&SyntheticConfig::small()), &data).expect("dataset");
+    let out = dir.join("run");
+    let config = RunConfig {
+        data: Some(data),
+        out: out.clone(),
+        iterations: 40,
+        checkpoint_every: Some(5),
+        eval_every: Some(20),
+        sh_degree: 1,
+        ..RunConfig::default()
+    };
+    let mut run = TrainingRun::new(config.clone()).expect("a new run");
+    let mut planes = 0;
+    let stopped = loop {
+        match run.next_event().expect("the run goes on").expect("a step") {
+            RunEvent::PlaneCreated { .. } => planes += 1,
+            RunEvent::CheckpointWritten { step, .. } if step >= 10 => break step,
+            _ => {}
+        }
+    };
+    assert_eq!(planes, 1, "stage 1 ends at step 4 of 40 with the glass plane");
+    drop(run);
+    assert!(!out.join("metrics.json").exists(), "the stopped run did not finish");
+
+    let mut resumed = TrainingRun::resume(&out).expect("resume");
+    let note = match resumed.next_event() {
+        Some(Ok(RunEvent::Note(line))) => line,
+        other => panic!("expected a note first, got {other:?}"),
+    };
+    assert!(note.contains(&format!("at step {stopped} of 40")), "{note}");
+    assert_eq!(resumed.trainer().step, stopped);
+    assert_eq!(resumed.trainer().planes().len(), 1, "the checkpoint holds the plane");
+    assert_eq!(resumed.config(), &config, "the run keeps its own settings");
+    let mut steps = Vec::new();
+    let summary = resumed
+        .run_to_end(|e| {
+            if let RunEvent::Step(s) = e {
+                steps.push(s.step);
+            }
+        })
+        .expect("the resumed run finishes");
+    assert_eq!(steps, (stopped + 1..=40).collect::<Vec<_>>());
+    assert_eq!((summary.steps, summary.planes), (40, 1));
+    assert!(summary.last.psnr.is_finite());
+    assert!(out.join("metrics.json").is_file() && out.join("model.ply").is_file());
+    let logged = logged_steps(&out.join(LOG_FILE));
+    assert_eq!(logged, (1..=40).collect::<Vec<u64>>(), "every step logged once");
+
+    let mut again = TrainingRun::resume(&out).expect("resume a finished run");
+    let mut trained = false;
+    let summary =
+        again.run_to_end(|e| trained |= matches!(e, RunEvent::Step(_))).expect("the results again");
+    assert!(!trained, "a finished run takes no more steps");
+    assert_eq!(summary.steps, 40);
+    assert!(again.is_done());
+}
