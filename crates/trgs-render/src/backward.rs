@@ -12,6 +12,7 @@ use crate::renderer::Renderer;
 use crate::scene::{GpuScene, SceneGradBuffers};
 use crate::stages::rasterize_bwd::ViewLists;
 use crate::stages::{Stage, compose_bwd, project_bwd, rasterize_bwd, rasterize_reflection_bwd};
+use crate::toolkit::FrameStages;
 use glam::{DMat3, DVec3};
 use trgs_core::reference::{PlaneGrad, ViewGrads, mirrored_view_bwd, plane_grad};
 
@@ -39,10 +40,8 @@ pub struct Gradients {
     kernel_times: Option<Vec<KernelTime>>,
 }
 
-impl Gradients {
-    /// Screen-space gradients of view `vi` (for stage-by-stage tests): per Gaussian
-    /// (dmean2d.xy, dopacity, ddepth, dconic a b c, dmask, dcolour rgb, dreflection).
-    pub fn read_projected_grads(
+impl crate::toolkit::GradientStages for Gradients {
+    fn read_projected_grads(
         &self,
         ctx: &crate::GpuContext,
         vi: usize,
@@ -53,12 +52,12 @@ impl Gradients {
         gpu::read_buffer(ctx, b, 0, self.gaussian_count as usize).map(Some)
     }
 
-    /// The buffer of view `vi`'s screen-space gradients (`PROJECTED_GRAD_FLOATS` per Gaussian),
-    /// for kernels that read them where they are (the trainer's densification statistics).
-    pub fn projected_grads(&self, vi: usize) -> Option<&wgpu::Buffer> {
+    fn projected_grads(&self, vi: usize) -> Option<&wgpu::Buffer> {
         self.projected_grads.get(vi)
     }
+}
 
+impl Gradients {
     /// Milliseconds per stage, with `profile` on an adapter with timestamps.
     pub fn stage_times(&self) -> Option<&[(&'static str, f64)]> {
         self.stage_times.as_deref()

@@ -3,6 +3,7 @@
 //! conversion; this module picks the buffer and mapping of each [`Layer`] and owns the target.
 use crate::gpu::{self, GpuError, Recorder};
 use crate::stages::{self, Stage};
+use crate::toolkit::FrameStages;
 use crate::{Frame, GpuContext, Layer, Renderer};
 use trgs_core::Image;
 use trgs_core::reference::DisplayMapping;

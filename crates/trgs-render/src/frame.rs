@@ -298,16 +298,6 @@ impl Frame {
         self.has_pass.get(k).copied().unwrap_or(false)
     }
 
-    /// The views: 0 is the camera, then one per mirrored pass.
-    pub fn views(&self) -> &[ViewBuffers] {
-        &self.views
-    }
-
-    /// The layer buffers (for the backward pass and embedding apps that keep data on the GPU).
-    pub fn layer_buffers(&self) -> Option<&LayerBuffers> {
-        self.layers.as_ref()
-    }
-
     /// Milliseconds per stage, when rendered with `profile` on an adapter with timestamps.
     pub fn stage_times(&self) -> Option<&[(&'static str, f64)]> {
         self.stage_times.as_deref()
@@ -451,16 +441,24 @@ impl Frame {
             planes,
         })
     }
+}
 
-    /// Pass 1's per-pixel states.
-    pub fn read_states(&self, ctx: &GpuContext) -> Result<Vec<RasterState>, GpuError> {
+impl crate::toolkit::FrameStages for Frame {
+    fn views(&self) -> &[ViewBuffers] {
+        &self.views
+    }
+
+    fn layer_buffers(&self) -> Option<&LayerBuffers> {
+        self.layers.as_ref()
+    }
+
+    fn read_states(&self, ctx: &GpuContext) -> Result<Vec<RasterState>, GpuError> {
         self.layers
             .as_ref()
             .map_or_else(|| Ok(Vec::new()), |l| gpu::read_buffer(ctx, &l.states, 0, self.pixels()))
     }
 
-    /// The projected Gaussians of view `vi` (0 = camera, then mirrored passes).
-    pub fn read_projected(
+    fn read_projected(
         &self,
         ctx: &GpuContext,
         vi: usize,
@@ -469,6 +467,22 @@ impl Frame {
             return Ok(None);
         };
         gpu::read_buffer(ctx, &v.projected, 0, self.gaussian_count() as usize).map(Some)
+    }
+
+    fn read_intermediates(
+        &self,
+        ctx: &GpuContext,
+        vi: usize,
+        gaussians: usize,
+    ) -> Result<Option<ViewIntermediates>, GpuError> {
+        self.intermediates_of(ctx, vi, gaussians)
+    }
+
+    fn read_depth_order(
+        &self,
+        ctx: &GpuContext,
+    ) -> Result<Option<DepthOrderIntermediates>, GpuError> {
+        self.depth_order_of(ctx)
     }
 }
 

@@ -1,142 +1,49 @@
-//! Every compute pipeline of the renderer, compiled once per [`crate::Renderer`].
-use crate::GpuContext;
-use crate::gpu::Kernel;
+//! The renderer's kernel tables: every compute pipeline of the renderer (compiled once per
+//! [`crate::Renderer`]), and the kernels of benchmarks and tests.
+use crate::toolkit::registry::{accumulation, block_walk, block_width, no_defines, tile_rows};
 
-#[derive(Debug)]
-pub struct Kernels {
-    pub project_candidates: Kernel,
-    pub project: Kernel,
-    pub tile_counts: Kernel,
-    pub depth_order_compact: Kernel,
-    pub depth_order_counts: Kernel,
-    pub prefix_sum: Kernel,
-    /// `prefix_sum`'s level scan of the set bits of each word (COUNT_BITS).
-    pub prefix_sum_bits: Kernel,
-    pub prefix_sum_add: Kernel,
-    pub emit_keys: Kernel,
-    pub sort_count: Kernel,
-    pub sort_scatter: Kernel,
-    pub tile_ranges: Kernel,
-    pub rasterize: Kernel,
-    pub rasterize_depth_variance: Kernel,
-    pub rasterize_reflection: Kernel,
-    pub compose: Kernel,
-    pub compose_bwd: Kernel,
-    pub display: Kernel,
-    pub rasterize_bwd: Kernel,
-    pub rasterize_reflection_bwd: Kernel,
-    pub project_bwd: Kernel,
-    /// `project_bwd` of a mirrored view: adds to the Gaussians' gradients (BWD_ADD).
-    pub project_bwd_add: Kernel,
-}
-
-/// Defines of the accumulating (adjoint) kernels for the device's features: float atomics or the
-/// compare-exchange fallback, with or without a subgroup reduction first.
-pub fn accumulation_defines(caps: &crate::Capabilities) -> Vec<&'static str> {
-    let mut d = Vec::new();
-    if caps.float_atomics {
-        d.push("FLOAT_ATOMICS");
-    }
-    if caps.subgroups {
-        d.push("SUBGROUPS");
-    }
-    d
-}
-
-/// The define of the layout of `rasterize_reflection`, `rasterize_bwd` and
-/// `rasterize_reflection_bwd` (none for one pixel per thread); why and what it measured:
-/// `shaders/shared/tile_rows.wgsl` and docs/gpu-renderer.md, "Pixels per thread".
-pub fn tile_defines(caps: &crate::Capabilities) -> &'static [&'static str] {
-    match caps.tile_layout {
-        crate::TileLayout::PixelPerThread => &[],
-        crate::TileLayout::FourRowsPerThread => &["ROWS_PER_THREAD_4"],
+crate::kernel_registry! {
+    /// Every kernel of the renderer: the forward stages, then the adjoints.
+    pub const RENDER_KERNELS: RenderKernelSpecs => Kernels, prelude: crate::layout::prelude, {
+        project_candidates: "render/project_candidates.wgsl" => no_defines,
+        project: "render/project.wgsl" => no_defines,
+        tile_counts: "render/tile_counts.wgsl" => no_defines,
+        depth_order_compact: "render/depth_order_compact.wgsl" => no_defines,
+        depth_order_counts: "render/depth_order_counts.wgsl" => no_defines,
+        prefix_sum: "render/prefix_sum.wgsl" => block_width,
+        /// `prefix_sum`'s level scan of the set bits of each word.
+        prefix_sum_bits: "render/prefix_sum.wgsl" => |c| [block_width(c), vec!["COUNT_BITS"]].concat(),
+        prefix_sum_add: "render/prefix_sum_add.wgsl" => block_width,
+        emit_keys: "render/emit_keys.wgsl" => no_defines,
+        sort_count: "render/sort_count.wgsl" => block_width,
+        sort_scatter: "render/sort_scatter.wgsl" => block_width,
+        tile_ranges: "render/tile_ranges.wgsl" => no_defines,
+        rasterize: "render/rasterize.wgsl" => block_walk,
+        /// `rasterize` with the depth-variance layer (for L_d).
+        rasterize_depth_variance: "render/rasterize.wgsl" =>
+            |c| [block_walk(c), vec!["DEPTH_VARIANCE"]].concat(),
+        rasterize_reflection: "render/rasterize_reflection.wgsl" =>
+            |c| [tile_rows(c), block_walk(c)].concat(),
+        compose: "render/compose.wgsl" => no_defines,
+        display: "render/display.wgsl" => no_defines,
+        compose_bwd: "backward/compose_bwd.wgsl" => accumulation,
+        rasterize_bwd: "backward/rasterize_bwd.wgsl" =>
+            |c| [accumulation(c), tile_rows(c), block_walk(c)].concat(),
+        rasterize_reflection_bwd: "backward/rasterize_reflection_bwd.wgsl" =>
+            |c| [accumulation(c), tile_rows(c), block_walk(c)].concat(),
+        project_bwd: "backward/project_bwd.wgsl" => accumulation,
+        /// `project_bwd` of a mirrored view: adds to the Gaussians' gradients (BWD_ADD).
+        project_bwd_add: "backward/project_bwd.wgsl" =>
+            |c| [accumulation(c), vec!["ADD_GRADIENTS"]].concat(),
     }
 }
 
-/// The define of the scan and sort block width (none for [`crate::BlockWidth::Narrow`]); why:
-/// [`crate::BlockWidth`].
-pub fn block_defines(caps: &crate::Capabilities) -> &'static [&'static str] {
-    match caps.block_width {
-        crate::BlockWidth::Narrow => &[],
-        crate::BlockWidth::Wide => &["WIDE_BLOCKS"],
-    }
-}
-
-impl Kernels {
-    pub fn new(ctx: &GpuContext) -> Self {
-        let acc = accumulation_defines(&ctx.capabilities);
-        let tiles = tile_defines(&ctx.capabilities);
-        let replay = [acc.as_slice(), tiles].concat();
-        let blocks = block_defines(&ctx.capabilities);
-        let walk: &[&str] = if ctx.capabilities.block_walk { &["BLOCK_WALK"] } else { &[] };
-        Self {
-            project_candidates: Kernel::new(
-                ctx,
-                "project_candidates",
-                "project_candidates.wgsl",
-                &[],
-            ),
-            project: Kernel::new(ctx, "project", "project.wgsl", &[]),
-            tile_counts: Kernel::new(ctx, "tile_counts", "tile_counts.wgsl", &[]),
-            depth_order_compact: Kernel::new(
-                ctx,
-                "depth_order_compact",
-                "depth_order_compact.wgsl",
-                &[],
-            ),
-            depth_order_counts: Kernel::new(
-                ctx,
-                "depth_order_counts",
-                "depth_order_counts.wgsl",
-                &[],
-            ),
-            prefix_sum: Kernel::new(ctx, "prefix_sum", "prefix_sum.wgsl", blocks),
-            prefix_sum_bits: Kernel::new(
-                ctx,
-                "prefix_sum_bits",
-                "prefix_sum.wgsl",
-                &[blocks, &["COUNT_BITS"]].concat(),
-            ),
-            prefix_sum_add: Kernel::new(ctx, "prefix_sum_add", "prefix_sum_add.wgsl", blocks),
-            emit_keys: Kernel::new(ctx, "emit_keys", "emit_keys.wgsl", &[]),
-            sort_count: Kernel::new(ctx, "sort_count", "sort_count.wgsl", blocks),
-            sort_scatter: Kernel::new(ctx, "sort_scatter", "sort_scatter.wgsl", blocks),
-            tile_ranges: Kernel::new(ctx, "tile_ranges", "tile_ranges.wgsl", &[]),
-            rasterize: Kernel::new(ctx, "rasterize", "rasterize.wgsl", walk),
-            rasterize_depth_variance: Kernel::new(
-                ctx,
-                "rasterize",
-                "rasterize.wgsl",
-                &[walk, &["DEPTH_VARIANCE"]].concat(),
-            ),
-            rasterize_reflection: Kernel::new(
-                ctx,
-                "rasterize_reflection",
-                "rasterize_reflection.wgsl",
-                &[tiles, walk].concat(),
-            ),
-            compose: Kernel::new(ctx, "compose", "compose.wgsl", &[]),
-            compose_bwd: Kernel::new(ctx, "compose_bwd", "compose_bwd.wgsl", &acc),
-            display: Kernel::new(ctx, "display", "display.wgsl", &[]),
-            rasterize_bwd: Kernel::new(
-                ctx,
-                "rasterize_bwd",
-                "rasterize_bwd.wgsl",
-                &[replay.as_slice(), walk].concat(),
-            ),
-            rasterize_reflection_bwd: Kernel::new(
-                ctx,
-                "rasterize_reflection_bwd",
-                "rasterize_reflection_bwd.wgsl",
-                &[replay.as_slice(), walk].concat(),
-            ),
-            project_bwd: Kernel::new(ctx, "project_bwd", "project_bwd.wgsl", &acc),
-            project_bwd_add: Kernel::new(
-                ctx,
-                "project_bwd_add",
-                "project_bwd.wgsl",
-                &[acc.as_slice(), &["ADD_GRADIENTS"]].concat(),
-            ),
-        }
+crate::kernel_registry! {
+    /// Kernels of benchmarks and tests, apart from rendering and training: the trivial tiled
+    /// splat loop that `bench` measures `rasterize` against, and the check of the workgroup
+    /// spread of dispatches whose counts are known on the GPU only.
+    pub const BENCH_KERNELS: BenchKernelSpecs => BenchKernels, prelude: crate::layout::prelude, {
+        splat_loop: "bench/splat_loop.wgsl" => no_defines,
+        spread_block_check: "bench/spread_block_check.wgsl" => no_defines,
     }
 }

@@ -1,8 +1,22 @@
-//! trgs-render: the TR-Gaussians renderer on wgpu. Device setup with optional features and their
-//! fallbacks ([`GpuContext`]), the scene in GPU buffers ([`GpuScene`]), one module per WGSL stage
-//! ([`stages`]), the forward [`Renderer::render`] that produces a [`Frame`] with every layer, and
-//! [`Renderer::backward`] that turns dL/d(each layer) into the gradients of every Gaussian
-//! attribute and every plane parameter.
+//! trgs-render: the TR-Gaussians renderer on wgpu.
+//!
+//! - [`GpuContext`]: the device, with its optional features and their fallbacks
+//!   ([`DeviceOptions`], [`Capabilities`]); [`GpuContext::from_device`] shares a device an app
+//!   made itself (from [`device_descriptor`]);
+//! - [`GpuScene`]: Gaussians and reflection planes uploaded and validated;
+//! - [`Renderer::render`]: a [`Frame`] with every [`Layer`] (final image, transmission,
+//!   reflection, strength, mask, depth, alpha), read back with [`Frame::read_layer`] or kept on
+//!   the GPU;
+//! - [`Renderer::backward`]: dL/d(each layer) ([`LayerGrads`]) to the [`Gradients`] of every
+//!   Gaussian attribute and every plane's centre, normal and R0;
+//! - [`Renderer::display`] into a [`DisplayTarget`]: a layer as 8-bit RGBA in a texture, for
+//!   windows;
+//! - [`GpuError`]: out of memory, a lost device or a hung kernel, as the error of the call that
+//!   met it.
+//!
+//! The stages themselves (one module per WGSL file, checked against its CPU twin in
+//! `trgs_core::reference`) are internal; [`toolkit`] is what they are built from, and what
+//! trgs-train builds its own stages from.
 //!
 //! ```
 //! use trgs_core::fixtures::{SceneSpec, random_scene};
@@ -33,15 +47,16 @@ mod backward;
 mod device;
 mod display;
 mod frame;
-pub mod gpu;
 mod gpu_error;
 mod kernels;
 mod layer_grads;
-pub mod layout;
 mod renderer;
 mod scene;
-pub mod shader;
-pub mod stages;
+mod stages;
+pub mod toolkit;
+
+// Short paths to the toolkit inside the crate.
+pub(crate) use toolkit::{gpu, layout};
 
 pub use backward::{BackwardError, BackwardOptions, Gradients};
 pub use device::{
@@ -49,13 +64,10 @@ pub use device::{
     TileLayout, device_descriptor, pick_adapter,
 };
 pub use display::{DisplayError, DisplayTarget, layer_mapping};
-pub use frame::{
-    DepthOrderIntermediates, Frame, FrameImages, Layer, LayerBuffers, PlaneImages, ViewBuffers,
-    ViewIntermediates,
-};
-pub use gpu::KernelTime;
+pub use frame::{Frame, FrameImages, Layer, PlaneImages};
 pub use gpu_error::GpuError;
 pub use layer_grads::{LayerGrads, LayerGradsError};
 pub use renderer::{RenderError, RenderOptions, Renderer};
 pub use scene::{GpuScene, SceneGradBuffers, UploadError};
+pub use toolkit::KernelTime;
 pub use trgs_core::reference::ReflectionModel;

@@ -15,6 +15,7 @@ use crate::stages::{
     Stage, compose, depth_order, emit_keys, prefix_sum, project, rasterize, rasterize_reflection,
     sort, tile_counts, tile_ranges,
 };
+use crate::toolkit::FrameStages;
 use trgs_core::plane_math::mirrored_view;
 use trgs_core::reference::ReflectionModel;
 use trgs_core::reference::{TileGrid, footprint};
@@ -127,7 +128,7 @@ struct ViewSpec {
 
 impl Renderer {
     pub fn new(ctx: &GpuContext) -> Self {
-        Self { ctx: ctx.clone(), kernels: Kernels::new(ctx) }
+        Self { ctx: ctx.clone(), kernels: crate::kernels::RENDER_KERNELS.compile(ctx) }
     }
 
     pub fn context(&self) -> &GpuContext {

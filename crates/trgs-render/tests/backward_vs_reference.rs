@@ -21,8 +21,9 @@ use trgs_core::reference::{
 };
 use trgs_core::rng::Rng;
 use trgs_core::scene::Gaussians;
-use trgs_render::gpu;
-use trgs_render::layout::RasterState;
+use trgs_render::toolkit::gpu;
+use trgs_render::toolkit::layout::RasterState;
+use trgs_render::toolkit::{FrameStages as _, GradientStages as _};
 use trgs_render::{
     BackwardOptions, DeviceOptions, GpuContext, GpuScene, RenderOptions, Renderer, TileLayout,
 };

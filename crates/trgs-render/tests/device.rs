@@ -128,10 +128,10 @@ fn spread_block_in_wgsl_matches_its_twin_on_every_grid_shape() {
     // The spread changes which workgroup takes which block, so the stage tests pass with any
     // bijection: this checks the WGSL itself, including the rows of split dispatches (more than
     // 65,535 workgroups), which no stage test reaches.
-    use trgs_render::gpu::{self, Kernel, Recorder, grid_1d, spread_block, spread_step};
-    use trgs_render::layout::ScanParams;
+    use trgs_render::toolkit::gpu::{self, Recorder, grid_1d, spread_block, spread_step};
+    use trgs_render::toolkit::layout::ScanParams;
     let ctx = GpuContext::new().expect("adapter");
-    let kernel = Kernel::new(&ctx, "spread_block_check", "spread_block_check.wgsl", &[]);
+    let kernel = trgs_render::toolkit::BENCH_KERNELS.spread_block_check.build(&ctx);
     let shapes = [grid_1d(13), grid_1d(3000), [7, 3, 1], [4, 40, 1], [65_535, 3, 1]];
     for groups in shapes {
         let n = groups[0] * groups[1];

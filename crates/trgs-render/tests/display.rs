@@ -3,9 +3,10 @@
 //! poison-filled, so pixels the stage forgets to write show up.
 use trgs_core::fixtures::random_scene;
 use trgs_core::reference::display;
+use trgs_render::toolkit::gpu;
 use trgs_render::{
     DeviceOptions, DisplayError, DisplayTarget, GpuContext, GpuScene, Layer, RenderOptions,
-    Renderer, gpu, layer_mapping,
+    Renderer, layer_mapping,
 };
 
 mod common;

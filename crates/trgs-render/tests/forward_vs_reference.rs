@@ -12,6 +12,7 @@ use trgs_core::reference::{
     tile_ranges,
 };
 use trgs_core::scene::Gaussians;
+use trgs_render::toolkit::FrameStages as _;
 use trgs_render::{
     BlockWidth, DeviceOptions, GpuContext, GpuScene, RenderOptions, Renderer, TileLayout,
 };
@@ -340,8 +341,8 @@ fn profiled_frame_times_each_kernel_within_its_stage() {
     // Every dispatch is timed under the stage it serves: the depth order's scan of its presence
     // bits, five radix passes of count, histogram scan and scatter, and its counts; the key
     // sort's passes and their scans under `sort`; `prefix_sum` is the scan of the tile counts.
-    let passes =
-        trgs_core::reference::DEPTH_KEY_BITS.div_ceil(trgs_render::layout::SORT_RADIX_BITS);
+    let passes = trgs_core::reference::DEPTH_KEY_BITS
+        .div_ceil(trgs_render::toolkit::layout::SORT_RADIX_BITS);
     assert_eq!(find("depth_order", "prefix_sum_bits"), Some(1));
     assert_eq!(find("depth_order", "depth_order_compact"), Some(1));
     assert_eq!(find("depth_order", "sort_count"), Some(passes));

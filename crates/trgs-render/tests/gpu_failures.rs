@@ -3,7 +3,7 @@
 //! out-of-memory frame or upload also reaches the caller: through the same error scopes).
 //! Each test makes its own device, since one of them destroys it.
 use trgs_core::fixtures::{SceneSpec, random_scene};
-use trgs_render::gpu::{self, ErrorScopes};
+use trgs_render::toolkit::gpu::{self, ErrorScopes};
 use trgs_render::{
     BackwardError, DisplayError, DisplayTarget, GpuContext, GpuError, GpuScene, Layer, RenderError,
     RenderOptions, Renderer, UploadError,

@@ -1,10 +1,10 @@
 //! Stage `adam` on the GPU (shaders/adam.wgsl; twin `trgs_core::reference::adam`): one Adam step
 //! of a parameter buffer from its gradient buffer, with the moments in buffers of the same shape.
 //! Large buffers are stepped in ranges under the adapter's binding limit.
+use crate::layout::AdamParams;
 use trgs_core::reference::{AdamRate, AdamSettings};
 use trgs_render::GpuContext;
-use trgs_render::gpu::{self, Kernel, Recorder, grid_1d, range};
-use trgs_render::layout::AdamParams;
+use trgs_render::toolkit::gpu::{self, Kernel, Recorder, grid_1d, range};
 
 /// The first and second moments of one parameter buffer.
 #[derive(Debug)]
@@ -53,7 +53,7 @@ impl Adam {
         // A count must fit the u32 of the uniform and the dispatch.
         let limit = (ctx.device.limits().max_storage_buffer_binding_size / 4).min(1 << 30);
         Self {
-            kernel: Kernel::new(ctx, "adam", "adam.wgsl", &[]),
+            kernel: crate::kernels::TRAINING_KERNELS.adam.build(ctx),
             settings,
             chunk: limit / 64 * 64,
         }

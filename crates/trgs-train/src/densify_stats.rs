@@ -5,8 +5,9 @@
 //! records and gradients back instead took 11 to 28 ms of a 30 to 40 ms step at 300k Gaussians
 //! on an H100 (one pass, or a camera and a mirrored pass): more than the rest of the step.
 use crate::densify::DensifyStats;
-use trgs_render::gpu::{self, Kernel, Recorder, grid_1d};
-use trgs_render::layout::DensifyStatsParams;
+use crate::layout::DensifyStatsParams;
+use trgs_render::toolkit::gpu::{self, Kernel, Recorder, grid_1d};
+use trgs_render::toolkit::{FrameStages, GradientStages};
 use trgs_render::{Frame, GpuContext, Gradients};
 
 /// Four floats per Gaussian: (sum of gradient norms, observations, largest screen radius, seen
@@ -24,7 +25,7 @@ pub struct GpuDensifyStats {
 impl GpuDensifyStats {
     /// Zero statistics for `n` Gaussians.
     pub fn new(ctx: &GpuContext, n: usize) -> Self {
-        let kernel = Kernel::new(ctx, "densify_stats", "densify_stats.wgsl", &[]);
+        let kernel = crate::kernels::TRAINING_KERNELS.densify_stats.build(ctx);
         Self { buffer: zeros(ctx, n), kernel, len: n }
     }
 

@@ -7,9 +7,9 @@
 //! 30k-step run.
 use crate::adam::AdamMoments;
 use crate::densify::RowPlan;
+use crate::layout::{GATHER_ZERO, GatherParams};
 use trgs_core::scene::PerAttribute;
-use trgs_render::gpu::{self, Kernel, Recorder, grid_1d, range};
-use trgs_render::layout::{GATHER_ZERO, GatherParams};
+use trgs_render::toolkit::gpu::{self, Kernel, Recorder, grid_1d, range};
 use trgs_render::{GpuContext, GpuScene};
 
 /// The kernel and the binding limit it works under.
@@ -55,7 +55,7 @@ impl GpuRowGather {
     pub fn new(ctx: &GpuContext) -> Self {
         let limit = ctx.device.limits().max_storage_buffer_binding_size;
         Self {
-            kernel: Kernel::new(ctx, "gather_rows", "gather_rows.wgsl", &[]),
+            kernel: crate::kernels::TRAINING_KERNELS.gather_rows.build(ctx),
             binding_words: (limit / 4).min(1 << 30),
         }
     }

@@ -62,7 +62,7 @@ impl GaussianState {
     /// The parameters and Adam moments, read back.
     pub fn read(&self) -> Result<TrainState> {
         let read = |b: &wgpu::Buffer, len: u64| {
-            trgs_render::gpu::read_buffer::<f32>(&self.ctx, b, 0, len as usize)
+            trgs_render::toolkit::gpu::read_buffer::<f32>(&self.ctx, b, 0, len as usize)
         };
         let (mut m, mut v) = (PerAttribute::default(), PerAttribute::default());
         for (a, mo) in self.moments.iter() {
@@ -89,10 +89,15 @@ impl GaussianState {
         let (ctx, n) = (&self.ctx, self.len());
         let p = self.scene.parameters();
         Ok(Geometry {
-            means: trgs_render::gpu::read_buffer(ctx, p[Attribute::Means], 0, n)?,
-            rotations: trgs_render::gpu::read_buffer(ctx, p[Attribute::Rotations], 0, n)?,
-            log_scales: trgs_render::gpu::read_buffer(ctx, p[Attribute::LogScales], 0, n)?,
-            opacity_logits: trgs_render::gpu::read_buffer(ctx, p[Attribute::OpacityLogits], 0, n)?,
+            means: trgs_render::toolkit::gpu::read_buffer(ctx, p[Attribute::Means], 0, n)?,
+            rotations: trgs_render::toolkit::gpu::read_buffer(ctx, p[Attribute::Rotations], 0, n)?,
+            log_scales: trgs_render::toolkit::gpu::read_buffer(ctx, p[Attribute::LogScales], 0, n)?,
+            opacity_logits: trgs_render::toolkit::gpu::read_buffer(
+                ctx,
+                p[Attribute::OpacityLogits],
+                0,
+                n,
+            )?,
             populations: self.scene.read_populations(ctx)?,
         })
     }
@@ -101,7 +106,7 @@ impl GaussianState {
     pub fn apply_plan(&mut self, plan: &RowPlan) -> Result<()> {
         self.check_plan(plan)?;
         let ctx = self.ctx.clone();
-        trgs_render::gpu::scoped(&ctx, "densifying", || {
+        trgs_render::toolkit::gpu::scoped(&ctx, "densifying", || {
             let (scene, moments) = self.gather.apply(&ctx, &self.scene, &self.moments, plan)?;
             self.scene = scene;
             self.moments = moments;
@@ -148,7 +153,7 @@ impl GaussianState {
     pub fn reset_opacities(&mut self, edit: impl FnOnce(&mut [f32])) -> Result<()> {
         let opacity = self.scene.parameter(Attribute::OpacityLogits);
         let mut logits: Vec<f32> =
-            trgs_render::gpu::read_buffer(&self.ctx, opacity, 0, self.len())?;
+            trgs_render::toolkit::gpu::read_buffer(&self.ctx, opacity, 0, self.len())?;
         edit(&mut logits);
         self.write_opacity_logits(&logits);
         let moments = &self.moments[Attribute::OpacityLogits];

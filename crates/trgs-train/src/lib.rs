@@ -9,7 +9,8 @@
 //! - [`settings`]: the schedules and rates; [`checkpoint`]: resumable state on disk;
 //! - [`eval`]: test metrics, renders and comparisons with a synthetic scene's ground truth;
 //! - the training stages on the GPU, each with its CPU twin in `trgs_core::reference`:
-//!   [`adam`], [`losses`], [`densify_stats`], [`gather_rows`] (and MCMC's in [`densify::mcmc`]).
+//!   [`adam`], [`losses`], [`densify_stats`], [`gather_rows`] (and MCMC's in [`densify::mcmc`]),
+//!   their kernels registered in [`kernels`] and their GPU structs declared in [`layout`].
 pub mod adam;
 pub mod checkpoint;
 pub mod data;
@@ -19,6 +20,8 @@ pub mod eval;
 pub mod gather_rows;
 pub mod gaussian_state;
 pub mod init;
+pub mod kernels;
+pub mod layout;
 pub mod losses;
 pub mod perturb;
 pub mod plane_adam;

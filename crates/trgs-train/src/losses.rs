@@ -12,10 +12,12 @@
 //! image and glass labels are uploaded once ([`GpuTarget`]) and stay on the GPU; only the strips'
 //! sums (32 bytes per strip of LOSS_STRIP pixels: 32 KB at 256x256) come back, for the step's
 //! statistics.
+use crate::kernels::TRAINING_KERNELS;
+use crate::layout::{LOSS_STRIP, LossParams};
 use trgs_core::Image;
 use trgs_core::reference::RegulariserWeights;
-use trgs_render::gpu::{self, BufferPool, GpuError, Kernel, Recorder};
-use trgs_render::layout::{LOSS_STRIP, LossParams};
+use trgs_render::toolkit::FrameStages;
+use trgs_render::toolkit::gpu::{self, BufferPool, GpuError, Kernel, Recorder};
 use trgs_render::{Frame, GpuContext, LayerGrads};
 
 /// Side of the square workgroups of the per-pixel passes.
@@ -216,14 +218,14 @@ pub struct LossKernels {
 
 impl LossKernels {
     pub fn new(ctx: &GpuContext) -> Self {
-        let kernel = |name: &'static str| Kernel::new(ctx, name, &format!("{name}.wgsl"), &[]);
+        let k = &TRAINING_KERNELS;
         Self {
-            photometric_loss_rows: kernel("photometric_loss_rows"),
-            photometric_loss: kernel("photometric_loss"),
-            photometric_loss_grad_rows: kernel("photometric_loss_grad_rows"),
-            photometric_loss_grad: kernel("photometric_loss_grad"),
-            regularisers: kernel("regularisers"),
-            loss_sums: kernel("loss_sums"),
+            photometric_loss_rows: k.photometric_loss_rows.build(ctx),
+            photometric_loss: k.photometric_loss.build(ctx),
+            photometric_loss_grad_rows: k.photometric_loss_grad_rows.build(ctx),
+            photometric_loss_grad: k.photometric_loss_grad.build(ctx),
+            regularisers: k.regularisers.build(ctx),
+            loss_sums: k.loss_sums.build(ctx),
             scratch: BufferPool::default(),
         }
     }

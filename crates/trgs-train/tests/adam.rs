@@ -2,7 +2,7 @@
 //! a buffer split into several binding ranges.
 use trgs_core::reference::{AdamRate, AdamSettings, adam};
 use trgs_core::rng::Rng;
-use trgs_render::gpu::{self, Recorder};
+use trgs_render::toolkit::gpu::{self, Recorder};
 use trgs_render::{DeviceOptions, GpuContext};
 use trgs_train::adam::{Adam, AdamMoments};
 

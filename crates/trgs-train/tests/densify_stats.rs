@@ -6,7 +6,8 @@ use trgs_core::fixtures::{SceneSpec, random_scene};
 use trgs_core::reference::FrameGrads;
 use trgs_core::rng::Rng;
 use trgs_core::scene::Gaussians;
-use trgs_render::gpu::Recorder;
+use trgs_render::toolkit::gpu::Recorder;
+use trgs_render::toolkit::{FrameStages as _, GradientStages as _};
 use trgs_render::{
     BackwardOptions, DeviceOptions, Frame, GpuContext, GpuScene, Gradients, LayerGrads,
     RenderOptions, Renderer,

@@ -5,7 +5,7 @@
 use trgs_core::fixtures::{SceneSpec, random_scene};
 use trgs_core::rng::Rng;
 use trgs_core::scene::{Attribute, Gaussians, PerAttribute, ReflectionPlane, attribute_widths};
-use trgs_render::gpu::read_buffer;
+use trgs_render::toolkit::gpu::read_buffer;
 use trgs_render::{DeviceOptions, GpuContext, GpuScene};
 use trgs_train::adam::AdamMoments;
 use trgs_train::checkpoint::Checkpoint;

@@ -7,7 +7,7 @@ use trgs_core::reference::{
     DSSIM_LAMBDA, RegulariserInputs, RegulariserWeights, photometric_loss, regularisers,
 };
 use trgs_core::rng::Rng;
-use trgs_render::gpu::{self, Recorder};
+use trgs_render::toolkit::gpu::{self, Recorder};
 use trgs_render::{DeviceOptions, GpuContext, LayerGrads};
 use trgs_train::losses::{GpuTarget, LossKernels, LossLayers, LossSettings};
 

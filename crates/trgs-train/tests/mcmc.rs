@@ -4,7 +4,7 @@
 use trgs_core::reference::{AdamRate, mcmc_noise, mcmc_regularise};
 use trgs_core::rng::Rng;
 use trgs_core::scene::{Attribute, Gaussians, Population};
-use trgs_render::gpu::{self, Recorder};
+use trgs_render::toolkit::gpu::{self, Recorder};
 use trgs_render::{DeviceOptions, GpuContext, GpuScene, SceneGradBuffers};
 use trgs_train::densify::mcmc::{McmcKernels, McmcSettings};
 

@@ -38,7 +38,7 @@ impl Frame {
     /// The geometry stages' results of view `vi` (0 = camera, then mirrored passes), in the
     /// twin's form of one view alone: its slice of the shared key list, with tile indices of the
     /// whole grid and ranges counted from the slice's start.
-    pub fn read_intermediates(
+    pub(crate) fn intermediates_of(
         &self,
         ctx: &GpuContext,
         vi: usize,
@@ -109,7 +109,7 @@ impl Frame {
     }
 
     /// The frame's depth order, every view's together.
-    pub fn read_depth_order(
+    pub(crate) fn depth_order_of(
         &self,
         ctx: &GpuContext,
     ) -> Result<Option<DepthOrderIntermediates>, GpuError> {

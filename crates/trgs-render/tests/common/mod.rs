@@ -4,7 +4,7 @@
 use glam::DVec2;
 use trgs_core::fixtures::SceneSpec;
 use trgs_core::reference::Projected;
-use trgs_render::layout::{
+use trgs_render::toolkit::layout::{
     FLAG_CLAMPED_B, FLAG_CLAMPED_G, FLAG_CLAMPED_R, FLAG_GLASS, FLAG_VISIBLE, ProjectedGaussian,
 };
 

@@ -13,8 +13,9 @@ use anyhow::Result;
 use glam::{DMat3, DQuat, DVec3};
 use trgs_core::rng::Rng;
 use trgs_render::GpuContext;
-use trgs_render::gpu::Recorder;
-use trgs_render::layout::{FLAG_VISIBLE, PROJECTED_GRAD_FLOATS, ProjectedGaussian};
+use trgs_render::toolkit::FrameStages;
+use trgs_render::toolkit::gpu::Recorder;
+use trgs_render::toolkit::layout::{FLAG_VISIBLE, PROJECTED_GRAD_FLOATS, ProjectedGaussian};
 
 /// The schedule and thresholds (3DGS defaults for 30k steps; lengths scale with the run).
 #[derive(Clone, Debug, PartialEq)]

@@ -13,13 +13,14 @@
 //! they belong to their plane.
 use super::{DensifyEvent, DensifyStrategy, Geometry, RowPlan, StepView, TrainState, sigmoid};
 use crate::gaussian_state::GaussianState;
+use crate::kernels::TRAINING_KERNELS;
+use crate::layout::McmcParams;
 use crate::settings::scale_len;
 use anyhow::Result;
 use trgs_core::reference::AdamRate;
 use trgs_core::rng::Rng;
 use trgs_core::scene::{Attribute, Population};
-use trgs_render::gpu::{self, Kernel, Recorder, grid_1d, range};
-use trgs_render::layout::McmcParams;
+use trgs_render::toolkit::gpu::{self, Kernel, Recorder, grid_1d, range};
 use trgs_render::{GpuContext, GpuScene, SceneGradBuffers};
 
 /// The largest number of Gaussians sharing one source in the relocation formula (the binomial
@@ -320,8 +321,8 @@ pub struct McmcKernels {
 impl McmcKernels {
     pub fn new(ctx: &GpuContext) -> Self {
         Self {
-            regularise: Kernel::new(ctx, "mcmc_regularise", "mcmc_regularise.wgsl", &[]),
-            noise: Kernel::new(ctx, "mcmc_noise", "mcmc_noise.wgsl", &[]),
+            regularise: TRAINING_KERNELS.mcmc_regularise.build(ctx),
+            noise: TRAINING_KERNELS.mcmc_noise.build(ctx),
         }
     }
 

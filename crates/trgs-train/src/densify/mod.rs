@@ -19,7 +19,7 @@ use anyhow::Result;
 use trgs_core::reference::AdamRate;
 use trgs_core::rng::Rng;
 use trgs_core::scene::PerAttribute;
-use trgs_render::gpu::Recorder;
+use trgs_render::toolkit::gpu::Recorder;
 use trgs_render::{Frame, GpuContext, GpuScene, Gradients};
 
 /// The densification a run uses, with its settings: the value a run is configured with.

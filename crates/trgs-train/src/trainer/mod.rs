@@ -83,7 +83,7 @@ impl Trainer {
         settings: TrainSettings,
         extent: f64,
     ) -> Result<Self> {
-        trgs_render::gpu::scoped(ctx, "setting up training", || {
+        trgs_render::toolkit::gpu::scoped(ctx, "setting up training", || {
             Ok(Self {
                 ctx: ctx.clone(),
                 renderer: Renderer::new(ctx),
@@ -114,7 +114,7 @@ impl Trainer {
         extent: f64,
         densification: &Densification,
     ) -> Result<Self> {
-        trgs_render::gpu::scoped(ctx, "resuming from a checkpoint", || {
+        trgs_render::toolkit::gpu::scoped(ctx, "resuming from a checkpoint", || {
             let mut t = Self::new(ctx, &ck.state.gaussians, &ck.planes, settings, extent)?;
             t.gaussians.replace(&ck.state)?;
             t.plane_moments = ck.plane_moments.clone();
@@ -163,7 +163,7 @@ impl Trainer {
     /// per-Gaussian statistics start over.
     pub fn set_state(&mut self, state: &TrainState) -> Result<()> {
         let ctx = self.ctx.clone();
-        trgs_render::gpu::scoped(&ctx, "uploading the training state", || {
+        trgs_render::toolkit::gpu::scoped(&ctx, "uploading the training state", || {
             self.gaussians.replace(state)?;
             self.densification.restart(state.gaussians.len());
             Ok(())

@@ -14,7 +14,7 @@ impl PhaseClock {
 
     /// Milliseconds since the previous lap.
     pub(super) fn lap(&mut self, ctx: &GpuContext) -> Result<f64, GpuError> {
-        trgs_render::gpu::wait_for_gpu(ctx, "a training phase")?;
+        trgs_render::toolkit::gpu::wait_for_gpu(ctx, "a training phase")?;
         let now = std::time::Instant::now();
         let ms = 1e3 * (now - self.last).as_secs_f64();
         self.last = now;

@@ -8,7 +8,7 @@ use crate::settings::Stage;
 use anyhow::{Context, Result};
 use trgs_core::reference::RegulariserWeights;
 use trgs_core::scene::Attribute;
-use trgs_render::gpu::Recorder;
+use trgs_render::toolkit::gpu::Recorder;
 use trgs_render::{BackwardOptions, LayerGrads};
 
 impl Trainer {
@@ -30,7 +30,7 @@ impl Trainer {
         before_maintenance: impl FnOnce(&Trainer) -> Result<()>,
     ) -> Result<StepStats> {
         let ctx = self.ctx.clone();
-        trgs_render::gpu::scoped(&ctx, "a training step", || {
+        trgs_render::toolkit::gpu::scoped(&ctx, "a training step", || {
             self.train_step_scoped(view, before_maintenance)
         })
     }

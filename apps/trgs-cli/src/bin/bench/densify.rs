@@ -74,7 +74,7 @@ fn time_rebuilds(
     for _ in 0..reps {
         for on_gpu in [true, false] {
             t.set_state(&start)?;
-            trgs_render::gpu::wait_for_gpu(&ctx, "the upload")?;
+            trgs_render::toolkit::gpu::wait_for_gpu(&ctx, "the upload")?;
             let clock = Instant::now();
             let geometry = t.geometry()?;
             read.push(clock.elapsed().as_secs_f64() * 1e3);
@@ -88,7 +88,7 @@ fn time_rebuilds(
             } else {
                 t.apply_plan_on_cpu(&plan)?;
             }
-            trgs_render::gpu::wait_for_gpu(&ctx, "the rebuild")?;
+            trgs_render::toolkit::gpu::wait_for_gpu(&ctx, "the rebuild")?;
             let ms = clock.elapsed().as_secs_f64() * 1e3;
             if on_gpu { gpu.push(ms) } else { cpu.push(ms) }
         }

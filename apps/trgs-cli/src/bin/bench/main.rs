@@ -20,8 +20,9 @@ use std::time::Instant;
 use train_step::bench_train_step;
 use trgs_core::fixtures::{RoomDensity, RoomSpec, room_scene};
 use trgs_core::reference::TILE_SIZE;
-use trgs_render::gpu::{self, Kernel, Recorder};
-use trgs_render::layout::{ProjectedGaussian, RasterParams};
+use trgs_render::toolkit::FrameStages as _;
+use trgs_render::toolkit::gpu::{self, Kernel, Recorder};
+use trgs_render::toolkit::layout::{ProjectedGaussian, RasterParams};
 use trgs_render::{Frame, GpuContext, GpuScene, RenderOptions, Renderer};
 
 /// Renderer benchmarks on this machine's adapter: forward frames over scene sizes and planes,
@@ -278,7 +279,7 @@ impl SplatLoop {
         let visible: Vec<ProjectedGaussian> =
             inter.projected.into_iter().filter(|g| g.flags & 1 != 0).take(list).collect();
         let (w, h) = (frame.width(), frame.height());
-        let kernel = Kernel::new(ctx, "splat_loop", "splat_loop.wgsl", &[]);
+        let kernel = trgs_render::toolkit::BENCH_KERNELS.splat_loop.build(ctx);
         let projected = gpu::storage_init(ctx, "trgs.splat_loop.projected", &visible);
         let out = gpu::storage(ctx, "trgs.splat_loop.out", u64::from(w * h) * 16);
         let params = RasterParams {

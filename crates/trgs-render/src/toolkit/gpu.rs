@@ -220,10 +220,11 @@ pub struct Kernel {
 }
 
 impl Kernel {
-    pub fn new(ctx: &GpuContext, name: &'static str, file: &str, defines: &[&str]) -> Self {
-        // The sources are compiled in and validated by a naga test, so a failure here is a bug.
-        #[allow(clippy::expect_used)]
-        let text = crate::shader::compose(file, defines).expect("shader sources are well formed");
+    /// The pipeline of `wgsl` (a whole shader, prelude included, with entry point `main`),
+    /// labelled `name`. Kernels are built from their registration
+    /// ([`super::registry::KernelSpec::build`]).
+    pub fn from_wgsl(ctx: &GpuContext, name: &'static str, wgsl: String) -> Self {
+        let text = wgsl;
         let module = ctx.device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some(&format!("trgs.{name}.module")),
             source: wgpu::ShaderSource::Wgsl(text.into()),

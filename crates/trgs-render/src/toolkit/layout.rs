@@ -4,7 +4,6 @@
 //! blur, SH constants) come from `trgs_core` the same way. A test compares every struct's field
 //! offsets and size with naga's layout of the generated WGSL, so a field whose WGSL alignment
 //! differs from its Rust position fails instead of drifting.
-use trgs_core::metrics::{SSIM_C1, SSIM_C2, SSIM_RADIUS, SSIM_WINDOW, gaussian_window};
 use trgs_core::reference::{
     COV2D_BLUR, MAX_ALPHA, MIN_ALPHA, MIN_TRANSMITTANCE, TILE_PIXELS, TILE_SIZE,
 };
@@ -32,6 +31,9 @@ pub trait GpuStruct: bytemuck::Pod {
     fn field_offsets() -> Vec<(&'static str, usize)>;
 }
 
+/// Declares a `#[repr(C)]` Pod struct shared with WGSL: the Rust struct and its [`GpuStruct`]
+/// impl (its WGSL declaration and field offsets, which a test compares with naga's layout).
+#[macro_export]
 macro_rules! gpu_struct {
     ($(#[$meta:meta])* pub struct $name:ident { $($(#[$fmeta:meta])* pub $field:ident : $ty:ty),* $(,)? }) => {
         $(#[$meta])*
@@ -39,11 +41,15 @@ macro_rules! gpu_struct {
         #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
         pub struct $name { $($(#[$fmeta])* pub $field: $ty),* }
 
-        impl GpuStruct for $name {
+        impl $crate::toolkit::layout::GpuStruct for $name {
             const NAME: &'static str = stringify!($name);
             fn wgsl() -> String {
                 let mut s = format!("struct {} {{\n", stringify!($name));
-                $(s.push_str(&format!("    {}: {},\n", stringify!($field), <$ty as WgslType>::WGSL));)*
+                $(s.push_str(&format!(
+                    "    {}: {},\n",
+                    stringify!($field),
+                    <$ty as $crate::toolkit::layout::WgslType>::WGSL
+                ));)*
                 s.push_str("}\n");
                 s
             }
@@ -263,104 +269,10 @@ gpu_struct! {
     }
 }
 
-gpu_struct! {
-    /// Parameters of `adam`: one step over `count` floats of one attribute buffer.
-    pub struct AdamParams {
-        pub count: u32,
-        pub lr: f32,
-        pub beta1: f32,
-        pub beta2: f32,
-        pub eps: f32,
-        /// 1 - beta1^t and 1 - beta2^t of this step.
-        pub bias1: f32,
-        pub bias2: f32,
-        /// The first `lead` floats of every record of `stride` floats step with `lead_lr` (the SH
-        /// DC colour in the SH buffer); stride 0: every float steps with `lr`.
-        pub lead: u32,
-        pub stride: u32,
-        pub lead_lr: f32,
-        /// Index in the whole buffer of this range's first float (records are counted from 0).
-        pub offset: u32,
-        pub pad: u32,
-    }
-}
-
 /// Entries per workgroup of `depth_order_counts`: its 256 threads take DEPTH_COUNTS_BLOCK / 256
 /// each.
 pub const DEPTH_COUNTS_BLOCK: u32 = 1024;
 const _: () = assert!(DEPTH_COUNTS_BLOCK.is_multiple_of(256), "whole rounds of 256 threads");
-
-/// Pixels per thread of `loss_sums` (the losses' readback is 32 bytes per strip).
-pub const LOSS_STRIP: u32 = 64;
-
-gpu_struct! {
-    /// Parameters of the training losses: `photometric_loss` (its four passes), `regularisers`
-    /// and `loss_sums`, over one `width` x `height` frame.
-    pub struct LossParams {
-        pub width: u32,
-        pub height: u32,
-        /// The D-SSIM weight lambda of `(1 - lambda) L1 + lambda (1 - SSIM)`.
-        pub lambda_dssim: f32,
-        /// 1 / (width height 3): the photometric loss and L_c are means over samples.
-        pub inv_samples: f32,
-        /// 1 / (width height): L_d and L_m are means over pixels.
-        pub inv_pixels: f32,
-        /// The regularisers' weights (`regularisers`).
-        pub weight_depth: f32,
-        pub weight_conflict: f32,
-        /// Zero on views without a glass annotation.
-        pub weight_mask: f32,
-    }
-}
-
-gpu_struct! {
-    /// Parameters of `mcmc_regularise` and `mcmc_noise` over `count` Gaussians.
-    pub struct McmcParams {
-        pub count: u32,
-        /// The step's random seed (`mcmc_noise`).
-        pub seed: u32,
-        /// Position learning rate times the noise rate (`mcmc_noise`).
-        pub noise_scale: f32,
-        /// lambda_o / N and lambda_s / (3 N) (`mcmc_regularise`).
-        pub opacity_weight: f32,
-        pub scale_weight: f32,
-        /// Index in the scene of this range's first Gaussian (numbers the random draws).
-        pub first: u32,
-        pub pad1: u32,
-        pub pad2: u32,
-    }
-}
-
-gpu_struct! {
-    /// Parameters of `densify_stats` over `count` Gaussians (one pass of the frame).
-    pub struct DensifyStatsParams {
-        pub count: u32,
-        /// 1 for the frame's first pass (the camera's): the step's "seen" flags start over.
-        pub first_pass: u32,
-        /// Half the image's width and height (3DGS measures the gradient in NDC).
-        pub half_width: f32,
-        pub half_height: f32,
-    }
-}
-
-gpu_struct! {
-    /// Parameters of `gather_rows`: `count` output rows of `width` words each, from the source
-    /// rows [`first_source`, `first_source + source_rows`) bound in this dispatch.
-    pub struct GatherParams {
-        pub count: u32,
-        pub width: u32,
-        pub first_source: u32,
-        pub source_rows: u32,
-        /// 1: a source with the GATHER_ZERO bit makes a zero row (Adam moments that restart).
-        pub honour_zero: u32,
-        pub pad0: u32,
-        pub pad1: u32,
-        pub pad2: u32,
-    }
-}
-
-/// `gather_rows`' source-index bit for an output row that starts from zero (when honoured).
-pub const GATHER_ZERO: u32 = 1 << 31;
 
 /// `ProjectedGaussian::flags` bits.
 pub const FLAG_VISIBLE: u32 = 1;
@@ -433,35 +345,45 @@ pub const SORT_PACKED_VECS: u32 = SORT_PACKED / 4;
 /// One GPU struct: (name, WGSL declaration, Rust field offsets, Rust size).
 pub type StructInfo = (&'static str, String, Vec<(&'static str, usize)>, usize);
 
-/// Every GPU struct.
+/// The name, WGSL declaration, Rust field offsets and Rust size of `T`.
+pub fn struct_info<T: GpuStruct>() -> StructInfo {
+    (T::NAME, T::wgsl(), T::field_offsets(), std::mem::size_of::<T>())
+}
+
+/// Every GPU struct of the renderer.
 pub fn all_structs() -> Vec<StructInfo> {
-    fn entry<T: GpuStruct>() -> StructInfo {
-        (T::NAME, T::wgsl(), T::field_offsets(), std::mem::size_of::<T>())
-    }
     vec![
-        entry::<ProjectParams>(),
-        entry::<ProjectedGaussian>(),
-        entry::<TileParams>(),
-        entry::<EmitParams>(),
-        entry::<ViewTiles>(),
-        entry::<ScanParams>(),
-        entry::<SortParams>(),
-        entry::<RasterParams>(),
-        entry::<RasterState>(),
-        entry::<ReflectionState>(),
-        entry::<ComposeParams>(),
-        entry::<DisplayParams>(),
-        entry::<PlaneGpu>(),
-        entry::<AdamParams>(),
-        entry::<McmcParams>(),
-        entry::<DensifyStatsParams>(),
-        entry::<GatherParams>(),
-        entry::<LossParams>(),
+        struct_info::<ProjectParams>(),
+        struct_info::<ProjectedGaussian>(),
+        struct_info::<TileParams>(),
+        struct_info::<EmitParams>(),
+        struct_info::<ViewTiles>(),
+        struct_info::<ScanParams>(),
+        struct_info::<SortParams>(),
+        struct_info::<RasterParams>(),
+        struct_info::<RasterState>(),
+        struct_info::<ReflectionState>(),
+        struct_info::<ComposeParams>(),
+        struct_info::<DisplayParams>(),
+        struct_info::<PlaneGpu>(),
     ]
 }
 
-fn float(v: f64) -> String {
+/// `v` as a WGSL f32 literal.
+pub fn float(v: f64) -> String {
     format!("{:?}", v as f32)
+}
+
+/// WGSL declarations of `u32` and `f32` constants.
+pub fn wgsl_constants(u32s: &[(&str, u32)], f32s: &[(String, f64)]) -> String {
+    let mut s = String::new();
+    for (name, v) in u32s {
+        s.push_str(&format!("const {name}: u32 = {v}u;\n"));
+    }
+    for (name, v) in f32s {
+        s.push_str(&format!("const {name}: f32 = {};\n", float(*v)));
+    }
+    s
 }
 
 /// The `ComposeParams::model` bits of `model`.
@@ -474,7 +396,8 @@ pub fn model_bits(model: trgs_core::reference::ReflectionModel) -> u32 {
 /// a frame with more views runs it once per group).
 pub const CULL_VIEWS: u32 = 3;
 
-/// The text every shader starts with: shared constants and struct declarations.
+/// The text every renderer shader starts with: the constants and struct declarations above
+/// (trgs-train's prelude extends it with its own).
 pub fn prelude() -> String {
     let mut s =
         String::from("// Generated by trgs-render (layout.rs): do not edit in the .wgsl files.\n");
@@ -503,39 +426,21 @@ pub fn prelude() -> String {
         ("BWD_VIEW", BWD_VIEW),
         ("MODEL_NO_FRESNEL", MODEL_NO_FRESNEL),
         ("MODEL_NO_INTENSITY", MODEL_NO_INTENSITY),
-        ("LOSS_STRIP", LOSS_STRIP),
-        ("GATHER_ZERO", GATHER_ZERO),
         ("DEPTH_KEY_BITS", trgs_core::reference::DEPTH_KEY_BITS),
         ("CULL_VIEWS", CULL_VIEWS),
         ("DEPTH_COUNTS_BLOCK", DEPTH_COUNTS_BLOCK),
     ];
-    for (name, v) in consts_u32 {
-        s.push_str(&format!("const {name}: u32 = {v}u;\n"));
-    }
     let mut consts_f32 = vec![
         ("MAX_ALPHA".to_string(), MAX_ALPHA),
         ("MIN_ALPHA".to_string(), MIN_ALPHA),
         ("MIN_TRANSMITTANCE".to_string(), MIN_TRANSMITTANCE),
         ("COV2D_BLUR".to_string(), COV2D_BLUR),
-        ("NOISE_GATE_STEEPNESS".to_string(), trgs_core::reference::NOISE_GATE_STEEPNESS),
-        ("NOISE_GATE_THRESHOLD".to_string(), trgs_core::reference::NOISE_GATE_THRESHOLD),
-        ("MAX_REGULARISED_LOG_SCALE".to_string(), trgs_core::reference::MAX_REGULARISED_LOG_SCALE),
         ("SH_C0".to_string(), sh::C0),
         ("SH_C1".to_string(), sh::C1),
     ];
     consts_f32.extend(sh::C2.iter().enumerate().map(|(i, &v)| (format!("SH_C2_{i}"), v)));
     consts_f32.extend(sh::C3.iter().enumerate().map(|(i, &v)| (format!("SH_C3_{i}"), v)));
-    consts_f32.push(("SSIM_C1".to_string(), SSIM_C1));
-    consts_f32.push(("SSIM_C2".to_string(), SSIM_C2));
-    for (name, v) in consts_f32 {
-        s.push_str(&format!("const {name}: f32 = {};\n", float(v)));
-    }
-    // The SSIM window of trgs_core::metrics (photometric_loss blurs with it).
-    let window: Vec<String> = gaussian_window().iter().map(|&v| float(v)).collect();
-    s.push_str(&format!(
-        "const SSIM_RADIUS: u32 = {SSIM_RADIUS}u;\nconst SSIM_WEIGHTS = array<f32, {SSIM_WINDOW}>({});\n",
-        window.join(", ")
-    ));
+    s.push_str(&wgsl_constants(&consts_u32, &consts_f32));
     for (_, decl, _, _) in all_structs() {
         s.push_str(&decl);
     }

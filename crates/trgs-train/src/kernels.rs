@@ -1,0 +1,21 @@
+//! The training stages' kernel table: each stage builds its kernel from its entry here
+//! (`TRAINING_KERNELS.adam.build(ctx)`), and the naga test validates every entry's variants.
+use trgs_render::toolkit::registry::no_defines;
+
+trgs_render::kernel_registry! {
+    /// Every kernel of the training stages.
+    pub const TRAINING_KERNELS: TrainingKernelSpecs => TrainingKernels,
+        prelude: crate::layout::prelude, {
+        photometric_loss_rows: "training/photometric_loss_rows.wgsl" => no_defines,
+        photometric_loss: "training/photometric_loss.wgsl" => no_defines,
+        photometric_loss_grad_rows: "training/photometric_loss_grad_rows.wgsl" => no_defines,
+        photometric_loss_grad: "training/photometric_loss_grad.wgsl" => no_defines,
+        regularisers: "training/regularisers.wgsl" => no_defines,
+        loss_sums: "training/loss_sums.wgsl" => no_defines,
+        adam: "training/adam.wgsl" => no_defines,
+        densify_stats: "training/densify_stats.wgsl" => no_defines,
+        mcmc_regularise: "training/mcmc_regularise.wgsl" => no_defines,
+        mcmc_noise: "training/mcmc_noise.wgsl" => no_defines,
+        gather_rows: "training/gather_rows.wgsl" => no_defines,
+    }
+}
