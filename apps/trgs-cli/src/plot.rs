@@ -1,7 +1,9 @@
 //! Speed against error across runs: the PSNR each run reached after so many seconds of training
-//! (its `metrics.json` `psnr_over_time`), as a Markdown table and a PNG line plot. The plot's
-//! tick labels (seconds, dB) are drawn with a built-in 3x5 pixel font, so that no font
-//! dependency is needed; the table beside it carries the exact numbers and the colour key.
+//! (its `metrics.json` `psnr_over_time`), as a Markdown table and a PNG line plot with a title,
+//! axis names and a legend (plotters; text in egui's bundled font, so that no system font is
+//! looked up).
+use anyhow::{Result, anyhow};
+use plotters::prelude::*;
 use trgs_core::Image;
 
 /// One run's curve: (training seconds, test PSNR) in order.
@@ -13,16 +15,19 @@ pub struct Curve {
 
 /// Line colours, in run order (the table names them); `report` takes at most this many runs,
 /// so that no two curves share a colour.
-pub const COLOURS: [([f32; 3], &str); 8] = [
-    ([0.85, 0.2, 0.15], "red"),
-    ([0.15, 0.35, 0.85], "blue"),
-    ([0.1, 0.6, 0.2], "green"),
-    ([0.6, 0.3, 0.7], "purple"),
-    ([0.95, 0.6, 0.1], "orange"),
-    ([0.1, 0.7, 0.75], "teal"),
-    ([0.5, 0.5, 0.5], "grey"),
-    ([0.55, 0.35, 0.15], "brown"),
+pub const COLOURS: [([u8; 3], &str); 8] = [
+    ([217, 51, 38], "red"),
+    ([38, 89, 217], "blue"),
+    ([26, 153, 51], "green"),
+    ([153, 77, 179], "purple"),
+    ([242, 153, 26], "orange"),
+    ([26, 179, 191], "teal"),
+    ([128, 128, 128], "grey"),
+    ([140, 89, 38], "brown"),
 ];
+
+/// The font family every label is drawn in.
+const FONT: &str = "sans-serif";
 
 /// Read `psnr_over_time` of a run's metrics.json text.
 pub fn curve_of(name: &str, metrics: &serde_json::Value) -> Curve {
@@ -59,145 +64,84 @@ pub fn markdown_table(curves: &[Curve]) -> String {
     s
 }
 
-/// A `width x height` plot: PSNR (y) against seconds (x), both axes from the data's range, with a
-/// labelled grid (a round number of seconds that gives at most 8 intervals, and 1, 2, 5 or 10 dB
-/// or more that gives at most 10),
-/// each curve as a polyline with square markers.
-pub fn plot(curves: &[Curve], width: u32, height: u32) -> Image<f32> {
-    let mut im = Image::<f32>::new(width, height, 3);
-    im.data.iter_mut().for_each(|v| *v = 1.0);
+/// Make the bundled font the family the plot's labels use (once per process).
+fn register_font() -> Result<()> {
+    static REGISTERED: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    let ok = *REGISTERED.get_or_init(|| {
+        plotters::style::register_font(
+            FONT,
+            plotters::style::FontStyle::Normal,
+            epaint_default_fonts::UBUNTU_LIGHT,
+        )
+        .is_ok()
+    });
+    if ok { Ok(()) } else { Err(anyhow!("the bundled font could not be loaded")) }
+}
+
+/// A `width x height` plot titled `title`: test PSNR (dB) against training time (s), each curve
+/// a line with circle markers in its colour of [`COLOURS`], named in the legend.
+pub fn plot(curves: &[Curve], title: &str, width: u32, height: u32) -> Result<Image<u8>> {
+    register_font()?;
+    let mut rgb = vec![255u8; (width * height * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut rgb, (width, height)).into_drawing_area();
+        draw(&root, curves, title).map_err(|e| anyhow!("drawing the plot: {e}"))?;
+        root.present().map_err(|e| anyhow!("drawing the plot: {e}"))?;
+    }
+    let mut image = Image::<u8>::new(width, height, 3);
+    image.data = rgb;
+    Ok(image)
+}
+
+fn draw<DB: DrawingBackend>(
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+    curves: &[Curve],
+    title: &str,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    root.fill(&WHITE)?;
     let all: Vec<(f64, f64)> = curves.iter().flat_map(|c| c.points.iter().copied()).collect();
-    if all.is_empty() || width < 16 || height < 16 {
-        return im;
-    }
     let t_max = all.iter().map(|p| p.0).fold(1.0, f64::max);
-    let p_min = all.iter().map(|p| p.1).fold(f64::INFINITY, f64::min).floor();
-    let p_max = all.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max).ceil().max(p_min + 1.0);
-    let t_step = [10.0, 30.0, 60.0, 120.0, 300.0, 600.0, 1200.0, 1800.0, 3600.0]
-        .into_iter()
-        .find(|&s| t_max / s <= 8.0)
-        .unwrap_or((t_max / 8.0 / 3600.0).ceil() * 3600.0);
-    let p_step = [1.0, 2.0, 5.0, 10.0].into_iter().find(|&s| (p_max - p_min) / s <= 10.0);
-    let p_step = p_step.unwrap_or(((p_max - p_min) / 100.0).ceil() * 10.0);
-    // Room for the labels left of and below the axes; the plot area keeps 8 pixels at the top
-    // and on the right.
-    let label = |p: f64| format!("{p:.0}dB");
-    let widest = [p_min, p_max].iter().map(|&p| text_width(&label(p))).fold(0.0, f64::max);
-    let (left, bottom, margin) = (widest + 12.0, GLYPH_H + 12.0, 8.0);
-    let w = (f64::from(width) - left - margin).max(1.0);
-    let h = (f64::from(height) - bottom - margin).max(1.0);
-    let to_px =
-        |t: f64, p: f64| (left + w * t / t_max, margin + h * (1.0 - (p - p_min) / (p_max - p_min)));
-    let (grey, black) = ([0.85, 0.85, 0.85], [0.0, 0.0, 0.0]);
-    let mut t = 0.0;
-    while t <= t_max {
-        let (x, y) = to_px(t, p_min);
-        line(&mut im, (x, margin), (x, y), grey);
-        let text = format!("{t:.0}s");
-        // Centred under its grid line, but kept inside the image at the right edge.
-        let tx = (x - 0.5 * text_width(&text)).min(f64::from(width) - text_width(&text) - 1.0);
-        draw_text(&mut im, tx, y + 6.0, &text, black);
-        t += t_step;
-    }
-    let mut p = p_min;
-    while p <= p_max {
-        let (x, y) = to_px(0.0, p);
-        line(&mut im, (x, y), (left + w, y), grey);
-        let text = label(p);
-        let ty = (y - 0.5 * GLYPH_H).max(1.0);
-        draw_text(&mut im, x - 6.0 - text_width(&text), ty, &text, black);
-        p += p_step;
-    }
-    line(&mut im, (left, margin + h), (left + w, margin + h), black);
-    line(&mut im, (left, margin), (left, margin + h), black);
+    let p_min = all.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
+    let p_max = all.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max);
+    let (p_lo, p_hi) =
+        if p_min.is_finite() { ((p_min - 1.0).floor(), (p_max + 1.0).ceil()) } else { (0.0, 1.0) };
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, (FONT, 22))
+        .margin(12)
+        .x_label_area_size(44)
+        .y_label_area_size(56)
+        .build_cartesian_2d(0.0..t_max * 1.05, p_lo..p_hi)?;
+    chart
+        .configure_mesh()
+        .x_desc("training time (s)")
+        .y_desc("test PSNR (dB)")
+        .axis_desc_style((FONT, 16))
+        .label_style((FONT, 13))
+        .x_label_formatter(&|t| format!("{t:.0}"))
+        .y_label_formatter(&|p| format!("{p:.0}"))
+        .light_line_style(RGBColor(238, 238, 238))
+        .draw()?;
     for (k, c) in curves.iter().enumerate() {
-        let colour = COLOURS[k % COLOURS.len()].0;
-        let px: Vec<(f64, f64)> = c.points.iter().map(|&(t, p)| to_px(t, p)).collect();
-        for pair in px.windows(2) {
-            line(&mut im, pair[0], pair[1], colour);
-        }
-        for &(x, y) in &px {
-            for dy in -2..=2 {
-                for dx in -2..=2 {
-                    set(&mut im, x + f64::from(dx), y + f64::from(dy), colour);
-                }
-            }
-        }
+        let [r, g, b] = COLOURS[k % COLOURS.len()].0;
+        let colour = RGBColor(r, g, b);
+        chart
+            .draw_series(LineSeries::new(c.points.iter().copied(), colour.stroke_width(2)))?
+            .label(c.name.as_str())
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
+            });
+        chart.draw_series(c.points.iter().map(|&p| Circle::new(p, 4, colour.filled())))?;
     }
-    im
-}
-
-/// Pixels per font cell side: the 3x5 glyphs are drawn at 6x10 pixels.
-const GLYPH_SCALE: f64 = 2.0;
-const GLYPH_H: f64 = 5.0 * GLYPH_SCALE;
-const GLYPH_ADVANCE: f64 = 4.0 * GLYPH_SCALE;
-
-/// The 3x5 glyph of `c` (rows top to bottom, 3 bits each, the high bit on the left), for the
-/// characters the tick labels use; anything else is a blank.
-fn glyph(c: char) -> [u8; 5] {
-    match c {
-        '0' => [0b111, 0b101, 0b101, 0b101, 0b111],
-        '1' => [0b010, 0b110, 0b010, 0b010, 0b111],
-        '2' => [0b111, 0b001, 0b111, 0b100, 0b111],
-        '3' => [0b111, 0b001, 0b111, 0b001, 0b111],
-        '4' => [0b101, 0b101, 0b111, 0b001, 0b001],
-        '5' => [0b111, 0b100, 0b111, 0b001, 0b111],
-        '6' => [0b111, 0b100, 0b111, 0b101, 0b111],
-        '7' => [0b111, 0b001, 0b001, 0b001, 0b001],
-        '8' => [0b111, 0b101, 0b111, 0b101, 0b111],
-        '9' => [0b111, 0b101, 0b111, 0b001, 0b111],
-        '-' => [0b000, 0b000, 0b111, 0b000, 0b000],
-        's' => [0b011, 0b100, 0b010, 0b001, 0b110],
-        'd' => [0b001, 0b001, 0b111, 0b101, 0b111],
-        'B' => [0b110, 0b101, 0b110, 0b101, 0b110],
-        _ => [0; 5],
+    if !curves.is_empty() {
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::LowerRight)
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font((FONT, 14))
+            .draw()?;
     }
-}
-
-fn text_width(text: &str) -> f64 {
-    GLYPH_ADVANCE * text.chars().count() as f64 - GLYPH_SCALE
-}
-
-/// Draw `text` with its top-left corner at (x, y).
-fn draw_text(im: &mut Image<f32>, x: f64, y: f64, text: &str, c: [f32; 3]) {
-    for (i, ch) in text.chars().enumerate() {
-        let x0 = x + GLYPH_ADVANCE * i as f64;
-        for (row, bits) in glyph(ch).iter().enumerate() {
-            for col in 0..3 {
-                if bits >> (2 - col) & 1 == 0 {
-                    continue;
-                }
-                for sy in 0..GLYPH_SCALE as i32 {
-                    for sx in 0..GLYPH_SCALE as i32 {
-                        let px = x0 + GLYPH_SCALE * f64::from(col) + f64::from(sx);
-                        let py = y + GLYPH_SCALE * row as f64 + f64::from(sy);
-                        set(im, px, py, c);
-                    }
-                }
-            }
-        }
-    }
-}
-
-fn set(im: &mut Image<f32>, x: f64, y: f64, c: [f32; 3]) {
-    let (xi, yi) = (x.round(), y.round());
-    if xi < 0.0 || yi < 0.0 || xi >= f64::from(im.width) || yi >= f64::from(im.height) {
-        return;
-    }
-    for (ch, v) in c.iter().enumerate() {
-        im.set(xi as u32, yi as u32, ch as u32, *v);
-    }
-}
-
-/// A two-pixel-wide line, sampled every half pixel.
-fn line(im: &mut Image<f32>, a: (f64, f64), b: (f64, f64), c: [f32; 3]) {
-    let steps = (2.0 * (b.0 - a.0).abs().max((b.1 - a.1).abs())).ceil().max(1.0) as usize;
-    for i in 0..=steps {
-        let s = i as f64 / steps as f64;
-        let (x, y) = (a.0 + s * (b.0 - a.0), a.1 + s * (b.1 - a.1));
-        set(im, x, y, c);
-        set(im, x + 0.5, y + 0.5, c);
-    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -221,36 +165,16 @@ mod tests {
     }
 
     #[test]
-    fn plot_draws_each_curve_in_its_colour() {
-        let im = plot(&curves(), 200, 120);
-        let count = |c: [f32; 3]| {
-            im.data.chunks_exact(3).filter(|px| px.iter().zip(&c).all(|(a, b)| a == b)).count()
-        };
+    fn plot_draws_each_curve_in_its_colour_with_text() {
+        let im = plot(&curves(), "two runs", 480, 320).expect("plot");
+        let count = |c: [u8; 3]| im.data.chunks_exact(3).filter(|px| **px == c).count();
         assert!(count(COLOURS[0].0) > 50 && count(COLOURS[1].0) > 50);
-        // The last point of curve a (the highest PSNR) is at the top right.
-        let (x, y) = (200 - 8 - 1, 8);
-        assert_eq!(im.get(x, y, 0), COLOURS[0].0[0]);
-        assert!(plot(&[], 50, 50).data.iter().all(|&v| v == 1.0));
-    }
-
-    /// The tick labels are drawn left of the y axis and below the x axis, and nowhere they
-    /// would be clipped.
-    #[test]
-    fn plot_labels_both_axes() {
-        let (w, h) = (200u32, 120u32);
-        let im = plot(&curves(), w, h);
-        let black = |x: u32, y: u32| (0..3).all(|c| im.get(x, y, c) == 0.0);
-        // The y axis is the leftmost all-black column of the plot area.
-        let axis_x = (0..w).find(|&x| (20..h - 30).all(|y| black(x, y))).expect("y axis");
-        let left_ink = (0..axis_x - 2).flat_map(|x| (0..h).map(move |y| (x, y)));
-        assert!(left_ink.filter(|&(x, y)| black(x, y)).count() > 20, "no y labels");
-        // The x axis: the lowest row that is mostly black (markers may cover parts of it).
-        let ink = |y: u32| (axis_x..w).filter(|&x| black(x, y)).count();
-        let axis_y = (0..h).rev().find(|&y| ink(y) > 8 * (w - axis_x) as usize / 10);
-        let axis_y = axis_y.expect("x axis");
-        let below = (axis_y + 3..h).flat_map(|y| (0..w).map(move |x| (x, y)));
-        assert!(below.filter(|&(x, y)| black(x, y)).count() > 20, "no x labels");
-        assert_eq!(text_width("22dB"), 30.0);
-        assert!(glyph('?').iter().all(|&r| r == 0));
+        // Text (title, axis names, labels, legend) is drawn in grey levels: dark pixels that
+        // are neither a curve nor the white background.
+        let dark = im.data.chunks_exact(3).filter(|px| px.iter().all(|&v| v < 100)).count();
+        assert!(dark > 500, "{dark} dark pixels: no text?");
+        // No curves: axes and title only.
+        let empty = plot(&[], "nothing", 200, 120).expect("plot");
+        assert!(empty.data.chunks_exact(3).all(|px| px[0] == px[1] && px[1] == px[2]));
     }
 }

@@ -4,7 +4,7 @@ use anyhow::{Context, Result, bail};
 use clap::Parser;
 use std::path::PathBuf;
 use trgs_cli::plot::{curve_of, markdown_table, plot};
-use trgs_core::io::write_png_rgb;
+use trgs_core::io::write_png_rgb8;
 
 /// Test PSNR against training time of several runs: reads each run's metrics.json
 /// (psnr_over_time), prints a Markdown table and writes the plot.
@@ -54,7 +54,8 @@ fn main() -> Result<()> {
         curves.push(curve);
     }
     print!("{}", markdown_table(&curves));
-    write_png_rgb(&out, &plot(&curves, 640, 400))?;
+    let image = plot(&curves, "Test PSNR against training time", 800, 500)?;
+    write_png_rgb8(&out, &image)?;
     println!("plot written to {}", out.display());
     Ok(())
 }

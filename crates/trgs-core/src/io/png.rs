@@ -169,6 +169,12 @@ pub fn write_png_rgb(path: &Path, image: &Image<f32>) -> Result<(), FormatError>
     encode(path, &image.to_u8(), image.width, image.height, ExtendedColorType::Rgb8)
 }
 
+/// Write an 8-bit RGB image (e.g. a plot) as a PNG.
+pub fn write_png_rgb8(path: &Path, image: &Image<u8>) -> Result<(), FormatError> {
+    check_layout(path, image.width, image.height, image.channels, image.data.len(), 3)?;
+    encode(path, &image.data, image.width, image.height, ExtendedColorType::Rgb8)
+}
+
 /// Write a one-channel 8-bit image (e.g. a label mask) as a gray PNG.
 pub fn write_png_gray(path: &Path, image: &Image<u8>) -> Result<(), FormatError> {
     check_layout(path, image.width, image.height, image.channels, image.data.len(), 1)?;
