@@ -420,7 +420,7 @@ impl TrainingRun {
             self.events.push_back(RunEvent::PlaneFailed { label: *label, reason: reason.clone() });
         }
         for (&label, plane) in init.labels.iter().zip(&init.planes) {
-            self.events.push_back(RunEvent::PlaneCreated { label, plane: plane.clone() });
+            self.events.push_back(RunEvent::PlaneCreated { label, plane: *plane });
         }
         self.trainer.add_planes(&init.planes, &init.glass)
     }

@@ -231,7 +231,7 @@ impl Trainer {
     /// Render `camera` with the current state (what evaluation and the outputs see).
     pub fn render(&self, camera: &Camera) -> Result<Frame> {
         let options = self.render_options();
-        Ok(self.renderer.render(self.scene(), camera, &options).context("rendering a view")?)
+        self.renderer.render(self.scene(), camera, &options).context("rendering a view")
     }
 }
 
