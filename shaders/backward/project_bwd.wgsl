@@ -17,7 +17,7 @@
 
 // Whether this variant adds to the gradients (a mirrored view's) or writes them: a constant, so
 // that the writing variant never loads what it overwrites (a select on a runtime flag loaded it
-// anyway: 2.5 of 19.8 ms on lavapipe at 100k Gaussians).
+// anyway, at a cost `bench --backward` showed).
 #ifdef ADD_GRADIENTS
 const ADD: bool = true;
 #else

@@ -7,8 +7,8 @@
 // gradients (colour, depth with the depth-variance term, mask value, opacity, 2D mean and conic)
 // are summed over the thread's pixels, then over the subgroup, and added to the Gaussian's
 // record of `grads` (PROJECTED_GRAD_FLOATS per Gaussian) once per subgroup that touched it.
-// With one pixel per thread on lavapipe those reductions and atomics were 60% of the kernel's
-// time (100k Gaussians); with four rows per thread one of them serves 32 pixels instead of 8.
+// With one pixel per thread on a CPU adapter those reductions and atomics take most of the
+// kernel's time; with four rows per thread one of them serves 32 pixels instead of 8.
 // With BLOCK_WALK a subgroup steps back only through the entries that can reach its block
 // (shared/block_walk.wgsl).
 #include "shared/common.wgsl"

@@ -51,8 +51,8 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
     let ty = wid.y + params.tile_y0;
     // Eight consecutive threads take a block of 4 x 2 pixels, not a row of 8: on a CPU adapter
     // they are one SIMD vector, which walks the list until its last pixel stops, and compact
-    // blocks' pixels stop closer together (87% of the vector's steps do work on the room
-    // benchmark, against 85% with rows). A GPU's 32-thread warp still takes 8 x 4 pixels.
+    // blocks' pixels stop closer together, so more of the vector's steps do work. A GPU's
+    // 32-thread warp still takes 8 x 4 pixels.
     let block = lid / 8u;
     let lane = lid % 8u;
     let x = tx * TILE_SIZE + (block % (TILE_SIZE / 4u)) * 4u + lane % 4u;

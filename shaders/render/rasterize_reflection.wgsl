@@ -7,7 +7,7 @@
 #include "shared/common.wgsl"
 #include "shared/splat.wgsl"
 #include "shared/plane_hit.wgsl"
-// ROWS pixels per thread (2.2x faster in four rows on lavapipe, 100k Gaussians).
+// ROWS pixels per thread (four rows on CPU adapters, where they are faster: `bench`).
 #include "shared/tile_rows.wgsl"
 #include "shared/block_walk.wgsl"
 

@@ -1,7 +1,7 @@
 // Stage `adam` (twin: trgs_core::reference::adam): one Adam step with bias correction over a
-// range of one attribute buffer, four floats per thread as one vec4 (on lavapipe 12.5-14.5 ms
-// against 22 ms for one float per thread over 4.8 million floats: every invocation costs, and
-// the SH buffer alone holds 48 floats a Gaussian). The moments live in buffers shaped like the
+// range of one attribute buffer, four floats per thread as one vec4 (on a CPU adapter every
+// invocation costs, and the SH buffer alone holds 48 floats a Gaussian; `bench --train-step`
+// times the Adam phase). The moments live in buffers shaped like the
 // parameters. A learning-rate pattern gives the first floats of each record their own rate. The
 // floats of the last vec4 past the count (the buffers' padding, every binding covers whole
 // vec4s) keep what they held.

@@ -67,8 +67,8 @@ pub enum BlockWidth {
     #[default]
     Narrow,
     /// `SCAN_ITEMS_WIDE` and `SORT_ITEMS_WIDE`, four times as many, for CPU adapters. There each
-    /// workgroup pays its barriers while its serial loops are cheap: on lavapipe the depth sort
-    /// at 100k Gaussians took about 0.8x the time and the scans 0.8-0.9x (docs/gpu-renderer.md).
+    /// workgroup pays its barriers while its serial loops are cheap, and the sort and scans take
+    /// less time (`bench` on lavapipe, and docs/gpu-renderer.md).
     Wide,
 }
 

@@ -1,9 +1,9 @@
-//! Stage `densify_stats` on the GPU (shaders/densify_stats.wgsl; twin
+//! Stage `densify_stats` on the GPU (shaders/training/densify_stats.wgsl; twin
 //! [`DensifyStats::add`]): each step's screen-space gradient norms, observations and screen
 //! radii, summed per Gaussian on the GPU. Classic densification reads the sums back once per
-//! densification, and a checkpoint reads them when it is written. Reading every step's projected
-//! records and gradients back instead took 11 to 28 ms of a 30 to 40 ms step at 300k Gaussians
-//! on an H100 (one pass, or a camera and a mirrored pass): more than the rest of the step.
+//! densification, and a checkpoint reads them when it is written: on a GPU, reading every step's
+//! projected records and gradients back costs more than the rest of the step
+//! (`bench --train-step` times a step's phases).
 use crate::densify::DensifyStats;
 use crate::layout::DensifyStatsParams;
 use trgs_render::toolkit::gpu::{self, Kernel, Recorder, grid_1d};

@@ -1,10 +1,9 @@
-//! Stage `gather_rows` on the GPU (shaders/gather_rows.wgsl; twin [`RowPlan::apply`]): rebuild
-//! the Gaussians' attribute and Adam-moment buffers from a [`RowPlan`] without reading them back.
-//! Densification decides from a few attributes (means, rotations, scales, opacities,
+//! Stage `gather_rows` on the GPU (shaders/training/gather_rows.wgsl; twin [`RowPlan::apply`]):
+//! rebuild the Gaussians' attribute and Adam-moment buffers from a [`RowPlan`] without reading
+//! them back. Densification decides from a few attributes (means, rotations, scales, opacities,
 //! populations: 15 words per Gaussian); the parameters with their two moments are about 180 words
-//! at SH degree 3. Reading the whole state back, editing it on the CPU and uploading it again
-//! took 0.4 to 0.8 s per densification at 300k Gaussians on an H100, about 6 ms a step over a
-//! 30k-step run.
+//! at SH degree 3, and reading the whole state back, editing it on the CPU and uploading it again
+//! costs many steps' time (`bench --densify` measures both ways).
 use crate::adam::AdamMoments;
 use crate::densify::RowPlan;
 use crate::layout::{GATHER_ZERO, GatherParams};

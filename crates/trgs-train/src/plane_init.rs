@@ -1,8 +1,8 @@
 //! Reflection-plane initialisation from the annotated glass masks at the end of stage 1 (the
-//! paper's appendix A, DESIGN.md "Plane initialisation"): for each label, the Gaussians whose
-//! centres project into a band around the mask's outline in most annotated views are fitted with
-//! a RANSAC plane and a minimum-area rectangle (`trgs_core::fit`); the normal is turned toward the
-//! annotated cameras; 1000 glass Gaussians are sampled on the rectangle.
+//! paper's appendix A; docs/ARCHITECTURE.md, "Plane initialisation"): for each label, the
+//! Gaussians whose centres project into a band around the mask's outline in most annotated views
+//! are fitted with a RANSAC plane and a minimum-area rectangle (`trgs_core::fit`); the normal is
+//! turned toward the annotated cameras; 1000 glass Gaussians are sampled on the rectangle.
 use crate::data::View;
 use glam::{DMat3, DQuat, DVec3};
 use trgs_core::Image;

@@ -1,5 +1,5 @@
-//! Plane fitting for initialising reflection planes (appendix A of the paper, DESIGN.md "Plane
-//! initialisation").
+//! Plane fitting for initialising reflection planes (appendix A of the paper;
+//! docs/ARCHITECTURE.md, "Plane initialisation").
 //!
 //! The pipeline: the Gaussians in a band around the annotated glass outline are fitted with
 //! [`ransac_plane`] (3-point hypotheses, least-squares refinement), the normal is turned toward

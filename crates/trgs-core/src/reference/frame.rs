@@ -5,7 +5,7 @@ use super::rasterize_reflection::ReflectionPixelState;
 use super::render::ViewPass;
 use crate::image::Image;
 
-/// Every layer of one view (DESIGN.md data flow), plus what the backward replays.
+/// Every layer of one view (docs/ARCHITECTURE.md, "Data flow"), plus what the backward replays.
 #[derive(Clone, Debug)]
 pub struct Frame {
     /// C, RGB.

@@ -4,7 +4,7 @@
 //! that its gradients can be checked against central finite differences, and it is the oracle of
 //! every GPU stage.
 //!
-//! [`render`] runs the forward pipeline of DESIGN.md and keeps what the backward needs;
+//! [`render`] runs the forward pipeline of docs/ARCHITECTURE.md ("Data flow") and keeps what the backward needs;
 //! [`backward`] takes dL/d(each output layer) and returns dL/d(every Gaussian attribute and every
 //! plane's centre, normal and R0 logit).
 mod adam;
@@ -66,9 +66,9 @@ pub use tile_counts::{TileGrid, tile_counts, tile_rect};
 pub use tile_ranges::tile_ranges;
 
 /// Side of a square screen tile in pixels. 8 rather than 3DGS's 16: a tile's list holds the
-/// Gaussians that overlap it, so smaller tiles halve the evaluations per pixel on the room
-/// benchmark (rasterize 202 -> 102 ms at 256x192 with 100k Gaussians on lavapipe) for about 1.5x
-/// the keys, and a plane's footprint follows its outline more closely.
+/// Gaussians that overlap it, so smaller tiles about halve the evaluations per pixel (and the
+/// rasterize time of `bench`) for about 1.5x the keys, and a plane's footprint follows its
+/// outline more closely.
 pub const TILE_SIZE: u32 = 8;
 /// Pixels per tile: the rasterizers' workgroup size and batch length.
 pub const TILE_PIXELS: u32 = TILE_SIZE * TILE_SIZE;

@@ -25,7 +25,7 @@ impl Scalar for f64 {
     }
 }
 
-/// Which population a Gaussian belongs to (DESIGN.md, math conventions).
+/// Which population a Gaussian belongs to (docs/ARCHITECTURE.md, "Math conventions").
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 #[repr(u8)]
 pub enum Population {

@@ -126,7 +126,7 @@ pub fn read_buffer<T: bytemuck::Pod>(
 }
 
 /// The longest the CPU waits for submitted GPU work before it gives up: far beyond any frame or
-/// training step (a 500k-Gaussian frame takes about 1 s on a 2-core lavapipe), so that a hung
+/// training step, even of large scenes on a CPU adapter (`bench` times them), so that a hung
 /// kernel or a device that stopped answering ends in a [`GpuError`] that says so instead of a
 /// process that never returns.
 pub const GPU_WAIT_LIMIT: std::time::Duration = std::time::Duration::from_secs(300);

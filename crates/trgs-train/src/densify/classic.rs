@@ -39,9 +39,9 @@ pub struct ClassicSettings {
 impl ClassicSettings {
     /// The start and end scale with the run; the interval does not (the statistics need about a
     /// hundred views' gradients each time, whatever the run's length), and the opacity reset comes
-    /// at least ten densifications apart, so runs of 2000 steps or fewer have none: with resets
-    /// three densifications apart (steps 300 and 600 of 2000) plain 3DGS ended 1.4-1.8 dB lower
-    /// on the synthetic scene (docs/training.md, "Opacity resets in short runs").
+    /// at least ten densifications apart, so runs of 2000 steps or fewer have none: resets three
+    /// densifications apart (steps 300 and 600 of 2000) leave a short run no time to recover,
+    /// and plain 3DGS ended lower on the synthetic scenes with them.
     pub fn scaled(iterations: u32) -> Self {
         let every = 100;
         Self {

@@ -29,7 +29,7 @@ use trgs_render::{GpuContext, GpuScene, SceneGradBuffers};
 pub const MAX_SHARE: usize = 50;
 
 /// The shortest relocation interval in steps (each relocation reads a few attributes back, plans
-/// on the CPU and rebuilds every buffer: about 80 ms at 100k Gaussians on lavapipe).
+/// on the CPU and rebuilds every buffer: several steps' time, `bench --densify`).
 pub const MIN_RELOCATION_INTERVAL: u32 = 5;
 
 /// 3DGS-MCMC's opacity learning rate (its `arguments/__init__.py`), twice 3DGS's 0.025: its

@@ -68,9 +68,8 @@ struct Row {
 
 /// How long each configuration runs untimed before it is timed. One frame compiles the
 /// pipelines and fills the buffer pools; a real GPU also has to leave the idle clocks it drops to
-/// while the CPU builds the next scene (an H100 read 345 MHz at rest, and after a one-frame
-/// warm-up some configurations measured 3x slower in every stage, the unchanged ones included).
-/// One lavapipe frame takes 50-700 ms, so there this adds a frame or two.
+/// while the CPU builds the next scene (after a one-frame warm-up an H100 timed whole
+/// configurations several times slower in every stage). On lavapipe this adds a frame or two.
 const WARM_UP_SECONDS: f64 = 0.5;
 
 /// Runs `step` once, then again until `WARM_UP_SECONDS` have passed.
