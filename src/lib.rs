@@ -1,10 +1,9 @@
-//! trgs: TR-Gaussians (3D Gaussian Splatting with learnable reflection planes) in Rust.
+#![doc = include_str!("../README.md")]
 //!
-//! This facade re-exports the workspace crates so that an embedding app depends on one package:
-//! - [`core`]: scene model, reflection-plane math, plane fitting, the CPU reference renderer and
-//!   its gradients, image metrics and file formats (no GPU);
-//! - [`render`]: the wgpu renderer;
-//! - [`train`]: the optimisation.
+//! The crates behind this facade: [`core`] (scene model, reflection-plane math, plane fitting,
+//! the CPU reference renderer and its gradients, metrics, formats; no GPU), [`render`] (the wgpu
+//! renderer and its kernel toolkit) and [`train`] (a whole run, the training step, losses and
+//! densification). The README's example above runs as this crate's doc test.
 pub use trgs_core as core;
 pub use trgs_render as render;
 pub use trgs_train as train;
