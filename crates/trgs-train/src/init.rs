@@ -1,7 +1,7 @@
 //! The Gaussians training starts from, as 3DGS makes them: one per sparse point, coloured by the
 //! point (SH DC; higher bands zero), isotropic with the scale of the root mean squared distance to
-//! its three nearest neighbours, identity rotation, opacity 0.1. 3DGS-MCMC starts from the same
-//! points at opacity 0.5 and a tenth of that scale ([`InitialShape::MCMC`]). Without points
+//! its three nearest neighbours, identity rotation, opacity 0.1. MCMC densification starts from
+//! the same points at opacity 0.5 and the same scale ([`InitialShape::MCMC`]). Without points
 //! (transforms.json scenes) the points are drawn uniformly in a box around the cameras, with
 //! random colours.
 use glam::DVec3;
@@ -20,10 +20,11 @@ pub struct InitialShape {
 impl InitialShape {
     /// 3DGS: `inverse_sigmoid(0.1)` and the neighbour distance.
     pub const CLASSIC: Self = Self { opacity: 0.1, scale_factor: 1.0 };
-    /// 3DGS-MCMC (its `create_from_pcd`): opacity 0.5 and a tenth of the neighbour distance. Its
-    /// growth copies Gaussians in proportion to opacity and splits the opacity among the copies;
-    /// from 0.1 a short run's Gaussians stayed semi-transparent (median opacity 0.11 after 600
-    /// steps, against 0.31 with classic densification).
+    /// MCMC densification: 3DGS-MCMC's opacity 0.5 (its `create_from_pcd`), at 3DGS's scale.
+    /// Its growth copies Gaussians in proportion to opacity and splits the opacity among the
+    /// copies, so from 0.1 a short run's Gaussians stay semi-transparent; 3DGS-MCMC's tenth of the
+    /// neighbour distance leaves the first images full of holes that a run of a few thousand
+    /// steps does not fill.
     pub const MCMC: Self = Self { opacity: 0.5, scale_factor: 1.0 };
 }
 
