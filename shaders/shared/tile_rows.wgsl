@@ -5,7 +5,7 @@
 // one SIMD vector and a workgroup's subgroups run one after another, each paying every batch
 // entry's loads from workgroup memory and loop control, and in the adjoints a subgroup reduction
 // and its atomics (loops over the lanes), however few of its pixels use the entry; four rows
-// share them (docs/gpu-renderer.md, "Pixels per thread").
+// share them (docs/gpu-renderer.md, "Choices per adapter").
 #ifdef ROWS_PER_THREAD_4
 const ROWS: u32 = 4u;
 #else

@@ -1,7 +1,7 @@
 //! `train` on a scene without glass masks creates no plane: it says so, trains plain 3DGS (no
 //! mirrored pass, so no reflection layer) and writes an empty `planes.json`, and its metrics
 //! count no plane. That its PSNR then equals a `--no-planes` run's is measured on the full-size
-//! scene in docs/training.md, "Without glass" (GPU float atomics make two runs differ a little).
+//! scene in docs/RESULTS.md, "Without glass" (GPU float atomics make two runs differ a little).
 use std::process::Command;
 use trgs_core::scratch::ScratchDir;
 use trgs_core::synthetic::{SyntheticConfig, generate, write_dataset};

@@ -1,8 +1,8 @@
 //! `train` killed mid-run and continued with `--resume`: the run finishes at its planned step
 //! count with its own settings, the log has every step once, and the checkpoint holds the planes
 //! that stage 1 initialised; `eval` of the result reproduces the run's own test PSNR. (That the
-//! resumed result matches an uninterrupted run within 0.1 dB is measured on the full-size scene
-//! in docs/training.md, "Checkpoints, resume"; GPU float atomics make any two runs differ a
+//! resumed result matches an uninterrupted run is measured on the full-size scene in
+//! docs/RESULTS.md, "Resume"; GPU float atomics make any two runs differ a
 //! little, so a small test could not tell a resume bug from that noise.)
 use std::path::Path;
 use std::process::{Command, Stdio};
