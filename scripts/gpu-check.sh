@@ -38,7 +38,7 @@ for line in sys.stdin:
     m = json.loads(line)
     if m.get("reason") == "compiler-artifact" and m.get("profile", {}).get("test") and m.get("executable"):
         print(m["executable"])
-' | sed "s|^$PWD/||" | grep -v xvfb_screenshot >target/release/gpu-check-tests.txt
+' | sed "s|^$PWD/||" | grep -v viewer_window >target/release/gpu-check-tests.txt
     echo "$PWD" >target/release/gpu-check-root.txt
     # The thread sampler for `hunt`, static so that it needs nothing on the GPU machine.
     local sampler=()
