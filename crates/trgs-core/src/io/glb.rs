@@ -29,8 +29,8 @@
 //! 1.4.1 (the newest release) parses a vertex attribute name that is neither a glTF semantic nor
 //! `_`-prefixed, as every `KHR_gaussian_splatting:*` name is, into one `Checked::Invalid` key, so
 //! a file's extension attributes collapse into one map entry (four of seven left in a probe);
-//! `Gltf::from_slice` then refuses the file ("invalid glTF: meshes[0].primitives[0].attributes
-//! ["<invalid semantic name>"]: Invalid value"), iterating the attributes without validation
+//! `Gltf::from_slice` then refuses the file (`invalid glTF: meshes[0].primitives[0].attributes
+//! ["<invalid semantic name>"]: Invalid value`), iterating the attributes without validation
 //! panics, and no `Semantic` writes such a name back. The container framing is 12 bytes.
 use std::path::Path;
 

@@ -1,6 +1,7 @@
-//! Kernels are registered once. Each crate lists its kernels in one [`kernel_registry!`]
-//! table: a kernel's name (labels, timings), its WGSL file under `shaders/`, and how its
-//! defines follow from the device's [`Capabilities`]. Everything else follows from that table:
+//! Kernels are registered once. Each crate lists its kernels in one
+//! [`kernel_registry!`](crate::kernel_registry) table: a kernel's name (labels, timings), its
+//! WGSL file under `shaders/`, and how its defines follow from the device's [`Capabilities`].
+//! Everything else follows from that table:
 //! the struct of compiled kernels, the specs a stage builds its kernel from, and every variant
 //! the naga test validates ([`KernelSpec::variants`] over [`every_capability_set`]).
 //!

@@ -18,7 +18,7 @@ pub const DEFAULT_MCMC_CAP: usize = 300_000;
 pub struct RunConfig {
     /// Scene folder: COLMAP (sparse/0 + images/) or transforms.json, with optional
     /// glass_masks/, planes.json and test_views.txt [default: the built-in scene, written to
-    /// <OUT>/dataset]
+    /// the --out folder's dataset/]
     #[arg(long, value_name = "DIR", conflicts_with = "demo_scene")]
     pub data: Option<PathBuf>,
     /// The built-in synthetic scene trained on without --data
@@ -48,7 +48,7 @@ pub struct RunConfig {
     /// Evaluate the test views every N steps [default: ten times a run]
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub eval_every: Option<u32>,
-    /// Write <OUT>/checkpoint.trgs every N steps [default: at each evaluation]
+    /// Write checkpoint.trgs into the --out folder every N steps [default: at each evaluation]
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub checkpoint_every: Option<u32>,
     /// Start from N random points when the scene has no sparse points
