@@ -12,7 +12,8 @@ crate::kernel_registry! {
         depth_order_counts: "render/depth_order_counts.wgsl" => no_defines,
         prefix_sum: "render/prefix_sum.wgsl" => block_width,
         /// `prefix_sum`'s level scan of the set bits of each word.
-        prefix_sum_bits: "render/prefix_sum.wgsl" => |c| [block_width(c), vec!["COUNT_BITS"]].concat(),
+        prefix_sum_bits: "render/prefix_sum.wgsl" =>
+            |c| [block_width(c), vec!["COUNT_BITS"]].concat(),
         prefix_sum_add: "render/prefix_sum_add.wgsl" => block_width,
         emit_keys: "render/emit_keys.wgsl" => no_defines,
         sort_count: "render/sort_count.wgsl" => block_width,

@@ -1,4 +1,5 @@
-//! The forward renderer: the stages of the data flow (docs/ARCHITECTURE.md) for one camera, into a [`Frame`].
+//! The forward renderer: the stages of the data flow (docs/ARCHITECTURE.md) for one camera, into
+//! a [`Frame`].
 use crate::GpuContext;
 use crate::frame::{Binning, Frame, ViewBuffers};
 use crate::gpu::{self, GpuError, Recorder};

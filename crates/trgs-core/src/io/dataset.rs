@@ -1,5 +1,6 @@
-//! A scene folder (docs/ARCHITECTURE.md, "File formats"): cameras and images from COLMAP (`sparse/0/` + `images/`)
-//! or `transforms.json`, plus the optional `glass_masks/`, `planes.json` and `test_views.txt`.
+//! A scene folder (docs/ARCHITECTURE.md, "File formats"): cameras and images from COLMAP
+//! (`sparse/0/` + `images/`) or `transforms.json`, plus the optional `glass_masks/`,
+//! `planes.json` and `test_views.txt`.
 //! Opening checks everything that is cheap to check (files exist, cameras are pinhole and valid,
 //! test names exist); pixels are read on demand, one view at a time.
 use std::collections::BTreeSet;

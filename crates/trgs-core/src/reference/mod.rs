@@ -4,8 +4,8 @@
 //! that its gradients can be checked against central finite differences, and it is the oracle of
 //! every GPU stage.
 //!
-//! [`render`] runs the forward pipeline of docs/ARCHITECTURE.md ("Data flow") and keeps what the backward needs;
-//! [`backward`] takes dL/d(each output layer) and returns dL/d(every Gaussian attribute and every
+//! [`render`] runs the forward pipeline of docs/ARCHITECTURE.md ("Data flow") and keeps what the
+//! backward needs; [`backward`] takes dL/d(each output layer) and returns dL/d(every Gaussian attribute and every
 //! plane's centre, normal and R0 logit).
 mod adam;
 mod backward;

@@ -15,7 +15,7 @@
 //! let mut run = TrainingRun::new(config)?;
 //! while let Some(event) = run.next_event() {
 //!     match event? {
-//!         RunEvent::PlaneCreated { label, plane } => println!("plane {label}: R0 {:.2}", plane.r0()),
+//!         RunEvent::PlaneCreated { label, plane } => println!("plane {label}: {:.2}", plane.r0()),
 //!         RunEvent::Finished(summary) => println!("test PSNR {:.2} dB", summary.last.psnr),
 //!         _ => {}
 //!     }
