@@ -5,8 +5,8 @@
 //! every GPU stage.
 //!
 //! [`render`] runs the forward pipeline of docs/ARCHITECTURE.md ("Data flow") and keeps what the
-//! backward needs; [`backward`] takes dL/d(each output layer) and returns dL/d(every Gaussian attribute and every
-//! plane's centre, normal and R0 logit).
+//! backward needs; [`backward`] takes dL/d(each output layer) and returns dL/d(every Gaussian
+//! attribute and every plane's centre, normal and R0 logit).
 mod adam;
 mod backward;
 mod block_reach;
