@@ -1,9 +1,9 @@
 //! The backward pass on the GPU: from dL/d(each layer of a frame) to the gradients of every
 //! Gaussian attribute (in GPU buffers shaped like the scene's) and of every plane's centre,
 //! normal and R0 logit. The order is the reverse of the forward's (docs/ARCHITECTURE.md, "Data
-//! flow"): compose_bwd; rasterize_bwd and project_bwd of the real view; per plane rasterize_reflection_bwd
-//! and project_bwd of its mirrored view, whose view gradient then chains into the plane on the CPU
-//! (a dozen numbers per plane, the twin's own `mirrored_view_bwd`).
+//! flow"): compose_bwd; rasterize_bwd and project_bwd of the real view; per plane
+//! rasterize_reflection_bwd and project_bwd of its mirrored view, whose view gradient then chains
+//! into the plane on the CPU (a dozen numbers per plane, the twin's own `mirrored_view_bwd`).
 use crate::frame::Frame;
 use crate::gpu::{self, GpuError, KernelTime, Recorder};
 use crate::layer_grads::LayerGrads;
