@@ -37,8 +37,8 @@ impl GaussianState {
         &self.scene
     }
 
-    /// The scene, for edits that keep the Gaussians (the planes).
-    pub fn scene_mut(&mut self) -> &mut GpuScene {
+    /// The scene, for edits that keep the Gaussians (the trainer's planes).
+    pub(crate) fn scene_mut(&mut self) -> &mut GpuScene {
         &mut self.scene
     }
 
@@ -74,6 +74,20 @@ impl GaussianState {
 
     /// Replace the parameters and moments (the planes stay).
     pub fn replace(&mut self, state: &TrainState) -> Result<()> {
+        let n = state.gaussians.len();
+        let widths = trgs_core::scene::attribute_widths(state.gaussians.sh_coeffs());
+        for a in Attribute::ALL {
+            let want = n * widths[a];
+            if state.m[a].len() != want || state.v[a].len() != want {
+                anyhow::bail!(
+                    "the Adam moments of {} hold {} and {} values for {n} Gaussians ({want} \
+                     expected)",
+                    a.name(),
+                    state.m[a].len(),
+                    state.v[a].len()
+                );
+            }
+        }
         let planes = self.scene.planes().to_vec();
         self.scene = GpuScene::upload(&self.ctx, &state.gaussians, &planes)
             .context("uploading the edited Gaussians")?;
@@ -142,8 +156,10 @@ impl GaussianState {
         Ok(())
     }
 
-    /// Replace the opacity logits on the GPU (the other parameters and all moments stay).
-    pub fn write_opacity_logits(&self, logits: &[f32]) {
+    /// Replace the opacity logits on the GPU (the other parameters and all moments stay); one
+    /// per Gaussian.
+    pub(crate) fn write_opacity_logits(&self, logits: &[f32]) {
+        debug_assert_eq!(logits.len(), self.len(), "one opacity logit per Gaussian");
         let opacity = self.scene.parameter(Attribute::OpacityLogits);
         self.ctx.queue.write_buffer(opacity, 0, bytemuck::cast_slice(logits));
     }

@@ -1,5 +1,6 @@
 //! The kernel toolkit: what the renderer's stages are made of, and what trgs-train makes its
-//! own GPU stages of. An app that only renders does not need it.
+//! own GPU stages of. An app that renders and reads its layers back does not need it; one that
+//! keeps the layers on the GPU reaches their buffers through [`FrameStages::layer_buffers`].
 //!
 //! - [`gpu`]: buffers ([`storage`], [`storage_init`], parameter blocks by [`params`]), binding
 //!   ranges under the adapter's limits ([`range`]), dispatch grids ([`grid_1d`]), a

@@ -87,7 +87,7 @@ pub enum DensifyEvent {
 /// [`record_before_adam`](Self::record_before_adam) and
 /// [`record_after_adam`](Self::record_after_adam) into the step's Adam batch on the GPU, then
 /// [`maintain`](Self::maintain) once the step's update is done.
-pub trait DensifyStrategy: std::fmt::Debug + Send {
+pub trait DensifyStrategy: std::fmt::Debug + Send + Sync {
     /// A short name for logs ("none", "classic", "mcmc").
     fn name(&self) -> &'static str;
 

@@ -203,8 +203,25 @@ impl Default for RunConfig {
 }
 
 impl RunConfig {
-    /// Refuse settings where one would be silently ignored.
+    /// Refuse settings out of range or where one would be silently ignored (clap checks the
+    /// ranges of the command line too; this is what a library caller gets).
     pub fn check(&self) -> Result<()> {
+        if self.iterations == 0 {
+            bail!("--iterations must be at least 1");
+        }
+        if self.sh_degree > 3 {
+            bail!("--sh-degree {}: expected 0 to 3", self.sh_degree);
+        }
+        if self.eval_every == Some(0) || self.checkpoint_every == Some(0) {
+            bail!("--eval-every and --checkpoint-every must be at least 1");
+        }
+        if self.resolution == Some(0) || self.downscale.is_some_and(|f| !(f > 0.0 && f.is_finite()))
+        {
+            bail!("--resolution must be at least 1 and --downscale above 0");
+        }
+        if self.resolution.is_some() && self.downscale.is_some() {
+            bail!("give one of --resolution and --downscale");
+        }
         if self.cap.is_some() && self.densify != DensifyMode::Mcmc {
             bail!("--cap is the MCMC count: it needs --densify mcmc");
         }
@@ -322,6 +339,25 @@ mod tests {
         assert_eq!(c.out, PathBuf::from("runs/demo"));
         assert_eq!(c.resolution(), Resolution::Original);
         c.check().expect("the defaults are consistent");
+    }
+
+    #[test]
+    fn a_library_caller_gets_the_command_line_refusals() {
+        let bad: [(&str, RunConfig); 6] = [
+            ("--iterations", RunConfig { iterations: 0, ..RunConfig::default() }),
+            ("--sh-degree", RunConfig { sh_degree: 4, ..RunConfig::default() }),
+            ("--eval-every", RunConfig { eval_every: Some(0), ..RunConfig::default() }),
+            ("--downscale", RunConfig { downscale: Some(-1.0), ..RunConfig::default() }),
+            (
+                "one of --resolution and --downscale",
+                RunConfig { resolution: Some(64), downscale: Some(2.0), ..RunConfig::default() },
+            ),
+            ("--cap", RunConfig { cap: Some(10), ..RunConfig::default() }),
+        ];
+        for (words, config) in bad {
+            let err = config.check().expect_err(words).to_string();
+            assert!(err.contains(words), "{words}: {err}");
+        }
     }
 
     #[test]

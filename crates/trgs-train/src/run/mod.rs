@@ -264,6 +264,8 @@ impl TrainingRun {
                 self.finish()
             };
             if let Err(e) = progress {
+                // Events of the failed step are not reported after its error.
+                self.events.clear();
                 self.done = true;
                 return Some(Err(e));
             }

@@ -144,6 +144,12 @@ impl Trainer {
         self.densification = densification.strategy(&self.ctx, self.gaussians.len(), None);
     }
 
+    /// Densify with `strategy` from now on: a strategy of the app's own (the built-in ones come
+    /// from [`Trainer::set_densification`]).
+    pub fn set_strategy(&mut self, strategy: Box<dyn DensifyStrategy>) {
+        self.densification = strategy;
+    }
+
     /// The strategy in use.
     pub fn densification(&self) -> &dyn DensifyStrategy {
         self.densification.as_ref()
