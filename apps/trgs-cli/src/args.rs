@@ -47,14 +47,6 @@ pub fn parse_size(v: &str) -> Result<[f32; 2], String> {
     Ok(size)
 }
 
-/// A number above 0.
-pub fn parse_positive(v: &str) -> Result<f64, String> {
-    match v.parse::<f64>() {
-        Ok(f) if f.is_finite() && f > 0.0 => Ok(f),
-        _ => Err("expected a number above 0".into()),
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -68,6 +60,5 @@ mod tests {
         assert_eq!(parse_size("800x600"), Ok([800.0, 600.0]));
         assert!(parse_size("big").is_err_and(|e| e.contains("WxH")));
         assert!(parse_size("0x600").is_err_and(|e| e.contains("at least 1")));
-        assert!(parse_positive("0").is_err() && parse_positive("2.5") == Ok(2.5));
     }
 }

@@ -19,6 +19,17 @@ pub enum Resolution {
     Width(u32),
 }
 
+impl Resolution {
+    /// The resolution of a `--resolution W` and a `--downscale F` flag (the width wins).
+    pub fn from_flags(width: Option<u32>, downscale: Option<f64>) -> Self {
+        match (width, downscale) {
+            (Some(w), _) => Resolution::Width(w),
+            (None, Some(f)) => Resolution::Downscale(f),
+            (None, None) => Resolution::Original,
+        }
+    }
+}
+
 /// One view at the training resolution.
 #[derive(Clone, Debug)]
 pub struct View {

@@ -33,6 +33,16 @@ impl GaussianState {
         Ok(Self { ctx: ctx.clone(), scene, moments, gather: GpuRowGather::new(ctx) })
     }
 
+    /// Upload `state` (parameters and moments, a checkpoint's or an edit's) and `planes`.
+    pub fn from_state(
+        ctx: &GpuContext,
+        state: &TrainState,
+        planes: &[ReflectionPlane],
+    ) -> Result<Self> {
+        let (scene, moments) = upload(ctx, state, planes)?;
+        Ok(Self { ctx: ctx.clone(), scene, moments, gather: GpuRowGather::new(ctx) })
+    }
+
     pub fn scene(&self) -> &GpuScene {
         &self.scene
     }
@@ -74,26 +84,8 @@ impl GaussianState {
 
     /// Replace the parameters and moments (the planes stay).
     pub fn replace(&mut self, state: &TrainState) -> Result<()> {
-        let n = state.gaussians.len();
-        let widths = trgs_core::scene::attribute_widths(state.gaussians.sh_coeffs());
-        for a in Attribute::ALL {
-            let want = n * widths[a];
-            if state.m[a].len() != want || state.v[a].len() != want {
-                anyhow::bail!(
-                    "the Adam moments of {} hold {} and {} values for {n} Gaussians ({want} \
-                     expected)",
-                    a.name(),
-                    state.m[a].len(),
-                    state.v[a].len()
-                );
-            }
-        }
         let planes = self.scene.planes().to_vec();
-        self.scene = GpuScene::upload(&self.ctx, &state.gaussians, &planes)
-            .context("uploading the edited Gaussians")?;
-        self.moments = PerAttribute::from_fn(|a| {
-            AdamMoments::from_values(&self.ctx, a.name(), &state.m[a], &state.v[a])
-        });
+        (self.scene, self.moments) = upload(&self.ctx, state, &planes)?;
         Ok(())
     }
 
@@ -179,4 +171,32 @@ impl GaussianState {
         self.ctx.queue.submit([enc.finish()]);
         Ok(())
     }
+}
+
+/// `state`'s parameters and moments on the GPU (its moments' lengths checked), with `planes`.
+fn upload(
+    ctx: &GpuContext,
+    state: &TrainState,
+    planes: &[ReflectionPlane],
+) -> Result<(GpuScene, PerAttribute<AdamMoments>)> {
+    let n = state.gaussians.len();
+    let widths = trgs_core::scene::attribute_widths(state.gaussians.sh_coeffs());
+    for a in Attribute::ALL {
+        let want = n * widths[a];
+        if state.m[a].len() != want || state.v[a].len() != want {
+            anyhow::bail!(
+                "the Adam moments of {} hold {} and {} values for {n} Gaussians ({want} \
+                 expected)",
+                a.name(),
+                state.m[a].len(),
+                state.v[a].len()
+            );
+        }
+    }
+    let scene = GpuScene::upload(ctx, &state.gaussians, planes)
+        .context("uploading the edited Gaussians")?;
+    let moments = PerAttribute::from_fn(|a| {
+        AdamMoments::from_values(ctx, a.name(), &state.m[a], &state.v[a])
+    });
+    Ok((scene, moments))
 }

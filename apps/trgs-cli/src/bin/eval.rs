@@ -5,12 +5,13 @@
 use anyhow::{Context, Result, bail};
 use clap::Parser;
 use std::path::PathBuf;
-use trgs_cli::args::{SplitArg, parse_positive};
+use trgs_cli::args::SplitArg;
 use trgs_core::io::{Split, write_atomic};
 use trgs_render::{GpuContext, GpuScene, RenderOptions, Renderer};
 use trgs_train::data::{self, Resolution};
 use trgs_train::eval::{Renderable, compare_with_truth, evaluate, render_fps, write_renders};
 use trgs_train::model::load_model;
+use trgs_train::run::parse_positive;
 
 /// Metrics of a trained model on a dataset's test (or training) views: PSNR and SSIM per view
 /// and their mean, render FPS, and for a synthetic scene the plane and transmission errors
@@ -49,16 +50,6 @@ struct Args {
     renders: Option<PathBuf>,
 }
 
-impl Args {
-    fn resolution(&self) -> Resolution {
-        match (self.resolution, self.downscale) {
-            (Some(w), _) => Resolution::Width(w),
-            (None, Some(f)) => Resolution::Downscale(f),
-            (None, None) => Resolution::Original,
-        }
-    }
-}
-
 fn main() -> Result<()> {
     let args = Args::parse();
     let split = Split::from(args.split);
@@ -69,7 +60,8 @@ fn main() -> Result<()> {
         _ => bail!("--data is required: {} has no dataset/ folder", args.model.display()),
     };
     let model = load_model(&args.model, args.planes.as_deref())?;
-    let data = data::load(&data_dir, args.resolution())?.evaluate_on(split);
+    let data = data::load(&data_dir, Resolution::from_flags(args.resolution, args.downscale))?
+        .evaluate_on(split);
     let ctx = GpuContext::new()?;
     let scene = GpuScene::upload(&ctx, &model.gaussians, &model.planes)
         .with_context(|| format!("uploading {}", model.ply.display()))?;

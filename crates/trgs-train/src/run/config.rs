@@ -38,7 +38,7 @@ pub struct RunConfig {
     #[serde(default)]
     pub resolution: Option<u32>,
     /// Train at 1/F of the image size
-    #[arg(long, value_name = "F", value_parser = positive)]
+    #[arg(long, value_name = "F", value_parser = parse_positive)]
     #[serde(default)]
     pub downscale: Option<f64>,
     /// Largest SH degree
@@ -73,7 +73,8 @@ pub struct RunConfig {
     pub ablations: Ablations,
 }
 
-fn positive(v: &str) -> Result<f64, String> {
+/// A number above 0 (clap's parser of `--downscale`).
+pub fn parse_positive(v: &str) -> Result<f64, String> {
     match v.parse::<f64>() {
         Ok(f) if f.is_finite() && f > 0.0 => Ok(f),
         _ => Err(format!("{v:?}: expected a number above 0")),
@@ -237,11 +238,7 @@ impl RunConfig {
 
     /// The training resolution.
     pub fn resolution(&self) -> Resolution {
-        match (self.resolution, self.downscale) {
-            (Some(w), _) => Resolution::Width(w),
-            (None, Some(f)) => Resolution::Downscale(f),
-            (None, None) => Resolution::Original,
-        }
+        Resolution::from_flags(self.resolution, self.downscale)
     }
 
     /// The densification, with its schedule scaled to the run.
@@ -358,6 +355,7 @@ mod tests {
             let err = config.check().expect_err(words).to_string();
             assert!(err.contains(words), "{words}: {err}");
         }
+        assert!(parse_positive("0").is_err() && parse_positive("2.5") == Ok(2.5));
     }
 
     #[test]

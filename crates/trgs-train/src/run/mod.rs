@@ -32,7 +32,8 @@ mod outputs;
 mod state;
 
 pub use config::{
-    Ablations, DEFAULT_MCMC_CAP, DemoScene, DensifyMode, RunConfig, upgrade_config_record,
+    Ablations, DEFAULT_MCMC_CAP, DemoScene, DensifyMode, RunConfig, parse_positive,
+    upgrade_config_record,
 };
 pub use dataset::DEMO_SCENE_MARKER;
 pub use log::LOG_FILE;

@@ -84,25 +84,36 @@ impl Trainer {
         extent: f64,
     ) -> Result<Self> {
         trgs_render::toolkit::gpu::scoped(ctx, "setting up training", || {
-            Ok(Self {
-                ctx: ctx.clone(),
-                renderer: Renderer::new(ctx),
-                adam: Adam::new(ctx, AdamSettings::default()),
-                gaussians: GaussianState::new(ctx, gaussians, planes)?,
-                plane_moments: vec![PlaneMoments::default(); planes.len()],
-                frame: Frame::default(),
-                losses: LossKernels::new(ctx),
-                targets: HashMap::new(),
-                layer_grads: None,
-                step: 0,
-                rng: Rng::new(settings.seed ^ 0x5eed),
-                settings,
-                extent,
-                densification: Box::new(NoDensification),
-                profile: false,
-                camera_centres: Vec::new(),
-            })
+            let state = GaussianState::new(ctx, gaussians, planes)?;
+            Ok(Self::with_state(ctx, state, settings, extent))
         })
+    }
+
+    /// A trainer of `gaussians` (their planes' moments zero), without densification.
+    fn with_state(
+        ctx: &GpuContext,
+        gaussians: GaussianState,
+        settings: TrainSettings,
+        extent: f64,
+    ) -> Self {
+        Self {
+            ctx: ctx.clone(),
+            renderer: Renderer::new(ctx),
+            adam: Adam::new(ctx, AdamSettings::default()),
+            plane_moments: vec![PlaneMoments::default(); gaussians.scene().planes().len()],
+            gaussians,
+            frame: Frame::default(),
+            losses: LossKernels::new(ctx),
+            targets: HashMap::new(),
+            layer_grads: None,
+            step: 0,
+            rng: Rng::new(settings.seed ^ 0x5eed),
+            settings,
+            extent,
+            densification: Box::new(NoDensification),
+            profile: false,
+            camera_centres: Vec::new(),
+        }
     }
 
     /// Continue from `ck` (written by [`Trainer::checkpoint`]) with `settings`, which should be
@@ -115,8 +126,8 @@ impl Trainer {
         densification: &Densification,
     ) -> Result<Self> {
         trgs_render::toolkit::gpu::scoped(ctx, "resuming from a checkpoint", || {
-            let mut t = Self::new(ctx, &ck.state.gaussians, &ck.planes, settings, extent)?;
-            t.gaussians.replace(&ck.state)?;
+            let state = GaussianState::from_state(ctx, &ck.state, &ck.planes)?;
+            let mut t = Self::with_state(ctx, state, settings, extent);
             t.plane_moments = ck.plane_moments.clone();
             t.step = ck.step;
             t.rng = Rng::from_state(ck.rng_state);
