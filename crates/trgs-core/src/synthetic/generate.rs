@@ -3,11 +3,11 @@ use std::f64::consts::{PI, TAU};
 
 use glam::{DMat3, DVec3};
 
-use super::geom::{Ray, Rect};
+use super::geom::{Ray, Rect, Turn};
 use super::points::sparse_points;
 use super::texture::Texture;
 use super::trace::{Object, Pane, Shape, World};
-use super::{Backdrop, GLASS_R0, MIRROR_R0, PaneKind, SyntheticConfig, SyntheticScene};
+use super::{Backdrop, CameraPath, GLASS_R0, MIRROR_R0, PaneKind, SyntheticConfig, SyntheticScene};
 use crate::image::Image;
 use crate::scene::{Camera, Intrinsics, Material, Pose, ReflectionPlane};
 
@@ -27,6 +27,18 @@ const FRONT_DEPTH: f64 = 5.0;
 /// Pane centre height and frame bar width (the pane's size is [`Backdrop::pane_size`]).
 const PANE_Y: f64 = 1.2;
 const FRAME_W: f64 = 0.07;
+
+/// Tallest pane the wall holds around [`PANE_Y`] with its frame and sill.
+const MAX_PANE_H: f64 = 2.1;
+
+/// Centres (x, y) of the light panels on the wall behind the cameras, in the order
+/// [`SyntheticConfig::reflected_lights`] adds them, and their half size.
+const LIGHT_SPOTS: [(f64, f64); 4] = [(-1.3, 1.95), (1.0, 1.8), (0.1, 2.35), (-2.3, 1.5)];
+const LIGHT_HALF: [f64; 2] = [0.35, 0.22];
+
+/// Lighting gain of the light panels: their shading saturates to white, as an 8-bit photo of a
+/// lamp does.
+const LIGHT_GAIN: f64 = 4.0;
 
 impl Backdrop {
     /// Depth of the room behind the pane wall.
@@ -93,7 +105,11 @@ const fn rgb(r: f64, g: f64, b: f64) -> DVec3 {
 }
 
 fn cuboid(min: [f64; 3], max: [f64; 3], texture: Texture) -> Object {
-    Object { shape: Shape::Cuboid { min: min.into(), max: max.into() }, texture, gain: 1.0 }
+    Object {
+        shape: Shape::Cuboid { min: min.into(), max: max.into(), turn: None },
+        texture,
+        gain: 1.0,
+    }
 }
 
 fn sphere(centre: [f64; 3], radius: f64, texture: Texture) -> Object {
@@ -208,8 +224,16 @@ fn showcase_objects() -> Vec<Object> {
     ]
 }
 
-/// Local boxes (min, max corners).
-type Boxes = Vec<(DVec3, DVec3)>;
+/// A pane's frame bar or sill: a box (min, max corners in the pane's own frame) turned with the
+/// pane.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct FrameBox {
+    pub min: DVec3,
+    pub max: DVec3,
+    pub turn: Option<Turn>,
+}
+
+type Boxes = Vec<FrameBox>;
 
 /// The rooms, objects, panes and frames in the local frame; also the frame boxes and each pane's
 /// (width, height, R0).
@@ -288,23 +312,49 @@ fn build_world(config: &SyntheticConfig) -> (World, Boxes, Vec<(f64, f64, f64)>)
     let gain = config.behind_gain;
     objects.extend(behind.into_iter().map(|o| Object { gain, ..o }));
 
+    for &(lx, ly) in LIGHT_SPOTS.iter().take(config.reflected_lights) {
+        let (hx, hy) = (LIGHT_HALF[0], LIGHT_HALF[1]);
+        objects.push(Object {
+            shape: Shape::Cuboid {
+                min: DVec3::new(lx - hx, ly - hy, fd - 0.04),
+                max: DVec3::new(lx + hx, ly + hy, fd),
+                turn: None,
+            },
+            texture: Texture::Plain { colour: rgb(1.0, 0.96, 0.88), grain: 0.0 },
+            gain: LIGHT_GAIN,
+        });
+    }
+
     let (single_w, pane_h) = config.backdrop.pane_size();
+    let (single_w, pane_h) = if config.pane_scale == 1.0 {
+        (single_w, pane_h)
+    } else {
+        let s = config.pane_scale;
+        ((single_w * s).min(2.0 * HALF_WIDTH - 0.8), (pane_h * s).min(MAX_PANE_H))
+    };
     let (w, xs) = pane_slots(config.panes.len(), single_w);
     let mut panes = Vec::new();
     let mut frame_boxes = Vec::new();
     let mut holes = Vec::new();
     let mut sizes = Vec::new();
     let wall_y = 0.5 * ht;
-    for (&kind, &cx) in config.panes.iter().zip(&xs) {
+    for (k, (&kind, &cx)) in config.panes.iter().zip(&xs).enumerate() {
         let (x0, x1) = (cx - 0.5 * w, cx + 0.5 * w);
         let (y0, y1) = (PANE_Y - 0.5 * pane_h, PANE_Y + 0.5 * pane_h);
+        let f = FRAME_W;
+        let turn_deg = config.pane_turn_deg.get(k).copied().unwrap_or(0.0);
+        // How far a turned frame's side edges leave the pane's centre line in z.
+        let reach = (0.5 * w + f) * turn_deg.to_radians().sin().abs();
         let (pane_z, r0, frame_z) = match kind {
             // Glass sits in the middle of a frame that goes through the wall.
             PaneKind::Glass => (0.0, GLASS_R0, [-0.06, 0.04]),
-            // A mirror hangs 1.5 cm in front of the wall in a shallow frame.
-            PaneKind::Mirror => (0.015, MIRROR_R0, [0.0, 0.05]),
+            // A mirror hangs 1.5 cm in front of the wall in a shallow frame, further out when
+            // it is turned, so that its edges clear the wall.
+            PaneKind::Mirror => (0.015 + reach, MIRROR_R0, [reach, 0.05 + reach]),
         };
-        let f = FRAME_W;
+        let r0 = config.r0.unwrap_or(r0);
+        let turn =
+            (turn_deg != 0.0).then(|| Turn::about_y(DVec3::new(cx, PANE_Y, pane_z), turn_deg));
         let bars = [
             ([x0 - f, y0 - f], [x1 + f, y0]),
             ([x0 - f, y1], [x1 + f, y1 + f]),
@@ -312,20 +362,31 @@ fn build_world(config: &SyntheticConfig) -> (World, Boxes, Vec<(f64, f64, f64)>)
             ([x1, y0], [x1 + f, y1]),
         ];
         for (lo, hi) in bars {
-            frame_boxes
-                .push((DVec3::new(lo[0], lo[1], frame_z[0]), DVec3::new(hi[0], hi[1], frame_z[1])));
+            let (min, max) =
+                (DVec3::new(lo[0], lo[1], frame_z[0]), DVec3::new(hi[0], hi[1], frame_z[1]));
+            frame_boxes.push(FrameBox { min, max, turn });
         }
         if kind == PaneKind::Glass {
-            holes.push([x0 - f, x1 + f, y0 - f - wall_y, y1 + f - wall_y]);
+            // The opening holds the frame, turned or not.
+            let (h0, h1) = match turn {
+                None => (x0 - f, x1 + f),
+                Some(_) => {
+                    let c = turn_deg.to_radians().cos().abs();
+                    let half = (0.5 * w + f) * c + 0.06 * (1.0 - c * c).sqrt();
+                    (cx - half, cx + half)
+                }
+            };
+            holes.push([h0, h1, y0 - f - wall_y, y1 + f - wall_y]);
             // A sill under the window, as in a real room; it sticks out towards the cameras.
-            frame_boxes.push((
-                DVec3::new(x0 - f - 0.06, y0 - f - 0.05, -0.06),
-                DVec3::new(x1 + f + 0.06, y0 - f, 0.14),
-            ));
+            frame_boxes.push(FrameBox {
+                min: DVec3::new(h0 - 0.06, y0 - f - 0.05, -0.06),
+                max: DVec3::new(h1 + 0.06, y0 - f, 0.14),
+                turn: None,
+            });
         }
         let rect = Rect {
             centre: DVec3::new(cx, PANE_Y, pane_z),
-            u: x,
+            u: turn.map_or(x, |t| t.dir(x)),
             v: y,
             half_u: 0.5 * w,
             half_v: 0.5 * pane_h,
@@ -333,9 +394,9 @@ fn build_world(config: &SyntheticConfig) -> (World, Boxes, Vec<(f64, f64, f64)>)
         panes.push(Pane { rect, r0 });
         sizes.push((w, pane_h, r0));
     }
-    for &(min, max) in &frame_boxes {
+    for &FrameBox { min, max, turn } in &frame_boxes {
         objects.push(Object {
-            shape: Shape::Cuboid { min, max },
+            shape: Shape::Cuboid { min, max, turn },
             texture: Texture::Noise {
                 scale: 0.04,
                 a: rgb(0.92, 0.92, 0.90),
@@ -370,8 +431,35 @@ fn build_world(config: &SyntheticConfig) -> (World, Boxes, Vec<(f64, f64, f64)>)
     (world, frame_boxes, sizes)
 }
 
-/// The camera loop in the local frame: eye and target of view `i` of `n`.
-fn camera_path(i: usize, n: usize) -> (DVec3, DVec3) {
+/// Eye and target of view `i` of `n` along `path`, in the local frame.
+fn camera_path(path: CameraPath, i: usize, n: usize) -> (DVec3, DVec3) {
+    let s = i as f64 / n as f64;
+    match path {
+        CameraPath::Loop => camera_loop(i, n),
+        CameraPath::Arc => {
+            let theta = (-45.0 + 90.0 * s).to_radians();
+            let eye = DVec3::new(2.7 * theta.sin(), 1.4, 2.7 * theta.cos());
+            (eye, DVec3::new(0.25 * theta.sin(), 1.15, -0.8))
+        }
+        CameraPath::WalkBy => {
+            let eye = DVec3::new(-2.2 + 4.4 * s, 1.55 + 0.03 * (6.0 * TAU * s).sin(), 2.2);
+            (eye, DVec3::new(0.5 * eye.x, 1.15, -0.8))
+        }
+        CameraPath::CloseUp => {
+            let theta = 0.5 * (TAU * s).sin();
+            let r = 1.75 + 0.15 * (2.0 * TAU * s).cos();
+            let eye = DVec3::new(
+                r * theta.sin(),
+                1.25 + 0.2 * (3.0 * TAU * s + 0.5).sin(),
+                r * theta.cos(),
+            );
+            (eye, DVec3::new(0.2 * (TAU * s + 0.8).sin(), 1.2, -0.8))
+        }
+    }
+}
+
+/// The default camera loop: eye and target of view `i` of `n`.
+fn camera_loop(i: usize, n: usize) -> (DVec3, DVec3) {
     let s = i as f64 / n as f64;
     // One sweep left-right per loop, three height oscillations: the loop covers a band of
     // positions instead of retracing one curve.
@@ -398,7 +486,7 @@ pub(crate) fn layout(config: &SyntheticConfig) -> Layout {
     let intrinsics = Intrinsics::from_fov_x(FOV_X_DEG.to_radians(), config.width, config.height);
     let room = (0..config.room_views).map(|j| room_view_path(j, config.room_views));
     let cameras = (0..config.views)
-        .map(|i| camera_path(i, config.views))
+        .map(|i| camera_path(config.path, i, config.views))
         .chain(room)
         .enumerate()
         .map(|(i, (eye, target))| {

@@ -81,6 +81,38 @@ pub(crate) fn ray_box(ray: &Ray, min: DVec3, max: DVec3, t_min: f64) -> Option<(
     Some((t, n))
 }
 
+/// A rotation by `degrees` about the vertical (y) line through `pivot`: a pane turned on its
+/// centre line and its frame. Positive angles turn +x towards -z.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Turn {
+    pub pivot: DVec3,
+    cos: f64,
+    sin: f64,
+}
+
+impl Turn {
+    pub fn about_y(pivot: DVec3, degrees: f64) -> Self {
+        let (sin, cos) = degrees.to_radians().sin_cos();
+        Self { pivot, cos, sin }
+    }
+
+    pub fn dir(&self, d: DVec3) -> DVec3 {
+        DVec3::new(self.cos * d.x + self.sin * d.z, d.y, -self.sin * d.x + self.cos * d.z)
+    }
+
+    pub fn dir_inverse(&self, d: DVec3) -> DVec3 {
+        DVec3::new(self.cos * d.x - self.sin * d.z, d.y, self.sin * d.x + self.cos * d.z)
+    }
+
+    pub fn point(&self, p: DVec3) -> DVec3 {
+        self.pivot + self.dir(p - self.pivot)
+    }
+
+    pub fn point_inverse(&self, p: DVec3) -> DVec3 {
+        self.pivot + self.dir_inverse(p - self.pivot)
+    }
+}
+
 /// A rectangle `centre + a u + b v` with `|a| <= half_u`, `|b| <= half_v` (u, v orthonormal).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Rect {
@@ -147,6 +179,16 @@ mod tests {
         let oblique = Ray::new(DVec3::new(-3.0, 0.0, 0.0), DVec3::new(1.0, 0.25, 0.0).normalize());
         let (t, n) = ray_box(&oblique, lo, hi, 1e-9).unwrap_or((0.0, DVec3::ZERO));
         assert!((oblique.at(t) - DVec3::new(-1.0, 0.5, 0.0)).length() < 1e-12 && n == DVec3::NEG_X);
+    }
+
+    #[test]
+    fn turn_round_trips_and_turns_x_towards_minus_z() {
+        let turn = Turn::about_y(DVec3::new(1.0, 2.0, 3.0), 90.0);
+        let p = DVec3::new(2.0, 5.0, 3.0);
+        assert!((turn.point(p) - DVec3::new(1.0, 5.0, 2.0)).length() < 1e-12);
+        assert!((turn.point_inverse(turn.point(p)) - p).length() < 1e-12);
+        let d = DVec3::new(0.3, -0.4, 0.5);
+        assert!((turn.dir_inverse(turn.dir(d)) - d).length() < 1e-12);
     }
 
     #[test]

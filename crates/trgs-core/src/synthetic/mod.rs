@@ -24,7 +24,7 @@
 //! Panes are laid out side by side, centred; one pane is 1.6 m x 1.0 m (2.4 m x 1.4 m
 //! for the showcase), more are narrower.
 //!
-//! Cameras follow a closed loop 2.3 to 2.9 m from the wall, up to about 52 degrees off the pane
+//! Cameras follow (by default, see [`CameraPath`] for the others) a closed loop 2.3 to 2.9 m from the wall, up to about 52 degrees off the pane
 //! normal, between 0.9 and 1.7 m high, all looking at a point 0.8 m behind the glass; every 8th
 //! view of the loop is a test view. A few more training views stand near the window and look back
 //! into the camera room, as a walk-through capture would: they reconstruct what the glass
@@ -37,6 +37,7 @@
 //! Images are rendered by an independent ray tracer (`trace.rs`, `geom.rs`) with 2x2
 //! supersampling; see `trace.rs` for the image model, which is trgs's compositing with the truth's
 //! planes.
+pub mod family;
 mod generate;
 mod geom;
 mod points;
@@ -106,6 +107,37 @@ pub struct SyntheticConfig {
     pub behind_gain: f64,
     /// What stands behind the pane wall.
     pub backdrop: Backdrop,
+    /// Base reflectance of every pane; `None`: [`GLASS_R0`] for glass, [`MIRROR_R0`] for mirrors.
+    pub r0: Option<f64>,
+    /// Multiplies the panes' width and height (each is limited to what the wall can hold).
+    pub pane_scale: f64,
+    /// Turn of each pane about its vertical centre line, in degrees (missing entries: 0): a
+    /// window left ajar, a mirror hung at an angle. Positive turns the pane's right edge away
+    /// from the cameras.
+    pub pane_turn_deg: Vec<f64>,
+    /// Bright light panels on the wall behind the cameras (at most four): what the glass
+    /// reflects most strongly, and, without room views, never seen directly.
+    pub reflected_lights: usize,
+    /// How the cameras move in front of the glass.
+    pub path: CameraPath,
+}
+
+/// The path of the `views` cameras in front of the pane wall; every 8th view is a test view.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum CameraPath {
+    /// A closed loop 2.3 to 2.9 m from the wall, up to about 52 degrees off the pane normal,
+    /// between 0.9 and 1.7 m high, looking at a point 0.8 m behind the glass.
+    #[default]
+    Loop,
+    /// A level arc 2.7 m from the pane centre, from 45 degrees left to 45 degrees right, at
+    /// 1.4 m: a capture that circles the glass and never turns round.
+    Arc,
+    /// A straight walk past the wall, 2.2 m from it, from x = -2.2 to 2.2 m, looking ahead and
+    /// a little towards the pane: the pane is seen at a sweep of angles, often obliquely.
+    WalkBy,
+    /// Close-ups 1.6 to 1.9 m from the pane, within 30 degrees of its normal: the pane fills
+    /// most of each view.
+    CloseUp,
 }
 
 /// The room behind the glass in the default scene: a shop window seen from a brighter room,
@@ -129,6 +161,11 @@ impl Default for SyntheticConfig {
             sparse_points: 4000,
             behind_gain: DAY_BEHIND_GAIN,
             backdrop: Backdrop::Room,
+            r0: None,
+            pane_scale: 1.0,
+            pane_turn_deg: Vec::new(),
+            reflected_lights: 0,
+            path: CameraPath::Loop,
         }
     }
 }

@@ -48,8 +48,9 @@ pub(crate) fn sparse_points(layout: &Layout, target: usize, seed: u64) -> Points
             break;
         }
         let p_local = if !layout.frame_boxes.is_empty() && rng.uniform() < 0.15 {
-            let (min, max) = layout.frame_boxes[rng.below(layout.frame_boxes.len())];
-            point_on_box(&mut rng, min, max)
+            let frame = layout.frame_boxes[rng.below(layout.frame_boxes.len())];
+            let p = point_on_box(&mut rng, frame.min, frame.max);
+            frame.turn.map_or(p, |t| t.point(p))
         } else {
             let cam = &cams[rng.below(cams.len())];
             let px = rng.range(0.0, f64::from(cam.width()));

@@ -390,3 +390,75 @@ fn showcase_has_a_large_pane_and_a_shallow_display() {
     let deepest = behind.iter().copied().fold(0.0, f64::min);
     assert!(deepest > -1.65, "a sparse point {deepest} m behind the pane");
 }
+
+/// Each family member at test size: one truth plane per pane with the member's R0, the panes in
+/// the masked views, the composite equal to the transmission outside the masks, and cameras
+/// clear of every surface.
+#[test]
+fn family_members_are_valid_scenes() {
+    for member in family::members().into_iter().chain([family::drawn(1), family::drawn(2)]) {
+        let cfg = SyntheticConfig {
+            width: 64,
+            height: 48,
+            views: 16,
+            masked_views: 3,
+            sparse_points: 600,
+            ..member.config.clone()
+        };
+        let s = generate(&cfg);
+        assert_eq!(s.planes.len(), cfg.panes.len(), "{}", member.name);
+        for (k, plane) in s.planes.iter().enumerate() {
+            assert!((plane.r0() - member.r0(k)).abs() < 1e-9, "{}: R0 of pane {k}", member.name);
+        }
+        let labels: std::collections::BTreeSet<u8> =
+            s.masks.iter().flatten().flat_map(|m| m.data.iter().copied()).collect();
+        for k in 1..=cfg.panes.len() as u8 {
+            assert!(labels.contains(&k), "{}: pane {k} in no mask ({labels:?})", member.name);
+        }
+        for (i, mask) in s.masks.iter().enumerate() {
+            let Some(mask) = mask else { continue };
+            for (j, label) in mask.data.iter().enumerate() {
+                if *label == 0 {
+                    let (a, b) = (&s.images[i].data, &s.transmission[i].data);
+                    assert_eq!(a[3 * j..3 * j + 3], b[3 * j..3 * j + 3], "{}", member.name);
+                }
+            }
+        }
+        let lay = layout(&cfg);
+        let nearest = lay
+            .cameras
+            .iter()
+            .flat_map(|cam| {
+                let lay = &lay;
+                (0..cam.height()).step_by(4).flat_map(move |y| {
+                    (0..cam.width()).step_by(4).map(move |x| {
+                        let (px, py) = (f64::from(x) + 0.5, f64::from(y) + 0.5);
+                        lay.world.sample(&super::generate::local_ray(lay, cam, px, py)).depth
+                    })
+                })
+            })
+            .fold(f64::INFINITY, f64::min);
+        assert!(nearest > 0.3, "{}: a camera {nearest:.2} m from a surface", member.name);
+    }
+}
+
+#[test]
+fn turned_pane_and_light_panels() {
+    let members = family::members();
+    let two = members.iter().find(|m| m.name == "two-turned-panes").expect("member");
+    let s = generate(&SyntheticConfig { width: 64, height: 48, views: 16, ..two.config.clone() });
+    let cos = s.planes[0].unit_normal().dot(s.planes[1].unit_normal());
+    assert!((cos.acos().to_degrees() - 20.0).abs() < 1e-6, "panes {:.3} deg apart", cos.acos());
+    // Without room views the light panels are seen in the glass only: they change the
+    // composite and leave every transmission image as it was.
+    let lights = SyntheticConfig { reflected_lights: 0, ..two.config.clone() };
+    let dark = generate(&SyntheticConfig { width: 64, height: 48, views: 16, ..lights });
+    assert_eq!(s.transmission, dark.transmission);
+    let brighter = s
+        .images
+        .iter()
+        .zip(&dark.images)
+        .fold(0.0f32, |m, (a, b)| a.data.iter().zip(&b.data).fold(m, |m, (x, y)| m.max(x - y)));
+    println!("the light panels brighten a pixel by up to {brighter:.3}");
+    assert!(brighter > 0.05);
+}

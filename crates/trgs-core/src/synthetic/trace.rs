@@ -10,7 +10,7 @@
 //! (glass seen in a reflection) would be something the model cannot express.
 use glam::DVec3;
 
-use super::geom::{Ray, Rect, ray_box, ray_sphere};
+use super::geom::{Ray, Rect, Turn, ray_box, ray_sphere};
 use super::texture::Texture;
 
 /// Rays start this far from their origin surface so that they do not hit it again.
@@ -25,9 +25,12 @@ pub(crate) enum Shape {
         centre: DVec3,
         radius: f64,
     },
+    /// An axis-aligned box, or with `turn` a box turned about a vertical line (a turned pane's
+    /// frame); `None` keeps the axis-aligned arithmetic exact.
     Cuboid {
         min: DVec3,
         max: DVec3,
+        turn: Option<Turn>,
     },
     /// A rectangle with rectangular holes `[a0, a1, b0, b1]` in its own coordinates (windows).
     Quad {
@@ -101,9 +104,13 @@ impl World {
                         (t, r / *radius, r)
                     })
                 }
-                Shape::Cuboid { min, max } => {
-                    ray_box(ray, *min, *max, T_MIN).filter(|&(t, _)| t < t_max).map(|(t, n)| {
-                        let p = ray.at(t) - *min;
+                Shape::Cuboid { min, max, turn } => {
+                    // A turned box is hit in its own frame; rotations keep t.
+                    let own = turn.map_or(*ray, |tr| {
+                        Ray::new(tr.point_inverse(ray.origin), tr.dir_inverse(ray.dir))
+                    });
+                    ray_box(&own, *min, *max, T_MIN).filter(|&(t, _)| t < t_max).map(|(t, n)| {
+                        let p = own.at(t) - *min;
                         // The two coordinates across the face, in metres from the box corner.
                         let uv = if n.x != 0.0 {
                             DVec3::new(p.z, p.y, 0.0)
@@ -112,7 +119,7 @@ impl World {
                         } else {
                             DVec3::new(p.x, p.y, 0.0)
                         };
-                        (t, n, uv)
+                        (t, turn.map_or(n, |tr| tr.dir(n)), uv)
                     })
                 }
                 Shape::Quad { rect, holes } => rect
