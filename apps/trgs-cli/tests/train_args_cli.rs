@@ -63,6 +63,7 @@ fn every_command_has_generated_help() {
         env!("CARGO_BIN_EXE_convert"),
         env!("CARGO_BIN_EXE_report"),
         env!("CARGO_BIN_EXE_bench"),
+        env!("CARGO_BIN_EXE_family"),
     ];
     for bin in commands {
         let out = Command::new(bin).arg("--help").output().expect("run");

@@ -87,6 +87,10 @@ pub struct TruthComparison {
     /// Per true plane: the angle in degrees between its normal and the nearest trained plane's,
     /// and the centre distance as a fraction of the true plane's diagonal (NaN with no plane).
     pub planes: Vec<(f64, f64)>,
+    /// Per true plane: the base reflectance R0 of the nearest trained plane (NaN with no plane)
+    /// and the truth's.
+    #[serde(default)]
+    pub r0: Vec<(f64, f64)>,
     /// PSNR of the transmission layer against the true transmission, mean over the evaluation
     /// views (the test views unless `eval --split` says otherwise).
     pub transmission_psnr: Option<f64>,
@@ -117,9 +121,13 @@ impl std::fmt::Display for TruthComparison {
             }
             write!(
                 f,
-                "plane {i}: normal off by {angle:.2} deg, centre by {:.2}% of the size; ",
+                "plane {i}: normal off by {angle:.2} deg, centre by {:.2}% of the size",
                 100.0 * centre
             )?;
+            match self.r0.get(i) {
+                Some((trained, truth)) => write!(f, ", R0 {trained:.3} (truth {truth:.3}); ")?,
+                None => write!(f, "; ")?,
+            }
         }
         match self.transmission_psnr {
             Some(p) => write!(f, "transmission PSNR {p:.2} dB"),
@@ -205,6 +213,7 @@ pub fn compare_with_truth(
         return Ok(None);
     }
     let mut errors = Vec::new();
+    let mut r0 = Vec::new();
     let planes_path = gt.join("planes.json");
     if planes_path.is_file() {
         for spec in read_planes_json(&planes_path)? {
@@ -214,10 +223,12 @@ pub fn compare_with_truth(
                 .iter()
                 .map(|p| {
                     let cos = p.unit_normal().dot(truth.unit_normal()).abs().min(1.0);
-                    (cos.acos().to_degrees(), p.centre.distance(truth.centre) / diag)
+                    (cos.acos().to_degrees(), p.centre.distance(truth.centre) / diag, p.r0())
                 })
                 .min_by(|a, b| a.1.total_cmp(&b.1));
-            errors.push(best.unwrap_or((f64::NAN, f64::NAN)));
+            let (angle, centre, trained) = best.unwrap_or((f64::NAN, f64::NAN, f64::NAN));
+            errors.push((angle, centre));
+            r0.push((trained, truth.r0()));
         }
     }
     let mut psnrs = Vec::new();
@@ -252,6 +263,7 @@ pub fn compare_with_truth(
     let samples = regions[0].1 + regions[1].1;
     Ok(Some(TruthComparison {
         planes: errors,
+        r0,
         transmission_psnr,
         reflection_region_psnr: psnr_of(regions[0].0, regions[0].1),
         elsewhere_psnr: psnr_of(regions[1].0, regions[1].1),

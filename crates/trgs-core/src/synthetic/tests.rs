@@ -460,5 +460,5 @@ fn turned_pane_and_light_panels() {
         .zip(&dark.images)
         .fold(0.0f32, |m, (a, b)| a.data.iter().zip(&b.data).fold(m, |m, (x, y)| m.max(x - y)));
     println!("the light panels brighten a pixel by up to {brighter:.3}");
-    assert!(brighter > 0.05);
+    assert!(brighter > 0.3, "lamps brighter than white stand out in the glass");
 }

@@ -144,7 +144,9 @@ impl World {
         let albedo = object.texture.albedo(hit.uv, self.seed);
         let direct: f64 = self.lights.iter().map(|(l, i)| i * hit.normal.dot(*l).max(0.0)).sum();
         let light = object.gain * (self.ambient + direct);
-        (albedo * light).clamp(DVec3::ZERO, DVec3::ONE)
+        // Surfaces reflect at most what falls on them; a lamp (gain above 1) is brighter than
+        // white, which the glass then reflects brightly, and the photo saturates (`sample`).
+        (albedo * light).clamp(DVec3::ZERO, DVec3::splat(object.gain.max(1.0)))
     }
 
     /// Colour seen along `ray` with panes ignored, and the distance to the surface.
@@ -175,7 +177,9 @@ impl World {
     pub fn sample(&self, ray: &Ray) -> Sample {
         let (transmission, depth) = self.radiance_opaque(ray);
         let Some((k, t)) = self.hit_pane(ray, depth) else {
-            return Sample { colour: transmission, transmission, pane: None, depth };
+            // A lamp seen directly saturates the photo.
+            let colour = transmission.min(DVec3::ONE);
+            return Sample { colour, transmission: colour, pane: None, depth };
         };
         let pane = &self.panes[k];
         let n = pane.rect.normal();
@@ -183,8 +187,8 @@ impl World {
         let (reflection, _) = self.radiance_opaque(&mirrored);
         let cos = (-n.dot(ray.dir)).clamp(0.0, 1.0);
         let r = pane.r0 + (1.0 - pane.r0) * (1.0 - cos).powi(5);
-        let colour = (1.0 - r) * transmission + r * reflection;
-        Sample { colour, transmission, pane: Some(k), depth }
+        let colour = ((1.0 - r) * transmission + r * reflection).min(DVec3::ONE);
+        Sample { colour, transmission: transmission.min(DVec3::ONE), pane: Some(k), depth }
     }
 
     /// Whether the opaque surface point `p` is visible from `eye` (panes are transparent to
