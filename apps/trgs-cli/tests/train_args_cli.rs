@@ -77,3 +77,26 @@ fn every_command_has_generated_help() {
         assert!(help.contains(flag), "train --help lacks {flag}: {help}");
     }
 }
+
+#[test]
+fn family_lists_its_members_and_refuses_unknown_ones_and_bad_train_flags() {
+    let family = env!("CARGO_BIN_EXE_family");
+    let out =
+        Command::new(family).args(["--list", "--members", "all,drawn-5"]).output().expect("run");
+    assert!(out.status.success());
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(stdout.lines().count(), 9, "{stdout}");
+    for name in ["arc-lights", "mirror-unlabelled", "two-turned-panes", "walk-by", "drawn-5"] {
+        assert!(stdout.contains(name), "{stdout}");
+    }
+    let stderr = refused(family, &["--list", "--members", "attic"]);
+    assert!(stderr.contains("\"attic\"") && stderr.contains("arc-lights"), "{stderr}");
+    let dir = std::env::temp_dir().join(format!("trgs-family-flags-{}", std::process::id()));
+    let out = dir.to_string_lossy().into_owned();
+    // Refused before the scene is generated.
+    let stderr =
+        refused(family, &["--members", "walk-by", "--tr-flags", "--frobnicate", "--out", &out]);
+    assert!(stderr.contains("--frobnicate"), "{stderr}");
+    assert!(!dir.join("walk-by").join("dataset").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -86,10 +86,11 @@ pub fn render_fps(model: &Renderable, data: &TrainingData) -> Result<f64> {
 pub struct TruthComparison {
     /// Per true plane: the angle in degrees between its normal and the nearest trained plane's,
     /// and the centre distance as a fraction of the true plane's diagonal (NaN with no plane).
+    #[serde(deserialize_with = "nan_for_null")]
     pub planes: Vec<(f64, f64)>,
     /// Per true plane: the base reflectance R0 of the nearest trained plane (NaN with no plane)
     /// and the truth's.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "nan_for_null")]
     pub r0: Vec<(f64, f64)>,
     /// PSNR of the transmission layer against the true transmission, mean over the evaluation
     /// views (the test views unless `eval --split` says otherwise).
@@ -110,6 +111,12 @@ pub struct TruthComparison {
     /// Share of the test pixels in the reflection region.
     #[serde(default)]
     pub reflection_region_share: Option<f64>,
+}
+
+/// Pairs written by serde_json, which writes NaN (no plane to compare with) as null.
+fn nan_for_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Vec<(f64, f64)>, D::Error> {
+    let pairs: Vec<(Option<f64>, Option<f64>)> = serde::Deserialize::deserialize(d)?;
+    Ok(pairs.into_iter().map(|(a, b)| (a.unwrap_or(f64::NAN), b.unwrap_or(f64::NAN))).collect())
 }
 
 impl std::fmt::Display for TruthComparison {

@@ -5,7 +5,8 @@
 //! - [`densify`]: how the Gaussian set changes (none, classic, MCMC) behind one interface;
 //! - [`gaussian_state`]: the parameters and Adam moments on the GPU, edited together;
 //! - [`data`], [`init`], [`plane_init`]: datasets at the training resolution, the initial
-//!   Gaussians and the planes fitted from the glass masks;
+//!   Gaussians and the planes fitted from the glass masks; [`reflection_seed`]: the reflected
+//!   content stage 1 put behind each plane, mirrored to its front;
 //! - [`settings`]: the schedules and rates; [`checkpoint`]: resumable state on disk;
 //! - [`eval`]: test metrics, renders and comparisons with a synthetic scene's ground truth;
 //! - the training stages on the GPU, each with its CPU twin in `trgs_core::reference`:
@@ -26,6 +27,7 @@ pub mod losses;
 pub mod perturb;
 pub mod plane_adam;
 pub mod plane_init;
+pub mod reflection_seed;
 pub mod run;
 pub mod settings;
 pub mod trainer;

@@ -33,14 +33,17 @@ fn a_stopped_run_resumes_through_the_library() {
     };
     let mut run = TrainingRun::new(config.clone()).expect("a new run");
     let mut planes = 0;
+    let mut seeded = Vec::new();
     let stopped = loop {
         match run.next_event().expect("the run goes on").expect("a step") {
             RunEvent::PlaneCreated { .. } => planes += 1,
+            RunEvent::Note(line) if line.contains("mirrored to its front") => seeded.push(line),
             RunEvent::CheckpointWritten { step, .. } if step >= 10 => break step,
             _ => {}
         }
     };
     assert_eq!(planes, 1, "stage 1 ends at step 4 of 40 with the glass plane");
+    assert_eq!(seeded.len(), 1, "the plane's reflection seeds are reported: {seeded:?}");
     drop(run);
     assert!(!out.join("metrics.json").exists(), "the stopped run did not finish");
 

@@ -33,6 +33,13 @@ struct Args {
     /// Also write the table as Markdown
     #[arg(long, value_name = "FILE")]
     write: Option<PathBuf>,
+    /// More `train` flags for the TR-Gaussians runs (an ablation or a variant), e.g.
+    /// "--no-reflection-seeds"; their runs go to <OUT>/<member>/<--tr-label>-<steps>
+    #[arg(long, value_name = "FLAGS", allow_hyphen_values = true, default_value = "")]
+    tr_flags: String,
+    /// Folder name of the TR-Gaussians runs
+    #[arg(long, value_name = "NAME", default_value = "tr")]
+    tr_label: String,
     /// List the members and what each tests, then exit
     #[arg(long)]
     list: bool,
@@ -56,6 +63,8 @@ fn main() -> Result<()> {
         }
         return Ok(());
     }
+    // Bad flags are refused before any scene is generated.
+    run_config(&args.tr_flags)?;
     let ctx = GpuContext::new()?;
     let mut rows = Vec::new();
     for member in &members {
@@ -63,10 +72,17 @@ fn main() -> Result<()> {
         let data = scene_folder(member, &dir)?;
         let mut outcomes = Vec::new();
         for plain in [false, true] {
-            let mode = if plain { "plain" } else { "tr" };
+            let mode = if plain { "plain" } else { args.tr_label.as_str() };
             let out = dir.join(format!("{mode}-{}", args.steps));
             println!("{}: {mode}, {} steps -> {}", member.name, args.steps, out.display());
-            outcomes.push(train(&ctx, &data, &out, args.steps, plain)?);
+            let flags = if plain { "--no-planes" } else { args.tr_flags.as_str() };
+            let config = RunConfig {
+                data: Some(data.clone()),
+                out: out.clone(),
+                iterations: args.steps,
+                ..run_config(flags)?
+            };
+            outcomes.push(train(&ctx, config)?);
         }
         let plain = outcomes.pop().context("two runs")?;
         let tr = outcomes.pop().context("two runs")?;
@@ -128,20 +144,26 @@ fn scene_folder(member: &FamilyMember, dir: &Path) -> Result<PathBuf> {
     Ok(data)
 }
 
+/// `train`'s settings from its flags.
+fn run_config(flags: &str) -> Result<RunConfig> {
+    #[derive(Parser)]
+    struct Flags {
+        #[command(flatten)]
+        config: RunConfig,
+    }
+    let argv = std::iter::once("train").chain(flags.split_whitespace());
+    let parsed = Flags::try_parse_from(argv).with_context(|| format!("train flags {flags:?}"))?;
+    Ok(parsed.config)
+}
+
 /// One run to its end (resumed from its checkpoint when interrupted, read back when finished).
-fn train(ctx: &GpuContext, data: &Path, out: &Path, steps: u32, plain: bool) -> Result<Outcome> {
+fn train(ctx: &GpuContext, config: RunConfig) -> Result<Outcome> {
+    let out = config.out.clone();
     let metrics = out.join("metrics.json");
     if !metrics.is_file() {
         let mut run = if out.join("checkpoint.trgs").is_file() {
-            TrainingRun::resume_with_context(ctx.clone(), out)?
+            TrainingRun::resume_with_context(ctx.clone(), &out)?
         } else {
-            let config = RunConfig {
-                data: Some(data.to_path_buf()),
-                out: out.to_path_buf(),
-                iterations: steps,
-                no_planes: plain,
-                ..RunConfig::default()
-            };
             TrainingRun::with_context(ctx.clone(), config)?
         };
         run.run_to_end(|event| match event {

@@ -135,6 +135,19 @@ impl<F: Scalar> Gaussians<F> {
         self.populations.push(population);
     }
 
+    /// Append every Gaussian of `other` (its SH converted to this set's degree).
+    pub fn append(&mut self, other: &Self) {
+        let other = other.with_sh_degree(self.sh_degree);
+        self.means.extend_from_slice(&other.means);
+        self.rotations.extend_from_slice(&other.rotations);
+        self.log_scales.extend_from_slice(&other.log_scales);
+        self.opacity_logits.extend_from_slice(&other.opacity_logits);
+        self.sh.extend_from_slice(&other.sh);
+        self.mask_logits.extend_from_slice(&other.mask_logits);
+        self.log_reflections.extend_from_slice(&other.log_reflections);
+        self.populations.extend_from_slice(&other.populations);
+    }
+
     /// The same set in another scalar type.
     pub fn cast<G: Scalar>(&self) -> Gaussians<G> {
         let c = |v: F| G::from_f64(v.to_f64());

@@ -63,6 +63,11 @@ pub struct RunConfig {
     /// Ignore the glass masks: plain 3DGS (the baseline of the comparisons)
     #[arg(long)]
     pub no_planes: bool,
+    /// Do not mirror what stage 1 learnt behind each plane to its front at plane
+    /// initialisation (`trgs_train::reflection_seed`): the reflection layer then starts empty
+    #[arg(long, conflicts_with = "no_planes")]
+    #[serde(default)]
+    pub no_reflection_seeds: bool,
     /// Order of the training views and every random draw
     #[arg(long, value_name = "S", default_value_t = 0)]
     pub seed: u64,

@@ -45,6 +45,7 @@ use crate::data::{self, TrainingData};
 use crate::eval::{Evaluation, evaluate};
 use crate::init::{SeedPoint, gaussians_from_points, random_points};
 use crate::plane_init::{PlaneInitSettings, initialise_planes};
+use crate::reflection_seed::{ReflectedSpaceSeeds, mirrored_seeds, reflected_space_seeds};
 use crate::trainer::{StepStats, StepTimes, Trainer};
 use anyhow::{Context, Result, bail};
 use std::collections::VecDeque;
@@ -411,8 +412,9 @@ impl TrainingRun {
 
     /// Initialise the planes from the glass masks (the end of stage 1).
     fn init_planes(&mut self) -> Result<()> {
+        let gaussians = self.trainer.gaussians()?;
         let init = initialise_planes(
-            &self.trainer.gaussians()?,
+            &gaussians,
             &self.data.train,
             &self.data.materials,
             self.data.extent,
@@ -425,7 +427,31 @@ impl TrainingRun {
         for (&label, plane) in init.labels.iter().zip(&init.planes) {
             self.events.push_back(RunEvent::PlaneCreated { label, plane: *plane });
         }
-        self.trainer.add_planes(&init.planes, &init.glass)
+        let mut added = init.glass;
+        if !self.config().no_reflection_seeds {
+            let cameras: Vec<_> = self.data.train.iter().map(|v| v.camera.clone()).collect();
+            let seeds = mirrored_seeds(&gaussians, &init.planes, &cameras);
+            let views: Vec<_> = self.data.train.iter().map(|v| (&v.camera, &v.image)).collect();
+            let space = reflected_space_seeds(
+                &views,
+                &init.planes,
+                self.data.extent,
+                &ReflectedSpaceSeeds::default(),
+                gaussians.sh_degree,
+                &mut self.rng,
+            );
+            for ((&label, s), r) in init.labels.iter().zip(&seeds).zip(&space) {
+                self.events.push_back(RunEvent::Note(format!(
+                    "plane {label}: {} Gaussians seen through it mirrored to its front, {} \
+                     seeded in the space it reflects",
+                    s.len(),
+                    r.len()
+                )));
+                added.append(s);
+                added.append(r);
+            }
+        }
+        self.trainer.add_planes(&init.planes, &added)
     }
 }
 
