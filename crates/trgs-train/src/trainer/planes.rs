@@ -10,7 +10,8 @@ use trgs_core::reference::PlaneGrad;
 use trgs_core::scene::{Attribute, Gaussians, ReflectionPlane, attribute_widths};
 
 impl Trainer {
-    /// Add reflection planes and their glass Gaussians (zero moments) to the optimisation.
+    /// Add reflection planes and the Gaussians that come with them (their glass Gaussians and
+    /// reflection seeds; zero moments) to the optimisation.
     pub fn add_planes(&mut self, planes: &[ReflectionPlane], glass: &Gaussians<f32>) -> Result<()> {
         let mut state = self.read_state()?;
         let n_old = state.gaussians.len();
