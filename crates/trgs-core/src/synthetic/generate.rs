@@ -1,14 +1,15 @@
 //! Scene layout, camera loop, rendering of every view, and the sparse points.
-use std::f64::consts::{PI, TAU};
+use std::f64::consts::PI;
 
 use glam::{DMat3, DVec3};
 
 use super::geom::{Ray, Rect, Turn};
+use super::paths::{camera_path, room_view_path};
 use super::points::sparse_points;
+use super::render_views::render_all;
 use super::texture::Texture;
 use super::trace::{Object, Pane, Shape, World};
-use super::{Backdrop, CameraPath, GLASS_R0, MIRROR_R0, PaneKind, SyntheticConfig, SyntheticScene};
-use crate::image::Image;
+use super::{Backdrop, GLASS_R0, MIRROR_R0, PaneKind, SyntheticConfig, SyntheticScene};
 use crate::scene::{Camera, Intrinsics, Material, Pose, ReflectionPlane};
 
 /// Subsamples per pixel side: 2x2 rays per pixel.
@@ -22,7 +23,7 @@ const FOV_X_DEG: f64 = 62.0;
 /// [`Backdrop::depth`].
 const HALF_WIDTH: f64 = 3.0;
 const HEIGHT: f64 = 2.8;
-const FRONT_DEPTH: f64 = 5.0;
+pub(crate) const FRONT_DEPTH: f64 = 5.0;
 
 /// Pane centre height and frame bar width (the pane's size is [`Backdrop::pane_size`]).
 const PANE_Y: f64 = 1.2;
@@ -431,54 +432,6 @@ fn build_world(config: &SyntheticConfig) -> (World, Boxes, Vec<(f64, f64, f64)>)
     (world, frame_boxes, sizes)
 }
 
-/// Eye and target of view `i` of `n` along `path`, in the local frame.
-fn camera_path(path: CameraPath, i: usize, n: usize) -> (DVec3, DVec3) {
-    let s = i as f64 / n as f64;
-    match path {
-        CameraPath::Loop => camera_loop(i, n),
-        CameraPath::Arc => {
-            let theta = (-45.0 + 90.0 * s).to_radians();
-            let eye = DVec3::new(2.7 * theta.sin(), 1.4, 2.7 * theta.cos());
-            (eye, DVec3::new(0.25 * theta.sin(), 1.15, -0.8))
-        }
-        CameraPath::WalkBy => {
-            let eye = DVec3::new(-2.2 + 4.4 * s, 1.55 + 0.03 * (6.0 * TAU * s).sin(), 2.2);
-            (eye, DVec3::new(0.5 * eye.x, 1.15, -0.8))
-        }
-        CameraPath::CloseUp => {
-            let theta = 0.5 * (TAU * s).sin();
-            let r = 1.75 + 0.15 * (2.0 * TAU * s).cos();
-            let eye = DVec3::new(
-                r * theta.sin(),
-                1.25 + 0.2 * (3.0 * TAU * s + 0.5).sin(),
-                r * theta.cos(),
-            );
-            (eye, DVec3::new(0.2 * (TAU * s + 0.8).sin(), 1.2, -0.8))
-        }
-    }
-}
-
-/// The default camera loop: eye and target of view `i` of `n`.
-fn camera_loop(i: usize, n: usize) -> (DVec3, DVec3) {
-    let s = i as f64 / n as f64;
-    // One sweep left-right per loop, three height oscillations: the loop covers a band of
-    // positions instead of retracing one curve.
-    let theta = 0.9 * (TAU * s).sin();
-    let r = 2.6 + 0.3 * (2.0 * TAU * s).cos();
-    let eye = DVec3::new(r * theta.sin(), 1.3 + 0.4 * (3.0 * TAU * s + 0.5).sin(), r * theta.cos());
-    let target = DVec3::new(0.3 * (TAU * s + 0.8).sin(), 1.1 + 0.1 * (2.0 * TAU * s).sin(), -0.8);
-    (eye, target)
-}
-
-/// Room view `j` of `n`: an eye near the window looking back into the camera room, the targets
-/// sweeping the poster wall and the side walls from left to right.
-fn room_view_path(j: usize, n: usize) -> (DVec3, DVec3) {
-    let s = (j as f64 + 0.5) / n as f64;
-    let eye = DVec3::new(-1.2 + 2.4 * s, 1.35 + 0.2 * (TAU * s).sin(), 0.8 + 0.4 * (PI * s).sin());
-    let target = DVec3::new(-3.0 + 6.0 * s, 1.3, FRONT_DEPTH - 0.5);
-    (eye, target)
-}
-
 pub(crate) fn layout(config: &SyntheticConfig) -> Layout {
     let (world, frame_boxes, sizes) = build_world(config);
     let placement = Placement::fixed();
@@ -520,13 +473,6 @@ pub(crate) fn layout(config: &SyntheticConfig) -> Layout {
     Layout { world, placement, cameras, planes, frame_boxes }
 }
 
-/// One rendered view: composite, transmission, and labels for every pixel.
-struct View {
-    image: Image<f32>,
-    transmission: Image<f32>,
-    labels: Image<u8>,
-}
-
 /// The local-frame ray through the continuous pixel position `(px, py)`.
 pub(crate) fn local_ray(layout: &Layout, camera: &Camera, px: f64, py: f64) -> Ray {
     let d = camera.pose.direction_to_world(camera.intrinsics.unproject(px, py));
@@ -534,80 +480,6 @@ pub(crate) fn local_ray(layout: &Layout, camera: &Camera, px: f64, py: f64) -> R
         layout.placement.point_to_local(camera.pose.centre()),
         layout.placement.dir_to_local(d).normalize(),
     )
-}
-
-fn render_view(layout: &Layout, camera: &Camera) -> View {
-    let (w, h) = (camera.width(), camera.height());
-    let mut image = Image::new(w, h, 3);
-    let mut transmission = Image::new(w, h, 3);
-    let mut labels = Image::new(w, h, 1);
-    let n_sub = f64::from(SUPERSAMPLE * SUPERSAMPLE);
-    let mut counts = vec![0u32; layout.world.panes.len()];
-    for y in 0..h {
-        for x in 0..w {
-            let (mut c, mut t) = (DVec3::ZERO, DVec3::ZERO);
-            counts.iter_mut().for_each(|k| *k = 0);
-            for sy in 0..SUPERSAMPLE {
-                for sx in 0..SUPERSAMPLE {
-                    let px = f64::from(x) + (f64::from(sx) + 0.5) / f64::from(SUPERSAMPLE);
-                    let py = f64::from(y) + (f64::from(sy) + 0.5) / f64::from(SUPERSAMPLE);
-                    let s = layout.world.sample(&local_ray(layout, camera, px, py));
-                    c += s.colour;
-                    t += s.transmission;
-                    if let Some(k) = s.pane {
-                        counts[k] += 1;
-                    }
-                }
-            }
-            // Any subsample on a pane marks the pixel (the pane with most subsamples, lowest
-            // index on ties), so that outside the masks the composite equals the transmission.
-            let mut label = 0u8;
-            let mut most = 0;
-            for (k, &n) in counts.iter().enumerate() {
-                if n > most {
-                    most = n;
-                    label = (k + 1).min(255) as u8;
-                }
-            }
-            labels.set(x, y, 0, label);
-            for ch in 0..3 {
-                image.set(x, y, ch as u32, (c[ch] / n_sub) as f32);
-                transmission.set(x, y, ch as u32, (t[ch] / n_sub) as f32);
-            }
-        }
-    }
-    View { image, transmission, labels }
-}
-
-/// Render every view, spread over the available cores; each view is a pure function of the
-/// layout, so the result does not depend on the number of threads.
-fn render_all(layout: &Layout) -> Vec<View> {
-    let n = layout.cameras.len();
-    let threads = std::thread::available_parallelism().map_or(1, |t| t.get()).clamp(1, 16).min(n);
-    if threads <= 1 {
-        return layout.cameras.iter().map(|c| render_view(layout, c)).collect();
-    }
-    let mut slots: Vec<Option<View>> = (0..n).map(|_| None).collect();
-    std::thread::scope(|scope| {
-        let handles: Vec<_> = (0..threads)
-            .map(|j| {
-                scope.spawn(move || {
-                    (j..n)
-                        .step_by(threads)
-                        .map(|i| (i, render_view(layout, &layout.cameras[i])))
-                        .collect::<Vec<_>>()
-                })
-            })
-            .collect();
-        for handle in handles {
-            // A panic in a worker is a bug in the tracer: surface it where it happened.
-            let done = handle.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
-            for (i, view) in done {
-                slots[i] = Some(view);
-            }
-        }
-    });
-    slots.into_iter().flatten().collect()
 }
 
 /// Project a world point into a camera: pixel position if it is in front and inside the image.

@@ -40,7 +40,9 @@
 pub mod family;
 mod generate;
 mod geom;
+mod paths;
 mod points;
+mod render_views;
 mod texture;
 mod trace;
 mod write;
