@@ -2,11 +2,15 @@
 //! paper's appendix A; docs/ARCHITECTURE.md, "Plane initialisation"): for each label, the
 //! Gaussians whose centres project into a band around the mask's outline in most annotated views
 //! are fitted with a RANSAC plane and a minimum-area rectangle (`trgs_core::fit`); the normal is
-//! turned toward the annotated cameras; 1000 glass Gaussians are sampled on the rectangle.
+//! turned toward the annotated cameras; the rectangle is moved from the pane's frame onto the
+//! glass that the masks outline (`trgs_core::fit::refine_to_masks`, not in the paper); 1000
+//! glass Gaussians are sampled on the rectangle.
 use crate::data::View;
 use glam::{DMat3, DQuat, DVec3};
 use trgs_core::Image;
-use trgs_core::fit::{fit_rectangle, orient_towards, sample_rectangle};
+use trgs_core::fit::{
+    SilhouetteSettings, fit_rectangle, orient_towards, refine_to_masks, sample_rectangle,
+};
 use trgs_core::rng::Rng;
 use trgs_core::scene::{Gaussians, Material, Population, ReflectionPlane};
 
@@ -24,6 +28,8 @@ pub struct PlaneInitSettings {
     /// Opacity and mask value of the glass Gaussians.
     pub glass_opacity: f64,
     pub glass_mask: f64,
+    /// The refinement of the fitted rectangle against the masks (None: the paper's fit alone).
+    pub silhouette: Option<SilhouetteSettings>,
 }
 
 impl Default for PlaneInitSettings {
@@ -35,6 +41,7 @@ impl Default for PlaneInitSettings {
             glass_gaussians: 1000,
             glass_opacity: 0.5,
             glass_mask: 0.99,
+            silhouette: Some(SilhouetteSettings::default()),
         }
     }
 }
@@ -83,6 +90,8 @@ pub struct InitialisedPlanes {
     pub glass: Gaussians<f32>,
     /// Labels whose fit failed, with why.
     pub failed: Vec<(u32, String)>,
+    /// What the refinement against the masks did to each plane, in words.
+    pub refined: Vec<String>,
 }
 
 /// Fit the planes of `labels` from the primary Gaussians `g` and the annotated `views`.
@@ -99,6 +108,7 @@ pub fn initialise_planes(
         labels: Vec::new(),
         glass: Gaussians::empty(g.sh_degree),
         failed: Vec::new(),
+        refined: Vec::new(),
     };
     let annotated: Vec<&View> = views.iter().filter(|v| v.mask.is_some()).collect();
     let means: Vec<DVec3> = g.means.iter().map(|m| DVec3::from_array(m.map(f64::from))).collect();
@@ -154,6 +164,28 @@ pub fn initialise_planes(
         let mut plane = fit.to_plane(material);
         plane.normal = orient_towards(fit.normal, fit.centre, &cameras);
         plane.orthogonalise_axis();
+        if let Some(silhouette) = &settings.silhouette {
+            let masks: Vec<_> =
+                annotated.iter().filter_map(|v| Some((&v.camera, v.mask.as_ref()?))).collect();
+            out.refined.push(match refine_to_masks(&plane, &masks, label8, silhouette) {
+                Some(r) => {
+                    let moved = (r.plane.centre - plane.centre).dot(plane.unit_normal());
+                    let text = format!(
+                        "moved onto the masks: {moved:+.3} along the normal, {:.2} x {:.2} \
+                         (fit from the outline: {:.2} x {:.2}), mask cost {:.3} -> {:.3}",
+                        r.plane.width,
+                        r.plane.height,
+                        plane.width,
+                        plane.height,
+                        r.cost_before,
+                        r.cost_after
+                    );
+                    plane = r.plane;
+                    text
+                }
+                None => "kept as fitted: the masks disagree with it beyond the limits".into(),
+            });
+        }
         append_glass(&mut out.glass, &plane, settings, rng);
         out.planes.push(plane);
         out.labels.push(label);

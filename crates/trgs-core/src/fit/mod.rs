@@ -5,12 +5,15 @@
 //! [`ransac_plane`] (3-point hypotheses, least-squares refinement), the normal is turned toward
 //! the annotated cameras with [`orient_towards`], the inliers are projected into the plane and
 //! enclosed by the minimum-area box ([`convex_hull`] + rotating calipers in [`min_area_box`]);
-//! [`fit_rectangle`] does all but the orientation. [`sample_rectangle`] then places the glass
-//! Gaussians uniformly on the rectangle.
+//! [`fit_rectangle`] does all but the orientation. [`refine_to_masks`] then moves the rectangle
+//! from the pane's frame onto the glass the masks outline, and [`sample_rectangle`] places the
+//! glass Gaussians uniformly on it.
 mod hull;
 mod ransac;
 mod rectangle;
+mod silhouette;
 
 pub use hull::{OrientedBox, convex_hull, min_area_box};
 pub use ransac::{PlaneFit, orient_towards, ransac_plane, symmetric_eigen};
 pub use rectangle::{RectangleFit, fit_rectangle, sample_rectangle};
+pub use silhouette::{SilhouetteFit, SilhouetteSettings, refine_to_masks};

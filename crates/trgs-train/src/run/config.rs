@@ -68,6 +68,12 @@ pub struct RunConfig {
     #[arg(long, conflicts_with = "no_planes")]
     #[serde(default)]
     pub no_reflection_seeds: bool,
+    /// Keep each plane as fitted to the Gaussians around the mask outline (the paper's
+    /// initialisation), without moving it onto the glass the masks outline
+    /// (`trgs_core::fit::refine_to_masks`)
+    #[arg(long, conflicts_with = "no_planes")]
+    #[serde(default)]
+    pub no_mask_refinement: bool,
     /// Order of the training views and every random draw
     #[arg(long, value_name = "S", default_value_t = 0)]
     pub seed: u64,

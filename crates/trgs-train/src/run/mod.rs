@@ -51,6 +51,7 @@ use anyhow::{Context, Result, bail};
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
+use trgs_core::fit::SilhouetteSettings;
 use trgs_core::io::{remove_stale_temporaries, write_cameras_json};
 use trgs_core::rng::Rng;
 use trgs_core::scene::{Camera, ReflectionPlane};
@@ -418,7 +419,10 @@ impl TrainingRun {
             &self.data.train,
             &self.data.materials,
             self.data.extent,
-            &PlaneInitSettings::default(),
+            &PlaneInitSettings {
+                silhouette: (!self.config().no_mask_refinement).then(SilhouetteSettings::default),
+                ..PlaneInitSettings::default()
+            },
             &mut self.rng,
         );
         for (label, reason) in &init.failed {
@@ -426,6 +430,9 @@ impl TrainingRun {
         }
         for (&label, plane) in init.labels.iter().zip(&init.planes) {
             self.events.push_back(RunEvent::PlaneCreated { label, plane: *plane });
+        }
+        for (&label, text) in init.labels.iter().zip(&init.refined) {
+            self.events.push_back(RunEvent::Note(format!("plane {label}: {text}")));
         }
         let mut added = init.glass;
         if !self.config().no_reflection_seeds {
