@@ -183,7 +183,8 @@ pub fn initialise_planes(
                     plane = r.plane;
                     text
                 }
-                None => "kept as fitted: the masks disagree with it beyond the limits".into(),
+                None => "kept as fitted: the masks pin no rectangle within the refinement's limits"
+                    .into(),
             });
         }
         append_glass(&mut out.glass, &plane, settings, rng);
