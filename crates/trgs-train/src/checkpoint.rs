@@ -6,6 +6,7 @@
 //! the arrays that follow: name, element type, length), then the arrays, little-endian, in manifest
 //! order. The manifest makes a truncated or mismatched file an error that says which array.
 use crate::densify::{DensifyStats, TrainState};
+use crate::plane_adam::OffsetLimit;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -18,10 +19,11 @@ use trgs_core::scene::{
 pub const CHECKPOINT_FILE: &str = "checkpoint.trgs";
 const MAGIC: &str = "trgs-checkpoint 1";
 
-/// Adam state of one plane, in `plane_adam`'s slots: 0 the offset along the normal, 3..6 the
-/// unnormalised normal, 6 the R0 logit; 1 and 2 are unused, left from the per-coordinate centre
-/// of older versions (whose checkpoints still load: their centre-x moments then start the
-/// offset's, which Adam's bias-corrected averages forget within a few hundred steps).
+/// Optimiser state of one plane. Adam's moments are in `plane_adam`'s slots: 0 the offset along
+/// the normal, 3..6 the unnormalised normal, 6 the R0 logit; 1 and 2 are unused, left from the
+/// per-coordinate centre of older versions (whose checkpoints still load: their centre-x moments
+/// then start the offset's, which Adam's bias-corrected averages forget within a few hundred
+/// steps).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct PlaneMoments {
     pub m: [f64; 7],
@@ -30,6 +32,9 @@ pub struct PlaneMoments {
     /// not from the run's start (0 in checkpoints that predate it; see `Trainer::step_planes`).
     #[serde(default)]
     pub steps: u32,
+    /// Where the glass masks pin the plane's offset (None: free; also in older checkpoints).
+    #[serde(default)]
+    pub offset_limit: Option<OffsetLimit>,
 }
 
 /// A training run's state at the end of step `step`.
@@ -377,7 +382,12 @@ mod tests {
             step: 42,
             state: TrainState { gaussians: g, m, v },
             planes: vec![plane],
-            plane_moments: vec![PlaneMoments { m: [0.25; 7], v: [1e-9; 7], steps: 17 }],
+            plane_moments: vec![PlaneMoments {
+                m: [0.25; 7],
+                v: [1e-9; 7],
+                steps: 17,
+                offset_limit: Some(OffsetLimit { anchor: [0.5, -1.0, 2.0], tolerance: 0.03 }),
+            }],
             densify_stats: Some(DensifyStats {
                 grad_sum: vec![1.0, 2.0, 3.0, 4.0, 5.0],
                 count: vec![1, 2, 3, 4, 5],

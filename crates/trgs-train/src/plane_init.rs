@@ -3,9 +3,11 @@
 //! Gaussians whose centres project into a band around the mask's outline in most annotated views
 //! are fitted with a RANSAC plane and a minimum-area rectangle (`trgs_core::fit`); the normal is
 //! turned toward the annotated cameras; the rectangle is moved from the pane's frame onto the
-//! glass that the masks outline (`trgs_core::fit::refine_to_masks`, not in the paper); 1000
+//! glass that the masks outline (`trgs_core::fit::refine_to_masks`, not in the paper), which
+//! then also bound how far training may move it along its normal ([`OffsetLimit`]); 1000
 //! glass Gaussians are sampled on the rectangle.
 use crate::data::View;
+use crate::plane_adam::OffsetLimit;
 use glam::{DMat3, DQuat, DVec3};
 use trgs_core::Image;
 use trgs_core::fit::{
@@ -30,6 +32,9 @@ pub struct PlaneInitSettings {
     pub glass_mask: f64,
     /// The refinement of the fitted rectangle against the masks (None: the paper's fit alone).
     pub silhouette: Option<SilhouetteSettings>,
+    /// How far training may move a refined plane along its normal, in pixels of outline motion
+    /// in the annotated view where it moves most ([`OffsetLimit`]; infinite: free).
+    pub offset_limit_px: f64,
 }
 
 impl Default for PlaneInitSettings {
@@ -42,6 +47,7 @@ impl Default for PlaneInitSettings {
             glass_opacity: 0.5,
             glass_mask: 0.99,
             silhouette: Some(SilhouetteSettings::default()),
+            offset_limit_px: 1.0,
         }
     }
 }
@@ -92,6 +98,8 @@ pub struct InitialisedPlanes {
     pub failed: Vec<(u32, String)>,
     /// What the refinement against the masks did to each plane, in words.
     pub refined: Vec<String>,
+    /// Per plane, the bounds the masks set on its offset (None where they pin nothing).
+    pub offset_limits: Vec<Option<OffsetLimit>>,
 }
 
 /// Fit the planes of `labels` from the primary Gaussians `g` and the annotated `views`.
@@ -109,6 +117,7 @@ pub fn initialise_planes(
         glass: Gaussians::empty(g.sh_degree),
         failed: Vec::new(),
         refined: Vec::new(),
+        offset_limits: Vec::new(),
     };
     let annotated: Vec<&View> = views.iter().filter(|v| v.mask.is_some()).collect();
     let means: Vec<DVec3> = g.means.iter().map(|m| DVec3::from_array(m.map(f64::from))).collect();
@@ -131,16 +140,9 @@ pub fn initialise_planes(
                 if *pop != Population::Primary {
                     continue;
                 }
-                let c = v.camera.pose.transform_point(*m);
-                if c.z <= 1e-6 {
-                    continue;
-                }
-                let (u, w) = (k.fx * c.x / c.z + k.cx, k.fy * c.y / c.z + k.cy);
-                if !(u >= 0.0 && w >= 0.0 && u < f64::from(k.width) && w < f64::from(k.height)) {
-                    continue;
-                }
+                let Some(u) = v.camera.image_point(*m) else { continue };
                 seen[i] += 1;
-                if band[(w as usize) * k.width as usize + u as usize] {
+                if band[(u.y as usize) * k.width as usize + u.x as usize] {
                     in_band[i] += 1;
                 }
             }
@@ -164,6 +166,7 @@ pub fn initialise_planes(
         let mut plane = fit.to_plane(material);
         plane.normal = orient_towards(fit.normal, fit.centre, &cameras);
         plane.orthogonalise_axis();
+        let mut offset_limit = None;
         if let Some(silhouette) = &settings.silhouette {
             let masks: Vec<_> =
                 annotated.iter().filter_map(|v| Some((&v.camera, v.mask.as_ref()?))).collect();
@@ -180,8 +183,17 @@ pub fn initialise_planes(
                         r.cost_before,
                         r.cost_after
                     );
+                    let tolerance = settings.offset_limit_px * r.offset_resolution;
+                    offset_limit = tolerance
+                        .is_finite()
+                        .then_some(OffsetLimit { anchor: r.plane.centre.to_array(), tolerance });
                     plane = r.plane;
-                    text
+                    match offset_limit {
+                        Some(l) => {
+                            format!("{text}; kept within {:.3} along the normal", l.tolerance)
+                        }
+                        None => text,
+                    }
                 }
                 None => "kept as fitted: the masks pin no rectangle within the refinement's limits"
                     .into(),
@@ -190,6 +202,7 @@ pub fn initialise_planes(
         append_glass(&mut out.glass, &plane, settings, rng);
         out.planes.push(plane);
         out.labels.push(label);
+        out.offset_limits.push(offset_limit);
     }
     out
 }

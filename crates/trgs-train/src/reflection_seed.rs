@@ -54,7 +54,7 @@ fn seeds_of(g: &Gaussians<f32>, plane: &ReflectionPlane, cameras: &[Camera]) -> 
             ray_rectangle_hit(plane, c.pose.centre(), to.normalize()).is_some()
         });
         let copy = reflect_point(plane, mu);
-        if !through || cameras.iter().any(|c| sees(c, copy)) {
+        if !through || cameras.iter().any(|c| c.sees(copy)) {
             continue;
         }
         // H R F, F = diag(1, 1, -1): a proper rotation with the mirrored covariance H R S^2 R^T H.
@@ -137,7 +137,7 @@ pub fn reflected_space_seeds(
                 let Some(s) = ray_rectangle_hit(plane, eye, d) else { continue };
                 let t = (ln_near + rng.uniform() * (ln_far - ln_near)).exp();
                 let q = eye + s * d + t * reflect_direction(plane, d);
-                if views.iter().any(|(c, _)| sees(c, q)) {
+                if views.iter().any(|(c, _)| c.sees(q)) {
                     continue;
                 }
                 // About two pixels wide at its distance along the mirrored ray.
@@ -157,17 +157,6 @@ pub fn reflected_space_seeds(
             out
         })
         .collect()
-}
-
-/// Whether `camera` sees the point `p` directly: in front of it and inside its image.
-fn sees(camera: &Camera, p: DVec3) -> bool {
-    let q = camera.pose.transform_point(p);
-    if q.z <= 0.0 {
-        return false;
-    }
-    let k = &camera.intrinsics;
-    let (u, v) = (k.fx * q.x / q.z + k.cx, k.fy * q.y / q.z + k.cy);
-    u >= 0.0 && v >= 0.0 && u < f64::from(k.width) && v < f64::from(k.height)
 }
 
 /// The degree-1 SH band of a colour seen along mirrored directions: the band is `a . d` with
@@ -244,12 +233,12 @@ mod tests {
         for m in &s.means {
             let q = DVec3::from_array(m.map(f64::from));
             assert!(plane.signed_distance(q) > 0.0, "{q} is behind the plane");
-            assert!(!cams.iter().any(|c| sees(c, q)), "{q} is seen directly");
+            assert!(!cams.iter().any(|c| c.sees(q)), "{q} is seen directly");
             // Its mirror image is seen through the rectangle by a camera.
             let image_point = reflect_point(&plane, q);
             assert!(cams.iter().any(|c| {
                 let to = (image_point - c.pose.centre()).normalize();
-                sees(c, image_point) && ray_rectangle_hit(&plane, c.pose.centre(), to).is_some()
+                c.sees(image_point) && ray_rectangle_hit(&plane, c.pose.centre(), to).is_some()
             }));
         }
     }

@@ -45,6 +45,7 @@ fn small_scene_trains_and_finds_its_plane() {
     trainer.set_densification(&Densification::Classic(densify));
     let before = test_psnr(&trainer, &data);
     let mut rng = trgs_core::rng::Rng::new(1);
+    let mut limits = Vec::new();
     while trainer.step < iterations {
         for v in &data.train {
             if trainer.step == trainer.settings.stage1 {
@@ -73,7 +74,10 @@ fn small_scene_trains_and_finds_its_plane() {
                 // degrees off over runs. The 2-degree bar is measured on the 256x192 scene.
                 assert!(angle.to_degrees() < 10.0, "normal {:.2} deg off", angle.to_degrees());
                 assert!(off < 0.1, "centre {off:.3} of the size off");
-                trainer.add_planes(&init.planes, &init.glass).expect("add planes");
+                trainer
+                    .add_planes(&init.planes, &init.offset_limits, &init.glass)
+                    .expect("add planes");
+                limits = init.offset_limits;
             }
             if trainer.step == iterations {
                 break;
@@ -90,6 +94,11 @@ fn small_scene_trains_and_finds_its_plane() {
     // The plane's Adam counts its own steps (bias correction from its creation at step 60).
     let ck = trainer.checkpoint(serde_json::Value::Null).expect("readback");
     assert_eq!(ck.plane_moments[0].steps, iterations - 60);
+    // The masks pinned the plane's offset, the checkpoint keeps the limit, and training kept it.
+    let limit = limits[0].expect("the masks set an offset limit");
+    assert_eq!(ck.plane_moments[0].offset_limit, Some(limit));
+    let off = (p.centre - glam::DVec3::from_array(limit.anchor)).dot(p.unit_normal());
+    assert!(off.abs() <= limit.tolerance + 1e-9, "offset {off} beyond {}", limit.tolerance);
     let after = test_psnr(&trainer, &data);
     eprintln!("test PSNR {after:.2} dB after {iterations} steps");
     assert!(after > before + 1.0);

@@ -57,6 +57,10 @@ pub struct SilhouetteFit {
     /// divided by its labelled pixel count, summed over views) before and after.
     pub cost_before: f64,
     pub cost_after: f64,
+    /// How far the refined rectangle can move along its normal before its outline moves by a
+    /// pixel across itself in the annotated view where it moves most: how closely the masks pin
+    /// the plane's offset (infinite when no view shows an edge).
+    pub offset_resolution: f64,
 }
 
 /// One annotated view's pixels near its mask: world-space ray and whether the pixel is labelled.
@@ -77,8 +81,10 @@ pub fn refine_to_masks(
     label: u8,
     settings: &SilhouetteSettings,
 ) -> Option<SilhouetteFit> {
-    let pixels: Vec<ViewPixels> =
-        views.iter().filter_map(|(c, m)| view_pixels(c, m, label, settings.margin)).collect();
+    let (cameras, pixels): (Vec<&Camera>, Vec<ViewPixels>) = views
+        .iter()
+        .filter_map(|(c, m)| Some((*c, view_pixels(c, m, label, settings.margin)?)))
+        .unzip();
     if pixels.is_empty() {
         return None;
     }
@@ -98,7 +104,40 @@ pub fn refine_to_masks(
     {
         return None;
     }
-    Some(SilhouetteFit { plane: moved, cost_before, cost_after })
+    let offset_resolution = offset_resolution(&moved, &cameras);
+    Some(SilhouetteFit { plane: moved, cost_before, cost_after, offset_resolution })
+}
+
+/// How far `plane` can move along its normal before some stretch of its outline in view of one
+/// of `cameras` moves a pixel across itself (the motion along an edge leaves a mask as it is).
+/// Measured by a small step at points along each edge.
+fn offset_resolution(plane: &ReflectionPlane, cameras: &[&Camera]) -> f64 {
+    const POINTS_PER_EDGE: usize = 16;
+    let step = 1e-4 * (plane.width * plane.height).sqrt();
+    let n = plane.unit_normal();
+    let corners = plane.corners();
+    // Pixels the outline moves across itself per unit of offset, at most.
+    let mut rate = 0.0f64;
+    for camera in cameras {
+        for k in 0..4 {
+            let (a, b) = (corners[k], corners[(k + 1) % 4]);
+            for i in 0..POINTS_PER_EDGE {
+                let p = a + (b - a) * ((i as f64 + 0.5) / POINTS_PER_EDGE as f64);
+                let along = (b - a).normalize() * step;
+                let (Some(u), Some(moved), Some(ahead)) = (
+                    camera.image_point(p),
+                    camera.project(p + n * step),
+                    camera.project(p + along),
+                ) else {
+                    continue;
+                };
+                let Some(edge) = (ahead - u).try_normalize() else { continue };
+                let across = (moved - u) - edge * (moved - u).dot(edge);
+                rate = rate.max(across.length() / step);
+            }
+        }
+    }
+    if rate > 0.0 { 1.0 / rate } else { f64::INFINITY }
 }
 
 /// Offsets from the starting plane: along the normal, along the axis and the bitangent, log
@@ -316,6 +355,29 @@ mod tests {
         assert!((p.height - truth.height).abs() < 0.005 * truth.height, "height {}", p.height);
         assert_eq!(p.material, Material::Glass);
         assert!(p.normal.dot(truth.normal) > 0.0, "the front side is kept");
+    }
+
+    /// A camera straight in front of the rectangle at distance z: a step along the normal scales
+    /// the outline about the image centre, so the longer side's edges move fastest, by
+    /// f (w / 2) / z^2 pixels per unit of offset.
+    #[test]
+    fn the_offset_resolution_is_a_pixel_of_outline_motion() {
+        let plane =
+            ReflectionPlane::new(DVec3::ZERO, DVec3::Z, DVec3::X, 2.4, 1.4, Material::Glass);
+        let k = Intrinsics::from_fov_x(70f64.to_radians(), 320, 240);
+        let z = 3.0;
+        let camera =
+            Camera::new("front", k, Pose::look_at(DVec3::new(0.0, 0.0, z), DVec3::ZERO, DVec3::Y));
+        let expected = z * z / (k.fx * 1.2);
+        let got = offset_resolution(&plane, &[&camera]);
+        assert!((got / expected - 1.0).abs() < 1e-2, "{got} against {expected}");
+        // A camera that sees no edge pins nothing.
+        let inside = Camera::new(
+            "inside",
+            Intrinsics::from_fov_x(10f64.to_radians(), 32, 24),
+            Pose::look_at(DVec3::new(0.0, 0.0, 1.0), DVec3::ZERO, DVec3::Y),
+        );
+        assert_eq!(offset_resolution(&plane, &[&inside]), f64::INFINITY);
     }
 
     #[test]

@@ -1,6 +1,6 @@
 //! Pinhole cameras in the COLMAP/OpenCV convention: x right, y down, z forward,
 //! world-to-camera pose `x_cam = R x_world + t`, pixel centres at +0.5.
-use glam::{DMat3, DVec3};
+use glam::{DMat3, DVec2, DVec3};
 
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum CameraError {
@@ -180,6 +180,29 @@ impl Camera {
 
     pub fn height(&self) -> u32 {
         self.intrinsics.height
+    }
+
+    /// The continuous pixel position of world point `p`, or None when `p` is not in front of
+    /// the camera. The position may lie outside the image.
+    pub fn project(&self, p: DVec3) -> Option<DVec2> {
+        let q = self.pose.transform_point(p);
+        if q.z <= 0.0 {
+            return None;
+        }
+        let k = &self.intrinsics;
+        Some(DVec2::new(k.fx * q.x / q.z + k.cx, k.fy * q.y / q.z + k.cy))
+    }
+
+    /// The pixel position of world point `p` when it is in front of the camera and inside its
+    /// image.
+    pub fn image_point(&self, p: DVec3) -> Option<DVec2> {
+        let (w, h) = (f64::from(self.width()), f64::from(self.height()));
+        self.project(p).filter(|u| u.x >= 0.0 && u.y >= 0.0 && u.x < w && u.y < h)
+    }
+
+    /// Whether the camera sees world point `p` directly: in front of it and inside its image.
+    pub fn sees(&self, p: DVec3) -> bool {
+        self.image_point(p).is_some()
     }
 
     /// World-space unit ray direction through the centre of pixel `(x, y)`.

@@ -458,7 +458,7 @@ impl TrainingRun {
                 added.append(r);
             }
         }
-        self.trainer.add_planes(&init.planes, &added)
+        self.trainer.add_planes(&init.planes, &init.offset_limits, &added)
     }
 }
 

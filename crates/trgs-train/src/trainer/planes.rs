@@ -3,16 +3,22 @@
 use super::Trainer;
 use crate::checkpoint::PlaneMoments;
 use crate::perturb::{perturb_opacities, seen_through_planes};
-use crate::plane_adam::{PlaneRates, plane_adam};
+use crate::plane_adam::{OffsetLimit, PlaneRates, plane_adam};
 use crate::settings::Stage;
 use anyhow::{Context, Result};
 use trgs_core::reference::PlaneGrad;
 use trgs_core::scene::{Attribute, Gaussians, ReflectionPlane, attribute_widths};
 
 impl Trainer {
-    /// Add reflection planes and the Gaussians that come with them (their glass Gaussians and
+    /// Add reflection planes, the bounds on their offsets (`limits[i]` for `planes[i]`; free where
+    /// missing or None) and the Gaussians that come with them (their glass Gaussians and
     /// reflection seeds; zero moments) to the optimisation.
-    pub fn add_planes(&mut self, planes: &[ReflectionPlane], glass: &Gaussians<f32>) -> Result<()> {
+    pub fn add_planes(
+        &mut self,
+        planes: &[ReflectionPlane],
+        limits: &[Option<OffsetLimit>],
+        glass: &Gaussians<f32>,
+    ) -> Result<()> {
         let mut state = self.read_state()?;
         let n_old = state.gaussians.len();
         let g = &mut state.gaussians;
@@ -33,7 +39,10 @@ impl Trainer {
         let mut all = self.planes().to_vec();
         all.extend_from_slice(planes);
         self.gaussians.scene_mut().set_planes(&all).context("initialised planes")?;
-        self.plane_moments.resize(all.len(), PlaneMoments::default());
+        self.plane_moments.extend((0..planes.len()).map(|i| PlaneMoments {
+            offset_limit: limits.get(i).copied().flatten(),
+            ..PlaneMoments::default()
+        }));
         self.set_state(&state)
     }
 
