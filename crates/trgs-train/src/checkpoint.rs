@@ -333,6 +333,16 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, FormatError> {
             header.planes.len()
         )));
     }
+    for (k, mom) in header.plane_moments.iter().enumerate() {
+        if let Some(l) = &mom.offset_limit
+            && !l.is_valid()
+        {
+            return Err(bad(format!(
+                "plane {k}: offset limit {l:?} (expected a finite anchor and a finite tolerance \
+                 of at least 0)"
+            )));
+        }
+    }
     let gaussians = Gaussians {
         means,
         rotations,
@@ -461,5 +471,12 @@ mod tests {
         std::fs::write(&path, b"ply\nformat binary_little_endian 1.0\n").expect("foreign");
         let err = read_checkpoint(&path).expect_err("foreign").to_string();
         assert!(err.contains("not a trgs checkpoint"), "{err}");
+        // A hand-edited offset limit that would break the plane step is refused on reading.
+        let mut ck = sample();
+        ck.plane_moments[0].offset_limit =
+            Some(OffsetLimit { anchor: [0.0, 0.0, 0.0], tolerance: -0.01 });
+        write_checkpoint(&path, &ck).expect("write");
+        let err = read_checkpoint(&path).expect_err("negative tolerance").to_string();
+        assert!(err.contains("plane 0: offset limit") && err.contains(CHECKPOINT_FILE), "{err}");
     }
 }

@@ -39,6 +39,13 @@ pub struct OffsetLimit {
 }
 
 impl OffsetLimit {
+    /// A finite anchor and a finite tolerance of at least 0 (what [`Self::apply`] needs).
+    pub fn is_valid(&self) -> bool {
+        self.anchor.iter().all(|v| v.is_finite())
+            && self.tolerance.is_finite()
+            && self.tolerance >= 0.0
+    }
+
     /// `plane` moved along its normal back within the bounds, when it has left them.
     fn apply(&self, plane: &mut ReflectionPlane) {
         let n = plane.unit_normal();

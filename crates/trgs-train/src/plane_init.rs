@@ -184,9 +184,8 @@ pub fn initialise_planes(
                         r.cost_after
                     );
                     let tolerance = settings.offset_limit_px * r.offset_resolution;
-                    offset_limit = tolerance
-                        .is_finite()
-                        .then_some(OffsetLimit { anchor: r.plane.centre.to_array(), tolerance });
+                    let limit = OffsetLimit { anchor: r.plane.centre.to_array(), tolerance };
+                    offset_limit = limit.is_valid().then_some(limit);
                     plane = r.plane;
                     match offset_limit {
                         Some(l) => {

@@ -121,9 +121,9 @@ fn offset_resolution(plane: &ReflectionPlane, cameras: &[&Camera]) -> f64 {
     for camera in cameras {
         for k in 0..4 {
             let (a, b) = (corners[k], corners[(k + 1) % 4]);
+            let along = (b - a).normalize() * step;
             for i in 0..POINTS_PER_EDGE {
                 let p = a + (b - a) * ((i as f64 + 0.5) / POINTS_PER_EDGE as f64);
-                let along = (b - a).normalize() * step;
                 let (Some(u), Some(moved), Some(ahead)) = (
                     camera.image_point(p),
                     camera.project(p + n * step),
