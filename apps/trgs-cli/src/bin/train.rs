@@ -155,17 +155,25 @@ fn train(start: Start, feed: Option<&LiveFeed>) -> Result<()> {
             RunEvent::PlaneFailed { label, reason } => {
                 say(&bar, format!("plane {label}: not initialised: {reason}"));
             }
-            RunEvent::Evaluation(e) => say(
-                &bar,
-                format!(
-                    "step {}: PSNR {:.2} dB, SSIM {:.4} on the {} views ({:.0} s of training)",
-                    e.step,
-                    e.psnr,
-                    e.ssim,
-                    run.data().eval_views_name(),
-                    e.seconds
-                ),
-            ),
+            RunEvent::Evaluation(e) => {
+                // R0 is the one plane parameter the masks do not pin; show where it goes.
+                let r0: Vec<_> =
+                    run.trainer().planes().iter().map(|p| format!("{:.3}", p.r0())).collect();
+                let planes =
+                    if r0.is_empty() { String::new() } else { format!("; R0 {}", r0.join(", ")) };
+                say(
+                    &bar,
+                    format!(
+                        "step {}: PSNR {:.2} dB, SSIM {:.4} on the {} views ({:.0} s of \
+                         training){planes}",
+                        e.step,
+                        e.psnr,
+                        e.ssim,
+                        run.data().eval_views_name(),
+                        e.seconds
+                    ),
+                )
+            }
             RunEvent::CheckpointWritten { .. } => {}
             RunEvent::Finished(summary) => {
                 bar.finish();

@@ -205,6 +205,15 @@ impl Camera {
         self.image_point(p).is_some()
     }
 
+    /// Whether `p` is in front of the camera and inside its image grown by `margin` (a fraction
+    /// of the width and height) on every side: what a camera near this one, pointing nearly the
+    /// same way, may see.
+    pub fn nearly_sees(&self, p: DVec3, margin: f64) -> bool {
+        let (w, h) = (f64::from(self.width()), f64::from(self.height()));
+        let (mx, my) = (margin * w, margin * h);
+        self.project(p).is_some_and(|u| u.x >= -mx && u.y >= -my && u.x < w + mx && u.y < h + my)
+    }
+
     /// World-space unit ray direction through the centre of pixel `(x, y)`.
     pub fn pixel_ray(&self, x: u32, y: u32) -> DVec3 {
         let d = self.intrinsics.unproject(f64::from(x) + 0.5, f64::from(y) + 0.5);
@@ -260,5 +269,28 @@ mod tests {
         assert!(u_left < k.cx);
         assert!((pose.centre() - DVec3::new(0.0, 0.0, -5.0)).length() < 1e-12);
         assert!((pose.rotation.determinant() - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn nearly_sees_grows_the_image_by_the_margin_on_every_side() {
+        let k = Intrinsics::from_fov_x(1.0, 64, 48);
+        let camera =
+            Camera::new("c", k, Pose::look_at(DVec3::new(0.0, 0.0, -5.0), DVec3::ZERO, DVec3::Y));
+        // A point whose pixel is `du` pixels left of the image's left edge, at depth 5.
+        let left_of_image = |du: f64| {
+            let u = -du;
+            let x = (u - k.cx) / k.fx * 5.0;
+            // Camera x is world -x for this pose (see the test above).
+            DVec3::new(-x, 0.0, 0.0)
+        };
+        let inside = left_of_image(-3.0);
+        let just_out = left_of_image(3.0);
+        let far_out = left_of_image(10.0);
+        assert!(camera.sees(inside) && camera.nearly_sees(inside, 0.1));
+        assert!(!camera.sees(just_out) && camera.nearly_sees(just_out, 0.1), "6.4 px margin");
+        assert!(!camera.nearly_sees(far_out, 0.1));
+        assert!(camera.nearly_sees(far_out, 0.2));
+        assert!(!camera.nearly_sees(DVec3::new(0.0, 0.0, -10.0), 10.0), "behind the camera");
+        assert_eq!(camera.nearly_sees(just_out, 0.0), camera.sees(just_out));
     }
 }

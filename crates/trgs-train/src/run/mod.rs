@@ -45,7 +45,9 @@ use crate::data::{self, TrainingData};
 use crate::eval::{Evaluation, evaluate};
 use crate::init::{SeedPoint, gaussians_from_points, random_points};
 use crate::plane_init::{PlaneInitSettings, initialise_planes};
-use crate::reflection_seed::{ReflectedSpaceSeeds, mirrored_seeds, reflected_space_seeds};
+use crate::reflection_seed::{
+    ReflectedSpaceSeeds, UNSEEN_MARGIN, mirrored_seeds, reflected_space_seeds,
+};
 use crate::trainer::{StepStats, StepTimes, Trainer};
 use anyhow::{Context, Result, bail};
 use std::collections::VecDeque;
@@ -437,7 +439,7 @@ impl TrainingRun {
         let mut added = init.glass;
         if !self.config().no_reflection_seeds {
             let cameras: Vec<_> = self.data.train.iter().map(|v| v.camera.clone()).collect();
-            let seeds = mirrored_seeds(&gaussians, &init.planes, &cameras);
+            let seeds = mirrored_seeds(&gaussians, &init.planes, &cameras, UNSEEN_MARGIN);
             let views: Vec<_> = self.data.train.iter().map(|v| (&v.camera, &v.image)).collect();
             let space = reflected_space_seeds(
                 &views,
