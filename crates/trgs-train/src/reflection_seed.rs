@@ -32,8 +32,8 @@ pub const UNSEEN_MARGIN: f64 = 0.1;
 
 /// Copies of the primary Gaussians of `g` behind each of `planes` that one of `cameras` sees
 /// through the plane's rectangle, mirrored to its front where none of `cameras` nearly sees them
-/// (within `margin`, see [`Camera::nearly_sees`]). The copies have the originals' opacity, scale and DC colour; the degree-1 band is
-/// mirrored with them and higher bands start at zero.
+/// (within `margin`, see [`Camera::nearly_sees`]). The copies have the originals' opacity, scale
+/// and DC colour; the degree-1 band is mirrored with them and higher bands start at zero.
 pub fn mirrored_seeds(
     g: &Gaussians<f32>,
     planes: &[ReflectionPlane],

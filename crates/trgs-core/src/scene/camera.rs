@@ -196,8 +196,7 @@ impl Camera {
     /// The pixel position of world point `p` when it is in front of the camera and inside its
     /// image.
     pub fn image_point(&self, p: DVec3) -> Option<DVec2> {
-        let (w, h) = (f64::from(self.width()), f64::from(self.height()));
-        self.project(p).filter(|u| u.x >= 0.0 && u.y >= 0.0 && u.x < w && u.y < h)
+        self.project(p).filter(|&u| self.in_image(u, 0.0))
     }
 
     /// Whether the camera sees world point `p` directly: in front of it and inside its image.
@@ -209,9 +208,15 @@ impl Camera {
     /// of the width and height) on every side: what a camera near this one, pointing nearly the
     /// same way, may see.
     pub fn nearly_sees(&self, p: DVec3, margin: f64) -> bool {
+        self.project(p).is_some_and(|u| self.in_image(u, margin))
+    }
+
+    /// Whether pixel position `u` lies in the image grown by `margin` (a fraction of the width
+    /// and height) on every side.
+    fn in_image(&self, u: DVec2, margin: f64) -> bool {
         let (w, h) = (f64::from(self.width()), f64::from(self.height()));
         let (mx, my) = (margin * w, margin * h);
-        self.project(p).is_some_and(|u| u.x >= -mx && u.y >= -my && u.x < w + mx && u.y < h + my)
+        u.x >= -mx && u.y >= -my && u.x < w + mx && u.y < h + my
     }
 
     /// World-space unit ray direction through the centre of pixel `(x, y)`.

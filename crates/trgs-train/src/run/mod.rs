@@ -45,9 +45,7 @@ use crate::data::{self, TrainingData};
 use crate::eval::{Evaluation, evaluate};
 use crate::init::{SeedPoint, gaussians_from_points, random_points};
 use crate::plane_init::{PlaneInitSettings, initialise_planes};
-use crate::reflection_seed::{
-    ReflectedSpaceSeeds, UNSEEN_MARGIN, mirrored_seeds, reflected_space_seeds,
-};
+use crate::reflection_seed::{ReflectedSpaceSeeds, mirrored_seeds, reflected_space_seeds};
 use crate::trainer::{StepStats, StepTimes, Trainer};
 use anyhow::{Context, Result, bail};
 use std::collections::VecDeque;
@@ -439,13 +437,15 @@ impl TrainingRun {
         let mut added = init.glass;
         if !self.config().no_reflection_seeds {
             let cameras: Vec<_> = self.data.train.iter().map(|v| v.camera.clone()).collect();
-            let seeds = mirrored_seeds(&gaussians, &init.planes, &cameras, UNSEEN_MARGIN);
+            // One margin for both seed sources.
+            let space_settings = ReflectedSpaceSeeds::default();
+            let seeds = mirrored_seeds(&gaussians, &init.planes, &cameras, space_settings.margin);
             let views: Vec<_> = self.data.train.iter().map(|v| (&v.camera, &v.image)).collect();
             let space = reflected_space_seeds(
                 &views,
                 &init.planes,
                 self.data.extent,
-                &ReflectedSpaceSeeds::default(),
+                &space_settings,
                 gaussians.sh_degree,
                 &mut self.rng,
             );
