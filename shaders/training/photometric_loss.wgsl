@@ -48,7 +48,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     terms[3u * p] = vec4<f32>(g_mx, 0.0);
     terms[3u * p + 1u] = vec4<f32>(-g_s * s / b2, 0.0);
     terms[3u * p + 2u] = vec4<f32>(g_s * 2.0 * a1 * inv_b, 0.0);
-    let d = rendered[p].xyz - unpack4x8unorm(target_image[p]).xyz;
+    let y = unpack4x8unorm(target_image[p]);
+    let d = (rendered[p].xyz - y.xyz) * y.w;
     let ones = vec3<f32>(1.0);
     stats[2u * p] = vec4<f32>(dot(abs(d), ones), dot(s, ones), dot(d, d), 0.0);
 }

@@ -1,7 +1,8 @@
 // Stage `photometric_loss`, pass 4 of 4 (twin: trgs_core::reference::photometric_loss): the
 // column blur of pass 3's rows gives G*g_mx, G*g_mxx, G*g_mxy, and dL/dx = G*g_mx + 2 x (G*g_mxx)
-// + y (G*g_mxy) plus the L1 term (1 - lambda) sign(x - y) / samples. It writes (overwrites) the
-// colour gradient layer.
+// + y (G*g_mxy) plus the L1 term (1 - lambda) sign(x - y) / samples, with x and y the images
+// times the coverage c and the result times c (zero where the photo has no source). It writes
+// (overwrites) the colour gradient layer.
 #include "shared/common.wgsl"
 
 @group(0) @binding(0) var<storage, read> params: LossParams;
@@ -30,8 +31,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
     }
     let p = gid.y * params.width + gid.x;
-    let x = rendered[p].xyz;
-    let y = unpack4x8unorm(target_image[p]).xyz;
+    let photo = unpack4x8unorm(target_image[p]);
+    let c = photo.w;
+    let x = rendered[p].xyz * c;
+    let y = photo.xyz * c;
     let l1 = (1.0 - params.lambda_dssim) * sign(x - y) * params.inv_samples;
-    grad_color[p] = vec4<f32>(l1 + b[0] + 2.0 * x * b[1] + y * b[2], 0.0);
+    grad_color[p] = vec4<f32>(c * (l1 + b[0] + 2.0 * x * b[1] + y * b[2]), 0.0);
 }

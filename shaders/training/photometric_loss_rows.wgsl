@@ -2,13 +2,15 @@
 // blur of SSIM's five moments x, y, x^2, y^2, x y (RGB each) with the 11-tap window; samples
 // outside the image are zero (3DGS's conv2d with zero padding). One thread per pixel and no
 // workgroup memory: lavapipe runs a workgroup barrier as a switch of every invocation's state,
-// which made a shared-memory version several times slower than these four plain passes.
+// which made a shared-memory version several times slower than these four plain passes. Both
+// images are read multiplied by the target's coverage (its alpha: 0 where the photo has no
+// source), so such a pixel is black in both and adds nothing.
 #include "shared/common.wgsl"
 
 @group(0) @binding(0) var<storage, read> params: LossParams;
 // The frame's colour layer (C, -).
 @group(0) @binding(1) var<storage, read> rendered: array<vec4<f32>>;
-// The view's image, 8-bit RGBA (unpack4x8unorm).
+// The view's image, 8-bit RGBA (unpack4x8unorm; alpha: coverage).
 @group(0) @binding(2) var<storage, read> target_image: array<u32>;
 // Per pixel: the row-blurred x, y, x^2, y^2, x y (RGB, 0).
 @group(0) @binding(3) var<storage, read_write> rows: array<vec4<f32>>;
@@ -26,8 +28,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             continue;
         }
         let j = gid.y * params.width + u32(qx);
-        let a = rendered[j].xyz;
-        let b = unpack4x8unorm(target_image[j]).xyz;
+        let y = unpack4x8unorm(target_image[j]);
+        let a = rendered[j].xyz * y.w;
+        let b = y.xyz * y.w;
         s[0] += w[t] * a;
         s[1] += w[t] * b;
         s[2] += w[t] * a * a;

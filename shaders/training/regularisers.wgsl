@@ -20,7 +20,8 @@
 // (D_t, V, M, 0)
 @group(0) @binding(3) var<storage, read> geometry: array<vec4<f32>>;
 @group(0) @binding(4) var<storage, read> hit: array<u32>;
-// Glass labels of the view (> 0: glass); read only when weight_mask > 0.
+// Glass labels of the view (> 0: glass; UNCOVERED_LABEL: no source in the photo, no label);
+// read only when weight_mask > 0.
 @group(0) @binding(5) var<storage, read> annotation: array<u32>;
 @group(0) @binding(6) var<storage, read_write> grad_transmission: array<vec4<f32>>;
 @group(0) @binding(7) var<storage, read_write> grad_geometry: array<vec4<f32>>;
@@ -101,7 +102,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         sum.x = geometry[p].y;
         g_geometry.y = params.weight_depth * params.inv_pixels;
     }
-    if params.weight_mask > 0.0 {
+    if params.weight_mask > 0.0 && annotation[p] != UNCOVERED_LABEL {
         let d = geometry[p].z - select(0.0, 1.0, annotation[p] > 0u);
         sum.z = abs(d);
         g_geometry.z = params.weight_mask * sign(d) * params.inv_pixels;

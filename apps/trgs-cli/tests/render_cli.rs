@@ -32,7 +32,11 @@ fn renders_pngs_and_exrs_from_a_camera_path() {
     second.name = "second.png".into();
     let frames: Vec<TransformsFrame> = [s.camera.clone(), second]
         .into_iter()
-        .map(|camera| TransformsFrame { image_path: PathBuf::from(&camera.name), camera })
+        .map(|camera| TransformsFrame {
+            image_path: PathBuf::from(&camera.name),
+            camera,
+            undistortion: None,
+        })
         .collect();
     write_transforms(&dir.join("path.json"), &frames).expect("transforms");
     let out = dir.join("out");
@@ -92,7 +96,11 @@ fn mirror_view_is_the_raw_reflection_inside_the_rectangle() {
     behind.name = "behind.png".into();
     let frames: Vec<TransformsFrame> = [front.clone(), behind]
         .into_iter()
-        .map(|camera| TransformsFrame { image_path: PathBuf::from(&camera.name), camera })
+        .map(|camera| TransformsFrame {
+            image_path: PathBuf::from(&camera.name),
+            camera,
+            undistortion: None,
+        })
         .collect();
     write_transforms(&dir.join("path.json"), &frames).expect("transforms");
     let out = dir.join("out");

@@ -11,6 +11,7 @@ pub mod fit;
 pub mod fixtures;
 pub mod image;
 pub mod io;
+pub mod lens;
 pub mod metrics;
 pub mod plane_math;
 pub mod reference;

@@ -37,6 +37,9 @@ pub struct View {
     pub image: Image<f32>,
     /// Glass-mask labels (0: no glass, k: plane label k), nearest-neighbour resized.
     pub mask: Option<Image<u8>>,
+    /// Which pixels the photo covers (1) and which it does not (0: the border of an undistorted
+    /// photo, black in `image`), left out of the loss and the metrics. None: every pixel.
+    pub covered: Option<Image<u8>>,
 }
 
 /// The loaded scene.
@@ -51,24 +54,60 @@ pub struct TrainingData {
     pub centre: DVec3,
     /// The material of each plane label (planes.json; glass where it says nothing).
     pub materials: Vec<(u32, Material)>,
+    /// What was done to photos through distorting lenses, one line per lens, for the run's log.
+    pub lens_notes: Vec<String>,
 }
 
 impl TrainingData {
-    /// Load every view of `folder` at `resolution`.
+    /// Load every view of `folder` at `resolution` (of its pinhole camera: photos through a
+    /// distorting lens are downscaled as they are, then undistorted into the pinhole view).
     pub fn load(folder: &SceneFolder, resolution: Resolution) -> Result<Self> {
         let mut train = Vec::new();
         let mut test = Vec::new();
+        let mut lenses: Vec<LensNote> = Vec::new();
         for (i, spec) in folder.views.iter().enumerate() {
-            let image = folder.load_image(i)?;
-            let mask = folder.load_mask(i)?;
-            let (w, h) = target_size(image.width, image.height, resolution)
+            let photo = folder.load_image(i)?;
+            let labels = folder.load_mask(i)?;
+            let (w, h) = target_size(spec.camera.width(), spec.camera.height(), resolution)
                 .with_context(|| format!("resizing {}", spec.image_path.display()))?;
             let mut camera = spec.camera.clone();
             camera.intrinsics = camera.intrinsics.resized(w, h);
-            let view = View {
-                camera,
-                image: resize_area(&image, w, h),
-                mask: mask.map(|m| resize_nearest(&m, w, h)),
+            let view = match &spec.undistortion {
+                None => View {
+                    camera,
+                    image: resize_area(&photo, w, h),
+                    mask: labels.map(|m| resize_nearest(&m, w, h)),
+                    covered: None,
+                },
+                Some(u) => {
+                    let u = u.resized(w, h);
+                    let (pw, ph) = u.photo_size();
+                    let context = || format!("undistorting {}", spec.image_path.display());
+                    let (image, covered) =
+                        u.warp_image(&resize_area(&photo, pw, ph)).with_context(context)?;
+                    let mask = match labels {
+                        Some(m) => {
+                            Some(u.warp_labels(&resize_nearest(&m, pw, ph)).with_context(context)?)
+                        }
+                        None => None,
+                    };
+                    let blank = covered.data.iter().filter(|&&c| c == 0).count();
+                    match lenses.iter_mut().find(|n| {
+                        n.lens == u.lens.model && n.describe == u.lens.distortion.describe()
+                    }) {
+                        Some(n) => n.views += 1,
+                        None => lenses.push(LensNote {
+                            lens: u.lens.model.clone(),
+                            describe: u.lens.distortion.describe(),
+                            photo: spec.photo_size(),
+                            pinhole: (spec.camera.width(), spec.camera.height()),
+                            views: 1,
+                            blank,
+                            pixels: covered.data.len(),
+                        }),
+                    }
+                    View { camera, image, mask, covered: (blank > 0).then_some(covered) }
+                }
             };
             if folder.is_test(&spec.camera.name) {
                 test.push(view);
@@ -89,7 +128,9 @@ impl TrainingData {
             .iter()
             .map(|(p, c)| (DVec3::from_array(*p), c.map(|v| f64::from(v) / 255.0)))
             .collect();
-        let mut data = Self { train, test, points, extent, centre, materials: Vec::new() };
+        let lens_notes = lenses.iter().map(LensNote::line).collect();
+        let mut data =
+            Self { train, test, points, extent, centre, materials: Vec::new(), lens_notes };
         data.materials = data.mask_labels().into_iter().map(|l| (l, folder.material(l))).collect();
         Ok(data)
     }
@@ -140,6 +181,42 @@ impl TrainingData {
         labels.sort_unstable();
         labels.dedup();
         labels
+    }
+}
+
+/// What the loader did to the photos of one lens, for the run's log.
+struct LensNote {
+    lens: String,
+    describe: String,
+    photo: (u32, u32),
+    pinhole: (u32, u32),
+    views: usize,
+    /// Pixels without a source in the first view (at the training resolution), of `pixels`.
+    blank: usize,
+    pixels: usize,
+}
+
+impl LensNote {
+    fn line(&self) -> String {
+        let blank = if self.blank == 0 {
+            "every pixel has a source".to_string()
+        } else {
+            format!(
+                "{} of {} pixels have no source and are left out of the loss",
+                self.blank, self.pixels
+            )
+        };
+        format!(
+            "camera model {} ({}) on {} views: undistorted from {}x{} photos into {}x{} pinhole \
+             views, as colmap image_undistorter would; {blank}",
+            self.lens,
+            self.describe,
+            self.views,
+            self.photo.0,
+            self.photo.1,
+            self.pinhole.0,
+            self.pinhole.1
+        )
     }
 }
 

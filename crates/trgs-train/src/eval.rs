@@ -5,6 +5,7 @@ use crate::data::{TrainingData, View, resize_area};
 use anyhow::{Context, Result};
 use std::path::Path;
 use std::time::Instant;
+use trgs_core::Image;
 use trgs_core::io::{read_planes_json, read_rgb_image};
 use trgs_core::metrics::{psnr, ssim};
 use trgs_core::scene::ReflectionPlane;
@@ -55,7 +56,7 @@ pub fn evaluate(
 ) -> Result<Evaluation> {
     let mut rows = Vec::new();
     for v in data.eval_views() {
-        let color = model.layer(v, Layer::Color)?;
+        let color = covered_only(model.layer(v, Layer::Color)?, v.covered.as_ref());
         rows.push((v.camera.name.clone(), psnr(&color, &v.image)?, ssim(&color, &v.image)?));
     }
     let n = rows.len().max(1) as f64;
@@ -66,6 +67,20 @@ pub fn evaluate(
         ssim: rows.iter().map(|r| r.2).sum::<f64>() / n,
         views: rows,
     })
+}
+
+/// `image` black where the photo has no source (as the view's image is there), so that the
+/// metrics, like the loss, compare only what the photo shows.
+fn covered_only(mut image: Image<f32>, covered: Option<&Image<u8>>) -> Image<f32> {
+    if let Some(c) = covered {
+        let ch = image.channels as usize;
+        for (i, v) in image.data.iter_mut().enumerate() {
+            if c.data[i / ch] == 0 {
+                *v = 0.0;
+            }
+        }
+    }
+    image
 }
 
 /// Frames per second of full renders (every layer, as the renderer produces them) of the

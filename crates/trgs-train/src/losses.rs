@@ -13,7 +13,7 @@
 //! sums (32 bytes per strip of LOSS_STRIP pixels: 32 KB at 256x256) come back, for the step's
 //! statistics.
 use crate::kernels::TRAINING_KERNELS;
-use crate::layout::{LOSS_STRIP, LossParams};
+use crate::layout::{LOSS_STRIP, LossParams, UNCOVERED_LABEL};
 use trgs_core::Image;
 use trgs_core::reference::RegulariserWeights;
 use trgs_render::toolkit::FrameStages;
@@ -29,6 +29,8 @@ pub enum LossError {
     Channels { name: String, channels: u32 },
     #[error("glass mask of {name}: {got_w}x{got_h}, its image is {want_w}x{want_h}")]
     MaskSize { name: String, got_w: u32, got_h: u32, want_w: u32, want_h: u32 },
+    #[error("coverage of {name}: {got_w}x{got_h}, its image is {want_w}x{want_h}")]
+    CoverageSize { name: String, got_w: u32, got_h: u32, want_w: u32, want_h: u32 },
     #[error("target image {name} is {got_w}x{got_h}, the rendered frame {want_w}x{want_h}")]
     FrameSize { name: String, got_w: u32, got_h: u32, want_w: u32, want_h: u32 },
     #[error("the frame has not been rendered")]
@@ -45,7 +47,9 @@ const ROWS_BYTES_PER_PIXEL: u64 = 80;
 
 /// A view's target image and glass labels on the GPU. The image is stored as 8-bit RGBA (4 bytes
 /// a pixel, a quarter of f32 RGBA), as 3DGS keeps its 8-bit images: a dataset of a few hundred
-/// views then fits next to the model.
+/// views then fits next to the model. Alpha is the pixel's coverage: 1 where the photo has a
+/// source, 0 where it has none (the border of an undistorted photo), which the losses leave out
+/// (`photometric_loss_covered`; the label is then [`UNCOVERED_LABEL`]).
 #[derive(Debug)]
 pub struct GpuTarget {
     name: String,
@@ -56,20 +60,38 @@ pub struct GpuTarget {
 }
 
 impl GpuTarget {
-    /// Upload `image` (RGB) and its glass labels `mask` (same size), if any.
+    /// Upload `image` (RGB), its glass labels `mask` and its coverage `covered` (same size; None:
+    /// every pixel), if any.
     pub fn upload(
         ctx: &GpuContext,
         name: &str,
         image: &Image<f32>,
         mask: Option<&Image<u8>>,
+        covered: Option<&Image<u8>>,
     ) -> Result<Self, LossError> {
         if image.channels != 3 {
             return Err(LossError::Channels { name: name.to_string(), channels: image.channels });
         }
+        if let Some(c) =
+            covered.filter(|c| (c.width, c.height, c.channels) != (image.width, image.height, 1))
+        {
+            return Err(LossError::CoverageSize {
+                name: name.to_string(),
+                got_w: c.width,
+                got_h: c.height,
+                want_w: image.width,
+                want_h: image.height,
+            });
+        }
+        let is_covered = |i: usize| covered.is_none_or(|c| c.data[i] != 0);
         let rgb: Vec<u32> = image
             .data
             .chunks(3)
-            .map(|c| u32::from_le_bytes([unorm8(c[0]), unorm8(c[1]), unorm8(c[2]), 0]))
+            .enumerate()
+            .map(|(i, c)| {
+                let alpha = if is_covered(i) { 255 } else { 0 };
+                u32::from_le_bytes([unorm8(c[0]), unorm8(c[1]), unorm8(c[2]), alpha])
+            })
             .collect();
         let annotation = match mask {
             Some(m) if (m.width, m.height) != (image.width, image.height) || m.channels != 1 => {
@@ -82,7 +104,12 @@ impl GpuTarget {
                 });
             }
             Some(m) => {
-                let labels: Vec<u32> = m.data.iter().map(|&v| u32::from(v)).collect();
+                let labels: Vec<u32> = m
+                    .data
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &v)| if is_covered(i) { u32::from(v) } else { UNCOVERED_LABEL })
+                    .collect();
                 Some(gpu::storage_init(ctx, &format!("trgs.target.{name}.annotation"), &labels))
             }
             None => None,

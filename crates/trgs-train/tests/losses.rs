@@ -1,10 +1,11 @@
 //! The GPU loss stages (`photometric_loss`, `regularisers`) against their f64 twins in
 //! `trgs_core::reference`, on random layers of sizes that do and do not fill the 16x16 workgroups
-//! (one pixel included), with and without glass labels. Every gradient buffer starts
+//! (one pixel included), with and without glass labels, with every pixel covered by the photo
+//! and with a ragged uncovered border (an undistorted photo's). Every gradient buffer starts
 //! poison-filled, so a pixel a kernel forgets to write fails the comparison.
 use trgs_core::Image;
 use trgs_core::reference::{
-    DSSIM_LAMBDA, RegulariserInputs, RegulariserWeights, photometric_loss, regularisers,
+    DSSIM_LAMBDA, RegulariserInputs, RegulariserWeights, photometric_loss_covered, regularisers,
 };
 use trgs_core::rng::Rng;
 use trgs_render::toolkit::gpu::{self, Recorder};
@@ -24,6 +25,8 @@ struct Layers {
     geometry: Image<f32>,
     hit: Image<u32>,
     annotation: Image<u8>,
+    /// A ragged border without a source, for the runs with `partial` coverage.
+    covered: Image<u8>,
 }
 
 fn random(w: u32, h: u32, channels: u32, rng: &mut Rng) -> Image<f32> {
@@ -55,6 +58,11 @@ fn layers(w: u32, h: u32, rng: &mut Rng) -> Layers {
     }
     let mut annotation = Image::<u8>::new(w, h, 1);
     annotation.data.iter_mut().for_each(|v| *v = u8::from(rng.uniform() < 0.5));
+    let mut covered = Image::<u8>::new(w, h, 1);
+    for (i, v) in covered.data.iter_mut().enumerate() {
+        let (x, y) = (i as u32 % w, i as u32 / w);
+        *v = u8::from(x > (y * 7) % 4 && y + 2 < h);
+    }
     Layers {
         width: w,
         height: h,
@@ -67,6 +75,7 @@ fn layers(w: u32, h: u32, rng: &mut Rng) -> Layers {
         geometry: random(w, h, 3, rng),
         hit,
         annotation,
+        covered,
     }
 }
 
@@ -111,8 +120,17 @@ fn relative_error(gpu: &[f32], twin: &[f64]) -> f64 {
     gpu.iter().zip(twin).map(|(&g, &t)| (f64::from(g) - t).abs()).fold(0.0, f64::max) / scale
 }
 
-fn check(ctx: &GpuContext, kernels: &mut LossKernels, l: &Layers, labelled: bool, planes: bool) {
-    let tag = format!("{}x{} labels {labelled} planes {planes}", l.width, l.height);
+fn check(
+    ctx: &GpuContext,
+    kernels: &mut LossKernels,
+    l: &Layers,
+    labelled: bool,
+    planes: bool,
+    partial: bool,
+) {
+    let tag =
+        format!("{}x{} labels {labelled} planes {planes} partial {partial}", l.width, l.height);
+    let covered = partial.then_some(&l.covered);
     let pixels = u64::from(l.width * l.height);
     let up = |name: &str, data: &[[f32; 4]]| gpu::storage_init(ctx, name, data);
     let color = up("test.color", &vec4s(&[&l.color]));
@@ -130,7 +148,8 @@ fn check(ctx: &GpuContext, kernels: &mut LossKernels, l: &Layers, labelled: bool
         hit: &hit,
     };
     let target =
-        GpuTarget::upload(ctx, "test", &l.target, labelled.then_some(&l.annotation)).expect("rgb");
+        GpuTarget::upload(ctx, "test", &l.target, labelled.then_some(&l.annotation), covered)
+            .expect("rgb");
     let poisoned = |name: &str, bytes: u64| gpu::storage(ctx, name, bytes);
     let grads = LayerGrads {
         color: poisoned("test.g.color", pixels * 16),
@@ -154,8 +173,8 @@ fn check(ctx: &GpuContext, kernels: &mut LossKernels, l: &Layers, labelled: bool
     let rgb = |v: &[[f32; 4]]| -> Vec<f32> { v.iter().flat_map(|p| [p[0], p[1], p[2]]).collect() };
 
     // photometric_loss
-    let twin =
-        photometric_loss(&f64s(&l.color), &f64s(&l.target), DSSIM_LAMBDA).expect("same size");
+    let twin = photometric_loss_covered(&f64s(&l.color), &f64s(&l.target), covered, DSSIM_LAMBDA)
+        .expect("same size");
     let g_color = read(&grads.color);
     let err = relative_error(&rgb(&g_color), &twin.grad.data);
     assert!(err < 1e-5, "{tag}: dL/dC relative error {err:e}");
@@ -167,12 +186,15 @@ fn check(ctx: &GpuContext, kernels: &mut LossKernels, l: &Layers, labelled: bool
     ] {
         assert!((got - want).abs() <= 1e-5 * want.abs().max(1.0), "{tag}: {name} {got} vs {want}");
     }
+    let is_covered = |i: usize| covered.is_none_or(|c| c.data[i / 3] != 0);
     let mse = l
         .color
         .data
         .iter()
         .zip(&l.target.data)
-        .map(|(&a, &b)| f64::from(a - b).powi(2))
+        .enumerate()
+        .filter(|(i, _)| is_covered(*i))
+        .map(|(_, (&a, &b))| f64::from(a - b).powi(2))
         .sum::<f64>()
         / (3 * pixels) as f64;
     assert!((values.mse - mse).abs() <= 1e-5 * mse, "{tag}: mse {} vs {mse}", values.mse);
@@ -200,6 +222,7 @@ fn check(ctx: &GpuContext, kernels: &mut LossKernels, l: &Layers, labelled: bool
             mask: &m,
             hit: &l.hit,
             annotation: labelled.then_some(&l.annotation),
+            covered,
         },
         WEIGHTS,
     );
@@ -237,9 +260,10 @@ fn gpu_losses_match_twins() {
     // 64 strips, the last one partly full, and its last strip is partial too.
     for (w, h) in [(37, 29), (16, 16), (1, 1), (70, 3), (64, 48), (150, 61)] {
         let l = layers(w, h, &mut rng);
-        check(&ctx, &mut kernels, &l, true, true);
-        check(&ctx, &mut kernels, &l, false, true);
-        check(&ctx, &mut kernels, &l, false, false);
+        check(&ctx, &mut kernels, &l, true, true, false);
+        check(&ctx, &mut kernels, &l, false, true, false);
+        check(&ctx, &mut kernels, &l, false, false, false);
+        check(&ctx, &mut kernels, &l, true, true, true);
     }
 }
 
@@ -248,10 +272,12 @@ fn a_target_of_the_wrong_shape_is_refused() {
     let ctx = GpuContext::new().expect("adapter");
     let mut rng = Rng::new(6);
     let grey = random(8, 8, 1, &mut rng);
-    let err = GpuTarget::upload(&ctx, "grey.png", &grey, None).expect_err("one channel");
+    let err = GpuTarget::upload(&ctx, "grey.png", &grey, None, None).expect_err("one channel");
     assert!(err.to_string().contains("grey.png"), "{err}");
     let rgb = random(8, 8, 3, &mut rng);
     let mask = Image::<u8>::new(8, 7, 1);
-    let err = GpuTarget::upload(&ctx, "view.png", &rgb, Some(&mask)).expect_err("mask size");
+    let err = GpuTarget::upload(&ctx, "view.png", &rgb, Some(&mask), None).expect_err("mask size");
     assert!(err.to_string().contains("8x7"), "{err}");
+    let err = GpuTarget::upload(&ctx, "view.png", &rgb, None, Some(&mask)).expect_err("coverage");
+    assert!(err.to_string().contains("coverage of view.png: 8x7"), "{err}");
 }

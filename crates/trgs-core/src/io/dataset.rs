@@ -17,14 +17,28 @@ use super::transforms::{
     TransformsFrame, name_by_relative_path_if_needed, read_transforms, transforms_point_cloud,
 };
 use crate::image::Image;
+use crate::lens::Undistortion;
 use crate::scene::{Camera, Material};
 
 /// One training or test view: its camera (named by the image), its image and its glass mask.
+/// A photo through a distorting lens has an `undistortion`, and its camera is the pinhole view
+/// the photo is resampled into; the files themselves are the photo's own size.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ViewSpec {
     pub camera: Camera,
     pub image_path: PathBuf,
     pub mask_path: Option<PathBuf>,
+    pub undistortion: Option<Undistortion>,
+}
+
+impl ViewSpec {
+    /// The size of the image file (and mask): the photo's, before any undistortion.
+    pub fn photo_size(&self) -> (u32, u32) {
+        match &self.undistortion {
+            Some(u) => u.photo_size(),
+            None => (self.camera.width(), self.camera.height()),
+        }
+    }
 }
 
 /// Which of a scene folder's views a command works on, by its test split.
@@ -105,11 +119,13 @@ impl SceneFolder {
                 Some(ply) => read_point_cloud_ply(&ply)?,
                 None => Vec::new(),
             };
-            (frames.into_iter().map(|f| (f.camera, f.image_path)).collect(), points)
+            (frames.into_iter().map(|f| (f.camera, f.image_path, f.undistortion)).collect(), points)
         } else if root.join("transforms_train.json").is_file() {
             let (frames, tests) = read_blender_split_files(root)?;
             split_file_tests = tests;
-            (frames.into_iter().map(|f| (f.camera, f.image_path)).collect(), Vec::new())
+            let cameras =
+                frames.into_iter().map(|f| (f.camera, f.image_path, f.undistortion)).collect();
+            (cameras, Vec::new())
         } else {
             return Err(FormatError::new(
                 root,
@@ -127,7 +143,7 @@ impl SceneFolder {
 
         let masks_dir = root.join("glass_masks");
         let mut views = Vec::with_capacity(cameras.len());
-        for (camera, image_path) in cameras {
+        for (camera, image_path, undistortion) in cameras {
             if !image_path.is_file() {
                 return Err(FormatError::new(
                     &image_path,
@@ -135,7 +151,7 @@ impl SceneFolder {
                 ));
             }
             let mask_path = mask_path(&masks_dir, &camera.name);
-            views.push(ViewSpec { camera, image_path, mask_path });
+            views.push(ViewSpec { camera, image_path, mask_path, undistortion });
         }
         views.sort_by(|a, b| a.camera.name.cmp(&b.camera.name));
         if let Some(w) = views.windows(2).find(|w| w[0].camera.name == w[1].camera.name) {
@@ -172,11 +188,12 @@ impl SceneFolder {
         })
     }
 
-    /// The RGB image of view `i`, which must have its camera's size.
+    /// The RGB image file of view `i` as it is (the photo's own size, distorted if its lens
+    /// distorts: [`ViewSpec::undistortion`] resamples it).
     pub fn load_image(&self, i: usize) -> Result<Image<f32>, FormatError> {
         let view = self.view(i)?;
         let image = read_rgb_image(&view.image_path)?;
-        let (w, h) = (view.camera.width(), view.camera.height());
+        let (w, h) = view.photo_size();
         if (image.width, image.height) != (w, h) {
             let problem = format!(
                 "the image is {}x{} but its camera expects {w}x{h} (images must match the camera model; \
@@ -188,13 +205,12 @@ impl SceneFolder {
         Ok(image)
     }
 
-    /// The glass mask of view `i`, if it has one.
+    /// The glass mask of view `i`, if it has one, at the photo's own size.
     pub fn load_mask(&self, i: usize) -> Result<Option<Image<u8>>, FormatError> {
         let view = self.view(i)?;
+        let (w, h) = view.photo_size();
         match &view.mask_path {
-            Some(path) => {
-                read_glass_mask(path, view.camera.width(), view.camera.height()).map(Some)
-            }
+            Some(path) => read_glass_mask(path, w, h).map(Some),
             None => Ok(None),
         }
     }
@@ -226,7 +242,7 @@ fn colmap_dir(root: &Path) -> Option<PathBuf> {
     [root.join("sparse").join("0"), root.join("sparse")].into_iter().find(|d| has_model(d))
 }
 
-type Cameras = Vec<(Camera, PathBuf)>;
+type Cameras = Vec<(Camera, PathBuf, Option<Undistortion>)>;
 type Points = Vec<([f64; 3], [u8; 3])>;
 
 fn open_colmap(root: &Path, sparse: &Path) -> Result<(Cameras, Points), FormatError> {
@@ -237,14 +253,16 @@ fn open_colmap(root: &Path, sparse: &Path) -> Result<(Cameras, Points), FormatEr
         sparse.join("cameras.txt")
     };
     let images_dir = root.join("images");
-    let mut cameras = Vec::with_capacity(model.images.len());
-    for image in &model.images {
-        // `camera` cannot know the file; name the one it came from.
-        let camera = model
-            .camera(image)
-            .map_err(|e| FormatError { path: cameras_file.clone(), problem: e.problem })?;
-        cameras.push((camera, images_dir.join(&image.name)));
-    }
+    // `views` cannot know the file; name the one it came from.
+    let views = model
+        .views()
+        .map_err(|e| FormatError { path: cameras_file.clone(), problem: e.problem })?;
+    let cameras = model
+        .images
+        .iter()
+        .zip(views)
+        .map(|(image, (camera, undistortion))| (camera, images_dir.join(&image.name), undistortion))
+        .collect();
     let points = model.points.iter().map(|p| (p.xyz, p.rgb)).collect();
     Ok((cameras, points))
 }
@@ -430,15 +448,23 @@ mod tests {
     }
 
     #[test]
-    fn distorted_colmap_camera_names_the_cameras_file() {
+    fn distorted_colmap_camera_opens_as_its_pinhole_view() {
         let root = colmap_scene("ds-opencv");
         let sparse = root.join("sparse/0");
         let mut model = ColmapModel::read(&sparse).expect("read");
         model.cameras[0].model = "OPENCV".into();
         model.cameras[0].params = vec![5.0, 5.0, 2.0, 1.5, 0.1, 0.0, 0.0, 0.0];
         model.write_binary(&sparse).expect("write");
-        let err = SceneFolder::open(&root).expect_err("OPENCV");
-        assert_mentions(&err, &["sparse/0/cameras.bin", "OPENCV", "undistort"]);
+        let scene = SceneFolder::open(&root).expect("OPENCV is undistorted");
+        let u = scene.views[0].undistortion.as_ref().expect("a lens");
+        assert_eq!(scene.views[0].photo_size(), (4, 3), "the files keep the photo's size");
+        assert_eq!(scene.views[0].camera.intrinsics, u.pinhole);
+        assert_eq!(scene.load_image(0).expect("photo").width, 4);
+        // A lens that does not invert over the photo is refused, naming the file.
+        model.cameras[0].params = vec![1.0, 1.0, 2.0, 1.5, -0.5, 0.0, 0.0, 0.0];
+        model.write_binary(&sparse).expect("write");
+        let err = SceneFolder::open(&root).expect_err("folds");
+        assert_mentions(&err, &["sparse/0/cameras.bin", "camera 1", "OPENCV"]);
     }
 
     #[test]
@@ -450,7 +476,11 @@ mod tests {
             .map(|n| {
                 let image_path = root.join("rgb").join(n);
                 write_png_rgb(&image_path, &Image::new(4, 3, 3)).expect("image");
-                TransformsFrame { camera: Camera::new(*n, k, Pose::default()), image_path }
+                TransformsFrame {
+                    camera: Camera::new(*n, k, Pose::default()),
+                    image_path,
+                    undistortion: None,
+                }
             })
             .collect();
         write_transforms(&root.join("transforms.json"), &frames).expect("json");
@@ -493,7 +523,11 @@ mod tests {
                 .map(|n| {
                     let image_path = root.join(folder).join(n);
                     write_png_rgb(&image_path, &Image::new(4, 3, 3)).expect("image");
-                    TransformsFrame { camera: Camera::new(*n, k, Pose::default()), image_path }
+                    TransformsFrame {
+                        camera: Camera::new(*n, k, Pose::default()),
+                        image_path,
+                        undistortion: None,
+                    }
                 })
                 .collect();
             write_transforms(&root.join(file), &frames).expect("json");

@@ -1,6 +1,8 @@
 //! nerfstudio / Blender `transforms.json`: intrinsics given globally or per frame (`fl_x, fl_y,
 //! cx, cy, w, h`, or Blender's `camera_angle_x`), and per frame an image path and an OpenGL
 //! camera-to-world matrix (x right, y up, z backward), converted to trgs's COLMAP convention.
+//! Lens distortion as nerfstudio writes it: `camera_model` OPENCV with `k1, k2, k3, p1, p2`, or
+//! OPENCV_FISHEYE with `k1..k4`; such frames are undistorted into pinhole views on load.
 use std::path::{Path, PathBuf};
 
 use glam::{DMat3, DVec3};
@@ -9,17 +11,17 @@ use serde_json::{Map, Value, json};
 use super::error::read_text;
 use super::png::image_dimensions;
 use super::{FormatError, write_atomic};
+use crate::lens::{Distortion, Lens, Undistortion};
 use crate::scene::{Camera, Intrinsics, Pose};
 
-/// One frame: its camera (named by the image's file name) and the image file.
+/// One frame: its camera (named by the image's file name) and the image file. With lens
+/// distortion the camera is the pinhole view the photo is undistorted into.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TransformsFrame {
     pub camera: Camera,
     pub image_path: PathBuf,
+    pub undistortion: Option<Undistortion>,
 }
-
-/// Distortion coefficients nerfstudio may write; any nonzero one means the images are distorted.
-const DISTORTION: [&str; 6] = ["k1", "k2", "k3", "k4", "p1", "p2"];
 
 /// Read every frame, in file order. Image paths are relative to the JSON's folder; a path without
 /// extension (Blender's `./train/r_0`) is tried as given, then with `.png`. A path that exists in
@@ -37,11 +39,13 @@ pub fn read_transforms(path: &Path) -> Result<Vec<TransformsFrame>, FormatError>
         .as_array()
         .ok_or_else(|| fail("`frames` must be an array".into()))?;
     let dir = path.parent().unwrap_or(Path::new("."));
+    // Frames usually share one lens: its undistortion (a sweep of the photo's border) is made once.
+    let mut last: Option<Undistortion> = None;
     let mut out = frames
         .iter()
         .enumerate()
         .map(|(i, frame)| {
-            read_frame(global, frame, dir).map_err(|m| fail(format!("frames[{i}]: {m}")))
+            read_frame(global, frame, dir, &mut last).map_err(|m| fail(format!("frames[{i}]: {m}")))
         })
         .collect::<Result<Vec<_>, _>>()?;
     name_by_relative_path_if_needed(&mut out, dir);
@@ -86,6 +90,7 @@ fn read_frame(
     global: &Map<String, Value>,
     frame: &Value,
     dir: &Path,
+    last: &mut Option<Undistortion>,
 ) -> Result<TransformsFrame, String> {
     let frame = frame.as_object().ok_or("expected a JSON object")?;
     // A per-frame value overrides the global one (nerfstudio's rule).
@@ -99,15 +104,28 @@ fn read_frame(
             },
         }
     };
-    check_pinhole(get("camera_model"))?;
-    for key in DISTORTION {
-        if let Some(k) = num(key)?.filter(|&k| k != 0.0) {
-            return Err(format!(
-                "`{key}` = {k}: lens distortion is not supported; undistort the images first (e.g. with \
-                 `colmap image_undistorter`) and write a pinhole transforms.json"
-            ));
+    let coefficient = |key: &str| num(key).map(|v| v.unwrap_or(0.0));
+    let [k1, k2, k3, k4, p1, p2] = ["k1", "k2", "k3", "k4", "p1", "p2"].map(coefficient);
+    let (k1, k2, k3, k4, p1, p2) = (k1?, k2?, k3?, k4?, p1?, p2?);
+    let distortion = match camera_model(get("camera_model"))? {
+        LensKind::Perspective => {
+            if k4 != 0.0 {
+                return Err(format!(
+                    "`k4` = {k4} with a perspective camera: nerfstudio's r^8 radial term has no \
+                     COLMAP or OpenCV model; undistort the images first"
+                ));
+            }
+            Distortion::RadialTangential { k: [k1, k2, k3, 0.0, 0.0, 0.0], p: [p1, p2] }
         }
-    }
+        LensKind::Fisheye => {
+            if p1 != 0.0 || p2 != 0.0 {
+                return Err(
+                    "OPENCV_FISHEYE has no tangential terms: `p1` and `p2` must be 0".into()
+                );
+            }
+            Distortion::Fisheye { k: [k1, k2, k3, k4] }
+        }
+    };
 
     let file_path = get("file_path")
         .ok_or("missing field `file_path`")?
@@ -140,22 +158,46 @@ fn read_frame(
     let cx = num("cx")?.unwrap_or(0.5 * w);
     let cy = num("cy")?.unwrap_or(0.5 * h);
     let intrinsics = Intrinsics { fx, fy, cx, cy, width, height };
+    intrinsics.validate().map_err(|e| e.to_string())?;
+    let undistortion = if distortion.is_identity() {
+        None
+    } else {
+        let model = match distortion {
+            Distortion::Fisheye { .. } => "OPENCV_FISHEYE",
+            Distortion::RadialTangential { .. } => "OPENCV",
+        };
+        let lens = Lens { model: model.into(), intrinsics, distortion };
+        match last.as_ref().filter(|u| u.lens == lens) {
+            Some(same) => Some(same.clone()),
+            None => {
+                let made = Undistortion::new(lens).map_err(|e| e.to_string())?;
+                *last = Some(made.clone());
+                Some(made)
+            }
+        }
+    };
+    let pinhole = undistortion.as_ref().map_or(intrinsics, |u| u.pinhole);
 
     let matrix = frame.get("transform_matrix").ok_or("missing field `transform_matrix`")?;
     let (axes, centre) = read_matrix(matrix)?;
-    let camera = Camera::new(name, intrinsics, Pose::from_opengl_camera_to_world(axes, centre));
+    let camera = Camera::new(name, pinhole, Pose::from_opengl_camera_to_world(axes, centre));
     camera.validate().map_err(|e| e.to_string())?;
-    Ok(TransformsFrame { camera, image_path })
+    Ok(TransformsFrame { camera, image_path, undistortion })
 }
 
-/// Only undistorted pinhole cameras: the rasteriser has no lens model.
-fn check_pinhole(model: Option<&Value>) -> Result<(), String> {
+/// The lens family of nerfstudio's `camera_model`.
+enum LensKind {
+    Perspective,
+    Fisheye,
+}
+
+fn camera_model(model: Option<&Value>) -> Result<LensKind, String> {
     match model.map(|m| m.as_str().ok_or(format!("`camera_model` must be a string, found {m}"))) {
-        None => Ok(()),
-        Some(Ok("OPENCV" | "PINHOLE" | "SIMPLE_PINHOLE")) => Ok(()),
+        None | Some(Ok("OPENCV" | "PINHOLE" | "SIMPLE_PINHOLE")) => Ok(LensKind::Perspective),
+        Some(Ok("OPENCV_FISHEYE")) => Ok(LensKind::Fisheye),
         Some(Ok(other)) => Err(format!(
-            "camera_model {other:?} is not a pinhole camera; trgs supports PINHOLE (or OPENCV with zero \
-             distortion): undistort the images first"
+            "camera_model {other:?} is not supported; trgs reads PINHOLE, OPENCV (k1, k2, k3, p1, \
+             p2) and OPENCV_FISHEYE (k1..k4): undistort the images first"
         )),
         Some(Err(m)) => Err(m),
     }
@@ -206,21 +248,48 @@ pub fn write_transforms(path: &Path, frames: &[TransformsFrame]) -> Result<(), F
                 format!("frames[{i}]: the image path {} is not UTF-8", f.image_path.display()),
             )
         })?;
-        let k = &f.camera.intrinsics;
+        // A distorted frame is written as its photo's own camera and lens.
+        let k = f.undistortion.as_ref().map_or(&f.camera.intrinsics, |u| &u.lens.intrinsics);
         let pose = &f.camera.pose;
         let flip = DMat3::from_diagonal(DVec3::new(1.0, -1.0, -1.0));
         let axes = pose.rotation.transpose() * flip;
         let c = pose.centre();
         let row = |r: usize| json!([axes.x_axis[r], axes.y_axis[r], axes.z_axis[r], c[r]]);
-        out.push(json!({
+        let mut frame = json!({
             "file_path": file_path,
             "fl_x": k.fx, "fl_y": k.fy, "cx": k.cx, "cy": k.cy, "w": k.width, "h": k.height,
             "transform_matrix": [row(0), row(1), row(2), [0.0, 0.0, 0.0, 1.0]],
-        }));
+        });
+        if let (Some(u), Some(fields)) = (&f.undistortion, frame.as_object_mut()) {
+            lens_fields(&u.lens.distortion, fields).map_err(|m| {
+                FormatError::new(path, format!("frames[{i}] ({}): {m}", f.camera.name))
+            })?;
+        }
+        out.push(frame);
     }
     let text = serde_json::to_string_pretty(&json!({ "frames": out }))
         .map_err(|e| FormatError::new(path, e.to_string()))?;
     write_atomic(path, format!("{text}\n").as_bytes())
+}
+
+/// nerfstudio's keys for a distortion; a lens it has no keys for is an error.
+fn lens_fields(d: &Distortion, out: &mut Map<String, Value>) -> Result<(), String> {
+    let (model, values) = match *d {
+        Distortion::RadialTangential { k, p } => {
+            if k[3..].iter().any(|&v| v != 0.0) {
+                return Err("a rational (FULL_OPENCV) lens has no transforms.json form".into());
+            }
+            ("OPENCV", vec![("k1", k[0]), ("k2", k[1]), ("k3", k[2]), ("p1", p[0]), ("p2", p[1])])
+        }
+        Distortion::Fisheye { k } => {
+            ("OPENCV_FISHEYE", vec![("k1", k[0]), ("k2", k[1]), ("k3", k[2]), ("k4", k[3])])
+        }
+    };
+    out.insert("camera_model".into(), json!(model));
+    for (key, v) in values {
+        out.insert(key.into(), json!(v));
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -246,8 +315,11 @@ mod tests {
             Intrinsics { fx: 40.0, fy: 41.0, cx: 15.5, cy: 12.0, width: 32, height: 24 },
             pose,
         );
-        let frames =
-            vec![TransformsFrame { camera: cam.clone(), image_path: dir.join("images/a.png") }];
+        let frames = vec![TransformsFrame {
+            camera: cam.clone(),
+            image_path: dir.join("images/a.png"),
+            undistortion: None,
+        }];
         let path = dir.join("transforms.json");
         write_transforms(&path, &frames).expect("write");
         assert!(std::fs::read_to_string(&path).expect("read").contains("\"images/a.png\""));
@@ -318,29 +390,51 @@ mod tests {
     }
 
     #[test]
-    fn distortion_is_refused() {
+    fn lens_distortion_is_read_and_written_back() {
         let dir = scratch_dir("tf-dist");
+        let frame =
+            format!(r#""frames": [{{"file_path": "a.png", "transform_matrix": {IDENTITY}}}]"#);
+        let json =
+            format!(r#"{{"fl_x": 100, "w": 160, "h": 120, "k1": -0.05, "p2": 0.001, {frame}}}"#);
+        let frames = read_transforms(&write(&dir, &json)).expect("OPENCV lens");
+        let u = frames[0].undistortion.as_ref().expect("undistorted");
+        assert_eq!(
+            u.lens.distortion,
+            Distortion::RadialTangential { k: [-0.05, 0.0, 0.0, 0.0, 0.0, 0.0], p: [0.0, 0.001] }
+        );
+        assert_eq!(frames[0].camera.intrinsics, u.pinhole, "the view is the pinhole");
+        // Written back as the photo's own camera and lens, it reads the same.
+        let path = dir.join("back.json");
+        write_transforms(&path, &frames).expect("write");
+        assert_eq!(read_transforms(&path).expect("read back")[0].undistortion.as_ref(), Some(u));
+
         let json = format!(
-            r#"{{"fl_x": 10, "w": 4, "h": 4, "k1": 0.02, "frames": [{{"file_path": "a.png", "transform_matrix": {IDENTITY}}}]}}"#
+            r#"{{"fl_x": 100, "w": 160, "h": 120, "camera_model": "OPENCV_FISHEYE", "k1": 0.03, {frame}}}"#
+        );
+        let frames = read_transforms(&write(&dir, &json)).expect("fisheye");
+        assert!(matches!(
+            frames[0].undistortion.as_ref().map(|u| u.lens.distortion),
+            Some(Distortion::Fisheye { .. })
+        ));
+        let json = format!(
+            r#"{{"fl_x": 100, "w": 160, "h": 120, "camera_model": "OPENCV", "k4": 0.01, {frame}}}"#
         );
         assert_mentions(
-            &read_transforms(&write(&dir, &json)).expect_err("k1"),
-            &["transforms.json", "`k1` = 0.02", "undistort"],
+            &read_transforms(&write(&dir, &json)).expect_err("r^8 term"),
+            &["transforms.json", "`k4` = 0.01", "undistort"],
         );
         let json = format!(
-            r#"{{"fl_x": 10, "w": 4, "h": 4, "camera_model": "OPENCV_FISHEYE", "frames": [{{"file_path": "a.png", "transform_matrix": {IDENTITY}}}]}}"#
+            r#"{{"fl_x": 100, "w": 160, "h": 120, "camera_model": "EQUIRECTANGULAR", {frame}}}"#
         );
         assert_mentions(
-            &read_transforms(&write(&dir, &json)).expect_err("fisheye"),
-            &["transforms.json", "OPENCV_FISHEYE", "undistort"],
+            &read_transforms(&write(&dir, &json)).expect_err("equirectangular"),
+            &["transforms.json", "EQUIRECTANGULAR", "OPENCV_FISHEYE", "undistort"],
         );
         let json = format!(
-            r#"{{"fl_x": 10, "w": 4, "h": 4, "camera_model": "OPENCV", "k1": 0, "p2": 0.0, "frames": [{{"file_path": "a.png", "transform_matrix": {IDENTITY}}}]}}"#
+            r#"{{"fl_x": 10, "w": 4, "h": 4, "camera_model": "OPENCV", "k1": 0, "p2": 0.0, {frame}}}"#
         );
-        assert!(
-            read_transforms(&write(&dir, &json)).is_ok(),
-            "OPENCV with zero distortion is a pinhole"
-        );
+        let frames = read_transforms(&write(&dir, &json)).expect("pinhole");
+        assert!(frames[0].undistortion.is_none(), "OPENCV with zero distortion is a pinhole");
     }
 
     #[test]

@@ -48,7 +48,9 @@ pub use mcmc::{
     MAX_REGULARISED_LOG_SCALE, NOISE_GATE_STEEPNESS, NOISE_GATE_THRESHOLD, mcmc_noise,
     mcmc_regularise, noise_normal, noise_offset, pcg_hash,
 };
-pub use photometric_loss::{DSSIM_LAMBDA, PhotometricLoss, photometric_loss};
+pub use photometric_loss::{
+    DSSIM_LAMBDA, PhotometricLoss, photometric_loss, photometric_loss_covered,
+};
 pub use prefix_sum::prefix_sum;
 pub use project::{Projected, ProjectionFilter, project};
 pub use project_bwd::{ProjectedGrads, ViewGrads, project_bwd};

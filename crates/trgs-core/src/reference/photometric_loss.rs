@@ -32,6 +32,47 @@ pub fn photometric_loss(
     target: &Image<f64>,
     lambda: f64,
 ) -> Result<PhotometricLoss, MetricsError> {
+    photometric_loss_covered(render, target, None, lambda)
+}
+
+/// [`photometric_loss`] where only the pixels `covered` marks (nonzero; one channel, the image's
+/// size) count: the loss sees both images multiplied by the coverage, so a pixel without a source
+/// (the border of an undistorted photo) adds no error, no SSIM window reads a colour there, and
+/// its gradient is zero. The means stay over every sample.
+pub fn photometric_loss_covered(
+    render: &Image<f64>,
+    target: &Image<f64>,
+    covered: Option<&Image<u8>>,
+    lambda: f64,
+) -> Result<PhotometricLoss, MetricsError> {
+    let Some(covered) = covered else { return uncovered_loss(render, target, lambda) };
+    if (covered.width, covered.height, covered.channels) != (render.width, render.height, 1) {
+        return Err(MetricsError::SizeMismatch {
+            a: (render.width, render.height, 1),
+            b: (covered.width, covered.height, covered.channels),
+        });
+    }
+    let ch = render.channels.max(1) as usize;
+    let mask = |im: &Image<f64>| {
+        let mut out = im.clone();
+        for (i, v) in out.data.iter_mut().enumerate() {
+            if covered.data.get(i / ch).is_some_and(|&c| c == 0) {
+                *v = 0.0;
+            }
+        }
+        out
+    };
+    let mut loss = uncovered_loss(&mask(render), &mask(target), lambda)?;
+    loss.grad = mask(&loss.grad);
+    Ok(loss)
+}
+
+/// The loss over every pixel.
+fn uncovered_loss(
+    render: &Image<f64>,
+    target: &Image<f64>,
+    lambda: f64,
+) -> Result<PhotometricLoss, MetricsError> {
     let (w, h, ch) = (render.width as usize, render.height as usize, render.channels as usize);
     if (render.width, render.height, render.channels)
         != (target.width, target.height, target.channels)
@@ -187,6 +228,46 @@ mod tests {
             worst = worst.max((fd - loss.grad.data[k]).abs() / scale);
         }
         assert!(worst < 1e-5, "worst relative error {worst:e}");
+    }
+
+    #[test]
+    fn uncovered_pixels_neither_count_nor_train() {
+        let mut rng = Rng::new(5);
+        let (w, h) = (14, 11);
+        let a = random_image(w, h, &mut rng);
+        let b = random_image(w, h, &mut rng);
+        // A ragged border without a source, as an undistorted photo's.
+        let mut covered = Image::<u8>::new(w, h, 1);
+        for y in 0..h {
+            for x in 0..w {
+                covered.set(x, y, 0, u8::from(x > y % 3 && y + 1 < h));
+            }
+        }
+        let loss = photometric_loss_covered(&a, &b, Some(&covered), DSSIM_LAMBDA).expect("valid");
+        // Whatever the render shows where the photo has no source changes nothing.
+        let mut other = a.clone();
+        for (i, v) in other.data.iter_mut().enumerate() {
+            if covered.data[i / 3] == 0 {
+                *v = rng.uniform();
+                assert_eq!(loss.grad.data[i], 0.0, "sample {i} has no source");
+            }
+        }
+        let same = photometric_loss_covered(&other, &b, Some(&covered), DSSIM_LAMBDA).expect("ok");
+        assert!((same.value - loss.value).abs() < 1e-15);
+        // The gradient at the covered samples is the loss's (central differences).
+        let eps = 1e-6;
+        for k in (0..a.data.len()).step_by(5).filter(|k| covered.data[k / 3] != 0) {
+            let at = |d: f64| {
+                let mut p = a.clone();
+                p.data[k] += d;
+                photometric_loss_covered(&p, &b, Some(&covered), DSSIM_LAMBDA).expect("ok").value
+            };
+            let fd = (at(eps) - at(-eps)) / (2.0 * eps);
+            let scale = fd.abs().max(loss.grad.data[k].abs()).max(1e-9);
+            assert!((fd - loss.grad.data[k]).abs() / scale < 1e-5, "sample {k}");
+        }
+        let wrong = Image::<u8>::new(w + 1, h, 1);
+        assert!(photometric_loss_covered(&a, &b, Some(&wrong), DSSIM_LAMBDA).is_err());
     }
 
     #[test]

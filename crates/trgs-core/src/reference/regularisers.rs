@@ -19,11 +19,15 @@ pub struct LayerLoss {
 }
 
 /// L_m for the rendered mask `m` (one channel) and the annotation (label > 0 is glass).
-pub fn mask_loss(m: &Image<f64>, annotation: &Image<u8>) -> LayerLoss {
+pub fn mask_loss(m: &Image<f64>, annotation: &Image<u8>, covered: Option<&Image<u8>>) -> LayerLoss {
     let n = m.data.len().max(1) as f64;
     let mut grad = Image::<f64>::new(m.width, m.height, 1);
     let mut value = 0.0;
-    for ((g, &v), &a) in grad.data.iter_mut().zip(&m.data).zip(&annotation.data) {
+    for (i, ((g, &v), &a)) in grad.data.iter_mut().zip(&m.data).zip(&annotation.data).enumerate() {
+        // A pixel without a source in the photo has no label either.
+        if covered.is_some_and(|c| c.data[i] == 0) {
+            continue;
+        }
         let d = v - if a > 0 { 1.0 } else { 0.0 };
         value += d.abs();
         *g = d.signum() * f64::from(u8::from(d != 0.0)) / n;
@@ -127,6 +131,9 @@ pub struct RegulariserInputs<'a> {
     pub hit: &'a Image<u32>,
     /// The view's glass labels, when it has them.
     pub annotation: Option<&'a Image<u8>>,
+    /// Which pixels the photo covers (nonzero), when not all: L_m skips the others. L_d and L_c
+    /// are priors on the model's layers, not comparisons with the photo, and count everywhere.
+    pub covered: Option<&'a Image<u8>>,
 }
 
 /// The unweighted values and the weighted direct gradients of stage `regularisers`.
@@ -157,7 +164,7 @@ pub fn regularisers(inputs: &RegulariserInputs<'_>, w: RegulariserWeights) -> Re
         w.conflict,
     );
     let (mask, mask_grad) = match inputs.annotation {
-        Some(a) => scaled(mask_loss(inputs.mask, a), w.mask),
+        Some(a) => scaled(mask_loss(inputs.mask, a, inputs.covered), w.mask),
         None => (0.0, Image::new(inputs.mask.width, inputs.mask.height, 1)),
     };
     Regularisers { depth, conflict, mask, transmission, depth_variance, mask_grad }
@@ -232,9 +239,15 @@ mod tests {
         m.data = vec![0.25, 0.5];
         let mut a = Image::<u8>::new(2, 1, 1);
         a.data = vec![1, 0];
-        let l = mask_loss(&m, &a);
+        let l = mask_loss(&m, &a, None);
         assert!((l.value - 0.625).abs() < 1e-12);
         assert_eq!(l.grad.data, vec![-0.5, 0.5]);
+        // A pixel the photo does not cover has no label: no loss, no gradient.
+        let mut covered = Image::<u8>::new(2, 1, 1);
+        covered.data = vec![1, 0];
+        let l = mask_loss(&m, &a, Some(&covered));
+        assert!((l.value - 0.375).abs() < 1e-12);
+        assert_eq!(l.grad.data, vec![-0.5, 0.0]);
         let mut hit = Image::<u32>::new(2, 1, 1);
         hit.data = vec![0, 2];
         let d = depth_variance_loss(&m, &hit);

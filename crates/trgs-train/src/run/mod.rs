@@ -487,6 +487,9 @@ fn load_data(
         data.points.len(),
         data.extent
     ));
+    for line in &data.lens_notes {
+        note(line.clone());
+    }
     if config.no_planes {
         note("--no-planes: training plain 3DGS".into());
     } else if data.materials.is_empty() {

@@ -60,6 +60,7 @@ impl Trainer {
                 &view.camera.name,
                 &view.image,
                 view.mask.as_ref(),
+                view.covered.as_ref(),
             )?),
         };
         let shape = (self.frame.width(), self.frame.height(), self.frame.plane_slots());

@@ -9,10 +9,11 @@ mod binary;
 mod tests;
 mod text;
 
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
 use super::FormatError;
+use crate::lens::{Lens, Undistortion, colmap_camera_model};
 use crate::scene::{Camera, Intrinsics, Pose};
 
 /// COLMAP's camera models as (model id, name, number of parameters), from COLMAP's
@@ -134,66 +135,78 @@ impl ColmapModel {
         text::write(self, dir)
     }
 
-    /// The trgs camera of an image (named by the image's name). Only PINHOLE and SIMPLE_PINHOLE
-    /// are supported: every other model has lens distortion, which the splatting rasteriser cannot
-    /// model, so the error says to undistort first. The model does not remember its folder, so the
-    /// error's path is `cameras`; [`super::SceneFolder`] replaces it with the real file.
-    pub fn camera(&self, image: &ColmapImage) -> Result<Camera, FormatError> {
-        let fail = |problem: String| FormatError::new("cameras", problem);
-        let cam = self.cameras.iter().find(|c| c.id == image.camera_id).ok_or_else(|| {
-            fail(format!(
-                "image {} ({}) uses camera {}, which does not exist",
-                image.id, image.name, image.camera_id
-            ))
-        })?;
-        let (fx, fy, cx, cy) = match (cam.model.as_str(), cam.params.as_slice()) {
-            ("PINHOLE", &[fx, fy, cx, cy]) => (fx, fy, cx, cy),
-            ("SIMPLE_PINHOLE", &[f, cx, cy]) => (f, f, cx, cy),
-            // Lens models whose distortion is exactly zero are pinholes (some pipelines write
-            // them after undistorting); the transforms.json reader accepts the same.
-            ("SIMPLE_RADIAL", &[f, cx, cy, 0.0]) | ("RADIAL", &[f, cx, cy, 0.0, 0.0]) => {
-                (f, f, cx, cy)
-            }
-            ("OPENCV", &[fx, fy, cx, cy, ref d @ ..])
-                if d.len() == 4 && d.iter().all(|&v| v == 0.0) =>
-            {
-                (fx, fy, cx, cy)
-            }
-            ("PINHOLE" | "SIMPLE_PINHOLE", p) => {
-                return Err(fail(format!(
-                    "camera {}: {} needs its parameters, found {}",
-                    cam.id,
-                    cam.model,
-                    p.len()
-                )));
-            }
-            (other, _) => {
-                return Err(fail(format!(
-                    "camera {} uses the COLMAP model {other} with lens distortion (or the wrong \
-                     number of parameters); trgs supports PINHOLE and SIMPLE_PINHOLE (and lens \
-                     models whose distortion is zero): undistort the images first (e.g. with \
-                     `colmap image_undistorter`) and use the undistorted model",
-                    cam.id
-                )));
-            }
-        };
-        let size = |v: u64, what: &str| {
-            u32::try_from(v)
-                .map_err(|_| fail(format!("camera {}: {what} {v} is too large", cam.id)))
-        };
-        let intrinsics = Intrinsics {
-            fx,
-            fy,
-            cx,
-            cy,
-            width: size(cam.width, "width")?,
-            height: size(cam.height, "height")?,
-        };
-        intrinsics.validate().map_err(|e| fail(format!("camera {}: {e}", cam.id)))?;
-        let pose = Pose::from_qvec_tvec(image.qvec, image.tvec);
-        pose.validate().map_err(|e| fail(format!("image {} ({}): {e}", image.id, image.name)))?;
-        Ok(Camera::new(image.name.clone(), intrinsics, pose))
+    /// The trgs camera of an image (named by the image's name) and, for a camera model with lens
+    /// distortion, how its photo is undistorted: the camera is then the pinhole view
+    /// [`Undistortion::new`] chooses (as COLMAP's `image_undistorter` would). The model does not
+    /// remember its folder, so the error's path is `cameras`; [`super::SceneFolder`] replaces it
+    /// with the real file.
+    pub fn camera(
+        &self,
+        image: &ColmapImage,
+    ) -> Result<(Camera, Option<Undistortion>), FormatError> {
+        let lens = self.lens(self.camera_of(image)?)?;
+        posed(image, lens)
     }
+
+    /// [`Self::camera`] of every image, in order, each COLMAP camera's undistortion made once
+    /// (a sweep of its photo's border) and shared by its images.
+    pub fn views(&self) -> Result<Vec<(Camera, Option<Undistortion>)>, FormatError> {
+        let mut lenses = HashMap::new();
+        for cam in &self.cameras {
+            lenses.insert(cam.id, self.lens(cam)?);
+        }
+        self.images
+            .iter()
+            .map(|image| {
+                let cam = self.camera_of(image)?;
+                posed(image, lenses[&cam.id].clone())
+            })
+            .collect()
+    }
+
+    fn camera_of(&self, image: &ColmapImage) -> Result<&ColmapCamera, FormatError> {
+        self.cameras.iter().find(|c| c.id == image.camera_id).ok_or_else(|| {
+            FormatError::new(
+                "cameras",
+                format!(
+                    "image {} ({}) uses camera {}, which does not exist",
+                    image.id, image.name, image.camera_id
+                ),
+            )
+        })
+    }
+
+    /// The pinhole intrinsics of a COLMAP camera and its undistortion, if its model distorts.
+    pub fn lens(
+        &self,
+        cam: &ColmapCamera,
+    ) -> Result<(Intrinsics, Option<Undistortion>), FormatError> {
+        let fail =
+            |problem: String| FormatError::new("cameras", format!("camera {}: {problem}", cam.id));
+        let size = |v: u64, what: &str| {
+            u32::try_from(v).map_err(|_| fail(format!("{what} {v} is too large")))
+        };
+        let (width, height) = (size(cam.width, "width")?, size(cam.height, "height")?);
+        let (intrinsics, distortion) =
+            colmap_camera_model(&cam.model, &cam.params, width, height).map_err(&fail)?;
+        intrinsics.validate().map_err(|e| fail(e.to_string()))?;
+        let Some(distortion) = distortion else { return Ok((intrinsics, None)) };
+        let lens = Lens { model: cam.model.clone(), intrinsics, distortion };
+        let undistortion = Undistortion::new(lens).map_err(|e| fail(e.to_string()))?;
+        Ok((undistortion.pinhole, Some(undistortion)))
+    }
+}
+
+/// An image's camera: its pose with its COLMAP camera's pinhole intrinsics.
+fn posed(
+    image: &ColmapImage,
+    (intrinsics, undistortion): (Intrinsics, Option<Undistortion>),
+) -> Result<(Camera, Option<Undistortion>), FormatError> {
+    let pose = Pose::from_qvec_tvec(image.qvec, image.tvec);
+    pose.validate().map_err(|e| {
+        FormatError::new("cameras", format!("image {} ({}): {e}", image.id, image.name))
+    })?;
+    Ok((Camera::new(image.name.clone(), intrinsics, pose), undistortion))
 }
 
 /// Cross-checks shared by both layouts: unique camera and image ids, every image's camera exists.

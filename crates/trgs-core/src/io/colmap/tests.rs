@@ -84,19 +84,39 @@ fn binary_and_text_of_one_model_load_identically() {
 #[test]
 fn camera_of_pinhole_and_simple_pinhole() {
     let model = sample_model();
-    let cam = model.camera(&model.images[0]).expect("pinhole");
+    let (cam, lens) = model.camera(&model.images[0]).expect("pinhole");
+    assert!(lens.is_none(), "a pinhole needs no undistortion");
     assert_eq!(cam.name, "b dir/frame 3.png");
     assert_eq!((cam.intrinsics.fx, cam.intrinsics.fy, cam.intrinsics.cx), (50.0, 51.5, 32.0));
     assert_eq!((cam.width(), cam.height()), (64, 48));
-    let cam = model.camera(&model.images[1]).expect("simple pinhole");
+    let (cam, _) = model.camera(&model.images[1]).expect("simple pinhole");
     assert_eq!(cam.intrinsics.fx, cam.intrinsics.fy);
 }
 
 #[test]
-fn distorted_camera_model_says_undistort() {
+fn distorted_camera_model_is_undistorted_into_a_pinhole() {
     let model = sample_model();
-    let err = model.camera(&model.images[2]).expect_err("OPENCV must be refused");
-    assert_mentions(&err, &["camera 7", "OPENCV", "undistort", "colmap image_undistorter"]);
+    let (cam, lens) = model.camera(&model.images[2]).expect("OPENCV is undistorted");
+    let lens = lens.expect("a distorting lens");
+    assert_eq!(lens.lens.model, "OPENCV");
+    assert_eq!(lens.photo_size(), (10, 10));
+    assert_eq!(cam.intrinsics, lens.pinhole, "the view is the pinhole camera");
+    // `views` makes the same cameras, each COLMAP camera's undistortion once.
+    let views = model.views().expect("views");
+    assert_eq!(views[2], (cam, Some(lens)));
+}
+
+#[test]
+fn unsupported_or_folding_lenses_are_named() {
+    let mut model = sample_model();
+    model.cameras[2].model = "THIN_PRISM_FISHEYE".into();
+    model.cameras[2].params = vec![5.0, 5.0, 5.0, 5.0, 0.1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+    let err = model.camera(&model.images[2]).expect_err("unsupported");
+    assert_mentions(&err, &["camera 7", "THIN_PRISM_FISHEYE", "OPENCV_FISHEYE", "undistort"]);
+    model.cameras[2].model = "RADIAL".into();
+    model.cameras[2].params = vec![2.0, 5.0, 5.0, -0.5, 0.0];
+    let err = model.camera(&model.images[2]).expect_err("folds");
+    assert_mentions(&err, &["camera 7", "RADIAL", "10x10"]);
 }
 
 #[test]
@@ -110,14 +130,16 @@ fn lens_models_with_zero_distortion_are_pinholes() {
     for (name, params, want) in cases {
         model.cameras[2].model = name.into();
         model.cameras[2].params = params.clone();
-        let k = model.camera(&model.images[2]).expect(name).intrinsics;
+        let (cam, lens) = model.camera(&model.images[2]).expect(name);
+        let k = cam.intrinsics;
         assert_eq!([k.fx, k.fy, k.cx, k.cy], want, "{name}");
-        // Any distortion at all is still refused.
+        assert!(lens.is_none(), "{name} without distortion is a pinhole");
+        // Any distortion at all is undistorted.
         let mut distorted = params;
         *distorted.last_mut().expect("a coefficient") = 1e-6;
         model.cameras[2].params = distorted;
-        let err = model.camera(&model.images[2]).expect_err(name);
-        assert_mentions(&err, &[name, "undistort"]);
+        let (_, lens) = model.camera(&model.images[2]).expect(name);
+        assert!(lens.is_some(), "{name} with distortion");
     }
 }
 
