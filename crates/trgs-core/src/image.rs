@@ -67,4 +67,21 @@ impl Image<f32> {
     pub fn to_u8(&self) -> Vec<u8> {
         self.data.iter().map(|&v| (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8).collect()
     }
+
+    /// [`Self::to_u8`] as an image.
+    pub fn quantised(&self) -> Image<u8> {
+        Image {
+            width: self.width,
+            height: self.height,
+            channels: self.channels,
+            data: self.to_u8(),
+        }
+    }
+}
+
+impl Image<u8> {
+    /// The samples as [0, 1] (k / 255).
+    pub fn to_f32(&self) -> Image<f32> {
+        Image::<f32>::from_u8(self.width, self.height, self.channels, &self.data)
+    }
 }

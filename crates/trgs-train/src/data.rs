@@ -4,15 +4,23 @@
 use anyhow::{Context, Result, bail};
 use glam::DVec3;
 use std::path::Path;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use trgs_core::Image;
 use trgs_core::io::{SceneFolder, Split};
+use trgs_core::lens::Undistortion;
 use trgs_core::scene::{Camera, Material};
+
+/// The longer side photos are trained at by default (the INRIA code's limit too): a 12 MP photo
+/// at full size costs the renderer 6 times the pixels for detail the views rarely resolve.
+pub const DEFAULT_LONG_SIDE: u32 = 1600;
 
 /// How large the training images are.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Resolution {
     /// The images as they are.
     Original,
+    /// The images as they are up to this longer side; larger ones scaled down to it.
+    LongSide(u32),
     /// Divide both sides by this factor (rounded).
     Downscale(f64),
     /// This width; the height keeps the aspect ratio.
@@ -20,12 +28,15 @@ pub enum Resolution {
 }
 
 impl Resolution {
-    /// The resolution of a `--resolution W` and a `--downscale F` flag (the width wins).
-    pub fn from_flags(width: Option<u32>, downscale: Option<f64>) -> Self {
+    /// The resolution of a `--resolution W`, a `--downscale F` and a `--full-size` flag (in
+    /// that order of precedence); without any, photos longer than [`DEFAULT_LONG_SIDE`] are
+    /// scaled down to it.
+    pub fn from_flags(width: Option<u32>, downscale: Option<f64>, full_size: bool) -> Self {
         match (width, downscale) {
             (Some(w), _) => Resolution::Width(w),
             (None, Some(f)) => Resolution::Downscale(f),
-            (None, None) => Resolution::Original,
+            (None, None) if full_size => Resolution::Original,
+            (None, None) => Resolution::LongSide(DEFAULT_LONG_SIDE),
         }
     }
 }
@@ -34,12 +45,17 @@ impl Resolution {
 #[derive(Clone, Debug)]
 pub struct View {
     pub camera: Camera,
-    pub image: Image<f32>,
+    /// The photo, 8-bit RGB as it was stored (a quarter of f32's memory: a few hundred views at
+    /// 1600 px fit beside the model).
+    pub image: Image<u8>,
     /// Glass-mask labels (0: no glass, k: plane label k), nearest-neighbour resized.
     pub mask: Option<Image<u8>>,
     /// Which pixels the photo covers (1) and which it does not (0: the border of an undistorted
     /// photo, black in `image`), left out of the loss and the metrics. None: every pixel.
     pub covered: Option<Image<u8>>,
+    /// How the photo was undistorted into this view (at this view's size), for other images of
+    /// the same photo (`eval`'s ground truth).
+    pub undistortion: Option<Undistortion>,
 }
 
 /// The loaded scene.
@@ -54,62 +70,30 @@ pub struct TrainingData {
     pub centre: DVec3,
     /// The material of each plane label (planes.json; glass where it says nothing).
     pub materials: Vec<(u32, Material)>,
-    /// What was done to photos through distorting lenses, one line per lens, for the run's log.
-    pub lens_notes: Vec<String>,
+    /// What loading did to the photos (scaled down, undistorted: a line per lens), for the
+    /// run's log.
+    pub notes: Vec<String>,
 }
 
 impl TrainingData {
     /// Load every view of `folder` at `resolution` (of its pinhole camera: photos through a
     /// distorting lens are downscaled as they are, then undistorted into the pinhole view).
     pub fn load(folder: &SceneFolder, resolution: Resolution) -> Result<Self> {
+        Self::load_with_progress(folder, resolution, &|_, _| {})
+    }
+
+    /// [`Self::load`], calling `progress(done, total)` from the loading threads after each view.
+    pub fn load_with_progress(
+        folder: &SceneFolder,
+        resolution: Resolution,
+        progress: &(dyn Fn(usize, usize) + Sync),
+    ) -> Result<Self> {
         let mut train = Vec::new();
         let mut test = Vec::new();
-        let mut lenses: Vec<LensNote> = Vec::new();
-        for (i, spec) in folder.views.iter().enumerate() {
-            let photo = folder.load_image(i)?;
-            let labels = folder.load_mask(i)?;
-            let (w, h) = target_size(spec.camera.width(), spec.camera.height(), resolution)
-                .with_context(|| format!("resizing {}", spec.image_path.display()))?;
-            let mut camera = spec.camera.clone();
-            camera.intrinsics = camera.intrinsics.resized(w, h);
-            let view = match &spec.undistortion {
-                None => View {
-                    camera,
-                    image: resize_area(&photo, w, h),
-                    mask: labels.map(|m| resize_nearest(&m, w, h)),
-                    covered: None,
-                },
-                Some(u) => {
-                    let u = u.resized(w, h);
-                    let (pw, ph) = u.photo_size();
-                    let context = || format!("undistorting {}", spec.image_path.display());
-                    let (image, covered) =
-                        u.warp_image(&resize_area(&photo, pw, ph)).with_context(context)?;
-                    let mask = match labels {
-                        Some(m) => {
-                            Some(u.warp_labels(&resize_nearest(&m, pw, ph)).with_context(context)?)
-                        }
-                        None => None,
-                    };
-                    let blank = covered.data.iter().filter(|&&c| c == 0).count();
-                    match lenses.iter_mut().find(|n| {
-                        n.lens == u.lens.model && n.describe == u.lens.distortion.describe()
-                    }) {
-                        Some(n) => n.views += 1,
-                        None => lenses.push(LensNote {
-                            lens: u.lens.model.clone(),
-                            describe: u.lens.distortion.describe(),
-                            photo: spec.photo_size(),
-                            pinhole: (spec.camera.width(), spec.camera.height()),
-                            views: 1,
-                            blank,
-                            pixels: covered.data.len(),
-                        }),
-                    }
-                    View { camera, image, mask, covered: (blank > 0).then_some(covered) }
-                }
-            };
-            if folder.is_test(&spec.camera.name) {
+        let mut notes = LoadNotes::default();
+        for (view, report) in load_views(folder, resolution, progress)? {
+            notes.add(report);
+            if folder.is_test(&view.camera.name) {
                 test.push(view);
             } else {
                 train.push(view);
@@ -128,9 +112,8 @@ impl TrainingData {
             .iter()
             .map(|(p, c)| (DVec3::from_array(*p), c.map(|v| f64::from(v) / 255.0)))
             .collect();
-        let lens_notes = lenses.iter().map(LensNote::line).collect();
-        let mut data =
-            Self { train, test, points, extent, centre, materials: Vec::new(), lens_notes };
+        let notes = notes.lines(resolution);
+        let mut data = Self { train, test, points, extent, centre, materials: Vec::new(), notes };
         data.materials = data.mask_labels().into_iter().map(|l| (l, folder.material(l))).collect();
         Ok(data)
     }
@@ -184,6 +167,161 @@ impl TrainingData {
     }
 }
 
+/// Loading threads: enough to keep the cores decoding, few enough that the full-size photos
+/// they hold at once (36 MB for 12 MP at 8 bits) stay small.
+const LOAD_THREADS: usize = 8;
+
+/// Every view of `folder` at `resolution`, in the folder's order, decoded on up to
+/// [`LOAD_THREADS`] threads. The first failure in view order is the error; the other threads
+/// stop taking views once one fails.
+fn load_views(
+    folder: &SceneFolder,
+    resolution: Resolution,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Vec<(View, ViewReport)>> {
+    let n = folder.views.len();
+    let threads = std::thread::available_parallelism().map_or(1, |t| t.get()).min(LOAD_THREADS);
+    let threads = threads.min(n).max(1);
+    let next = AtomicUsize::new(0);
+    let done = AtomicUsize::new(0);
+    let mut slots: Vec<Option<Result<(View, ViewReport)>>> = (0..n).map(|_| None).collect();
+    let worker = || {
+        let mut out = Vec::new();
+        loop {
+            let i = next.fetch_add(1, Ordering::Relaxed);
+            if i >= n {
+                return out;
+            }
+            let loaded = load_view(folder, i, resolution);
+            let failed = loaded.is_err();
+            out.push((i, loaded));
+            progress(done.fetch_add(1, Ordering::Relaxed) + 1, n);
+            if failed {
+                next.store(n, Ordering::Relaxed);
+            }
+        }
+    };
+    std::thread::scope(|scope| -> Result<()> {
+        let handles: Vec<_> = (0..threads).map(|_| scope.spawn(worker)).collect();
+        for handle in handles {
+            let loaded = handle.join().map_err(|_| anyhow::anyhow!("a loading thread panicked"))?;
+            for (i, view) in loaded {
+                slots[i] = Some(view);
+            }
+        }
+        Ok(())
+    })?;
+    let mut views = Vec::with_capacity(n);
+    for slot in slots {
+        match slot {
+            Some(view) => views.push(view?),
+            // Not taken: a view failed, and its error comes first or later in this loop.
+            None => continue,
+        }
+    }
+    Ok(views)
+}
+
+/// One view of `folder` at `resolution`, and what loading did to it.
+fn load_view(folder: &SceneFolder, i: usize, resolution: Resolution) -> Result<(View, ViewReport)> {
+    let spec = &folder.views[i];
+    let photo = folder.load_image(i)?;
+    let labels = folder.load_mask(i)?;
+    let full = (spec.camera.width(), spec.camera.height());
+    let (w, h) = target_size(full.0, full.1, resolution)
+        .with_context(|| format!("resizing {}", spec.image_path.display()))?;
+    let mut report = ViewReport { scaled: ((w, h) != full).then_some((full, (w, h))), lens: None };
+    let mut camera = spec.camera.clone();
+    camera.intrinsics = camera.intrinsics.resized(w, h);
+    let Some(u) = &spec.undistortion else {
+        let view = View {
+            camera,
+            image: resize_area_u8(&photo, w, h).quantised(),
+            mask: labels.map(|m| resize_nearest(&m, w, h)),
+            covered: None,
+            undistortion: None,
+        };
+        return Ok((view, report));
+    };
+    let u = u.resized(w, h);
+    let (pw, ph) = u.photo_size();
+    let context = || format!("undistorting {}", spec.image_path.display());
+    let (image, covered) = u.warp_image(&resize_area_u8(&photo, pw, ph)).with_context(context)?;
+    let mask = match labels {
+        Some(m) => Some(u.warp_labels(&resize_nearest(&m, pw, ph)).with_context(context)?),
+        None => None,
+    };
+    let blank = covered.data.iter().filter(|&&c| c == 0).count();
+    report.lens = Some(LensNote {
+        lens: u.lens.model.clone(),
+        describe: u.lens.distortion.describe(),
+        photo: spec.photo_size(),
+        pinhole: full,
+        views: 1,
+        blank,
+        pixels: covered.data.len(),
+    });
+    let covered = (blank > 0).then_some(covered);
+    let view = View { camera, image: image.quantised(), mask, covered, undistortion: Some(u) };
+    Ok((view, report))
+}
+
+/// A width and height.
+type Size = (u32, u32);
+
+/// What loading did to one view.
+struct ViewReport {
+    /// Its pinhole size and its training size, when they differ.
+    scaled: Option<(Size, Size)>,
+    lens: Option<LensNote>,
+}
+
+/// How many views were scaled, and the first one's sizes.
+#[derive(Clone, Copy)]
+struct Scaled {
+    views: usize,
+    from: Size,
+    to: Size,
+}
+
+/// What loading did to the photos, gathered over the views for the run's log.
+#[derive(Default)]
+struct LoadNotes {
+    lenses: Vec<LensNote>,
+    scaled: Option<Scaled>,
+}
+
+impl LoadNotes {
+    fn add(&mut self, report: ViewReport) {
+        if let Some((from, to)) = report.scaled {
+            self.scaled.get_or_insert(Scaled { views: 0, from, to }).views += 1;
+        }
+        if let Some(lens) = report.lens {
+            match self
+                .lenses
+                .iter_mut()
+                .find(|n| n.lens == lens.lens && n.describe == lens.describe)
+            {
+                Some(n) => n.views += 1,
+                None => self.lenses.push(lens),
+            }
+        }
+    }
+
+    fn lines(&self, resolution: Resolution) -> Vec<String> {
+        let mut lines: Vec<String> = self.lenses.iter().map(LensNote::line).collect();
+        if let (Some(s), Resolution::LongSide(side)) = (self.scaled, resolution) {
+            let (n, (fw, fh), (w, h)) = (s.views, s.from, s.to);
+            lines.push(format!(
+                "{n} photos longer than {side} px are trained at {side} on their longer side \
+                 ({fw}x{fh} -> {w}x{h}); --full-size keeps their size, --resolution or \
+                 --downscale choose another"
+            ));
+        }
+        lines
+    }
+}
+
 /// What the loader did to the photos of one lens, for the run's log.
 struct LensNote {
     lens: String,
@@ -224,6 +362,11 @@ impl LensNote {
 pub fn target_size(w: u32, h: u32, resolution: Resolution) -> Result<(u32, u32)> {
     let (tw, th) = match resolution {
         Resolution::Original => (w, h),
+        Resolution::LongSide(side) if w.max(h) > side => {
+            let s = f64::from(side) / f64::from(w.max(h));
+            ((f64::from(w) * s).round() as u32, (f64::from(h) * s).round() as u32)
+        }
+        Resolution::LongSide(_) => (w, h),
         Resolution::Downscale(f) => {
             if !(f >= 1.0 && f.is_finite()) {
                 bail!("--downscale {f}: expected a factor of at least 1");
@@ -244,6 +387,18 @@ pub fn resize_area(im: &Image<f32>, w: u32, h: u32) -> Image<f32> {
     if (im.width, im.height) == (w, h) {
         return im.clone();
     }
+    area_resample(im, w, h, f64::from)
+}
+
+/// [`resize_area`] of an 8-bit image (samples k / 255), to [0, 1].
+pub fn resize_area_u8(im: &Image<u8>, w: u32, h: u32) -> Image<f32> {
+    if (im.width, im.height) == (w, h) {
+        return im.to_f32();
+    }
+    area_resample(im, w, h, |v| f64::from(v) / 255.0)
+}
+
+fn area_resample<T: Copy>(im: &Image<T>, w: u32, h: u32, value: impl Fn(T) -> f64) -> Image<f32> {
     let ch = im.channels as usize;
     let sx = f64::from(im.width) / f64::from(w);
     let sy = f64::from(im.height) / f64::from(h);
@@ -272,7 +427,7 @@ pub fn resize_area(im: &Image<f32>, w: u32, h: u32) -> Image<f32> {
                     total += wgt;
                     let base = (iy as usize * im.width as usize + ix as usize) * ch;
                     for (c, a) in acc.iter_mut().enumerate() {
-                        *a += wgt * f64::from(im.data[base + c]);
+                        *a += wgt * value(im.data[base + c]);
                     }
                 }
             }
@@ -308,9 +463,18 @@ pub fn resize_nearest(im: &Image<u8>, w: u32, h: u32) -> Image<u8> {
 
 /// Load `root` (a scene folder) at `resolution`.
 pub fn load(root: &Path, resolution: Resolution) -> Result<TrainingData> {
+    load_with_progress(root, resolution, &|_, _| {})
+}
+
+/// [`load`], reporting each loaded view as [`TrainingData::load_with_progress`].
+pub fn load_with_progress(
+    root: &Path,
+    resolution: Resolution,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<TrainingData> {
     let folder = SceneFolder::open(root)
         .with_context(|| format!("opening the scene folder {}", root.display()))?;
-    TrainingData::load(&folder, resolution)
+    TrainingData::load_with_progress(&folder, resolution, progress)
 }
 
 #[cfg(test)]
@@ -338,5 +502,12 @@ mod tests {
         assert_eq!(target_size(1000, 750, Resolution::Width(256)).expect("valid size"), (256, 192));
         assert!(target_size(10, 10, Resolution::Downscale(0.5)).is_err());
         assert!(target_size(10, 10, Resolution::Width(0)).is_err());
+        // The default keeps photos up to 1600 px and scales larger ones down to it.
+        let default = Resolution::from_flags(None, None, false);
+        assert_eq!(target_size(4000, 3000, default).expect("valid"), (1600, 1200));
+        assert_eq!(target_size(3000, 4000, default).expect("valid"), (1200, 1600));
+        assert_eq!(target_size(1280, 960, default).expect("valid"), (1280, 960));
+        let full = Resolution::from_flags(None, None, true);
+        assert_eq!(target_size(4000, 3000, full).expect("valid"), (4000, 3000));
     }
 }

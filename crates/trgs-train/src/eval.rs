@@ -57,7 +57,8 @@ pub fn evaluate(
     let mut rows = Vec::new();
     for v in data.eval_views() {
         let color = covered_only(model.layer(v, Layer::Color)?, v.covered.as_ref());
-        rows.push((v.camera.name.clone(), psnr(&color, &v.image)?, ssim(&color, &v.image)?));
+        let image = v.image.to_f32();
+        rows.push((v.camera.name.clone(), psnr(&color, &image)?, ssim(&color, &image)?));
     }
     let n = rows.len().max(1) as f64;
     Ok(Evaluation {
@@ -262,15 +263,25 @@ pub fn compare_with_truth(
             continue;
         }
         let truth = read_rgb_image(&path)?;
-        let truth = resize_area(&truth, v.camera.width(), v.camera.height());
+        // The truth is a photo like the view's own: through its lens, when it has one.
+        let truth = match &v.undistortion {
+            None => resize_area(&truth, v.camera.width(), v.camera.height()),
+            Some(u) => {
+                let (pw, ph) = u.photo_size();
+                u.warp_image(&resize_area(&truth, pw, ph))
+                    .with_context(|| path.display().to_string())?
+                    .0
+            }
+        };
         let frame = model.frame(v)?;
+        let image = v.image.to_f32();
         let t = frame.read_layer(model.ctx, Layer::Transmission)?;
         psnrs.push(psnr(&t, &truth)?);
         let color = frame.read_layer(model.ctx, Layer::Color)?;
         let context = || format!("comparing {} with {}", v.camera.name, path.display());
         let splits = [
-            region_errors(&color, &v.image, &v.image, &truth).with_context(context)?,
-            region_errors(&t, &truth, &v.image, &truth).with_context(context)?,
+            region_errors(&color, &image, &image, &truth).with_context(context)?,
+            region_errors(&t, &truth, &image, &truth).with_context(context)?,
         ];
         for (totals, split) in regions.iter_mut().zip(splits) {
             for (total, part) in totals.iter_mut().zip(split) {

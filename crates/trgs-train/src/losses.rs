@@ -65,7 +65,7 @@ impl GpuTarget {
     pub fn upload(
         ctx: &GpuContext,
         name: &str,
-        image: &Image<f32>,
+        image: &Image<u8>,
         mask: Option<&Image<u8>>,
         covered: Option<&Image<u8>>,
     ) -> Result<Self, LossError> {
@@ -90,7 +90,7 @@ impl GpuTarget {
             .enumerate()
             .map(|(i, c)| {
                 let alpha = if is_covered(i) { 255 } else { 0 };
-                u32::from_le_bytes([unorm8(c[0]), unorm8(c[1]), unorm8(c[2]), alpha])
+                u32::from_le_bytes([c[0], c[1], c[2], alpha])
             })
             .collect();
         let annotation = match mask {
@@ -126,11 +126,6 @@ impl GpuTarget {
     pub fn has_annotation(&self) -> bool {
         self.annotation.is_some()
     }
-}
-
-/// `v` in [0, 1] to the nearest of 256 levels (WGSL's `unpack4x8unorm` reads it back as k / 255).
-fn unorm8(v: f32) -> u8 {
-    (v.clamp(0.0, 1.0) * 255.0).round() as u8
 }
 
 /// The loss weights of a step.

@@ -119,7 +119,7 @@ impl Default for ReflectedSpaceSeeds {
 /// where photos of windows show what is behind the photographer; the mirrored passes' gradients
 /// then train and densify them as the camera's pass does for the rest.
 pub fn reflected_space_seeds(
-    views: &[(&Camera, &Image<f32>)],
+    views: &[(&Camera, &Image<u8>)],
     planes: &[ReflectionPlane],
     extent: f64,
     settings: &ReflectedSpaceSeeds,
@@ -160,7 +160,8 @@ pub fn reflected_space_seeds(
                 let log_scale = (2.0 * (s + t) / k.fx).ln() as f32;
                 let (x, y) = ((px as u32).min(k.width - 1), (py as u32).min(k.height - 1));
                 let mut sh = vec![[0.0f32; 3]; coeffs];
-                sh[0] = [0, 1, 2].map(|ch| ((f64::from(image.get(x, y, ch)) - 0.5) / C0) as f32);
+                let colour = |ch| f64::from(image.get(x, y, ch)) / 255.0;
+                sh[0] = [0, 1, 2].map(|ch| ((colour(ch) - 0.5) / C0) as f32);
                 out.push(
                     q.to_array().map(|v| v as f32),
                     [1.0, 0.0, 0.0, 0.0],
@@ -258,8 +259,8 @@ mod tests {
             camera_at(DVec3::new(0.0, 0.0, 3.0), DVec3::ZERO),
             camera_at(DVec3::new(1.0, 0.3, 2.5), DVec3::ZERO),
         ];
-        let mut image = Image::<f32>::new(64, 48, 3);
-        image.data.iter_mut().enumerate().for_each(|(i, v)| *v = (i % 7) as f32 / 7.0);
+        let mut image = Image::<u8>::new(64, 48, 3);
+        image.data.iter_mut().enumerate().for_each(|(i, v)| *v = (i % 7 * 36) as u8);
         let views: Vec<_> = cams.iter().map(|c| (c, &image)).collect();
         let settings = ReflectedSpaceSeeds { count: 200, ..Default::default() };
         let mut rng = Rng::new(3);

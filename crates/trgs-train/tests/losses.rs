@@ -147,9 +147,14 @@ fn check(
         geometry: &geometry,
         hit: &hit,
     };
-    let target =
-        GpuTarget::upload(ctx, "test", &l.target, labelled.then_some(&l.annotation), covered)
-            .expect("rgb");
+    let target = GpuTarget::upload(
+        ctx,
+        "test",
+        &l.target.quantised(),
+        labelled.then_some(&l.annotation),
+        covered,
+    )
+    .expect("rgb");
     let poisoned = |name: &str, bytes: u64| gpu::storage(ctx, name, bytes);
     let grads = LayerGrads {
         color: poisoned("test.g.color", pixels * 16),
@@ -272,12 +277,15 @@ fn a_target_of_the_wrong_shape_is_refused() {
     let ctx = GpuContext::new().expect("adapter");
     let mut rng = Rng::new(6);
     let grey = random(8, 8, 1, &mut rng);
-    let err = GpuTarget::upload(&ctx, "grey.png", &grey, None, None).expect_err("one channel");
+    let err = GpuTarget::upload(&ctx, "grey.png", &grey.quantised(), None, None)
+        .expect_err("one channel");
     assert!(err.to_string().contains("grey.png"), "{err}");
     let rgb = random(8, 8, 3, &mut rng);
     let mask = Image::<u8>::new(8, 7, 1);
-    let err = GpuTarget::upload(&ctx, "view.png", &rgb, Some(&mask), None).expect_err("mask size");
+    let err = GpuTarget::upload(&ctx, "view.png", &rgb.quantised(), Some(&mask), None)
+        .expect_err("mask size");
     assert!(err.to_string().contains("8x7"), "{err}");
-    let err = GpuTarget::upload(&ctx, "view.png", &rgb, None, Some(&mask)).expect_err("coverage");
+    let err = GpuTarget::upload(&ctx, "view.png", &rgb.quantised(), None, Some(&mask))
+        .expect_err("coverage");
     assert!(err.to_string().contains("coverage of view.png: 8x7"), "{err}");
 }

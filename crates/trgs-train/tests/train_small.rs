@@ -16,7 +16,7 @@ fn test_psnr(trainer: &Trainer, data: &data::TrainingData) -> f64 {
     for v in &data.test {
         let frame = trainer.render(&v.camera).expect("render");
         let c = frame.read_layer(trainer.context(), Layer::Color).expect("readback");
-        sum += psnr(&c, &v.image).expect("same size");
+        sum += psnr(&c, &v.image.to_f32()).expect("same size");
     }
     sum / data.test.len() as f64
 }

@@ -30,13 +30,17 @@ struct Args {
     /// scene]
     #[arg(long, value_name = "DIR")]
     data: Option<PathBuf>,
-    /// Evaluate at width W [default: the images' size]
+    /// Evaluate at width W [default: the images' size, up to 1600 px on the longer side]
     #[arg(long, value_name = "W", conflicts_with = "downscale",
           value_parser = clap::value_parser!(u32).range(1..))]
     resolution: Option<u32>,
     /// Evaluate at 1/F of the image size
     #[arg(long, value_name = "F", value_parser = parse_positive)]
     downscale: Option<f64>,
+    /// Evaluate at the photos' own size (by default, as in training, a photo whose longer side
+    /// exceeds 1600 px is evaluated at 1600)
+    #[arg(long, conflicts_with_all = ["resolution", "downscale"])]
+    full_size: bool,
     /// The views to measure: how well the model fits the views it was trained on, or new ones
     #[arg(long, value_enum, default_value = "test")]
     split: SplitArg,
@@ -60,8 +64,11 @@ fn main() -> Result<()> {
         _ => bail!("--data is required: {} has no dataset/ folder", args.model.display()),
     };
     let model = load_model(&args.model, args.planes.as_deref())?;
-    let data = data::load(&data_dir, Resolution::from_flags(args.resolution, args.downscale))?
-        .evaluate_on(split);
+    let data = data::load(
+        &data_dir,
+        Resolution::from_flags(args.resolution, args.downscale, args.full_size),
+    )?
+    .evaluate_on(split);
     let ctx = GpuContext::new()?;
     let scene = GpuScene::upload(&ctx, &model.gaussians, &model.planes)
         .with_context(|| format!("uploading {}", model.ply.display()))?;

@@ -105,10 +105,23 @@ fn say(bar: &ProgressBar, line: String) {
 /// The run from its start or its checkpoint, its events shown on the terminal and, when a
 /// viewer watches, published to `feed`.
 fn train(start: Start, feed: Option<&LiveFeed>) -> Result<()> {
-    let mut run = match start {
-        Start::New(config) => TrainingRun::new(config)?,
-        Start::Resume(out) => TrainingRun::resume(&out)?,
+    // The photos load on several threads; the bar counts them, then gives way to the steps'.
+    let loading = ProgressBar::new(0);
+    loading.set_style(
+        ProgressStyle::with_template("loading photos {bar:40} {pos}/{len}  eta {eta}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let bar = loading.clone();
+    let progress = move |done: usize, total: usize| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
     };
+    let run = match start {
+        Start::New(config) => TrainingRun::new_with_progress(config, &progress),
+        Start::Resume(out) => TrainingRun::resume_with_progress(&out, &progress),
+    };
+    loading.finish_and_clear();
+    let mut run = run?;
     if let Some(feed) = feed {
         feed.set_cameras(run.cameras());
     }

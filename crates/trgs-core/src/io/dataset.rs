@@ -11,7 +11,7 @@ use super::colmap::ColmapModel;
 use super::masks::{mask_path, read_glass_mask};
 use super::planes_json::{PlaneSpec, read_planes_json};
 use super::ply::read_point_cloud_ply;
-use super::png::read_rgb_image;
+use super::png::read_rgb8_image;
 use super::test_split::{default_test_views, read_test_views};
 use super::transforms::{
     TransformsFrame, name_by_relative_path_if_needed, read_transforms, transforms_point_cloud,
@@ -188,11 +188,11 @@ impl SceneFolder {
         })
     }
 
-    /// The RGB image file of view `i` as it is (the photo's own size, distorted if its lens
-    /// distorts: [`ViewSpec::undistortion`] resamples it).
-    pub fn load_image(&self, i: usize) -> Result<Image<f32>, FormatError> {
+    /// The RGB image file of view `i` as it is, 8 bits per sample (the photo's own size,
+    /// distorted if its lens distorts: [`ViewSpec::undistortion`] resamples it).
+    pub fn load_image(&self, i: usize) -> Result<Image<u8>, FormatError> {
         let view = self.view(i)?;
-        let image = read_rgb_image(&view.image_path)?;
+        let image = read_rgb8_image(&view.image_path)?;
         let (w, h) = view.photo_size();
         if (image.width, image.height) != (w, h) {
             let problem = format!(
@@ -388,7 +388,7 @@ mod tests {
         assert_eq!(scene.views[1].mask_path, Some(root.join("glass_masks/b.png")));
         assert_eq!(scene.points, [([1.0, 2.0, 3.0], [9, 8, 7])]);
         assert!(scene.is_test("b.png") && !scene.is_test("a.png"));
-        assert_eq!(scene.load_image(1).expect("image").data[0], 128.0 / 255.0);
+        assert_eq!(scene.load_image(1).expect("image").data[0], 128);
         assert_eq!(scene.load_mask(1).expect("mask"), Some(mask));
         assert_eq!(scene.load_mask(0).expect("no mask"), None);
         assert_eq!(scene.mask_labels().expect("labels"), [2, 5]);

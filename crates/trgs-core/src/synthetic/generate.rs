@@ -10,6 +10,7 @@ use super::render_views::render_all;
 use super::texture::Texture;
 use super::trace::{Object, Pane, Shape, World};
 use super::{Backdrop, GLASS_R0, MIRROR_R0, PaneKind, SyntheticConfig, SyntheticScene};
+use crate::lens::Distortion;
 use crate::scene::{Camera, Intrinsics, Material, Pose, ReflectionPlane};
 
 /// Subsamples per pixel side: 2x2 rays per pixel.
@@ -99,6 +100,8 @@ pub(crate) struct Layout {
     pub planes: Vec<ReflectionPlane>,
     /// Frame bars and sills (local boxes), sampled preferentially for sparse points.
     pub frame_boxes: Boxes,
+    /// The photos' lens distortion (None: pinhole photos).
+    pub lens: Option<Distortion>,
 }
 
 const fn rgb(r: f64, g: f64, b: f64) -> DVec3 {
@@ -470,12 +473,18 @@ pub(crate) fn layout(config: &SyntheticConfig) -> Layout {
             plane
         })
         .collect();
-    Layout { world, placement, cameras, planes, frame_boxes }
+    Layout { world, placement, cameras, planes, frame_boxes, lens: config.lens.distortion() }
 }
 
 /// The local-frame ray through the continuous pixel position `(px, py)`.
 pub(crate) fn local_ray(layout: &Layout, camera: &Camera, px: f64, py: f64) -> Ray {
-    let d = camera.pose.direction_to_world(camera.intrinsics.unproject(px, py));
+    let pinhole = camera.intrinsics.unproject(px, py);
+    // Through a lens the photo's pixel shows the direction whose distortion lands there.
+    let dir = match layout.lens.and_then(|d| d.undistort(pinhole.x, pinhole.y)) {
+        Some((x, y)) => DVec3::new(x, y, 1.0),
+        None => pinhole,
+    };
+    let d = camera.pose.direction_to_world(dir);
     Ray::new(
         layout.placement.point_to_local(camera.pose.centre()),
         layout.placement.dir_to_local(d).normalize(),
@@ -483,13 +492,25 @@ pub(crate) fn local_ray(layout: &Layout, camera: &Camera, px: f64, py: f64) -> R
 }
 
 /// Project a world point into a camera: pixel position if it is in front and inside the image.
+#[cfg(test)]
 pub(crate) fn project(camera: &Camera, p: DVec3) -> Option<[f64; 2]> {
+    project_through(None, camera, p)
+}
+
+/// [`project`] through a lens: the photo's pixel position of `p`.
+pub(crate) fn project_through(
+    lens: Option<Distortion>,
+    camera: &Camera,
+    p: DVec3,
+) -> Option<[f64; 2]> {
     let q = camera.pose.transform_point(p);
     if q.z <= 1e-3 {
         return None;
     }
+    let (x, y) = (q.x / q.z, q.y / q.z);
+    let (x, y) = lens.map_or((x, y), |d| d.distort(x, y));
     let k = &camera.intrinsics;
-    let (u, v) = (k.fx * q.x / q.z + k.cx, k.fy * q.y / q.z + k.cy);
+    let (u, v) = (k.fx * x + k.cx, k.fy * y + k.cy);
     let inside = u >= 0.0 && v >= 0.0 && u < f64::from(k.width) && v < f64::from(k.height);
     inside.then_some([u, v])
 }
@@ -513,6 +534,7 @@ pub fn generate(config: &SyntheticConfig) -> SyntheticScene {
     let (points, tracks) = sparse_points(&layout, config.sparse_points, config.seed);
     let mut scene = SyntheticScene {
         cameras: layout.cameras.clone(),
+        lens: config.lens,
         images: Vec::with_capacity(views.len()),
         transmission: Vec::with_capacity(views.len()),
         masks: Vec::with_capacity(views.len()),

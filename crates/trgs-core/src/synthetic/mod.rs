@@ -51,6 +51,7 @@ pub use generate::generate;
 pub use write::{colmap_model, write_dataset};
 
 use crate::image::Image;
+use crate::lens::Distortion;
 use crate::scene::{Camera, ReflectionPlane};
 
 /// What a pane is made of; the truth's base reflectance follows from it.
@@ -122,6 +123,46 @@ pub struct SyntheticConfig {
     pub reflected_lights: usize,
     /// How the cameras move in front of the glass.
     pub path: CameraPath,
+    /// The lens the photos are taken through (their COLMAP model).
+    pub lens: SyntheticLens,
+}
+
+/// The lens of the synthetic photos: a pinhole, or a distorting lens whose photos the loader must
+/// undistort (the scale fixture's camera model of choice). The distorting lenses keep the
+/// pinhole's focal length, so their photos see a little more of the room.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SyntheticLens {
+    #[default]
+    Pinhole,
+    /// OPENCV with a phone main camera's mild barrel distortion and a little decentring.
+    Opencv,
+    /// OPENCV_FISHEYE, an action camera's equidistant lens.
+    OpencvFisheye,
+}
+
+impl SyntheticLens {
+    pub const ALL: [SyntheticLens; 3] = [Self::Pinhole, Self::Opencv, Self::OpencvFisheye];
+
+    /// The lens's distortion; None for the pinhole.
+    pub fn distortion(self) -> Option<Distortion> {
+        match self {
+            Self::Pinhole => None,
+            Self::Opencv => Some(Distortion::RadialTangential {
+                k: [-0.12, 0.03, 0.0, 0.0, 0.0, 0.0],
+                p: [5e-4, -3e-4],
+            }),
+            Self::OpencvFisheye => Some(Distortion::Fisheye { k: [0.03, -0.005, 0.001, 0.0] }),
+        }
+    }
+
+    /// COLMAP's name of the model the photos are written with.
+    pub fn colmap_model(self) -> &'static str {
+        match self {
+            Self::Pinhole => "PINHOLE",
+            Self::Opencv => "OPENCV",
+            Self::OpencvFisheye => "OPENCV_FISHEYE",
+        }
+    }
 }
 
 /// The path of the `views` cameras in front of the pane wall; every 8th view is a test view.
@@ -168,6 +209,7 @@ impl Default for SyntheticConfig {
             pane_turn_deg: Vec::new(),
             reflected_lights: 0,
             path: CameraPath::Loop,
+            lens: SyntheticLens::Pinhole,
         }
     }
 }
@@ -207,8 +249,10 @@ impl SyntheticConfig {
 /// A generated dataset with its ground truth.
 #[derive(Clone, Debug)]
 pub struct SyntheticScene {
-    /// PINHOLE cameras named `view_000.png`, ...
+    /// The photos' cameras named `view_000.png`, ...: their camera matrices, with `lens`.
     pub cameras: Vec<Camera>,
+    /// The lens every photo is taken through.
+    pub lens: SyntheticLens,
     /// Final composites, RGB in [0, 1].
     pub images: Vec<Image<f32>>,
     /// Ground-truth transmission `C_t` (the scene with no pane at all), RGB in [0, 1].

@@ -2,7 +2,7 @@
 //! with colours and COLMAP-like tracks, and a share drawn on the pane frames.
 use glam::DVec3;
 
-use super::generate::{Layout, local_ray, project};
+use super::generate::{Layout, local_ray, project_through};
 use super::geom::Ray;
 use crate::rng::Rng;
 
@@ -64,7 +64,8 @@ pub(crate) fn sparse_points(layout: &Layout, target: usize, seed: u64) -> Points
         let p_world = layout.placement.point_to_world(p_local);
         let seen: Vec<usize> = (0..cams.len())
             .filter(|&i| {
-                project(&cams[i], p_world).is_some() && layout.world.visible(eyes[i], p_local)
+                project_through(layout.lens, &cams[i], p_world).is_some()
+                    && layout.world.visible(eyes[i], p_local)
             })
             .collect();
         let Some(&first) = seen.first() else { continue };
@@ -79,8 +80,10 @@ pub(crate) fn sparse_points(layout: &Layout, target: usize, seed: u64) -> Points
         let colour = layout.world.shade(&hit);
         let noise = DVec3::new(rng.normal(), rng.normal(), rng.normal()) * POINT_NOISE;
         let noisy = p_world + noise;
-        let track: Vec<usize> =
-            seen.into_iter().filter(|&i| project(&cams[i], noisy).is_some()).collect();
+        let track: Vec<usize> = seen
+            .into_iter()
+            .filter(|&i| project_through(layout.lens, &cams[i], noisy).is_some())
+            .collect();
         if track.len() < 2 {
             continue;
         }

@@ -13,7 +13,7 @@ pub(crate) struct View {
     pub labels: Image<u8>,
 }
 
-fn render_view(layout: &Layout, camera: &Camera) -> View {
+pub(crate) fn render_view(layout: &Layout, camera: &Camera) -> View {
     let (w, h) = (camera.width(), camera.height());
     let mut image = Image::new(w, h, 3);
     let mut transmission = Image::new(w, h, 3);

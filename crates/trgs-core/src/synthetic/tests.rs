@@ -462,3 +462,58 @@ fn turned_pane_and_light_panels() {
     println!("the light panels brighten a pixel by up to {brighter:.3}");
     assert!(brighter > 0.3, "lamps brighter than white stand out in the glass");
 }
+
+/// A photo through each distorting lens, undistorted, shows what the pinhole camera the
+/// undistortion chose sees when rendered directly: the lens in the generator and the inverse in
+/// the loader agree. Undistorting as if the lens did not distort is far worse, so the comparison
+/// measures the lens, not just the resampling.
+#[test]
+fn undistorted_photos_match_a_direct_pinhole_render() {
+    use super::render_views::render_view;
+    use crate::lens::{Lens, Undistortion};
+    use crate::metrics::psnr;
+    for lens in [SyntheticLens::Opencv, SyntheticLens::OpencvFisheye] {
+        let config = SyntheticConfig { width: 160, height: 120, lens, ..SyntheticConfig::small() };
+        let lay = layout(&config);
+        let photo_camera = &lay.cameras[3];
+        let photo = render_view(&lay, photo_camera).image;
+        let distortion = lens.distortion().expect("a distorting lens");
+        let undistortion = Undistortion::new(Lens {
+            model: lens.colmap_model().into(),
+            intrinsics: photo_camera.intrinsics,
+            distortion,
+        })
+        .expect("inverts");
+        let (image, covered) = undistortion.warp_image(&photo).expect("size matches");
+        let pinhole_layout =
+            layout(&SyntheticConfig { lens: SyntheticLens::Pinhole, ..config.clone() });
+        let mut pinhole_camera = photo_camera.clone();
+        pinhole_camera.intrinsics = undistortion.pinhole;
+        let direct = render_view(&pinhole_layout, &pinhole_camera).image;
+        let only_covered = |mut im: crate::image::Image<f32>| {
+            for (i, v) in im.data.iter_mut().enumerate() {
+                if covered.data[i / 3] == 0 {
+                    *v = 0.0;
+                }
+            }
+            im
+        };
+        let agreement = psnr(&only_covered(direct.clone()), &image).expect("same size");
+        // The same resampling with the lens ignored.
+        let identity = Undistortion {
+            lens: Lens {
+                distortion: crate::lens::Distortion::RadialTangential { k: [0.0; 6], p: [0.0; 2] },
+                ..undistortion.lens.clone()
+            },
+            pinhole: undistortion.pinhole,
+        };
+        let (ignored, _) = identity.warp_image(&photo).expect("size matches");
+        let ignoring = psnr(&only_covered(direct), &only_covered(ignored)).expect("same size");
+        println!("{lens:?}: {agreement:.2} dB, lens ignored {ignoring:.2} dB");
+        assert!(agreement > 27.0, "{lens:?}: undistorted photo {agreement:.2} dB from the pinhole");
+        assert!(
+            agreement > ignoring + 6.0,
+            "{lens:?}: {agreement:.2} dB, lens ignored {ignoring:.2}"
+        );
+    }
+}

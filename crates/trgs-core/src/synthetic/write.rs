@@ -2,7 +2,7 @@
 //!
 //! ```text
 //! images/<name>                 composites (8-bit RGB PNG)
-//! sparse/0/{cameras,images,points3D}.bin   COLMAP model (PINHOLE), tracks consistent
+//! sparse/0/{cameras,images,points3D}.bin   COLMAP model (the lens's), tracks consistent
 //! glass_masks/<name>            8-bit labels, masked training views only
 //! planes.json                   the planes' materials per label (only when there are panes)
 //! test_views.txt                the test split
@@ -11,8 +11,9 @@
 //! ```
 use std::path::Path;
 
-use super::SyntheticScene;
+use super::{SyntheticLens, SyntheticScene};
 use crate::io::{ColmapCamera, ColmapImage, ColmapModel, ColmapPoint, FormatError};
+use crate::lens::Distortion;
 use crate::scene::Camera;
 
 /// Write the scene folder described in the module documentation into `dir`.
@@ -40,26 +41,39 @@ pub fn write_dataset(scene: &SyntheticScene, dir: &Path) -> Result<(), FormatErr
     crate::io::write_test_views(&dir.join("test_views.txt"), &scene.test_views)
 }
 
-/// Pixel position of world point `p` in `camera` (COLMAP and trgs both put pixel centres at
-/// +0.5), or `None` behind the camera.
-fn pixel(camera: &Camera, p: [f64; 3]) -> Option<[f64; 2]> {
+/// Pixel position of world point `p` in the photo of `camera` through `lens` (COLMAP and trgs
+/// both put pixel centres at +0.5), or `None` behind the camera.
+fn pixel(camera: &Camera, lens: SyntheticLens, p: [f64; 3]) -> Option<[f64; 2]> {
     let q = camera.pose.transform_point(glam::DVec3::from_array(p));
     if q.z <= 0.0 {
         return None;
     }
+    let (x, y) = (q.x / q.z, q.y / q.z);
+    let (x, y) = lens.distortion().map_or((x, y), |d| d.distort(x, y));
     let k = &camera.intrinsics;
-    Some([k.fx * q.x / q.z + k.cx, k.fy * q.y / q.z + k.cy])
+    Some([k.fx * x + k.cx, k.fy * y + k.cy])
 }
 
-/// The scene's cameras, poses and sparse points as a COLMAP model: one PINHOLE camera per
-/// distinct intrinsics, image ids from 1 in view order, point ids from 1, and each point's track
+/// COLMAP's parameter list of a camera matrix with `lens`.
+fn colmap_params(k: &crate::scene::Intrinsics, lens: SyntheticLens) -> Vec<f64> {
+    let mut params = vec![k.fx, k.fy, k.cx, k.cy];
+    match lens.distortion() {
+        None => {}
+        Some(Distortion::RadialTangential { k, p }) => params.extend([k[0], k[1], p[0], p[1]]),
+        Some(Distortion::Fisheye { k }) => params.extend(k),
+    }
+    params
+}
+
+/// The scene's cameras, poses and sparse points as a COLMAP model: one camera of the lens's model
+/// per distinct intrinsics, image ids from 1 in view order, point ids from 1, and each point's track
 /// naming the images that see it with the index of its observation in their `points2d`.
 pub fn colmap_model(scene: &SyntheticScene) -> ColmapModel {
     let mut cameras: Vec<ColmapCamera> = Vec::new();
     let mut images = Vec::with_capacity(scene.cameras.len());
     for (i, cam) in scene.cameras.iter().enumerate() {
         let k = &cam.intrinsics;
-        let params = vec![k.fx, k.fy, k.cx, k.cy];
+        let params = colmap_params(k, scene.lens);
         let same = |c: &ColmapCamera| {
             c.width == u64::from(k.width) && c.height == u64::from(k.height) && c.params == params
         };
@@ -69,7 +83,7 @@ pub fn colmap_model(scene: &SyntheticScene) -> ColmapModel {
                 let id = cameras.len() as u32 + 1;
                 cameras.push(ColmapCamera {
                     id,
-                    model: "PINHOLE".to_string(),
+                    model: scene.lens.colmap_model().to_string(),
                     width: u64::from(k.width),
                     height: u64::from(k.height),
                     params,
@@ -92,7 +106,7 @@ pub fn colmap_model(scene: &SyntheticScene) -> ColmapModel {
         let mut track = Vec::with_capacity(views.len());
         for &v in views {
             // The generator only lists cameras the point projects into, in front of them.
-            let Some(uv) = pixel(&scene.cameras[v], *xyz) else { continue };
+            let Some(uv) = pixel(&scene.cameras[v], scene.lens, *xyz) else { continue };
             let image = &mut images[v];
             track.push((image.id, image.points2d.len() as u32));
             image.points2d.push((uv, id as i64));

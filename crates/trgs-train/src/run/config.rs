@@ -8,7 +8,7 @@ use crate::settings::TrainSettings;
 use anyhow::{Result, bail};
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
-use trgs_core::synthetic::SyntheticConfig;
+use trgs_core::synthetic::{SyntheticConfig, SyntheticLens};
 
 /// MCMC's cap on the Gaussian count when `--cap` is not given.
 pub const DEFAULT_MCMC_CAP: usize = 300_000;
@@ -24,6 +24,27 @@ pub struct RunConfig {
     /// The built-in synthetic scene trained on without --data
     #[arg(long, value_enum, value_name = "SCENE", default_value = "showcase")]
     pub demo_scene: DemoScene,
+    /// The built-in scene's photo size, e.g. 1600x1200 [default: 256x192]
+    #[arg(long, value_name = "WxH", value_parser = parse_size, conflicts_with = "data")]
+    #[serde(default)]
+    pub demo_size: Option<(u32, u32)>,
+    /// Views on the built-in scene's camera loop, every 8th a test view (8 views looking back
+    /// into the camera room come on top) [default: 40]
+    #[arg(long, value_name = "N", conflicts_with = "data",
+          value_parser = clap::value_parser!(u32).range(2..))]
+    #[serde(default)]
+    pub demo_views: Option<u32>,
+    /// The lens the built-in scene's photos are taken through (written as its COLMAP model;
+    /// training undistorts them)
+    #[arg(
+        long,
+        value_enum,
+        value_name = "MODEL",
+        default_value = "pinhole",
+        conflicts_with = "data"
+    )]
+    #[serde(default)]
+    pub demo_camera: DemoCamera,
     /// Output folder
     #[arg(long, value_name = "DIR", default_value = "runs/demo")]
     pub out: PathBuf,
@@ -32,7 +53,8 @@ pub struct RunConfig {
     #[arg(long, value_name = "N", default_value_t = 1000,
           value_parser = clap::value_parser!(u32).range(1..))]
     pub iterations: u32,
-    /// Train at width W (the height keeps the aspect ratio) [default: the images' size]
+    /// Train at width W (the height keeps the aspect ratio) [default: the images' size, up to
+    /// 1600 px on the longer side]
     #[arg(long, value_name = "W", conflicts_with = "downscale",
           value_parser = clap::value_parser!(u32).range(1..))]
     #[serde(default)]
@@ -41,6 +63,11 @@ pub struct RunConfig {
     #[arg(long, value_name = "F", value_parser = parse_positive)]
     #[serde(default)]
     pub downscale: Option<f64>,
+    /// Train at the photos' own size, however large (by default a photo whose longer side
+    /// exceeds 1600 px is trained at 1600)
+    #[arg(long, conflicts_with_all = ["resolution", "downscale"])]
+    #[serde(default)]
+    pub full_size: bool,
     /// Largest SH degree
     #[arg(long, value_name = "D", default_value_t = 3,
           value_parser = clap::value_parser!(u32).range(0..=3))]
@@ -82,6 +109,18 @@ pub struct RunConfig {
     pub profile: bool,
     #[command(flatten)]
     pub ablations: Ablations,
+}
+
+/// `WxH` with both sides at least 16 pixels (clap's parser of `--demo-size`).
+pub fn parse_size(v: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("{v:?}: expected WxH, e.g. 1600x1200, each side at least 16");
+    let (w, h) = v.split_once(['x', 'X']).ok_or_else(bad)?;
+    let (w, h) =
+        (w.trim().parse::<u32>().map_err(|_| bad())?, h.trim().parse::<u32>().map_err(|_| bad())?);
+    if w < 16 || h < 16 {
+        return Err(bad());
+    }
+    Ok((w, h))
 }
 
 /// A number above 0 (clap's parser of `--downscale`).
@@ -188,6 +227,69 @@ impl DemoScene {
     }
 }
 
+/// The lens of the built-in scene's photos (`--demo-camera`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, Serialize, Deserialize)]
+pub enum DemoCamera {
+    /// PINHOLE: no distortion
+    #[default]
+    Pinhole,
+    /// OPENCV: a phone camera's mild barrel distortion
+    Opencv,
+    /// OPENCV_FISHEYE: an action camera's fisheye
+    OpencvFisheye,
+}
+
+impl DemoCamera {
+    pub fn lens(self) -> SyntheticLens {
+        match self {
+            Self::Pinhole => SyntheticLens::Pinhole,
+            Self::Opencv => SyntheticLens::Opencv,
+            Self::OpencvFisheye => SyntheticLens::OpencvFisheye,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Pinhole => "pinhole",
+            Self::Opencv => "opencv",
+            Self::OpencvFisheye => "opencv-fisheye",
+        }
+    }
+}
+
+impl RunConfig {
+    /// The built-in scene this run trains on without --data: the scene with its size, view count
+    /// and lens.
+    pub fn demo_config(&self) -> SyntheticConfig {
+        let mut c = self.demo_scene.config();
+        if let Some((w, h)) = self.demo_size {
+            (c.width, c.height) = (w, h);
+        }
+        if let Some(n) = self.demo_views {
+            c.views = n as usize;
+        }
+        c.lens = self.demo_camera.lens();
+        c
+    }
+
+    /// The flags that choose the built-in scene, as the dataset's marker file records them: the
+    /// scene's name, then any of --demo-size, --demo-views and --demo-camera not at their
+    /// defaults.
+    pub fn demo_flags(&self) -> String {
+        let mut s = self.demo_scene.name().to_string();
+        if let Some((w, h)) = self.demo_size {
+            s.push_str(&format!(" --demo-size {w}x{h}"));
+        }
+        if let Some(n) = self.demo_views {
+            s.push_str(&format!(" --demo-views {n}"));
+        }
+        if self.demo_camera != DemoCamera::Pinhole {
+            s.push_str(&format!(" --demo-camera {}", self.demo_camera.name()));
+        }
+        s
+    }
+}
+
 /// How the Gaussian count changes during training.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize, Deserialize)]
 pub enum DensifyMode {
@@ -234,6 +336,23 @@ impl RunConfig {
         if self.resolution.is_some() && self.downscale.is_some() {
             bail!("give one of --resolution and --downscale");
         }
+        if self.full_size && (self.resolution.is_some() || self.downscale.is_some()) {
+            bail!("--full-size keeps the photos' size: drop --resolution and --downscale");
+        }
+        let demo_shaped = self.demo_size.is_some()
+            || self.demo_views.is_some()
+            || self.demo_camera != DemoCamera::Pinhole;
+        if self.data.is_some() && demo_shaped {
+            bail!(
+                "--demo-size, --demo-views and --demo-camera shape the built-in scene: drop them with --data"
+            );
+        }
+        if let Some((w, h)) = self.demo_size.filter(|&(w, h)| w < 16 || h < 16) {
+            bail!("--demo-size {w}x{h}: each side must be at least 16");
+        }
+        if self.demo_views.is_some_and(|n| n < 2) {
+            bail!("--demo-views must be at least 2");
+        }
         if self.cap.is_some() && self.densify != DensifyMode::Mcmc {
             bail!("--cap is the MCMC count: it needs --densify mcmc");
         }
@@ -249,7 +368,7 @@ impl RunConfig {
 
     /// The training resolution.
     pub fn resolution(&self) -> Resolution {
-        Resolution::from_flags(self.resolution, self.downscale)
+        Resolution::from_flags(self.resolution, self.downscale, self.full_size)
     }
 
     /// The densification, with its schedule scaled to the run.
@@ -345,13 +464,33 @@ mod tests {
         assert_eq!((c.iterations, c.sh_degree, c.random_init), (1000, 3, 10_000));
         assert_eq!((c.demo_scene, c.densify), (DemoScene::Showcase, DensifyMode::Classic));
         assert_eq!(c.out, PathBuf::from("runs/demo"));
-        assert_eq!(c.resolution(), Resolution::Original);
+        assert_eq!(c.resolution(), Resolution::LongSide(crate::data::DEFAULT_LONG_SIDE));
         c.check().expect("the defaults are consistent");
     }
 
     #[test]
+    fn demo_flags_shape_the_built_in_scene_and_name_it() {
+        assert_eq!(parse_size("1600x1200"), Ok((1600, 1200)));
+        assert!(parse_size("1600").is_err() && parse_size("8x8").is_err());
+        let c = RunConfig {
+            demo_size: Some((1600, 1200)),
+            demo_views: Some(200),
+            demo_camera: DemoCamera::OpencvFisheye,
+            ..RunConfig::default()
+        };
+        let s = c.demo_config();
+        assert_eq!((s.width, s.height, s.views), (1600, 1200, 200));
+        assert_eq!(s.lens, SyntheticLens::OpencvFisheye);
+        assert_eq!(
+            c.demo_flags(),
+            "showcase --demo-size 1600x1200 --demo-views 200 --demo-camera opencv-fisheye"
+        );
+        assert_eq!(RunConfig::default().demo_flags(), "showcase", "old markers still match");
+    }
+
+    #[test]
     fn a_library_caller_gets_the_command_line_refusals() {
-        let bad: [(&str, RunConfig); 6] = [
+        let bad: [(&str, RunConfig); 9] = [
             ("--iterations", RunConfig { iterations: 0, ..RunConfig::default() }),
             ("--sh-degree", RunConfig { sh_degree: 4, ..RunConfig::default() }),
             ("--eval-every", RunConfig { eval_every: Some(0), ..RunConfig::default() }),
@@ -361,6 +500,19 @@ mod tests {
                 RunConfig { resolution: Some(64), downscale: Some(2.0), ..RunConfig::default() },
             ),
             ("--cap", RunConfig { cap: Some(10), ..RunConfig::default() }),
+            (
+                "--full-size keeps",
+                RunConfig { full_size: true, downscale: Some(2.0), ..RunConfig::default() },
+            ),
+            (
+                "drop them with --data",
+                RunConfig {
+                    data: Some(PathBuf::from("scene")),
+                    demo_camera: DemoCamera::Opencv,
+                    ..RunConfig::default()
+                },
+            ),
+            ("--demo-size 8x600", RunConfig { demo_size: Some((8, 600)), ..RunConfig::default() }),
         ];
         for (words, config) in bad {
             let err = config.check().expect_err(words).to_string();

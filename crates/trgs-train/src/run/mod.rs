@@ -40,6 +40,10 @@ pub use log::LOG_FILE;
 pub use outputs::RunSummary;
 pub use state::RunState;
 
+/// `loading(done, total)`: how many of the scene's photos are loaded, called from the loading
+/// threads.
+pub type LoadProgress = dyn Fn(usize, usize) + Sync;
+
 use crate::checkpoint::{CHECKPOINT_FILE, Checkpoint, read_checkpoint, write_checkpoint};
 use crate::data::{self, TrainingData};
 use crate::eval::{Evaluation, evaluate};
@@ -114,24 +118,41 @@ impl TrainingRun {
     /// A new run of `config` on the best adapter (removing a previous run's checkpoint in the
     /// same folder).
     pub fn new(config: RunConfig) -> Result<Self> {
+        Self::new_with_progress(config, &|_, _| {})
+    }
+
+    /// [`TrainingRun::new`], calling `loading(done, total)` as the photos load (from the
+    /// loading threads).
+    pub fn new_with_progress(config: RunConfig, loading: &LoadProgress) -> Result<Self> {
         // Refused before the device is set up.
         config.check()?;
-        Self::with_context(GpuContext::new()?, config)
+        let ctx = GpuContext::new()?;
+        Self::start(ctx, config, None, Vec::new(), loading)
     }
 
     /// A new run of `config` on `ctx`.
     pub fn with_context(ctx: GpuContext, config: RunConfig) -> Result<Self> {
         config.check()?;
-        Self::start(ctx, config, None, Vec::new())
+        Self::start(ctx, config, None, Vec::new(), &|_, _| {})
     }
 
     /// Continue the run in `out` from its checkpoint, with the settings it started with.
     pub fn resume(out: &Path) -> Result<Self> {
-        Self::resume_with_context(GpuContext::new()?, out)
+        Self::resume_with_progress(out, &|_, _| {})
+    }
+
+    /// [`TrainingRun::resume`] with the photos' loading progress, as
+    /// [`TrainingRun::new_with_progress`].
+    pub fn resume_with_progress(out: &Path, loading: &LoadProgress) -> Result<Self> {
+        Self::resume_on(GpuContext::new()?, out, loading)
     }
 
     /// [`TrainingRun::resume`] on `ctx`.
     pub fn resume_with_context(ctx: GpuContext, out: &Path) -> Result<Self> {
+        Self::resume_on(ctx, out, &|_, _| {})
+    }
+
+    fn resume_on(ctx: GpuContext, out: &Path, loading: &LoadProgress) -> Result<Self> {
         let path = out.join(CHECKPOINT_FILE);
         let ck = read_checkpoint(&path).with_context(|| {
             format!("--resume: no checkpoint to continue from in {}", out.display())
@@ -153,7 +174,7 @@ impl TrainingRun {
             )
         };
         let config = state.config.clone();
-        Self::start(ctx, config, Some((ck, state)), vec![RunEvent::Note(note)])
+        Self::start(ctx, config, Some((ck, state)), vec![RunEvent::Note(note)], loading)
     }
 
     fn start(
@@ -161,11 +182,12 @@ impl TrainingRun {
         config: RunConfig,
         resumed: Option<(Checkpoint, RunState)>,
         mut events: Vec<RunEvent>,
+        loading: &LoadProgress,
     ) -> Result<Self> {
         let mut note = |line: String| events.push(RunEvent::Note(line));
         let (data_dir, written) = dataset::dataset_dir(&config)?;
         written.into_iter().for_each(&mut note);
-        let data = load_data(&config, &data_dir, &mut note)?;
+        let data = load_data(&config, &data_dir, &mut note, loading)?;
         let out = config.out.clone();
         std::fs::create_dir_all(&out)
             .with_context(|| format!("creating the output folder {}", out.display()))?;
@@ -473,21 +495,25 @@ fn load_data(
     config: &RunConfig,
     data_dir: &Path,
     note: &mut impl FnMut(String),
+    loading: &LoadProgress,
 ) -> Result<TrainingData> {
-    let mut data = data::load(data_dir, config.resolution())?;
+    let started = Instant::now();
+    let mut data = data::load_with_progress(data_dir, config.resolution(), loading)?;
+    let seconds = started.elapsed().as_secs_f64();
     if config.no_planes {
         data.materials.clear();
     }
     let (w, h) = data.size();
     note(format!(
-        "dataset {}: {} training and {} test views at {w}x{h}, {} sparse points, extent {:.2}",
+        "dataset {}: {} training and {} test views at {w}x{h}, {} sparse points, extent {:.2} \
+         (loaded in {seconds:.1} s)",
         data_dir.display(),
         data.train.len(),
         data.test.len(),
         data.points.len(),
         data.extent
     ));
-    for line in &data.lens_notes {
+    for line in &data.notes {
         note(line.clone());
     }
     if config.no_planes {
