@@ -79,6 +79,54 @@ impl Image<f32> {
     }
 }
 
+impl<F: Copy + Default> Image<F> {
+    /// Resampled to `w x h` by nearest sample (labels stay labels).
+    pub fn resized_nearest(&self, w: u32, h: u32) -> Self {
+        let mut out = Image::<F>::new(w, h, self.channels);
+        let ch = self.channels as usize;
+        for y in 0..h {
+            let sy = ((f64::from(y) + 0.5) * f64::from(self.height) / f64::from(h)) as u32;
+            for x in 0..w {
+                let sx = ((f64::from(x) + 0.5) * f64::from(self.width) / f64::from(w)) as u32;
+                let src = (sy.min(self.height - 1) as usize * self.width as usize
+                    + sx.min(self.width - 1) as usize)
+                    * ch;
+                let dst = (y as usize * w as usize + x as usize) * ch;
+                out.data[dst..dst + ch].copy_from_slice(&self.data[src..src + ch]);
+            }
+        }
+        out
+    }
+}
+
+impl Image<f32> {
+    /// Resampled to `w x h` bilinearly (pixel centres aligned, edges clamped): for enlarging.
+    pub fn resized_bilinear(&self, w: u32, h: u32) -> Self {
+        let mut out = Image::<f32>::new(w, h, self.channels);
+        let ch = self.channels as usize;
+        let at = |x: i64, y: i64, c: usize| {
+            let x = x.clamp(0, i64::from(self.width) - 1) as usize;
+            let y = y.clamp(0, i64::from(self.height) - 1) as usize;
+            self.data[(y * self.width as usize + x) * ch + c]
+        };
+        for y in 0..h {
+            let fy = (f64::from(y) + 0.5) * f64::from(self.height) / f64::from(h) - 0.5;
+            let (y0, ty) = (fy.floor() as i64, (fy - fy.floor()) as f32);
+            for x in 0..w {
+                let fx = (f64::from(x) + 0.5) * f64::from(self.width) / f64::from(w) - 0.5;
+                let (x0, tx) = (fx.floor() as i64, (fx - fx.floor()) as f32);
+                let o = (y as usize * w as usize + x as usize) * ch;
+                for c in 0..ch {
+                    let top = at(x0, y0, c) * (1.0 - tx) + at(x0 + 1, y0, c) * tx;
+                    let bottom = at(x0, y0 + 1, c) * (1.0 - tx) + at(x0 + 1, y0 + 1, c) * tx;
+                    out.data[o + c] = top * (1.0 - ty) + bottom * ty;
+                }
+            }
+        }
+        out
+    }
+}
+
 impl Image<u8> {
     /// The samples as [0, 1] (k / 255).
     pub fn to_f32(&self) -> Image<f32> {

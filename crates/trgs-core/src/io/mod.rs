@@ -39,6 +39,8 @@ pub use masks::{mask_path, read_glass_mask, write_glass_mask};
 pub use model::{Model, find_ply, load_model};
 pub use planes_json::{PlaneSpec, read_planes_json, write_plane_materials, write_planes_json};
 pub use ply::{ColouredPoint, encode_ply, parse_ply, read_ply, read_point_cloud_ply, write_ply};
-pub use png::{read_rgb_image, read_rgb8_image, write_png_gray, write_png_rgb, write_png_rgb8};
+pub use png::{
+    read_rgb_image, read_rgb8_image, write_jpeg_rgb, write_png_gray, write_png_rgb, write_png_rgb8,
+};
 pub use test_split::{default_test_views, read_test_views, write_test_views};
 pub use transforms::{TransformsFrame, read_transforms, write_transforms};

@@ -185,6 +185,16 @@ pub fn write_png_rgb(path: &Path, image: &Image<f32>) -> Result<(), FormatError>
     encode(path, &image.to_u8(), image.width, image.height, ExtendedColorType::Rgb8)
 }
 
+/// Write an RGB image in [0, 1] as a JPEG of `quality` (1-100), as a camera writes its photos.
+pub fn write_jpeg_rgb(path: &Path, image: &Image<f32>, quality: u8) -> Result<(), FormatError> {
+    check_layout(path, image.width, image.height, image.channels, image.data.len(), 3)?;
+    let mut jpeg = Vec::new();
+    image::codecs::jpeg::JpegEncoder::new_with_quality(&mut jpeg, quality.clamp(1, 100))
+        .write_image(&image.to_u8(), image.width, image.height, ExtendedColorType::Rgb8)
+        .map_err(|e| FormatError::new(path, format!("cannot encode the JPEG: {e}")))?;
+    write_atomic(path, &jpeg)
+}
+
 /// Write an 8-bit RGB image (e.g. a plot) as a PNG.
 pub fn write_png_rgb8(path: &Path, image: &Image<u8>) -> Result<(), FormatError> {
     check_layout(path, image.width, image.height, image.channels, image.data.len(), 3)?;
@@ -240,6 +250,20 @@ fn encode(
 mod tests {
     use super::*;
     use crate::io::test_util::{assert_mentions, scratch_dir};
+
+    #[test]
+    fn jpeg_photos_read_back_close_to_what_was_written() {
+        let dir = scratch_dir("jpeg-rgb");
+        let mut img = Image::<f32>::new(32, 24, 3);
+        for (i, v) in img.data.iter_mut().enumerate() {
+            *v = ((i / 3) % 32) as f32 / 31.0;
+        }
+        let path = dir.join("a.jpg");
+        write_jpeg_rgb(&path, &img, 95).expect("write");
+        let back = read_rgb8_image(&path).expect("read").to_f32();
+        let psnr = crate::metrics::psnr(&back, &img).expect("same size");
+        assert!(psnr > 35.0, "{psnr} dB");
+    }
 
     #[test]
     fn rgb_round_trip_is_exact_at_8_bits() {

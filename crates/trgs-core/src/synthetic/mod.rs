@@ -47,8 +47,8 @@ mod texture;
 mod trace;
 mod write;
 
-pub use generate::generate;
-pub use write::{colmap_model, write_dataset};
+pub use generate::{TRACED_LONG_SIDE, generate};
+pub use write::{colmap_model, write_dataset, write_generated};
 
 use crate::image::Image;
 use crate::lens::Distortion;

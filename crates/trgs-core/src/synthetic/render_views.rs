@@ -59,30 +59,35 @@ pub(crate) fn render_view(layout: &Layout, camera: &Camera) -> View {
 /// Render every view, spread over the available cores; each view is a pure function of the
 /// layout, so the result does not depend on the number of threads.
 pub(crate) fn render_all(layout: &Layout) -> Vec<View> {
-    let n = layout.cameras.len();
-    let threads = std::thread::available_parallelism().map_or(1, |t| t.get()).clamp(1, 16).min(n);
-    if threads <= 1 {
-        return layout.cameras.iter().map(|c| render_view(layout, c)).collect();
-    }
-    let mut slots: Vec<Option<View>> = (0..n).map(|_| None).collect();
-    std::thread::scope(|scope| {
-        let handles: Vec<_> = (0..threads)
-            .map(|j| {
-                scope.spawn(move || {
-                    (j..n)
-                        .step_by(threads)
-                        .map(|i| (i, render_view(layout, &layout.cameras[i])))
-                        .collect::<Vec<_>>()
-                })
-            })
-            .collect();
-        for handle in handles {
-            // A panic in a worker is a bug in the tracer: surface it where it happened.
-            let done = handle.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
-            for (i, view) in done {
-                slots[i] = Some(view);
-            }
+    let slots: Vec<std::sync::Mutex<Option<View>>> =
+        layout.cameras.iter().map(|_| std::sync::Mutex::new(None)).collect();
+    for_each_view(layout, |i, view| {
+        if let Ok(mut slot) = slots[i].lock() {
+            *slot = Some(view);
         }
     });
-    slots.into_iter().flatten().collect()
+    slots.into_iter().filter_map(|s| s.into_inner().ok().flatten()).collect()
+}
+
+/// Render every view on the available cores and hand each to `f` as soon as it is traced (in
+/// no particular order), so that a caller that writes them holds a few views at a time only.
+pub(crate) fn for_each_view(layout: &Layout, f: impl Fn(usize, View) + Sync) {
+    let n = layout.cameras.len();
+    let threads = std::thread::available_parallelism().map_or(1, |t| t.get()).clamp(1, 16);
+    let threads = threads.min(n).max(1);
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let worker = || loop {
+        let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        if i >= n {
+            return;
+        }
+        f(i, render_view(layout, &layout.cameras[i]));
+    };
+    std::thread::scope(|scope| {
+        let handles: Vec<_> = (0..threads).map(|_| scope.spawn(worker)).collect();
+        for handle in handles {
+            // A panic in a worker is a bug in the tracer: surface it where it happened.
+            handle.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
+        }
+    });
 }

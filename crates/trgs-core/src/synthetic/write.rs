@@ -11,34 +11,110 @@
 //! ```
 use std::path::Path;
 
-use super::{SyntheticLens, SyntheticScene};
+use std::sync::Mutex;
+
+use super::generate::plan;
+use super::render_views::for_each_view;
+use super::{SyntheticConfig, SyntheticLens, SyntheticScene};
 use crate::io::{ColmapCamera, ColmapImage, ColmapModel, ColmapPoint, FormatError};
 use crate::lens::Distortion;
 use crate::scene::Camera;
 
 /// Write the scene folder described in the module documentation into `dir`.
 pub fn write_dataset(scene: &SyntheticScene, dir: &Path) -> Result<(), FormatError> {
-    for (cam, img) in scene.cameras.iter().zip(&scene.images) {
-        crate::io::write_png_rgb(&dir.join("images").join(&cam.name), img)?;
+    for (i, cam) in scene.cameras.iter().enumerate() {
+        write_view(dir, cam, &scene.images[i], &scene.transmission[i], scene.masks[i].as_ref())?;
     }
-    for (cam, img) in scene.cameras.iter().zip(&scene.transmission) {
-        crate::io::write_png_rgb(&dir.join("gt").join("transmission").join(&cam.name), img)?;
-    }
-    for (cam, mask) in scene.cameras.iter().zip(&scene.masks) {
-        if let Some(mask) = mask {
-            crate::io::write_glass_mask(&dir.join("glass_masks").join(&cam.name), mask)?;
+    write_model(dir, &scene_parts(scene))
+}
+
+/// Generate the scene of `config` and write it into `dir` view by view as the views are traced,
+/// holding a few at a time: the same folder as `write_dataset(&generate(config), dir)`, for
+/// scenes too large to hold (200 photos of 12 MP).
+pub fn write_generated(config: &SyntheticConfig, dir: &Path) -> Result<(), FormatError> {
+    let plan = plan(config);
+    let failure: Mutex<Option<FormatError>> = Mutex::new(None);
+    for_each_view(&plan.layout, |i, view| {
+        let view = plan.photo(view);
+        let mask = plan.masked.contains(&i).then_some(&view.labels);
+        if let Err(e) = write_view(dir, &plan.cameras[i], &view.image, &view.transmission, mask)
+            && let Ok(mut first) = failure.lock()
+        {
+            first.get_or_insert(e);
         }
+    });
+    if let Some(e) = failure.into_inner().ok().flatten() {
+        return Err(e);
     }
-    colmap_model(scene).write_binary(&dir.join("sparse").join("0"))?;
-    if !scene.planes.is_empty() {
-        // The input side needs only each label's material; the reader must not initialise
-        // geometry from this file (the truth is also in gt/planes.json, which it never reads).
-        // The input carries materials only: the geometry must be estimated from the masks.
-        let materials: Vec<_> = scene.planes.iter().map(|p| p.material).collect();
+    let parts = Parts {
+        cameras: &plan.cameras,
+        lens: plan.lens,
+        points: &plan.points,
+        tracks: &plan.tracks,
+        planes: &plan.planes,
+        test_views: &plan.test_views,
+    };
+    write_model(dir, &parts)
+}
+
+/// One view's files: its photo, its ground-truth transmission and its glass mask, if it has one.
+fn write_view(
+    dir: &Path,
+    cam: &Camera,
+    image: &crate::image::Image<f32>,
+    transmission: &crate::image::Image<f32>,
+    mask: Option<&crate::image::Image<u8>>,
+) -> Result<(), FormatError> {
+    write_photo(&dir.join("images").join(&cam.name), image)?;
+    write_photo(&dir.join("gt").join("transmission").join(&cam.name), transmission)?;
+    if let Some(mask) = mask {
+        let name = Path::new(&cam.name).with_extension("png");
+        crate::io::write_glass_mask(&dir.join("glass_masks").join(name), mask)?;
+    }
+    Ok(())
+}
+
+/// What the folder holds beside the views' images.
+struct Parts<'a> {
+    cameras: &'a [Camera],
+    lens: SyntheticLens,
+    points: &'a [([f64; 3], [u8; 3])],
+    tracks: &'a [Vec<usize>],
+    planes: &'a [crate::scene::ReflectionPlane],
+    test_views: &'a [String],
+}
+
+fn scene_parts(scene: &SyntheticScene) -> Parts<'_> {
+    Parts {
+        cameras: &scene.cameras,
+        lens: scene.lens,
+        points: &scene.points,
+        tracks: &scene.tracks,
+        planes: &scene.planes,
+        test_views: &scene.test_views,
+    }
+}
+
+/// The COLMAP model, the planes' materials and truth, and the test split.
+fn write_model(dir: &Path, parts: &Parts<'_>) -> Result<(), FormatError> {
+    colmap_model_of(parts).write_binary(&dir.join("sparse").join("0"))?;
+    if !parts.planes.is_empty() {
+        // The input carries materials only: the geometry must be estimated from the masks (the
+        // truth is in gt/planes.json, which the reader never reads).
+        let materials: Vec<_> = parts.planes.iter().map(|p| p.material).collect();
         crate::io::write_plane_materials(&dir.join("planes.json"), &materials)?;
-        crate::io::write_planes_json(&dir.join("gt").join("planes.json"), &scene.planes)?;
+        crate::io::write_planes_json(&dir.join("gt").join("planes.json"), parts.planes)?;
     }
-    crate::io::write_test_views(&dir.join("test_views.txt"), &scene.test_views)
+    crate::io::write_test_views(&dir.join("test_views.txt"), parts.test_views)
+}
+
+/// A photo as its name says: JPEG (quality 95) for `.jpg`, PNG otherwise.
+fn write_photo(path: &Path, image: &crate::image::Image<f32>) -> Result<(), FormatError> {
+    if path.extension().is_some_and(|e| e == "jpg") {
+        crate::io::write_jpeg_rgb(path, image, 95)
+    } else {
+        crate::io::write_png_rgb(path, image)
+    }
 }
 
 /// Pixel position of world point `p` in the photo of `camera` through `lens` (COLMAP and trgs
@@ -69,6 +145,10 @@ fn colmap_params(k: &crate::scene::Intrinsics, lens: SyntheticLens) -> Vec<f64> 
 /// per distinct intrinsics, image ids from 1 in view order, point ids from 1, and each point's track
 /// naming the images that see it with the index of its observation in their `points2d`.
 pub fn colmap_model(scene: &SyntheticScene) -> ColmapModel {
+    colmap_model_of(&scene_parts(scene))
+}
+
+fn colmap_model_of(scene: &Parts<'_>) -> ColmapModel {
     let mut cameras: Vec<ColmapCamera> = Vec::new();
     let mut images = Vec::with_capacity(scene.cameras.len());
     for (i, cam) in scene.cameras.iter().enumerate() {
@@ -101,7 +181,7 @@ pub fn colmap_model(scene: &SyntheticScene) -> ColmapModel {
         });
     }
     let mut points = Vec::with_capacity(scene.points.len());
-    for (j, ((xyz, rgb), views)) in scene.points.iter().zip(&scene.tracks).enumerate() {
+    for (j, ((xyz, rgb), views)) in scene.points.iter().zip(scene.tracks).enumerate() {
         let id = j as u64 + 1;
         let mut track = Vec::with_capacity(views.len());
         for &v in views {
@@ -120,7 +200,8 @@ pub fn colmap_model(scene: &SyntheticScene) -> ColmapModel {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::synthetic::{SyntheticConfig, generate};
+    use crate::scratch::ScratchDir;
+    use crate::synthetic::generate;
 
     #[test]
     fn colmap_tracks_match_observations() {
@@ -145,6 +226,54 @@ mod tests {
         let observations: usize = model.images.iter().map(|i| i.points2d.len()).sum();
         let track_len: usize = model.points.iter().map(|p| p.track.len()).sum();
         assert_eq!(observations, track_len);
+    }
+
+    #[test]
+    fn written_view_by_view_is_the_same_folder() {
+        let config = SyntheticConfig::small();
+        let (a, b) = (ScratchDir::new("synth-held"), ScratchDir::new("synth-streamed"));
+        write_dataset(&generate(&config), &a).expect("write held");
+        write_generated(&config, &b).expect("write streamed");
+        let files = |d: &Path| {
+            let mut out = Vec::new();
+            let mut stack = vec![d.to_path_buf()];
+            while let Some(p) = stack.pop() {
+                for e in std::fs::read_dir(&p).expect("dir").flatten() {
+                    if e.path().is_dir() {
+                        stack.push(e.path());
+                    } else {
+                        let rel = e.path().strip_prefix(d).expect("inside").to_path_buf();
+                        out.push((rel, std::fs::read(e.path()).expect("read")));
+                    }
+                }
+            }
+            out.sort();
+            out
+        };
+        let (fa, fb) = (files(&a), files(&b));
+        assert_eq!(fa.len(), fb.len());
+        for ((pa, da), (pb, db)) in fa.iter().zip(&fb) {
+            assert_eq!(pa, pb);
+            assert!(da == db, "{} differs", pa.display());
+        }
+    }
+
+    #[test]
+    fn photos_larger_than_the_traced_size_are_enlarged_jpegs() {
+        let config = SyntheticConfig::small();
+        let plan = crate::synthetic::generate::plan_traced_at(&config, 32);
+        assert_eq!(plan.enlarged, Some((64, 48)));
+        assert_eq!(plan.layout.cameras[0].width(), 32, "traced at 32 px");
+        assert_eq!((plan.cameras[0].width(), plan.cameras[0].name.as_str()), (64, "view_000.jpg"));
+        assert!(plan.test_views.iter().all(|n| n.ends_with(".jpg")));
+        let traced =
+            crate::synthetic::render_views::render_view(&plan.layout, &plan.layout.cameras[0]);
+        let photo = plan.photo(traced);
+        assert_eq!((photo.image.width, photo.labels.height), (64, 48));
+        let dir = ScratchDir::new("synth-jpeg");
+        write_photo(&dir.join("a.jpg"), &photo.image).expect("write");
+        let bytes = std::fs::read(dir.join("a.jpg")).expect("read");
+        assert_eq!(&bytes[..2], &[0xFF, 0xD8], "a JPEG");
     }
 
     #[test]

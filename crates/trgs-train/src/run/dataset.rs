@@ -4,7 +4,7 @@ use super::config::RunConfig;
 use anyhow::{Context, Result, bail};
 use std::path::PathBuf;
 use trgs_core::io::write_atomic;
-use trgs_core::synthetic::{generate, write_dataset};
+use trgs_core::synthetic::write_generated;
 
 /// The file that a complete demo dataset ends with: it names the built-in scene the folder holds
 /// (its `--demo-scene` value, then the other flags that shape it: `RunConfig::demo_flags`). It
@@ -40,7 +40,7 @@ pub fn dataset_dir(config: &RunConfig) -> Result<(PathBuf, Option<String>)> {
         return Ok((dir, None));
     }
     let demo = config.demo_config();
-    write_dataset(&generate(&demo), &dir)
+    write_generated(&demo, &dir)
         .with_context(|| format!("writing the demo scene to {}", dir.display()))?;
     write_atomic(&marker, format!("{wanted}\n").as_bytes())?;
     let note = format!(
