@@ -1,11 +1,12 @@
-// Stage `photometric_loss`, pass 3 of 4 (twin: trgs_core::reference::photometric_loss): the row
-// blur of pass 2's derivatives dL/dm_x, dL/dm_xx, dL/dm_xy (zero outside the image).
+// Stage `photometric_loss`, pass 3 of 4 (twin: trgs_core::reference::photometric_loss), for one
+// colour channel: the row blur of pass 2's derivatives dL/dm_x, dL/dm_xx, dL/dm_xy (zero outside
+// the image).
 #include "shared/common.wgsl"
 
 @group(0) @binding(0) var<storage, read> params: LossParams;
-@group(0) @binding(1) var<storage, read> terms: array<vec4<f32>>;
-// Per pixel: the three row-blurred derivatives (RGB, 0).
-@group(0) @binding(2) var<storage, read_write> rows: array<vec4<f32>>;
+@group(0) @binding(1) var<storage, read> terms: array<f32>;
+// Per pixel: the three row-blurred derivatives.
+@group(0) @binding(2) var<storage, read_write> rows: array<f32>;
 
 @compute @workgroup_size(16, 16)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -13,7 +14,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     var w = SSIM_WEIGHTS;
-    var s = array<vec4<f32>, 3>();
+    var s = array<f32, 3>();
     for (var t = 0u; t < 11u; t++) {
         let qx = i32(gid.x + t) - i32(SSIM_RADIUS);
         if qx < 0 || qx >= i32(params.width) {

@@ -47,6 +47,9 @@ gpu_struct! {
         pub weight_conflict: f32,
         /// Zero on views without a glass annotation.
         pub weight_mask: f32,
+        /// The colour channel `photometric_loss`'s passes work on (they run once per channel,
+        /// so that their scratch buffers hold one channel: SSIM is a mean of per-channel maps).
+        pub channel: u32,
     }
 }
 

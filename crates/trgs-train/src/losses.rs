@@ -36,14 +36,18 @@ pub enum LossError {
     #[error("the frame has not been rendered")]
     NotRendered,
     #[error(
-        "training at {width}x{height}: the loss's row buffer needs {bytes} bytes in one binding, \
-         the device allows {limit}; train at a lower resolution (--resolution or --downscale)"
+        "training at {width}x{height}: the loss's {buffer} buffer needs {bytes} bytes in one \
+         binding, the device allows {limit}; train at a lower resolution (--resolution or \
+         --downscale)"
     )]
-    TooLarge { width: u32, height: u32, bytes: u64, limit: u64 },
+    TooLarge { width: u32, height: u32, buffer: &'static str, bytes: u64, limit: u64 },
 }
 
-/// Bytes per pixel of the loss's largest scratch buffer (`rows`: five RGB moments as vec4).
-const ROWS_BYTES_PER_PIXEL: u64 = 80;
+/// Bytes per pixel of the loss's scratch buffers: `rows` (one channel's five moments: the
+/// photometric passes run once per channel), `terms` (three derivatives) and `stats` (two vec4).
+const ROWS_BYTES_PER_PIXEL: u64 = 20;
+const TERMS_BYTES_PER_PIXEL: u64 = 12;
+const STATS_BYTES_PER_PIXEL: u64 = 32;
 
 /// A view's target image and glass labels on the GPU. The image is stored as 8-bit RGBA (4 bytes
 /// a pixel, a quarter of f32 RGBA), as 3DGS keeps its 8-bit images: a dataset of a few hundred
@@ -289,39 +293,62 @@ impl LossKernels {
             weight_depth: weights.depth as f32,
             weight_conflict: weights.conflict as f32,
             weight_mask: if target.has_annotation() { weights.mask as f32 } else { 0.0 },
+            channel: 0,
         };
         let block = gpu::params(ctx, "trgs.photometric_loss.params", &params);
         let (rendered, image) = (layers.color, &target.image);
-        // One binding holds every pixel's row moments; above the device's binding limit wgpu
-        // would fail validation, so that is an error here. (Splitting `rows` over two bindings
-        // would lift the limit; not done yet.)
+        // Each scratch buffer is one binding; above the device's binding limit wgpu would fail
+        // validation, so that is an error here.
         let limit = ctx.device.limits().max_storage_buffer_binding_size;
-        let bytes = pixels * ROWS_BYTES_PER_PIXEL;
-        if bytes > limit {
-            return Err(LossError::TooLarge { width: w, height: h, bytes, limit });
+        for (buffer, per_pixel) in [
+            ("row", ROWS_BYTES_PER_PIXEL),
+            ("derivative", TERMS_BYTES_PER_PIXEL),
+            ("statistics", STATS_BYTES_PER_PIXEL),
+        ] {
+            let bytes = pixels * per_pixel;
+            if bytes > limit {
+                return Err(LossError::TooLarge { width: w, height: h, buffer, bytes, limit });
+            }
         }
-        let rows = self.scratch.get(ctx, "trgs.photometric_loss.rows", bytes);
-        let terms = self.scratch.get(ctx, "trgs.photometric_loss.terms", pixels * 48);
-        let stats = self.scratch.get(ctx, "trgs.loss_sums.stats", pixels * 32);
+        let rows =
+            self.scratch.get(ctx, "trgs.photometric_loss.rows", pixels * ROWS_BYTES_PER_PIXEL);
+        let terms =
+            self.scratch.get(ctx, "trgs.photometric_loss.terms", pixels * TERMS_BYTES_PER_PIXEL);
+        let stats = self.scratch.get(ctx, "trgs.loss_sums.stats", pixels * STATS_BYTES_PER_PIXEL);
         let partials = self.scratch.get(ctx, "trgs.loss_sums.partials", u64::from(strips) * 32);
-        let passes: [(&'static str, &Kernel, Vec<&wgpu::Buffer>); 4] = [
-            ("photometric_loss_rows", &self.photometric_loss_rows, vec![rendered, image, &rows]),
-            (
-                "photometric_loss",
-                &self.photometric_loss,
-                vec![rendered, image, &rows, &terms, &stats],
-            ),
-            ("photometric_loss_grad_rows", &self.photometric_loss_grad_rows, vec![&terms, &rows]),
-            (
-                "photometric_loss_grad",
-                &self.photometric_loss_grad,
-                vec![rendered, image, &rows, &grads.color],
-            ),
-        ];
-        for (stage, kernel, buffers) in passes {
-            let mut entries = vec![block.as_entire_binding()];
-            entries.extend(buffers.iter().map(|b| b.as_entire_binding()));
-            rec.dispatch(stage, kernel, &kernel.bind(ctx, &entries), groups);
+        for channel in 0..3 {
+            let block = gpu::params(
+                ctx,
+                "trgs.photometric_loss.channel_params",
+                &LossParams { channel, ..params },
+            );
+            let passes: [(&'static str, &Kernel, Vec<&wgpu::Buffer>); 4] = [
+                (
+                    "photometric_loss_rows",
+                    &self.photometric_loss_rows,
+                    vec![rendered, image, &rows],
+                ),
+                (
+                    "photometric_loss",
+                    &self.photometric_loss,
+                    vec![rendered, image, &rows, &terms, &stats],
+                ),
+                (
+                    "photometric_loss_grad_rows",
+                    &self.photometric_loss_grad_rows,
+                    vec![&terms, &rows],
+                ),
+                (
+                    "photometric_loss_grad",
+                    &self.photometric_loss_grad,
+                    vec![rendered, image, &rows, &grads.color],
+                ),
+            ];
+            for (stage, kernel, buffers) in passes {
+                let mut entries = vec![block.as_entire_binding()];
+                entries.extend(buffers.iter().map(|b| b.as_entire_binding()));
+                rec.dispatch(stage, kernel, &kernel.bind(ctx, &entries), groups);
+            }
         }
         if settings.regularisers.is_some() {
             // Bound but never read when the view has no labels.
