@@ -141,6 +141,25 @@ pub struct LossSettings {
     pub regularisers: Option<RegulariserWeights>,
 }
 
+/// Whether the losses' scratch buffers of a `width x height` frame fit the device: each is one
+/// binding, and above the device's binding limit wgpu would fail validation, so that is an error
+/// here (a run checks every view's training size before it loads the photos).
+pub fn check_frame_size(ctx: &GpuContext, width: u32, height: u32) -> Result<(), LossError> {
+    let pixels = u64::from(width) * u64::from(height);
+    let limit = ctx.device.limits().max_storage_buffer_binding_size;
+    for (buffer, per_pixel) in [
+        ("row", ROWS_BYTES_PER_PIXEL),
+        ("derivative", TERMS_BYTES_PER_PIXEL),
+        ("statistics", STATS_BYTES_PER_PIXEL),
+    ] {
+        let bytes = pixels * per_pixel;
+        if bytes > limit {
+            return Err(LossError::TooLarge { width, height, buffer, bytes, limit });
+        }
+    }
+    Ok(())
+}
+
 /// The values of a step's losses, from the strips' sums (f32 on the GPU, summed in
 /// f64 here). The regularisers' values are unweighted; a zero weight leaves its value at zero.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -297,19 +316,7 @@ impl LossKernels {
         };
         let block = gpu::params(ctx, "trgs.photometric_loss.params", &params);
         let (rendered, image) = (layers.color, &target.image);
-        // Each scratch buffer is one binding; above the device's binding limit wgpu would fail
-        // validation, so that is an error here.
-        let limit = ctx.device.limits().max_storage_buffer_binding_size;
-        for (buffer, per_pixel) in [
-            ("row", ROWS_BYTES_PER_PIXEL),
-            ("derivative", TERMS_BYTES_PER_PIXEL),
-            ("statistics", STATS_BYTES_PER_PIXEL),
-        ] {
-            let bytes = pixels * per_pixel;
-            if bytes > limit {
-                return Err(LossError::TooLarge { width: w, height: h, buffer, bytes, limit });
-            }
-        }
+        check_frame_size(ctx, w, h)?;
         let rows =
             self.scratch.get(ctx, "trgs.photometric_loss.rows", pixels * ROWS_BYTES_PER_PIXEL);
         let terms =

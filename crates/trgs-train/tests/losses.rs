@@ -10,7 +10,7 @@ use trgs_core::reference::{
 use trgs_core::rng::Rng;
 use trgs_render::toolkit::gpu::{self, Recorder};
 use trgs_render::{DeviceOptions, GpuContext, LayerGrads};
-use trgs_train::losses::{GpuTarget, LossKernels, LossLayers, LossSettings};
+use trgs_train::losses::{GpuTarget, LossKernels, LossLayers, LossSettings, check_frame_size};
 
 const WEIGHTS: RegulariserWeights = RegulariserWeights { depth: 0.3, conflict: 0.7, mask: 0.5 };
 
@@ -288,4 +288,16 @@ fn a_target_of_the_wrong_shape_is_refused() {
     let err = GpuTarget::upload(&ctx, "view.png", &rgb.quantised(), None, Some(&mask))
         .expect_err("coverage");
     assert!(err.to_string().contains("coverage of view.png: 8x7"), "{err}");
+}
+
+#[test]
+fn a_frame_too_large_for_one_binding_is_named_before_any_work() {
+    let ctx = GpuContext::new().expect("adapter");
+    let limit = ctx.device.limits().max_storage_buffer_binding_size;
+    // The statistics buffer (32 bytes a pixel) is the loss's largest.
+    let side = ((limit / 32) as f64).sqrt().ceil() as u32 + 1;
+    let err = check_frame_size(&ctx, side, side).expect_err("too large").to_string();
+    assert!(err.contains(&format!("{side}x{side}")) && err.contains("statistics"), "{err}");
+    assert!(err.contains("--resolution or --downscale"), "{err}");
+    check_frame_size(&ctx, side / 2, side / 2).expect("a quarter of it fits");
 }

@@ -187,7 +187,7 @@ impl TrainingRun {
         let mut note = |line: String| events.push(RunEvent::Note(line));
         let (data_dir, written) = dataset::dataset_dir(&config)?;
         written.into_iter().for_each(&mut note);
-        let data = load_data(&config, &data_dir, &mut note, loading)?;
+        let data = load_data(&ctx, &config, &data_dir, &mut note, loading)?;
         let out = config.out.clone();
         std::fs::create_dir_all(&out)
             .with_context(|| format!("creating the output folder {}", out.display()))?;
@@ -491,14 +491,33 @@ fn view_names(data: &TrainingData) -> Vec<String> {
 }
 
 /// The dataset of `config` at its training resolution, with lines saying what it holds.
+/// Every view's training size against the device's limits, before the photos load: a view too
+/// large is refused now, naming it, rather than at its first step.
+fn check_view_sizes(
+    ctx: &GpuContext,
+    folder: &trgs_core::io::SceneFolder,
+    resolution: data::Resolution,
+) -> Result<()> {
+    for v in &folder.views {
+        let (w, h) = data::target_size(v.camera.width(), v.camera.height(), resolution)?;
+        crate::losses::check_frame_size(ctx, w, h)
+            .with_context(|| format!("view {} ({})", v.camera.name, v.image_path.display()))?;
+    }
+    Ok(())
+}
+
 fn load_data(
+    ctx: &GpuContext,
     config: &RunConfig,
     data_dir: &Path,
     note: &mut impl FnMut(String),
     loading: &LoadProgress,
 ) -> Result<TrainingData> {
+    let folder = trgs_core::io::SceneFolder::open(data_dir)
+        .with_context(|| format!("opening the scene folder {}", data_dir.display()))?;
+    check_view_sizes(ctx, &folder, config.resolution())?;
     let started = Instant::now();
-    let mut data = data::load_with_progress(data_dir, config.resolution(), loading)?;
+    let mut data = TrainingData::load_with_progress(&folder, config.resolution(), loading)?;
     let seconds = started.elapsed().as_secs_f64();
     if config.no_planes {
         data.materials.clear();
