@@ -80,8 +80,11 @@ impl Image<f32> {
 }
 
 impl<F: Copy + Default> Image<F> {
-    /// Resampled to `w x h` by nearest sample (labels stay labels).
+    /// Resampled to `w x h` by nearest sample (labels stay labels); a copy at the same size.
     pub fn resized_nearest(&self, w: u32, h: u32) -> Self {
+        if (self.width, self.height) == (w, h) {
+            return self.clone();
+        }
         let mut out = Image::<F>::new(w, h, self.channels);
         let ch = self.channels as usize;
         for y in 0..h {

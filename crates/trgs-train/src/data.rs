@@ -237,7 +237,7 @@ fn load_view(folder: &SceneFolder, i: usize, resolution: Resolution) -> Result<(
         let view = View {
             camera,
             image: resize_area_u8(&photo, w, h).quantised(),
-            mask: labels.map(|m| resize_nearest(&m, w, h)),
+            mask: labels.map(|m| m.resized_nearest(w, h)),
             covered: None,
             undistortion: None,
         };
@@ -248,7 +248,7 @@ fn load_view(folder: &SceneFolder, i: usize, resolution: Resolution) -> Result<(
     let context = || format!("undistorting {}", spec.image_path.display());
     let (image, covered) = u.warp_image(&resize_area_u8(&photo, pw, ph)).with_context(context)?;
     let mask = match labels {
-        Some(m) => Some(u.warp_labels(&resize_nearest(&m, pw, ph)).with_context(context)?),
+        Some(m) => Some(u.warp_labels(&m.resized_nearest(pw, ph)).with_context(context)?),
         None => None,
     };
     let blank = covered.data.iter().filter(|&&c| c == 0).count();
@@ -435,27 +435,6 @@ fn area_resample<T: Copy>(im: &Image<T>, w: u32, h: u32, value: impl Fn(T) -> f6
             for (c, a) in acc.iter().enumerate() {
                 out.data[base + c] = (a / total) as f32;
             }
-        }
-    }
-    out
-}
-
-/// Nearest-neighbour resampling (labels must not blend).
-pub fn resize_nearest(im: &Image<u8>, w: u32, h: u32) -> Image<u8> {
-    if (im.width, im.height) == (w, h) {
-        return im.clone();
-    }
-    let ch = im.channels as usize;
-    let mut out = Image::<u8>::new(w, h, im.channels);
-    for y in 0..h {
-        let iy = ((f64::from(y) + 0.5) * f64::from(im.height) / f64::from(h)) as u32;
-        for x in 0..w {
-            let ix = ((f64::from(x) + 0.5) * f64::from(im.width) / f64::from(w)) as u32;
-            let src = (iy.min(im.height - 1) as usize * im.width as usize
-                + ix.min(im.width - 1) as usize)
-                * ch;
-            let dst = (y as usize * w as usize + x as usize) * ch;
-            out.data[dst..dst + ch].copy_from_slice(&im.data[src..src + ch]);
         }
     }
     out

@@ -1,7 +1,9 @@
 //! The training losses on the GPU, writing dL/d(layer) where the backward pass reads it:
 //! - stage `photometric_loss`: 3DGS's `(1 - lambda) L1 + lambda (1 - SSIM)` with the 11x11
 //!   window, into dL/dC, as four separable passes (`photometric_loss_rows`, `photometric_loss`,
-//!   `photometric_loss_grad_rows`, `photometric_loss_grad`);
+//!   `photometric_loss_grad_rows`, `photometric_loss_grad`), run once per colour channel so that
+//!   their scratch buffers hold one channel (a 1600x1200 view's five moments would not fit one
+//!   128 MiB binding as RGB);
 //! - stage `regularisers`: the paper's L_d, L_c and L_m, into dL/d(C_t, alpha) and
 //!   dL/d(D_t, V, M);
 //! - stage `loss_sums`: their per-pixel values summed over strips of pixels.
