@@ -1,12 +1,12 @@
 //! Evaluation of a model on a dataset's test views (PSNR, SSIM, render speed) and, for a
 //! synthetic scene, against its ground truth (`gt/planes.json`, `gt/transmission/`). Shared by
 //! `train` (during and after training) and `eval` (a finished run).
-use crate::data::{TrainingData, View, resize_area};
+use crate::data::{TrainingData, View, resize_area_u8};
 use anyhow::{Context, Result};
 use std::path::Path;
 use std::time::Instant;
 use trgs_core::Image;
-use trgs_core::io::{read_planes_json, read_rgb_image};
+use trgs_core::io::{read_planes_json, read_rgb8_image};
 use trgs_core::metrics::{psnr, ssim};
 use trgs_core::scene::ReflectionPlane;
 use trgs_render::{Frame, GpuContext, GpuScene, Layer, RenderOptions, Renderer};
@@ -262,13 +262,14 @@ pub fn compare_with_truth(
         if !path.is_file() {
             continue;
         }
-        let truth = read_rgb_image(&path)?;
+        // Decoded at 8 bits, as the photos are: a 12 MP truth is 36 MB so, 144 MB as f32.
+        let truth = read_rgb8_image(&path)?;
         // The truth is a photo like the view's own: through its lens, when it has one.
         let truth = match &v.undistortion {
-            None => resize_area(&truth, v.camera.width(), v.camera.height()),
+            None => resize_area_u8(&truth, v.camera.width(), v.camera.height()),
             Some(u) => {
                 let (pw, ph) = u.photo_size();
-                u.warp_image(&resize_area(&truth, pw, ph))
+                u.warp_image(&resize_area_u8(&truth, pw, ph))
                     .with_context(|| path.display().to_string())?
                     .0
             }
