@@ -80,6 +80,18 @@ impl Image<f32> {
 }
 
 impl<F: Copy + Default> Image<F> {
+    /// Every sample of a pixel that `covered` (one channel, this size) marks 0 set to zero: what
+    /// the losses and metrics see of an undistorted photo's border, which has no source.
+    pub fn zero_uncovered(mut self, covered: &Image<u8>) -> Self {
+        let ch = self.channels.max(1) as usize;
+        for (i, v) in self.data.iter_mut().enumerate() {
+            if covered.data.get(i / ch).is_some_and(|&c| c == 0) {
+                *v = F::default();
+            }
+        }
+        self
+    }
+
     /// Resampled to `w x h` by nearest sample (labels stay labels); a copy at the same size.
     pub fn resized_nearest(&self, w: u32, h: u32) -> Self {
         if (self.width, self.height) == (w, h) {

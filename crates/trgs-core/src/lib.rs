@@ -13,6 +13,7 @@ pub mod image;
 pub mod io;
 pub mod lens;
 pub mod metrics;
+pub mod parallel;
 pub mod plane_math;
 pub mod reference;
 pub mod rng;

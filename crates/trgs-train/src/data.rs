@@ -4,10 +4,12 @@
 use anyhow::{Context, Result, bail};
 use glam::DVec3;
 use std::path::Path;
+use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use trgs_core::Image;
 use trgs_core::io::{SceneFolder, Split};
 use trgs_core::lens::Undistortion;
+use trgs_core::parallel::for_each_index;
 use trgs_core::scene::{Camera, Material};
 
 /// The longer side photos are trained at by default (the INRIA code's limit too): a 12 MP photo
@@ -58,6 +60,17 @@ pub struct View {
     pub undistortion: Option<Undistortion>,
 }
 
+/// `progress(done, total)`: how many of the scene's photos are loaded, called from the loading
+/// threads.
+pub type LoadProgress = dyn Fn(usize, usize) + Sync;
+
+impl View {
+    /// A view of `camera` showing `image` whole: no glass labels, every pixel covered, no lens.
+    pub fn new(camera: Camera, image: Image<u8>) -> Self {
+        Self { camera, image, mask: None, covered: None, undistortion: None }
+    }
+}
+
 /// The loaded scene.
 #[derive(Debug)]
 pub struct TrainingData {
@@ -86,7 +99,7 @@ impl TrainingData {
     pub fn load_with_progress(
         folder: &SceneFolder,
         resolution: Resolution,
-        progress: &(dyn Fn(usize, usize) + Sync),
+        progress: &LoadProgress,
     ) -> Result<Self> {
         let mut train = Vec::new();
         let mut test = Vec::new();
@@ -177,43 +190,23 @@ const LOAD_THREADS: usize = 8;
 fn load_views(
     folder: &SceneFolder,
     resolution: Resolution,
-    progress: &(dyn Fn(usize, usize) + Sync),
-) -> Result<Vec<(View, ViewReport)>> {
+    progress: &LoadProgress,
+) -> Result<Vec<Loaded>> {
     let n = folder.views.len();
-    let threads = std::thread::available_parallelism().map_or(1, |t| t.get()).min(LOAD_THREADS);
-    let threads = threads.min(n).max(1);
-    let next = AtomicUsize::new(0);
     let done = AtomicUsize::new(0);
-    let mut slots: Vec<Option<Result<(View, ViewReport)>>> = (0..n).map(|_| None).collect();
-    let worker = || {
-        let mut out = Vec::new();
-        loop {
-            let i = next.fetch_add(1, Ordering::Relaxed);
-            if i >= n {
-                return out;
-            }
-            let loaded = load_view(folder, i, resolution);
-            let failed = loaded.is_err();
-            out.push((i, loaded));
-            progress(done.fetch_add(1, Ordering::Relaxed) + 1, n);
-            if failed {
-                next.store(n, Ordering::Relaxed);
-            }
+    let slots: Vec<Mutex<Option<Result<Loaded>>>> = (0..n).map(|_| Mutex::new(None)).collect();
+    for_each_index(n, LOAD_THREADS, |i| {
+        let loaded = load_view(folder, i, resolution);
+        let ok = loaded.is_ok();
+        if let Ok(mut slot) = slots[i].lock() {
+            *slot = Some(loaded);
         }
-    };
-    std::thread::scope(|scope| -> Result<()> {
-        let handles: Vec<_> = (0..threads).map(|_| scope.spawn(worker)).collect();
-        for handle in handles {
-            let loaded = handle.join().map_err(|_| anyhow::anyhow!("a loading thread panicked"))?;
-            for (i, view) in loaded {
-                slots[i] = Some(view);
-            }
-        }
-        Ok(())
-    })?;
+        progress(done.fetch_add(1, Ordering::Relaxed) + 1, n);
+        ok
+    });
     let mut views = Vec::with_capacity(n);
     for slot in slots {
-        match slot {
+        match slot.into_inner().ok().flatten() {
             Some(view) => views.push(view?),
             // Not taken: a view failed, and its error comes first or later in this loop.
             None => continue,
@@ -223,7 +216,7 @@ fn load_views(
 }
 
 /// One view of `folder` at `resolution`, and what loading did to it.
-fn load_view(folder: &SceneFolder, i: usize, resolution: Resolution) -> Result<(View, ViewReport)> {
+fn load_view(folder: &SceneFolder, i: usize, resolution: Resolution) -> Result<Loaded> {
     let spec = &folder.views[i];
     let photo = folder.load_image(i)?;
     let labels = folder.load_mask(i)?;
@@ -268,6 +261,9 @@ fn load_view(folder: &SceneFolder, i: usize, resolution: Resolution) -> Result<(
 
 /// A width and height.
 type Size = (u32, u32);
+
+/// A loaded view and what loading did to it.
+type Loaded = (View, ViewReport);
 
 /// What loading did to one view.
 struct ViewReport {
@@ -449,7 +445,7 @@ pub fn load(root: &Path, resolution: Resolution) -> Result<TrainingData> {
 pub fn load_with_progress(
     root: &Path,
     resolution: Resolution,
-    progress: &(dyn Fn(usize, usize) + Sync),
+    progress: &LoadProgress,
 ) -> Result<TrainingData> {
     let folder = SceneFolder::open(root)
         .with_context(|| format!("opening the scene folder {}", root.display()))?;

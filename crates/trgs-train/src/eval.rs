@@ -5,7 +5,6 @@ use crate::data::{TrainingData, View, resize_area_u8};
 use anyhow::{Context, Result};
 use std::path::Path;
 use std::time::Instant;
-use trgs_core::Image;
 use trgs_core::io::{read_planes_json, read_rgb8_image};
 use trgs_core::metrics::{psnr, ssim};
 use trgs_core::scene::ReflectionPlane;
@@ -56,7 +55,12 @@ pub fn evaluate(
 ) -> Result<Evaluation> {
     let mut rows = Vec::new();
     for v in data.eval_views() {
-        let color = covered_only(model.layer(v, Layer::Color)?, v.covered.as_ref());
+        // Only what the photo shows counts, as in the loss.
+        let color = model.layer(v, Layer::Color)?;
+        let color = match &v.covered {
+            Some(c) => color.zero_uncovered(c),
+            None => color,
+        };
         let image = v.image.to_f32();
         rows.push((v.camera.name.clone(), psnr(&color, &image)?, ssim(&color, &image)?));
     }
@@ -68,20 +72,6 @@ pub fn evaluate(
         ssim: rows.iter().map(|r| r.2).sum::<f64>() / n,
         views: rows,
     })
-}
-
-/// `image` black where the photo has no source (as the view's image is there), so that the
-/// metrics, like the loss, compare only what the photo shows.
-fn covered_only(mut image: Image<f32>, covered: Option<&Image<u8>>) -> Image<f32> {
-    if let Some(c) = covered {
-        let ch = image.channels as usize;
-        for (i, v) in image.data.iter_mut().enumerate() {
-            if c.data[i / ch] == 0 {
-                *v = 0.0;
-            }
-        }
-    }
-    image
 }
 
 /// Frames per second of full renders (every layer, as the renderer produces them) of the

@@ -20,13 +20,7 @@ fn a_training_step_on_a_lost_device_is_an_error() {
         .read_layer(&ctx, Layer::Color)
         .expect("readback");
     image.data.iter_mut().for_each(|v| *v *= 0.9);
-    let view = View {
-        camera: scene.camera.clone(),
-        image: image.quantised(),
-        mask: None,
-        covered: None,
-        undistortion: None,
-    };
+    let view = View::new(scene.camera.clone(), image.quantised());
     trainer.train_step(&view).expect("a step on a working device");
     let saved = trainer.checkpoint(serde_json::Value::Null).expect("checkpoint");
     assert_eq!(saved.step, 1);

@@ -242,29 +242,18 @@ pub fn colmap_camera_model(
         ("RADIAL_FISHEYE", &[f, cx, cy, k1, k2]) => {
             (intrinsics(f, f, cx, cy), Some(Distortion::Fisheye { k: [k1, k2, 0.0, 0.0] }))
         }
-        (
-            "SIMPLE_PINHOLE"
-            | "PINHOLE"
-            | "SIMPLE_RADIAL"
-            | "RADIAL"
-            | "OPENCV"
-            | "FULL_OPENCV"
-            | "OPENCV_FISHEYE"
-            | "SIMPLE_RADIAL_FISHEYE"
-            | "RADIAL_FISHEYE",
-            p,
-        ) => {
-            return Err(format!(
-                "{model} takes {} parameters, found {}",
-                param_count(model),
-                p.len()
-            ));
-        }
-        (other, _) => {
-            return Err(format!(
-                "the camera model {other} is not supported; trgs reads {SUPPORTED_MODELS} \
+        // A known model with the wrong count says so (COLMAP's table of counts); any other
+        // model is not one trgs reads.
+        (_, p) => {
+            return Err(match crate::io::colmap::model_by_name(model) {
+                Some((_, n)) if n != p.len() => {
+                    format!("{model} takes {n} parameters, found {}", p.len())
+                }
+                _ => format!(
+                    "the camera model {model} is not supported; trgs reads {SUPPORTED_MODELS} \
                      (undistort other models first, e.g. with `colmap image_undistorter`)"
-            ));
+                ),
+            });
         }
     };
     Ok((k, distortion.filter(|d| !d.is_identity())))
@@ -274,16 +263,6 @@ pub fn colmap_camera_model(
 pub const SUPPORTED_MODELS: &str = "SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV, \
                                     FULL_OPENCV, OPENCV_FISHEYE, SIMPLE_RADIAL_FISHEYE and \
                                     RADIAL_FISHEYE";
-
-fn param_count(model: &str) -> usize {
-    match model {
-        "SIMPLE_PINHOLE" => 3,
-        "PINHOLE" | "SIMPLE_RADIAL" | "SIMPLE_RADIAL_FISHEYE" => 4,
-        "RADIAL" | "RADIAL_FISHEYE" => 5,
-        "OPENCV" | "OPENCV_FISHEYE" => 8,
-        _ => 12,
-    }
-}
 
 #[cfg(test)]
 mod tests {

@@ -52,18 +52,9 @@ pub fn photometric_loss_covered(
             b: (covered.width, covered.height, covered.channels),
         });
     }
-    let ch = render.channels.max(1) as usize;
-    let mask = |im: &Image<f64>| {
-        let mut out = im.clone();
-        for (i, v) in out.data.iter_mut().enumerate() {
-            if covered.data.get(i / ch).is_some_and(|&c| c == 0) {
-                *v = 0.0;
-            }
-        }
-        out
-    };
+    let mask = |im: &Image<f64>| im.clone().zero_uncovered(covered);
     let mut loss = uncovered_loss(&mask(render), &mask(target), lambda)?;
-    loss.grad = mask(&loss.grad);
+    loss.grad = loss.grad.zero_uncovered(covered);
     Ok(loss)
 }
 

@@ -41,13 +41,14 @@ pub mod family;
 mod generate;
 mod geom;
 mod paths;
+mod plan;
 mod points;
 mod render_views;
 mod texture;
 mod trace;
 mod write;
 
-pub use generate::{TRACED_LONG_SIDE, generate};
+pub use plan::{TRACED_LONG_SIDE, generate};
 pub use write::{colmap_model, write_dataset, write_generated};
 
 use crate::image::Image;

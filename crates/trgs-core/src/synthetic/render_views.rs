@@ -72,22 +72,8 @@ pub(crate) fn render_all(layout: &Layout) -> Vec<View> {
 /// Render every view on the available cores and hand each to `f` as soon as it is traced (in
 /// no particular order), so that a caller that writes them holds a few views at a time only.
 pub(crate) fn for_each_view(layout: &Layout, f: impl Fn(usize, View) + Sync) {
-    let n = layout.cameras.len();
-    let threads = std::thread::available_parallelism().map_or(1, |t| t.get()).clamp(1, 16);
-    let threads = threads.min(n).max(1);
-    let next = std::sync::atomic::AtomicUsize::new(0);
-    let worker = || loop {
-        let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        if i >= n {
-            return;
-        }
+    crate::parallel::for_each_index(layout.cameras.len(), 16, |i| {
         f(i, render_view(layout, &layout.cameras[i]));
-    };
-    std::thread::scope(|scope| {
-        let handles: Vec<_> = (0..threads).map(|_| scope.spawn(worker)).collect();
-        for handle in handles {
-            // A panic in a worker is a bug in the tracer: surface it where it happened.
-            handle.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
-        }
+        true
     });
 }

@@ -490,14 +490,7 @@ fn undistorted_photos_match_a_direct_pinhole_render() {
         let mut pinhole_camera = photo_camera.clone();
         pinhole_camera.intrinsics = undistortion.pinhole;
         let direct = render_view(&pinhole_layout, &pinhole_camera).image;
-        let only_covered = |mut im: crate::image::Image<f32>| {
-            for (i, v) in im.data.iter_mut().enumerate() {
-                if covered.data[i / 3] == 0 {
-                    *v = 0.0;
-                }
-            }
-            im
-        };
+        let only_covered = |im: crate::image::Image<f32>| im.zero_uncovered(&covered);
         let agreement = psnr(&only_covered(direct.clone()), &image).expect("same size");
         // The same resampling with the lens ignored.
         let identity = Undistortion {

@@ -13,7 +13,7 @@ use std::path::Path;
 
 use std::sync::Mutex;
 
-use super::generate::plan;
+use super::plan::plan;
 use super::render_views::for_each_view;
 use super::{SyntheticConfig, SyntheticLens, SyntheticScene};
 use crate::io::{ColmapCamera, ColmapImage, ColmapModel, ColmapPoint, FormatError};
@@ -261,7 +261,7 @@ mod tests {
     #[test]
     fn photos_larger_than_the_traced_size_are_enlarged_jpegs() {
         let config = SyntheticConfig::small();
-        let plan = crate::synthetic::generate::plan_traced_at(&config, 32);
+        let plan = crate::synthetic::plan::plan_traced_at(&config, 32);
         assert_eq!(plan.enlarged, Some((64, 48)));
         assert_eq!(plan.layout.cameras[0].width(), 32, "traced at 32 px");
         assert_eq!((plan.cameras[0].width(), plan.cameras[0].name.as_str()), (64, "view_000.jpg"));

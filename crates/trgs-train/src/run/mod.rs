@@ -40,9 +40,7 @@ pub use log::LOG_FILE;
 pub use outputs::RunSummary;
 pub use state::RunState;
 
-/// `loading(done, total)`: how many of the scene's photos are loaded, called from the loading
-/// threads.
-pub type LoadProgress = dyn Fn(usize, usize) + Sync;
+pub use crate::data::LoadProgress;
 
 use crate::checkpoint::{CHECKPOINT_FILE, Checkpoint, read_checkpoint, write_checkpoint};
 use crate::data::{self, TrainingData};

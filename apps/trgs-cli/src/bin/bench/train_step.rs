@@ -36,13 +36,7 @@ pub fn bench_train_step(ctx: &GpuContext, planes: usize, steps: usize) -> Result
     let mut trainer = Trainer::new(ctx, &gaussians, &scene.planes, settings, 1.0)?;
     let mut image = trainer.render(&scene.camera)?.read_layer(ctx, Layer::Color)?;
     image.data.iter_mut().for_each(|v| *v *= 0.9);
-    let view = View {
-        camera: scene.camera.clone(),
-        image: image.quantised(),
-        mask: None,
-        covered: None,
-        undistortion: None,
-    };
+    let view = View::new(scene.camera.clone(), image.quantised());
     warm_up(|| trainer.train_step(&view).map(drop))?;
     let (mut totals, mut phases) = (Vec::new(), vec![Vec::new(); 5]);
     for _ in 0..steps {

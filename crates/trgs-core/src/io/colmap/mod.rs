@@ -38,7 +38,7 @@ fn model_by_id(id: i32) -> Option<(&'static str, usize)> {
 }
 
 /// (model id, parameter count) of a model name.
-fn model_by_name(name: &str) -> Option<(i32, usize)> {
+pub(crate) fn model_by_name(name: &str) -> Option<(i32, usize)> {
     CAMERA_MODELS.iter().find(|m| m.1 == name).map(|m| (m.0, m.2))
 }
 

@@ -1,0 +1,56 @@
+//! Jobs spread over threads by index: the per-view work (tracing the synthetic views, loading
+//! photos) where each view is a pure function of its index.
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// Call `f(i)` for every `i` in `0..n` on up to `max_threads` threads (never more than the
+/// cores), each thread taking the next index when it is done, so that uneven jobs balance.
+/// When `f` returns false the threads take no further index (the ones already taken finish). A
+/// panic in `f` is resumed on the caller's thread.
+pub fn for_each_index(n: usize, max_threads: usize, f: impl Fn(usize) -> bool + Sync) {
+    let cores = std::thread::available_parallelism().map_or(1, |t| t.get());
+    let threads = cores.min(max_threads).min(n).max(1);
+    let next = AtomicUsize::new(0);
+    let worker = || {
+        loop {
+            let i = next.fetch_add(1, Ordering::Relaxed);
+            if i >= n {
+                return;
+            }
+            if !f(i) {
+                next.store(n, Ordering::Relaxed);
+            }
+        }
+    };
+    std::thread::scope(|scope| {
+        let handles: Vec<_> = (0..threads).map(|_| scope.spawn(worker)).collect();
+        for handle in handles {
+            handle.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
+        }
+    });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::Mutex;
+
+    #[test]
+    fn every_index_once_and_a_stop_stops_taking() {
+        let seen = Mutex::new(Vec::new());
+        for_each_index(100, 4, |i| {
+            seen.lock().expect("not poisoned").push(i);
+            true
+        });
+        let mut seen = seen.into_inner().expect("not poisoned");
+        seen.sort_unstable();
+        assert_eq!(seen, (0..100).collect::<Vec<_>>());
+        let taken = AtomicUsize::new(0);
+        for_each_index(1000, 4, |i| {
+            taken.fetch_add(1, Ordering::Relaxed);
+            i != 3
+        });
+        // Index 3 stops the others: at most one index per thread after it.
+        assert!(taken.load(Ordering::Relaxed) < 20, "{}", taken.load(Ordering::Relaxed));
+        for_each_index(0, 4, |_| panic!("no index"));
+    }
+}
