@@ -12,6 +12,7 @@
 // With BLOCK_WALK a subgroup steps back only through the entries that can reach its block
 // (shared/block_walk.wgsl).
 #include "shared/common.wgsl"
+#include "shared/projected_pages.wgsl"
 #include "shared/splat.wgsl"
 #include "shared/accumulate.wgsl"
 #include "shared/tile_rows.wgsl"
@@ -31,6 +32,14 @@
 @group(0) @binding(8) var<storage, read_write> grads: array<atomic<f32>>;
 #else
 @group(0) @binding(8) var<storage, read_write> grads: array<atomic<u32>>;
+#endif
+// The records and gradients of the Gaussians from index params.page on
+// (shared/projected_pages.wgsl, PAGED_GRADS in shared/accumulate.wgsl).
+@group(0) @binding(9) var<storage, read> projected_hi: array<ProjectedGaussian>;
+#ifdef FLOAT_ATOMICS
+@group(0) @binding(10) var<storage, read_write> grads_hi: array<atomic<f32>>;
+#else
+@group(0) @binding(10) var<storage, read_write> grads_hi: array<atomic<u32>>;
 #endif
 
 // (mean, m, 1 for glass), conic with opacity, (colour, depth), the Gaussian's index.
@@ -133,7 +142,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
             let idx = start + r * TILE_PIXELS + slot;
             if idx < end {
                 let gi = values[idx];
-                let g = projected[gi];
+                let g = projected_at(gi);
                 s_mean[slot] = vec4<f32>(g.mean2d, g.mask, f32((g.flags & FLAG_GLASS) != 0u));
                 s_conic[slot] = g.conic;
                 s_color[slot] = g.color;

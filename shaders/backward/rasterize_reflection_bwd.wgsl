@@ -9,6 +9,7 @@
 // once per subgroup that touched it. With BLOCK_WALK a subgroup steps back only through the
 // entries that can reach its block (shared/block_walk.wgsl).
 #include "shared/common.wgsl"
+#include "shared/projected_pages.wgsl"
 #include "shared/splat.wgsl"
 #include "shared/accumulate.wgsl"
 #include "shared/tile_rows.wgsl"
@@ -25,6 +26,14 @@
 @group(0) @binding(6) var<storage, read_write> grads: array<atomic<f32>>;
 #else
 @group(0) @binding(6) var<storage, read_write> grads: array<atomic<u32>>;
+#endif
+// The records and gradients of the Gaussians from index params.page on
+// (shared/projected_pages.wgsl, PAGED_GRADS in shared/accumulate.wgsl).
+@group(0) @binding(7) var<storage, read> projected_hi: array<ProjectedGaussian>;
+#ifdef FLOAT_ATOMICS
+@group(0) @binding(8) var<storage, read_write> grads_hi: array<atomic<f32>>;
+#else
+@group(0) @binding(8) var<storage, read_write> grads_hi: array<atomic<u32>>;
 #endif
 
 // mean, conic with opacity, (colour, reflection intensity a), the Gaussian's index.
@@ -102,7 +111,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
             let idx = start + r * TILE_PIXELS + slot;
             if idx < end {
                 let gi = values[idx];
-                let g = projected[gi];
+                let g = projected_at(gi);
                 s_mean[slot] = g.mean2d;
                 s_conic[slot] = g.conic;
                 s_color[slot] = vec4<f32>(g.color.xyz, g.reflection);

@@ -7,7 +7,8 @@
 // zero from lanes that have nothing to add. `subgroup_any` guards a group of them: its result is
 // the same on every lane of a subgroup, so every lane still takes part in each reduction.
 
-fn accumulate(i: u32, v: f32) {
+// The atomic add of v to grads[i].
+fn add_to_grads(i: u32, v: f32) {
 #ifdef FLOAT_ATOMICS
     atomicAdd(&grads[i], v);
 #else
@@ -22,6 +23,40 @@ fn accumulate(i: u32, v: f32) {
     }
 #endif
 }
+
+#ifdef PAGED_GRADS
+// With PAGED_GRADS the gradient records are in two pages (toolkit::paged): those of the first
+// params.page Gaussians in `grads`, the rest in `grads_hi`, which the including shader declares
+// as it declares `grads`.
+fn add_to_grads_hi(i: u32, v: f32) {
+#ifdef FLOAT_ATOMICS
+    atomicAdd(&grads_hi[i], v);
+#else
+    var old = atomicLoad(&grads_hi[i]);
+    loop {
+        let new_bits = bitcast<u32>(bitcast<f32>(old) + v);
+        let r = atomicCompareExchangeWeak(&grads_hi[i], old, new_bits);
+        if r.exchanged {
+            break;
+        }
+        old = r.old_value;
+    }
+#endif
+}
+
+fn accumulate(i: u32, v: f32) {
+    let first = params.page * PROJECTED_GRAD_FLOATS;
+    if i < first {
+        add_to_grads(i, v);
+    } else {
+        add_to_grads_hi(i - first, v);
+    }
+}
+#else
+fn accumulate(i: u32, v: f32) {
+    add_to_grads(i, v);
+}
+#endif
 
 #ifdef SUBGROUPS
 // The largest x over the subgroup.

@@ -13,6 +13,7 @@ use crate::scene::{GpuScene, SceneGradBuffers};
 use crate::stages::rasterize_bwd::ViewLists;
 use crate::stages::{Stage, compose_bwd, project_bwd, rasterize_bwd, rasterize_reflection_bwd};
 use crate::toolkit::FrameStages;
+use crate::toolkit::paged::Paged;
 use glam::{DMat3, DVec3};
 use trgs_core::reference::{PlaneGrad, ViewGrads, mirrored_view_bwd, plane_grad};
 
@@ -34,7 +35,7 @@ pub struct Gradients {
     /// dL/d(each plane's centre, unnormalised normal, R0 logit).
     pub planes: Vec<PlaneGrad>,
     /// Per view (0 = camera, then each mirrored pass): the screen-space gradients.
-    projected_grads: Vec<wgpu::Buffer>,
+    projected_grads: Vec<Paged>,
     gaussian_count: u32,
     stage_times: Option<Vec<(&'static str, f64)>>,
     kernel_times: Option<Vec<KernelTime>>,
@@ -49,10 +50,12 @@ impl crate::toolkit::GradientStages for Gradients {
         let Some(b) = self.projected_grads.get(vi) else {
             return Ok(None);
         };
-        gpu::read_buffer(ctx, b, 0, self.gaussian_count as usize).map(Some)
+        let mut records = b.read(ctx)?;
+        records.truncate(self.gaussian_count as usize);
+        Ok(Some(records))
     }
 
-    fn projected_grads(&self, vi: usize) -> Option<&wgpu::Buffer> {
+    fn projected_grads(&self, vi: usize) -> Option<&Paged> {
         self.projected_grads.get(vi)
     }
 }
@@ -165,7 +168,7 @@ impl Renderer {
         let s = Stage { ctx, kernels: &self.kernels };
         let mut rec = Recorder::new(ctx, "trgs.backward", options.profile);
         for b in &bufs.projected_grads {
-            rec.encoder.clear_buffer(b, 0, None);
+            b.clear(&mut rec.encoder);
         }
         rec.encoder.clear_buffer(&bufs.view_grads, 0, None);
         rec.encoder.clear_buffer(&bufs.plane_grads, 0, None);

@@ -162,6 +162,8 @@ pub struct GpuContext {
     pub poison_fresh_buffers: bool,
     /// Why the device was lost, once it has been (set by its device-lost callback).
     loss: DeviceLoss,
+    /// See [`GpuContext::binding_limit`].
+    binding_limit: u64,
 }
 
 /// Where a device's lost callback leaves its reason, shared by every clone of the context.
@@ -312,7 +314,24 @@ impl GpuContext {
         let loss = DeviceLoss::default();
         let on_loss = loss.clone();
         device.set_device_lost_callback(move |reason, message| on_loss.record(reason, &message));
-        Ok(Self { adapter, device, queue, info, capabilities, poison_fresh_buffers, loss })
+        let binding_limit = device.limits().max_storage_buffer_binding_size;
+        Ok(Self {
+            adapter,
+            device,
+            queue,
+            info,
+            capabilities,
+            poison_fresh_buffers,
+            loss,
+            binding_limit,
+        })
+    }
+
+    /// The most bytes of a buffer one storage binding may hold (the device's
+    /// `max_storage_buffer_binding_size`): what every stage sizes its chunks, pages and refusals
+    /// by.
+    pub fn binding_limit(&self) -> u64 {
+        self.binding_limit
     }
 
     /// Why the device was lost, if it has been (known once the GPU was last waited for).

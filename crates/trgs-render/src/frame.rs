@@ -4,6 +4,7 @@ use crate::GpuContext;
 use crate::gpu::{self, BufferPool, GpuError, KernelTime};
 use crate::layout::{ProjectParams, RasterState, ReflectionState};
 use crate::stages::sort::KeyList;
+use crate::toolkit::paged::Paged;
 use trgs_core::Image;
 use trgs_core::reference::{TileGrid, TileRect};
 use trgs_core::scene::ViewTransform;
@@ -21,7 +22,7 @@ pub struct ViewBuffers {
     pub limit: TileRect,
     /// The parameter block `project` ran with (its adjoint recomputes from the same view).
     pub(crate) project_params: ProjectParams,
-    pub projected: wgpu::Buffer,
+    pub projected: Paged,
     /// The Gaussians that passed project's cheap culls (project_bwd runs over them only).
     pub(crate) candidates: crate::stages::project::Candidates,
     /// The tiles each Gaussian touches (zero for the culled).
@@ -466,7 +467,9 @@ impl crate::toolkit::FrameStages for Frame {
         let Some(v) = self.views.get(vi) else {
             return Ok(None);
         };
-        gpu::read_buffer(ctx, &v.projected, 0, self.gaussian_count() as usize).map(Some)
+        let mut records = v.projected.read(ctx)?;
+        records.truncate(self.gaussian_count() as usize);
+        Ok(Some(records))
     }
 
     fn read_intermediates(
@@ -490,7 +493,7 @@ impl crate::toolkit::FrameStages for Frame {
 #[derive(Debug)]
 pub(crate) struct BackwardBuffers {
     /// Per view: PROJECTED_GRAD_FLOATS per Gaussian.
-    pub projected_grads: Vec<wgpu::Buffer>,
+    pub projected_grads: Vec<Paged>,
     /// VIEW_GRAD_FLOATS per view at `view_stride` bytes (a binding offset must be aligned).
     pub view_grads: wgpu::Buffer,
     pub view_stride: u64,
@@ -506,7 +509,7 @@ impl Frame {
         scene: &crate::GpuScene,
     ) -> BackwardBuffers {
         use crate::layout::{PROJECTED_GRAD_FLOATS, VIEW_GRAD_FLOATS};
-        let n = u64::from(self.gaussian_count);
+        let n = self.gaussian_count;
         let views = self.views.len().max(1) as u64;
         let align = u64::from(ctx.device.limits().min_storage_buffer_offset_alignment);
         let view_stride = (u64::from(VIEW_GRAD_FLOATS) * 4).div_ceil(align) * align;
@@ -516,7 +519,8 @@ impl Frame {
             projected_grads: (0..self.views.len())
                 .map(|vi| {
                     let label = format!("trgs.rasterize_bwd.projected_grads.v{vi}");
-                    pool.get(ctx, &label, n * u64::from(PROJECTED_GRAD_FLOATS) * 4)
+                    let stride = u64::from(PROJECTED_GRAD_FLOATS) * 4;
+                    Paged::from_pool(ctx, pool, &label, n, scene.page_len(), stride)
                 })
                 .collect(),
             view_grads: pool.get(ctx, "trgs.project_bwd.view_grads", views * view_stride),

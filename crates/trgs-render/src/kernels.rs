@@ -29,9 +29,9 @@ crate::kernel_registry! {
         display: "render/display.wgsl" => no_defines,
         compose_bwd: "backward/compose_bwd.wgsl" => accumulation,
         rasterize_bwd: "backward/rasterize_bwd.wgsl" =>
-            |c| [accumulation(c), tile_rows(c), block_walk(c)].concat(),
+            |c| [accumulation(c), tile_rows(c), block_walk(c), vec!["PAGED_GRADS"]].concat(),
         rasterize_reflection_bwd: "backward/rasterize_reflection_bwd.wgsl" =>
-            |c| [accumulation(c), tile_rows(c), block_walk(c)].concat(),
+            |c| [accumulation(c), tile_rows(c), block_walk(c), vec!["PAGED_GRADS"]].concat(),
         project_bwd: "backward/project_bwd.wgsl" => accumulation,
         /// `project_bwd` of a mirrored view: adds to the Gaussians' gradients (BWD_ADD).
         project_bwd_add: "backward/project_bwd.wgsl" =>

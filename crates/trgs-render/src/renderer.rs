@@ -17,6 +17,7 @@ use crate::stages::{
     sort, tile_counts, tile_ranges,
 };
 use crate::toolkit::FrameStages;
+use crate::toolkit::paged::{MAX_PAGES, Paged};
 use trgs_core::plane_math::mirrored_view;
 use trgs_core::reference::ReflectionModel;
 use trgs_core::reference::{TileGrid, footprint};
@@ -106,7 +107,7 @@ fn check_binding(
     what: &'static str,
     bytes: u64,
 ) -> Result<(), RenderError> {
-    let limit = ctx.device.limits().max_storage_buffer_binding_size;
+    let limit = ctx.binding_limit();
     if bytes > limit {
         return Err(RenderError::FrameTooLarge { name: camera.name.clone(), what, bytes, limit });
     }
@@ -196,9 +197,17 @@ impl Renderer {
         let view = ViewTransform::from(&camera.pose);
         let planes = scene.planes();
         check_binding(ctx, camera, "image layers", pixels * bytes_per_pixel(planes.len()))?;
-        // Each view's projected Gaussians are bound whole by the rasterize passes.
-        let projected_bytes = u64::from(scene.len()) * PROJECTED_BYTES;
-        check_binding(ctx, camera, "projected Gaussians (one record each)", projected_bytes)?;
+        // The rasterize passes bind each view's projected Gaussians whole, in at most MAX_PAGES
+        // pages of one binding each.
+        let pages = scene.len().div_ceil(scene.page_len());
+        if pages > MAX_PAGES {
+            return Err(RenderError::FrameTooLarge {
+                name: camera.name.clone(),
+                what: "projected Gaussians (one record each, in two bindings)",
+                bytes: u64::from(scene.len()) * PROJECTED_BYTES,
+                limit: u64::from(MAX_PAGES * scene.page_len()) * PROJECTED_BYTES,
+            });
+        }
         let mut specs = vec![ViewSpec { view, plane: None, limit: grid.full() }];
         for (i, plane) in planes.iter().enumerate() {
             if !options.enabled_planes.get(i).copied().unwrap_or(true) {
@@ -242,7 +251,10 @@ impl Renderer {
             })
             .collect();
         let projected: Vec<_> = (0..specs.len())
-            .map(|vi| pool.get(ctx, &format!("trgs.project.projected.v{vi}"), n * PROJECTED_BYTES))
+            .map(|vi| {
+                let label = format!("trgs.project.projected.v{vi}");
+                Paged::from_pool(ctx, pool, &label, scene.len(), scene.page_len(), PROJECTED_BYTES)
+            })
             .collect();
         let candidates: Vec<_> =
             (0..specs.len()).map(|vi| project::Candidates::new(s, pool, scene, vi)).collect();

@@ -29,10 +29,21 @@ pub struct GpuScene {
     pub(crate) populations: wgpu::Buffer,
     planes: Vec<ReflectionPlane>,
     chunk: u32,
+    /// Gaussians per page of the per-view arrays the rasterize passes bind whole
+    /// ([`GpuScene::page_len`]).
+    page: u32,
 }
 
 /// Bytes per Gaussian of the widest per-Gaussian binding other than SH (the projected record).
 const PROJECTED_STRIDE: u64 = std::mem::size_of::<crate::layout::ProjectedGaussian>() as u64;
+
+/// Whole chunks of `chunk` Gaussians whose projected records (the widest per-view record, wider
+/// than a gradient record) fit a binding of `limit` bytes; at least one chunk.
+fn page_len(limit: u64, chunk: u32) -> u32 {
+    let widest = PROJECTED_STRIDE.max(u64::from(crate::layout::PROJECTED_GRAD_FLOATS) * 4);
+    let chunks = (limit / widest / u64::from(chunk)).clamp(1, u64::from(u32::MAX / chunk));
+    chunks as u32 * chunk
+}
 
 impl GpuScene {
     /// Validate (every attribute finite, no zero quaternion, planes well formed) and upload.
@@ -58,12 +69,13 @@ impl GpuScene {
         let flat3 = |v: &[[f32; 3]]| v.iter().flatten().copied().collect::<Vec<f32>>();
         let pops: Vec<u32> = gaussians.populations.iter().map(|&p| p as u32).collect();
         let sh_coeffs = gaussians.sh_coeffs() as u32;
-        let limit = ctx.device.limits().max_storage_buffer_binding_size;
+        let limit = ctx.binding_limit();
         let widest = (u64::from(sh_coeffs) * 12).max(PROJECTED_STRIDE);
         // Multiples of 256 Gaussians keep every range offset aligned for any stride; a chunk's
         // one-thread-per-Gaussian dispatches stay within the workgroup limit.
         let most = u64::from(crate::layout::MAX_WORKGROUPS) * 256;
         let chunk = ((limit / widest) / 256 * 256).clamp(256, most) as u32;
+        let page = page_len(limit, chunk);
         let g = gaussians;
         let buffers = PerAttribute::from_fn(|a| {
             let label = format!("trgs.scene.{}", a.name());
@@ -85,6 +97,7 @@ impl GpuScene {
             populations: gpu::storage_init(ctx, "trgs.scene.populations", &pops),
             planes: planes.to_vec(),
             chunk,
+            page,
         }
     }
 
@@ -111,6 +124,7 @@ impl GpuScene {
             populations: rebuild(&self.populations, 1, "trgs.scene.populations"),
             planes: self.planes.clone(),
             chunk: self.chunk,
+            page: self.page,
         }
     }
 
@@ -186,6 +200,20 @@ impl GpuScene {
     /// least 256): tests exercise the split that very large scenes need.
     pub fn set_chunk_size(&mut self, gaussians: u32) {
         self.chunk = self.chunk.min((gaussians / 256 * 256).max(256));
+        self.page = (self.page / self.chunk).max(1) * self.chunk;
+    }
+
+    /// Put at most `gaussians` Gaussians in a page (rounded down to whole chunks, at least one):
+    /// tests exercise the pages that scenes of millions of Gaussians need.
+    pub fn set_page_len(&mut self, gaussians: u32) {
+        self.page = self.page.min((gaussians / self.chunk).max(1) * self.chunk);
+    }
+
+    /// Gaussians per page of a view's projected records and their gradients
+    /// ([`crate::toolkit::paged`]): as many whole chunks as one binding holds, so that each
+    /// chunk's range lies in one page.
+    pub fn page_len(&self) -> u32 {
+        self.page
     }
 
     /// (first, count) of each range of Gaussians bound at once.

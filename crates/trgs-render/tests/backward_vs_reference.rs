@@ -392,7 +392,18 @@ fn projected_record(pg: &reference::ProjectedGrads, i: usize) -> [f64; 12] {
 
 /// The whole backward against the twin's: the real view's screen-space gradients (stage
 /// rasterize_bwd), then every Gaussian attribute and every plane parameter.
-fn check_backward(name: &str, mut scene: trgs_core::fixtures::Scene, block: bool) {
+fn check_backward(name: &str, scene: trgs_core::fixtures::Scene, block: bool) {
+    check_backward_in_pages(name, scene, block, None);
+}
+
+/// With `chunk`, the scene is bound `chunk` Gaussians at a time and each view's projected
+/// records and gradients are held in pages of two chunks (the layout of scenes of millions).
+fn check_backward_in_pages(
+    name: &str,
+    mut scene: trgs_core::fixtures::Scene,
+    block: bool,
+    chunk: Option<u32>,
+) {
     // Tiny and huge scales on a few Gaussians (the hard cases of the acceptance).
     let n = scene.gaussians.len();
     for i in (0..n).step_by(37) {
@@ -447,7 +458,11 @@ fn check_backward(name: &str, mut scene: trgs_core::fixtures::Scene, block: bool
     for (mode, ctx) in contexts() {
         let what = format!("{name} ({mode})");
         let renderer = Renderer::new(&ctx);
-        let gpu_scene = GpuScene::upload(&ctx, &g32, &scene.planes).expect("valid scene");
+        let mut gpu_scene = GpuScene::upload(&ctx, &g32, &scene.planes).expect("valid scene");
+        if let Some(c) = chunk {
+            gpu_scene.set_chunk_size(c);
+            gpu_scene.set_page_len(2 * c);
+        }
         let render_options = RenderOptions {
             background: background.map(|v| v as f32),
             depth_variance: true,
@@ -456,6 +471,11 @@ fn check_backward(name: &str, mut scene: trgs_core::fixtures::Scene, block: bool
         };
         let mut frame =
             renderer.render(&gpu_scene, &scene.camera, &render_options).expect("render");
+        if chunk.is_some() {
+            let pages: Vec<usize> =
+                frame.views().iter().map(|v| v.projected.pages().len()).collect();
+            assert!(pages.iter().all(|&p| p == 2), "{what}: pages per view {pages:?}");
+        }
         let layer_grads = LayerGrads::upload(&ctx, &frame, &grads).expect("finite gradients");
         let bwd = BackwardOptions { block_reflection_to_gaussians: block, profile: false };
         let out = renderer.backward(&gpu_scene, &mut frame, &layer_grads, &bwd).expect("backward");
@@ -522,6 +542,14 @@ fn backward_grazing() {
 #[test]
 fn backward_edge_on() {
     check_backward("edge-on 89.9 deg", random_scene(&spec(55, 600, 2, 89.9)), false);
+}
+
+/// The records of the Gaussians past the first page come from the second page, and their
+/// gradients go to it, in every pass.
+#[test]
+fn backward_two_planes_in_two_pages() {
+    let scene = random_scene(&spec(58, 600, 2, 30.0));
+    check_backward_in_pages("2 planes, pages of 512", scene, false, Some(256));
 }
 
 #[test]

@@ -68,7 +68,10 @@ fn check_scene_in(name: &str, scene: &Scene, chunk: Option<u32>, ctx: &GpuContex
     let g = g32.cast::<f64>();
     let mut gpu_scene = GpuScene::upload(ctx, &g32, &scene.planes).expect("valid scene");
     if let Some(c) = chunk {
+        // Pages of two chunks: with more than two chunks the rasterize passes read the
+        // projected records from both of their pages.
         gpu_scene.set_chunk_size(c);
+        gpu_scene.set_page_len(2 * c);
     }
     let options = RenderOptions {
         depth_variance: true,
@@ -77,6 +80,12 @@ fn check_scene_in(name: &str, scene: &Scene, chunk: Option<u32>, ctx: &GpuContex
         ..Default::default()
     };
     let frame = renderer.render(&gpu_scene, &scene.camera, &options).expect("render");
+    if let Some(c) = chunk {
+        let want = (scene.gaussians.len() as u32).div_ceil(2 * c) as usize;
+        for v in frame.views() {
+            assert_eq!(v.projected.pages().len(), want, "{name}: pages of projected records");
+        }
+    }
     let k = &scene.camera.intrinsics;
     let grid = TileGrid::new(k.width, k.height);
     let images = frame.read_images(ctx).expect("readback");

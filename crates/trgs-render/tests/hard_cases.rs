@@ -224,7 +224,7 @@ fn half_a_million_gaussians_render() {
         Renderer::new(&ctx).render(&scene, &s.camera, &RenderOptions::default()).expect("render");
     let img = f.read_images(&ctx).expect("readback");
     assert!(all_finite(&img));
-    let limit = ctx.device.limits().max_storage_buffer_binding_size;
+    let limit = ctx.binding_limit();
     eprintln!(
         "500k Gaussians: {} keys, frame memory {:.1} MiB, binding limit {} MiB, SH buffer {:.1} MiB",
         f.key_count(),
@@ -238,7 +238,7 @@ fn half_a_million_gaussians_render() {
 #[test]
 fn frames_over_the_binding_limit_are_refused_with_a_clear_error() {
     let ctx = GpuContext::new().unwrap_or_else(|e| panic!("{e}"));
-    let limit = ctx.device.limits().max_storage_buffer_binding_size;
+    let limit = ctx.binding_limit();
     let renderer = Renderer::new(&ctx);
     let s = random_scene(&SceneSpec { planes: 0, gaussians: 1, ..SceneSpec::default() });
     // An image whose per-pixel layers alone exceed one binding: refused before any kernel.

@@ -51,7 +51,7 @@ pub struct Adam {
 impl Adam {
     pub fn new(ctx: &GpuContext, settings: AdamSettings) -> Self {
         // A count must fit the u32 of the uniform and the dispatch.
-        let limit = (ctx.device.limits().max_storage_buffer_binding_size / 4).min(1 << 30);
+        let limit = (ctx.binding_limit() / 4).min(1 << 30);
         Self {
             kernel: crate::kernels::TRAINING_KERNELS.adam.build(ctx),
             settings,

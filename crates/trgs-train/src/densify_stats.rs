@@ -84,23 +84,34 @@ impl GpuDensifyStats {
         let (hw, hh) = (0.5 * frame.width() as f32, 0.5 * frame.height() as f32);
         for (vi, view) in frame.views().iter().enumerate().take(views) {
             let Some(g) = grads.projected_grads(vi) else { continue };
-            let params = DensifyStatsParams {
-                count,
-                first_pass: u32::from(vi == 0),
-                half_width: hw,
-                half_height: hh,
-            };
-            let block = gpu::params(ctx, "trgs.densify_stats.params", &params);
-            let bind = self.kernel.bind(
-                ctx,
-                &[
-                    block.as_entire_binding(),
-                    view.projected.as_entire_binding(),
-                    g.as_entire_binding(),
-                    self.buffer.as_entire_binding(),
-                ],
-            );
-            rec.dispatch("densify_stats", &self.kernel, &bind, grid_1d(count.div_ceil(256)));
+            // One dispatch per page of the projected records and their gradients (a page is
+            // one binding's worth).
+            let page = view.projected.page_len();
+            for first in (0..count).step_by(page as usize) {
+                let n = page.min(count - first);
+                let params = DensifyStatsParams {
+                    count: n,
+                    first_pass: u32::from(vi == 0),
+                    half_width: hw,
+                    half_height: hh,
+                };
+                let block = gpu::params(ctx, "trgs.densify_stats.params", &params);
+                let stats_bytes = STATS_FLOATS as u64 * 4;
+                let bind = self.kernel.bind(
+                    ctx,
+                    &[
+                        block.as_entire_binding(),
+                        view.projected.range(first, n),
+                        g.range(first, n),
+                        gpu::range(
+                            &self.buffer,
+                            u64::from(first) * stats_bytes,
+                            u64::from(n) * stats_bytes,
+                        ),
+                    ],
+                );
+                rec.dispatch("densify_stats", &self.kernel, &bind, grid_1d(n.div_ceil(256)));
+            }
         }
     }
 }

@@ -52,7 +52,7 @@ impl GatherSources {
 
 impl GpuRowGather {
     pub fn new(ctx: &GpuContext) -> Self {
-        let limit = ctx.device.limits().max_storage_buffer_binding_size;
+        let limit = ctx.binding_limit();
         Self {
             kernel: crate::kernels::TRAINING_KERNELS.gather_rows.build(ctx),
             binding_words: (limit / 4).min(1 << 30),

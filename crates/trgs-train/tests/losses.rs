@@ -293,7 +293,7 @@ fn a_target_of_the_wrong_shape_is_refused() {
 #[test]
 fn a_frame_too_large_for_one_binding_is_named_before_any_work() {
     let ctx = GpuContext::new().expect("adapter");
-    let limit = ctx.device.limits().max_storage_buffer_binding_size;
+    let limit = ctx.binding_limit();
     // The statistics buffer (32 bytes a pixel) is the loss's largest.
     let side = ((limit / 32) as f64).sqrt().ceil() as u32 + 1;
     let err = check_frame_size(&ctx, side, side).expect_err("too large").to_string();

@@ -98,7 +98,11 @@ impl Frame {
             }
         }
         Ok(Some(ViewIntermediates {
-            projected: gpu::read_buffer(ctx, &v.projected, 0, gaussians)?,
+            projected: {
+                let mut records = v.projected.read(ctx)?;
+                records.truncate(gaussians);
+                records
+            },
             counts: gpu::read_buffer(ctx, &v.counts, 0, gaussians)?,
             order,
             emitted,

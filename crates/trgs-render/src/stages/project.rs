@@ -5,13 +5,12 @@
 //! indirectly over their list (see shared/project_cull.wgsl for why).
 use super::Stage;
 use crate::gpu::{self, BufferPool, Recorder, grid_1d, range};
-use crate::layout::{CULL_VIEWS, ProjectParams, ProjectedGaussian};
+use crate::layout::{CULL_VIEWS, ProjectParams};
 use crate::scene::GpuScene;
+use crate::toolkit::paged::Paged;
 use trgs_core::reference::{GUARD_BAND, TileRect};
 use trgs_core::scene::Attribute;
 use trgs_core::scene::{Intrinsics, ReflectionPlane, ViewTransform};
-
-const PROJECTED: u64 = std::mem::size_of::<ProjectedGaussian>() as u64;
 
 /// The parameter block of one view: `plane` is Some for a mirrored view (front-side filter).
 pub fn params(
@@ -104,7 +103,7 @@ pub fn record_candidates(
     scene: &GpuScene,
     params: &[ProjectParams],
     candidates: &[Candidates],
-    projected: &[wgpu::Buffer],
+    projected: &[Paged],
 ) {
     debug_assert!(params.len() == candidates.len() && params.len() == projected.len());
     let cull = &s.kernels.project_candidates;
@@ -131,7 +130,7 @@ pub fn record_candidates(
             for k in 0..group {
                 let v = views.get(k).copied().unwrap_or(views[0]);
                 let [list, work] = candidates[v].chunk(chunk, first, count);
-                entries.push(range(&projected[v], f * PROJECTED, c * PROJECTED));
+                entries.push(projected[v].range(first, count));
                 entries.push(list);
                 entries.push(work);
             }
@@ -152,7 +151,7 @@ pub fn record(
     scene: &GpuScene,
     base: &ProjectParams,
     candidates: &Candidates,
-    projected: &wgpu::Buffer,
+    projected: &Paged,
 ) {
     let k = &s.kernels.project;
     let coeffs = u64::from(scene.sh_coeffs());
@@ -161,7 +160,7 @@ pub fn record(
         let p = ProjectParams { count, sh_coeffs: scene.sh_coeffs(), ..*base };
         let block = gpu::params(s.ctx, "trgs.project.params", &p);
         let (f, c) = (u64::from(first), u64::from(count));
-        let out = range(projected, f * PROJECTED, c * PROJECTED);
+        let out = projected.range(first, count);
         let bind = k.bind(
             s.ctx,
             &[

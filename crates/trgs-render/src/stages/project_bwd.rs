@@ -3,12 +3,10 @@
 use super::Stage;
 use super::project::{Candidates, WORK_STRIDE};
 use crate::gpu::{self, Recorder, range};
-use crate::layout::{BWD_ADD, PROJECTED_GRAD_FLOATS, ProjectParams, ProjectedGaussian};
+use crate::layout::{BWD_ADD, ProjectParams};
 use crate::scene::{GpuScene, SceneGradBuffers};
+use crate::toolkit::paged::Paged;
 use trgs_core::scene::Attribute;
-
-const PROJECTED: u64 = std::mem::size_of::<ProjectedGaussian>() as u64;
-const PROJECTED_GRAD: u64 = PROJECTED_GRAD_FLOATS as u64 * 4;
 
 /// Backpropagate one view: `base` is the view's forward parameter block, `mode` its BWD_* bits
 /// (BWD_ADD picks the kernel variant that adds to the gradients, the others go to the kernel).
@@ -19,9 +17,9 @@ pub fn record(
     scene: &GpuScene,
     base: &ProjectParams,
     mode: u32,
-    projected: &wgpu::Buffer,
+    projected: &Paged,
     candidates: &Candidates,
-    projected_grads: &wgpu::Buffer,
+    projected_grads: &Paged,
     out: &SceneGradBuffers,
     view_grads: wgpu::BindingResource<'_>,
 ) {
@@ -40,8 +38,8 @@ pub fn record(
                 range(scene.parameter(Attribute::Rotations), f * 16, c * 16),
                 range(scene.parameter(Attribute::LogScales), f * 12, c * 12),
                 range(scene.parameter(Attribute::Sh), f * coeffs * 12, c * coeffs * 12),
-                range(projected, f * PROJECTED, c * PROJECTED),
-                range(projected_grads, f * PROJECTED_GRAD, c * PROJECTED_GRAD),
+                projected.range(first, count),
+                projected_grads.range(first, count),
                 range(out.parameter(Attribute::Means), f * 12, c * 12),
                 range(out.parameter(Attribute::Rotations), f * 16, c * 16),
                 range(out.parameter(Attribute::LogScales), f * 12, c * 12),

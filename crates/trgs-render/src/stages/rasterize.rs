@@ -2,6 +2,7 @@
 use super::Stage;
 use crate::gpu::{self, Recorder};
 use crate::layout::RasterParams;
+use crate::toolkit::paged::Paged;
 use trgs_core::reference::{TILE_SIZE, TileGrid};
 
 // rasterize.wgsl gives eight consecutive threads a 4 x 2 block of pixels of the tile.
@@ -42,23 +43,25 @@ pub fn record(
     grid: &TileGrid,
     background: [f32; 3],
     depth_variance: bool,
-    projected: &wgpu::Buffer,
+    projected: &Paged,
     values: &wgpu::Buffer,
     ranges: &wgpu::Buffer,
     out: &Pass1Outputs<'_>,
 ) {
-    let block = gpu::params(s.ctx, "trgs.rasterize.params", &params(grid, background));
+    let p = RasterParams { page: projected.first_page_len(), ..params(grid, background) };
+    let block = gpu::params(s.ctx, "trgs.rasterize.params", &p);
     let k = if depth_variance { &s.kernels.rasterize_depth_variance } else { &s.kernels.rasterize };
     let bind = k.bind(
         s.ctx,
         &[
             block.as_entire_binding(),
-            projected.as_entire_binding(),
+            projected.page_binding(0),
             values.as_entire_binding(),
             ranges.as_entire_binding(),
             out.transmission.as_entire_binding(),
             out.geometry.as_entire_binding(),
             out.states.as_entire_binding(),
+            projected.page_binding(1),
         ],
     );
     rec.dispatch("rasterize", k, &bind, [grid.tiles_x, grid.tiles_y, 1]);

@@ -6,12 +6,13 @@ use crate::frame::LayerBuffers;
 use crate::gpu::{self, Recorder};
 use crate::layer_grads::LayerGrads;
 use crate::layout::RasterParams;
+use crate::toolkit::paged::Paged;
 use trgs_core::reference::TileGrid;
 
 /// The sorted lists of the view being replayed.
 #[derive(Clone, Copy, Debug)]
 pub struct ViewLists<'a> {
-    pub projected: &'a wgpu::Buffer,
+    pub projected: &'a Paged,
     pub values: &'a wgpu::Buffer,
     pub ranges: &'a wgpu::Buffer,
 }
@@ -26,10 +27,11 @@ pub fn record(
     lists: ViewLists<'_>,
     layers: &LayerBuffers,
     grads: &LayerGrads,
-    projected_grads: &wgpu::Buffer,
+    projected_grads: &Paged,
 ) {
     let params = RasterParams {
         depth_variance: u32::from(depth_variance),
+        page: lists.projected.first_page_len(),
         ..super::rasterize::params(grid, background)
     };
     let block = gpu::params(s.ctx, "trgs.rasterize_bwd.params", &params);
@@ -38,14 +40,16 @@ pub fn record(
         s.ctx,
         &[
             block.as_entire_binding(),
-            lists.projected.as_entire_binding(),
+            lists.projected.page_binding(0),
             lists.values.as_entire_binding(),
             lists.ranges.as_entire_binding(),
             layers.states.as_entire_binding(),
             layers.geometry.as_entire_binding(),
             grads.transmission.as_entire_binding(),
             grads.geometry.as_entire_binding(),
-            projected_grads.as_entire_binding(),
+            projected_grads.page_binding(0),
+            lists.projected.page_binding(1),
+            projected_grads.page_binding(1),
         ],
     );
     rec.dispatch("rasterize_bwd", k, &bind, [grid.tiles_x, grid.tiles_y, 1]);

@@ -5,6 +5,7 @@ use super::Stage;
 use super::compose::RayBuffers;
 use crate::gpu::{self, Recorder};
 use crate::layout::RasterParams;
+use crate::toolkit::paged::Paged;
 use trgs_core::reference::{TileGrid, TileRect};
 
 /// The parameter block of pass 2 (and of its adjoint): plane slot `slot`, dispatched over the tiles of
@@ -27,7 +28,7 @@ pub fn record(
     slot: u32,
     footprint: &TileRect,
     tile_base: u32,
-    projected: &wgpu::Buffer,
+    projected: &Paged,
     values: &wgpu::Buffer,
     ranges: &wgpu::Buffer,
     reflection_raw: &wgpu::Buffer,
@@ -40,20 +41,24 @@ pub fn record(
     let block = gpu::params(
         s.ctx,
         "trgs.rasterize_reflection.params",
-        &params(grid, slot, footprint, tile_base),
+        &RasterParams {
+            page: projected.first_page_len(),
+            ..params(grid, slot, footprint, tile_base)
+        },
     );
     let k = &s.kernels.rasterize_reflection;
     let bind = k.bind(
         s.ctx,
         &[
             block.as_entire_binding(),
-            projected.as_entire_binding(),
+            projected.page_binding(0),
             values.as_entire_binding(),
             ranges.as_entire_binding(),
             reflection_raw.as_entire_binding(),
             states.as_entire_binding(),
             rays.camera.as_entire_binding(),
             rays.planes.as_entire_binding(),
+            projected.page_binding(1),
         ],
     );
     let groups = [footprint.x1 - footprint.x0, footprint.y1 - footprint.y0, 1];

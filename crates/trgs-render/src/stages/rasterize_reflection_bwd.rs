@@ -6,6 +6,7 @@ use super::rasterize_bwd::ViewLists;
 use crate::frame::LayerBuffers;
 use crate::gpu::{self, Recorder};
 use crate::layer_grads::LayerGrads;
+use crate::toolkit::paged::Paged;
 use trgs_core::reference::{TileGrid, TileRect};
 
 #[allow(clippy::too_many_arguments)]
@@ -19,24 +20,29 @@ pub fn record(
     lists: ViewLists<'_>,
     layers: &LayerBuffers,
     grads: &LayerGrads,
-    projected_grads: &wgpu::Buffer,
+    projected_grads: &Paged,
 ) {
     if footprint.is_empty() {
         return;
     }
-    let params = super::rasterize_reflection::params(grid, slot, footprint, tile_base);
+    let params = crate::layout::RasterParams {
+        page: lists.projected.first_page_len(),
+        ..super::rasterize_reflection::params(grid, slot, footprint, tile_base)
+    };
     let block = gpu::params(s.ctx, "trgs.rasterize_reflection_bwd.params", &params);
     let k = &s.kernels.rasterize_reflection_bwd;
     let bind = k.bind(
         s.ctx,
         &[
             block.as_entire_binding(),
-            lists.projected.as_entire_binding(),
+            lists.projected.page_binding(0),
             lists.values.as_entire_binding(),
             lists.ranges.as_entire_binding(),
             layers.reflection_states.as_entire_binding(),
             grads.reflection_raw.as_entire_binding(),
-            projected_grads.as_entire_binding(),
+            projected_grads.page_binding(0),
+            lists.projected.page_binding(1),
+            projected_grads.page_binding(1),
         ],
     );
     let groups = [footprint.x1 - footprint.x0, footprint.y1 - footprint.y0, 1];

@@ -4,11 +4,10 @@
 use super::Stage;
 use super::project::{Candidates, WORK_STRIDE};
 use crate::gpu::{self, BufferPool, Recorder, range};
-use crate::layout::{ProjectedGaussian, TileParams};
+use crate::layout::TileParams;
 use crate::scene::GpuScene;
+use crate::toolkit::paged::Paged;
 use trgs_core::reference::{TileGrid, TileRect, depth_key_base};
-
-const PROJECTED: u64 = std::mem::size_of::<ProjectedGaussian>() as u64;
 
 /// The parameter block of a view's binning, limited to `limit` (a footprint, or the whole grid).
 pub fn params(grid: &TileGrid, limit: &TileRect, near: f64) -> TileParams {
@@ -71,7 +70,7 @@ pub fn record(
     rec: &mut Recorder,
     scene: &GpuScene,
     base: &TileParams,
-    projected: &wgpu::Buffer,
+    projected: &Paged,
     candidates: &Candidates,
     counts: &wgpu::Buffer,
     entries: &DepthEntries,
@@ -87,7 +86,7 @@ pub fn record(
             s.ctx,
             &[
                 block.as_entire_binding(),
-                range(projected, f * PROJECTED, c * PROJECTED),
+                projected.range(first, count),
                 range(counts, f * 4, c * 4),
                 list,
                 work,

@@ -379,7 +379,7 @@ impl BufferPool {
             Some(_) => {
                 let limits = ctx.device.limits();
                 // storage() pads to 64 bytes: cap below the limit after padding.
-                let most = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
+                let most = ctx.binding_limit().min(limits.max_buffer_size);
                 (size + size / 4).min(most / 64 * 64).max(size)
             }
             None => size,

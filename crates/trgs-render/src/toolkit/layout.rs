@@ -209,7 +209,9 @@ gpu_struct! {
         /// in tiles (ViewTiles::tile_base; the whole grid's width for pass 1).
         pub tile_base: u32,
         pub tiles_w: u32,
-        pub pad0: u32,
+        /// Gaussians in the first page of the projected records and their gradients
+        /// ([`crate::toolkit::paged`]); the rest are in the second.
+        pub page: u32,
         pub pad1: u32,
         /// Colour behind the last transmittance of C_t.
         pub background: [f32; 4],

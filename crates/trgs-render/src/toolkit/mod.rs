@@ -9,6 +9,8 @@
 //! - [`shader`]: the WGSL sources under `shaders/` (compiled in by the build script) and their
 //!   preprocessor; [`layout`]: the GPU structs and constants, declared once in Rust with their
 //!   WGSL generated;
+//! - [`paged`]: per-Gaussian arrays in pages of one binding each (a view's projected records
+//!   and their gradients, which the rasterize passes bind whole);
 //! - [`registry`]: the one table per crate that registers each kernel (its WGSL file and its
 //!   defines per device), and the renderer's own tables ([`RENDER_KERNELS`],
 //!   [`BENCH_KERNELS`]);
@@ -17,6 +19,7 @@
 //!   statistics) and for the tests that check each stage against its CPU twin.
 pub mod gpu;
 pub mod layout;
+pub mod paged;
 pub mod registry;
 pub mod shader;
 
@@ -77,7 +80,7 @@ pub trait GradientStages {
         vi: usize,
     ) -> Result<Option<Vec<[f32; PROJECTED_GRAD_FLOATS as usize]>>, GpuError>;
 
-    /// The buffer of view `vi`'s screen-space gradients (`PROJECTED_GRAD_FLOATS` per Gaussian),
+    /// The pages of view `vi`'s screen-space gradients (`PROJECTED_GRAD_FLOATS` per Gaussian),
     /// for kernels that read them where they are.
-    fn projected_grads(&self, vi: usize) -> Option<&wgpu::Buffer>;
+    fn projected_grads(&self, vi: usize) -> Option<&paged::Paged>;
 }

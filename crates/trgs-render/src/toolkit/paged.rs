@@ -1,0 +1,120 @@
+//! Per-Gaussian arrays larger than one storage binding, held as pages.
+//!
+//! The rasterize passes and their adjoints read a view's projected Gaussians (and add to their
+//! gradient records) at any Gaussian index the sorted keys name, so they bind those arrays
+//! whole. At 64 bytes a record, a binding of 128 MiB (lavapipe's limit) holds about 2.1 million
+//! Gaussians. Such an array is therefore split into pages of [`Paged::page_len`] Gaussians, each
+//! page its own buffer: the rasterize kernels bind [`MAX_PAGES`] of them and pick the page by
+//! the index (`shared/projected_pages.wgsl`, `PAGED_GRADS` in `shared/accumulate.wgsl`); the
+//! per-Gaussian stages run over the scene's chunks, and a page holds a whole number of chunks
+//! ([`crate::GpuScene::page_len`]), so a chunk's range lies in one page.
+use super::gpu::{self, BufferPool};
+use crate::GpuContext;
+use crate::gpu::GpuError;
+
+/// Pages the rasterize kernels bind (their bindings `projected` and `projected_hi`, `grads` and
+/// `grads_hi`).
+pub const MAX_PAGES: u32 = 2;
+
+/// A per-Gaussian array of `len` records of `stride` bytes in pages of `page_len` records.
+#[derive(Clone, Debug)]
+pub struct Paged {
+    pages: Vec<wgpu::Buffer>,
+    /// Bound in place of the pages that do not exist (a buffer of its own, so that no
+    /// buffer is bound twice in one dispatch).
+    absent: wgpu::Buffer,
+    page_len: u32,
+    len: u32,
+    stride: u64,
+}
+
+impl Paged {
+    /// The pages of `len` records from `pool`, labelled `{label}.p{k}` (reused frame to frame).
+    pub fn from_pool(
+        ctx: &GpuContext,
+        pool: &mut BufferPool,
+        label: &str,
+        len: u32,
+        page_len: u32,
+        stride: u64,
+    ) -> Self {
+        let page_len = page_len.max(1);
+        let count = len.div_ceil(page_len).max(1);
+        let pages = (0..count)
+            .map(|k| {
+                let records = page_len.min(len.saturating_sub(k * page_len)).max(1);
+                pool.get(ctx, &format!("{label}.p{k}"), u64::from(records) * stride)
+            })
+            .collect();
+        let absent = pool.get(ctx, &format!("{label}.absent"), stride);
+        Self { pages, absent, page_len, len, stride }
+    }
+
+    /// Records in the first page (what the kernels' `page` parameter holds): records from this
+    /// index on are in the second page.
+    pub fn first_page_len(&self) -> u32 {
+        self.page_len.min(self.len)
+    }
+
+    pub fn page_len(&self) -> u32 {
+        self.page_len
+    }
+
+    pub fn len(&self) -> u32 {
+        self.len
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    pub fn pages(&self) -> &[wgpu::Buffer] {
+        &self.pages
+    }
+
+    /// Records `first..first + count` as one binding (they must lie in one page: the scene's
+    /// chunks do).
+    pub fn range(&self, first: u32, count: u32) -> wgpu::BindingResource<'_> {
+        let (page, local) = (first / self.page_len, first % self.page_len);
+        debug_assert!(
+            local + count <= self.page_len,
+            "records {first}..{} cross a page of {}",
+            first + count,
+            self.page_len
+        );
+        gpu::range(
+            &self.pages[page as usize],
+            u64::from(local) * self.stride,
+            u64::from(count) * self.stride,
+        )
+    }
+
+    /// Page `k` whole as a binding, or a one-record buffer of this array's own where there is
+    /// no such page (the kernels never read it then).
+    pub fn page_binding(&self, k: usize) -> wgpu::BindingResource<'_> {
+        self.pages.get(k).unwrap_or(&self.absent).as_entire_binding()
+    }
+
+    /// Zero every page.
+    pub fn clear(&self, encoder: &mut wgpu::CommandEncoder) {
+        for p in &self.pages {
+            encoder.clear_buffer(p, 0, None);
+        }
+    }
+
+    /// Every record, in order (blocking readback of each page).
+    pub fn read<T: bytemuck::Pod>(&self, ctx: &GpuContext) -> Result<Vec<T>, GpuError> {
+        let per_record = (self.stride as usize) / std::mem::size_of::<T>();
+        let mut out = Vec::with_capacity(self.len as usize * per_record);
+        for (k, p) in self.pages.iter().enumerate() {
+            let records = self.page_len.min(self.len.saturating_sub(k as u32 * self.page_len));
+            out.extend(gpu::read_buffer::<T>(ctx, p, 0, records as usize * per_record)?);
+        }
+        Ok(out)
+    }
+
+    /// Bytes held by the pages.
+    pub fn bytes(&self) -> u64 {
+        self.pages.iter().map(wgpu::Buffer::size).sum()
+    }
+}
