@@ -7,7 +7,9 @@
 //! - [`data`], [`init`], [`plane_init`]: datasets at the training resolution, the initial
 //!   Gaussians and the planes fitted from the glass masks; [`reflection_seed`]: the reflected
 //!   content stage 1 put behind each plane, mirrored to its front;
-//! - [`settings`]: the schedules and rates; [`checkpoint`]: resumable state on disk;
+//! - [`settings`]: the schedules and rates; [`targets`]: the training photos on the GPU, under
+//!   a memory budget; [`checkpoint`]: resumable state on disk;
+//! - [`memory`]: the GPU bytes a trainer holds and the process's peak RAM;
 //! - [`eval`]: test metrics, renders and comparisons with a synthetic scene's ground truth;
 //! - the training stages on the GPU, each with its CPU twin in `trgs_core::reference`:
 //!   [`adam`], [`losses`], [`densify_stats`], [`gather_rows`] (and MCMC's in [`densify::mcmc`]),
@@ -24,12 +26,14 @@ pub mod init;
 pub mod kernels;
 pub mod layout;
 pub mod losses;
+pub mod memory;
 pub mod perturb;
 pub mod plane_adam;
 pub mod plane_init;
 pub mod reflection_seed;
 pub mod run;
 pub mod settings;
+pub mod targets;
 pub mod trainer;
 pub use trgs_core as core;
 /// Loading a trained model (in trgs-core, so that the viewer reads models without training code).

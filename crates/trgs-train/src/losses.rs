@@ -11,7 +11,8 @@
 //! The first two have their f64 twins of the same name in `trgs_core::reference`; `loss_sums` is a
 //! plain sum, checked through the loss values those twins return (tests/losses.rs, at sizes with
 //! one and with several workgroups of strips). A view's target
-//! image and glass labels are uploaded once ([`GpuTarget`]) and stay on the GPU; only the strips'
+//! image and glass labels are uploaded ([`GpuTarget`], kept under a budget by
+//! [`crate::targets::TargetCache`]); only the strips'
 //! sums (32 bytes per strip of LOSS_STRIP pixels: 32 KB at 256x256) come back, for the step's
 //! statistics.
 use crate::kernels::TRAINING_KERNELS;
@@ -148,7 +149,7 @@ pub struct LossSettings {
 /// here (a run checks every view's training size before it loads the photos).
 pub fn check_frame_size(ctx: &GpuContext, width: u32, height: u32) -> Result<(), LossError> {
     let pixels = u64::from(width) * u64::from(height);
-    let limit = ctx.device.limits().max_storage_buffer_binding_size;
+    let limit = ctx.binding_limit();
     for (buffer, per_pixel) in [
         ("row", ROWS_BYTES_PER_PIXEL),
         ("derivative", TERMS_BYTES_PER_PIXEL),
@@ -275,6 +276,11 @@ impl LossKernels {
             loss_sums: k.loss_sums.build(ctx),
             scratch: BufferPool::default(),
         }
+    }
+
+    /// Bytes of the scratch buffers (kept from step to step).
+    pub fn scratch_bytes(&self) -> u64 {
+        self.scratch.bytes()
     }
 
     /// Record the losses of `layers` against `target` into `grads`. Every gradient layer the

@@ -139,9 +139,13 @@ fn train(start: Start, feed: Option<&LiveFeed>) -> Result<()> {
             RunEvent::Step(s) => {
                 bar.set_position(u64::from(s.step));
                 let (loss, psnr) = (s.stats.loss, s.stats.psnr);
+                let ram = s.memory.peak_ram_bytes.map_or(String::new(), |b| {
+                    format!("  RAM peak {}", trgs_train::memory::human_bytes(b))
+                });
                 bar.set_message(format!(
-                    "loss {loss:.4}  psnr {psnr:.2}  {} Gaussians",
-                    s.gaussians
+                    "loss {loss:.4}  psnr {psnr:.2}  {} Gaussians  GPU {}{ram}",
+                    s.gaussians,
+                    trgs_train::memory::human_bytes(s.memory.gpu.total())
                 ));
                 if let Some(feed) = feed
                     && feed.wants_snapshot(SNAPSHOT_INTERVAL)

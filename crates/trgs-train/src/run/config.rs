@@ -101,6 +101,12 @@ pub struct RunConfig {
     #[arg(long, conflicts_with = "no_planes")]
     #[serde(default)]
     pub no_mask_refinement: bool,
+    /// GPU memory for the training views' photos, in MiB; beyond it views are streamed, each
+    /// uploaded a step ahead of its use [default: 64 on a CPU adapter such as lavapipe, whose
+    /// "GPU memory" is the RAM that already holds the photos; 4096 on a GPU]
+    #[arg(long, value_name = "MIB")]
+    #[serde(default)]
+    pub target_memory: Option<u64>,
     /// Order of the training views and every random draw
     #[arg(long, value_name = "S", default_value_t = 0)]
     pub seed: u64,

@@ -1,7 +1,7 @@
 //! The run's JSONL log: one line per step and one per evaluation, appended as the run goes and
 //! cut back to the checkpoint's step when a run resumes (so that every step is logged once).
+use super::StepEvent;
 use crate::eval::Evaluation;
-use crate::trainer::StepStats;
 use anyhow::{Context, Result};
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
@@ -43,14 +43,8 @@ impl RunLog {
     }
 
     /// One step's line.
-    pub fn step(
-        &mut self,
-        step: u32,
-        view: &str,
-        stats: &StepStats,
-        gaussians: u32,
-        seconds: f64,
-    ) -> Result<()> {
+    pub fn step(&mut self, event: &StepEvent, seconds: f64) -> Result<()> {
+        let StepEvent { step, view, gaussians, stats, memory, .. } = event;
         let phases: serde_json::Map<_, _> = stats
             .times
             .phases()
@@ -60,7 +54,8 @@ impl RunLog {
         let gpu: Vec<_> = stats.gpu_stages.iter().map(|(k, v)| serde_json::json!([k, v])).collect();
         let line = serde_json::json!({"step": step, "view": view,
             "loss": stats.loss, "psnr": stats.psnr, "gaussians": gaussians,
-            "seconds": seconds, "ms": phases, "gpu_ms": gpu, "perturbed": stats.perturbed});
+            "seconds": seconds, "ms": phases, "gpu_ms": gpu, "perturbed": stats.perturbed,
+            "gpu_bytes": memory.gpu.total(), "peak_ram_bytes": memory.peak_ram_bytes});
         self.line(&line)
     }
 

@@ -32,7 +32,7 @@ mod outputs;
 mod state;
 
 pub use config::{
-    Ablations, DEFAULT_MCMC_CAP, DemoScene, DensifyMode, RunConfig, parse_positive,
+    Ablations, DEFAULT_MCMC_CAP, DemoScene, DensifyMode, RunConfig, parse_positive, parse_size,
     upgrade_config_record,
 };
 pub use dataset::DEMO_SCENE_MARKER;
@@ -88,6 +88,16 @@ pub struct StepEvent {
     pub view: String,
     pub gaussians: u32,
     pub stats: StepStats,
+    /// The trainer's GPU buffers after the step and the process's peak RAM so far.
+    pub memory: StepMemory,
+}
+
+/// Memory after a step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepMemory {
+    pub gpu: crate::memory::GpuMemory,
+    /// None where the system does not report it ([`crate::memory::peak_ram_bytes`]).
+    pub peak_ram_bytes: Option<u64>,
 }
 
 /// Files a run writes into its folder (stale temporaries of these are removed on start).
@@ -245,11 +255,24 @@ impl TrainingRun {
                     seconds: 0.0,
                     phase_ms: StepTimes::default(),
                     train_views: view_names(&data),
+                    peak_gpu_bytes: 0,
                 };
                 (trainer, state, log::RunLog::create(&out)?)
             }
         };
         trainer.profile = config.profile;
+        let budget = crate::targets::budget_bytes(&ctx, config.target_memory);
+        crate::targets::check_budget(budget, &data.train)?;
+        trainer.set_target_budget(budget);
+        let photos: u64 = data.train.iter().map(crate::targets::target_bytes).sum();
+        if photos > budget {
+            note(format!(
+                "the training views need {} MiB on the GPU, over its budget of {} MiB \
+                 (--target-memory): they are streamed, each uploaded a step ahead",
+                photos.div_ceil(1 << 20),
+                budget >> 20
+            ));
+        }
         let cameras: Vec<_> = data.train.iter().map(|v| v.camera.clone()).collect();
         trainer.set_training_cameras(&cameras);
         let run = Self {
@@ -373,6 +396,14 @@ impl TrainingRun {
             }
             Ok(())
         });
+        let stats = stats.and_then(|stats| {
+            // The next view's upload goes on the queue now, ahead of its step (a no-op when
+            // every view fits the budget and it is resident).
+            match self.state.order.last() {
+                Some(&next) => self.trainer.prefetch(&self.data.train[next]).map(|()| stats),
+                None => Ok(stats),
+            }
+        });
         let stats = stats.with_context(|| {
             format!(
                 "training stopped at step {next}; `train --out {} --resume` continues from the \
@@ -385,14 +416,14 @@ impl TrainingRun {
         let step = self.trainer.step;
         let gaussians = self.trainer.scene().len();
         let view = self.data.train[vi].camera.name.clone();
-        self.log.step(step, &view, &stats, gaussians, self.t0.elapsed().as_secs_f64())?;
-        self.events.push_back(RunEvent::Step(StepEvent {
-            step,
-            iterations,
-            view,
-            gaussians,
-            stats,
-        }));
+        let memory = StepMemory {
+            gpu: self.trainer.gpu_memory(),
+            peak_ram_bytes: crate::memory::peak_ram_bytes(),
+        };
+        self.state.peak_gpu_bytes = self.state.peak_gpu_bytes.max(memory.gpu.total());
+        let event = StepEvent { step, iterations, view, gaussians, stats, memory };
+        self.log.step(&event, self.t0.elapsed().as_secs_f64())?;
+        self.events.push_back(RunEvent::Step(event));
         if let Some(e) = evaluation {
             self.log.evaluation(&e)?;
             self.state.evaluations.push(e.clone());

@@ -29,6 +29,8 @@ pub struct RunSummary {
     pub truth: Option<TruthComparison>,
     /// The ground truth's folder, when there is one.
     pub truth_dir: Option<PathBuf>,
+    /// The trainer's GPU buffers at the end, by what they hold.
+    pub gpu_memory: crate::memory::GpuMemory,
 }
 
 /// What outputs and evaluation need of the trainer.
@@ -75,6 +77,7 @@ pub fn write_outputs(
         render_fps: fps,
         truth_dir: truth.is_some().then(|| data_dir.join("gt")),
         truth,
+        gpu_memory: trainer.gpu_memory(),
     };
     let metrics = metrics_json(&summary, data, state);
     write_atomic(&out.join("metrics.json"), serde_json::to_string_pretty(&metrics)?.as_bytes())?;
@@ -117,5 +120,10 @@ fn metrics_json(s: &RunSummary, data: &TrainingData, state: &RunState) -> serde_
         "no_planes": config.no_planes,
         "truth": s.truth,
         "psnr_over_time": over_time,
+        "memory": {
+            "peak_gpu_bytes": state.peak_gpu_bytes,
+            "gpu_bytes": s.gpu_memory,
+            "peak_ram_bytes": crate::memory::peak_ram_bytes(),
+        },
     })
 }

@@ -29,6 +29,10 @@ pub struct RunState {
     /// dataset whose views changed (empty in checkpoints that predate it).
     #[serde(default)]
     pub train_views: Vec<String>,
+    /// The most GPU memory the trainer held after a step (bytes; 0 in checkpoints that predate
+    /// it).
+    #[serde(default)]
+    pub peak_gpu_bytes: u64,
 }
 
 impl RunState {

@@ -8,8 +8,9 @@ use crate::checkpoint::{Checkpoint, PlaneMoments};
 use crate::densify::{Densification, Geometry, RowPlan};
 use crate::densify::{DensifyEvent, DensifyStrategy, NoDensification, TrainState};
 use crate::gaussian_state::GaussianState;
-use crate::losses::{GpuTarget, LossKernels};
+use crate::losses::LossKernels;
 use crate::settings::TrainSettings;
+use crate::targets::TargetCache;
 
 mod phase_clock;
 mod planes;
@@ -19,7 +20,6 @@ mod step_times;
 pub use step_times::StepTimes;
 
 use anyhow::{Context, Result};
-use std::collections::HashMap;
 use trgs_core::reference::AdamSettings;
 use trgs_core::rng::Rng;
 use trgs_core::scene::{Camera, Gaussians, ReflectionPlane};
@@ -54,8 +54,8 @@ pub struct Trainer {
     plane_moments: Vec<PlaneMoments>,
     frame: Frame,
     losses: LossKernels,
-    /// Every training view's image and glass labels, uploaded on first use.
-    targets: HashMap<String, GpuTarget>,
+    /// The training views' images and glass labels on the GPU, under a memory budget.
+    targets: TargetCache,
     /// dL/d(layer) buffers, reused while the frame size and plane count stay.
     layer_grads: Option<((u32, u32, usize), LayerGrads)>,
     /// Steps taken so far.
@@ -104,7 +104,7 @@ impl Trainer {
             gaussians,
             frame: Frame::default(),
             losses: LossKernels::new(ctx),
-            targets: HashMap::new(),
+            targets: TargetCache::new(crate::targets::budget_bytes(ctx, None)),
             layer_grads: None,
             step: 0,
             rng: Rng::new(settings.seed ^ 0x5eed),
@@ -169,6 +169,45 @@ impl Trainer {
     /// The training cameras (for the opacity perturbation; without them it perturbs nothing).
     pub fn set_training_cameras(&mut self, cameras: &[Camera]) {
         self.camera_centres = cameras.iter().map(|c| c.pose.centre()).collect();
+    }
+
+    /// Bytes of the GPU buffers this trainer holds, by what they hold.
+    pub fn gpu_memory(&self) -> crate::memory::GpuMemory {
+        use trgs_core::scene::Attribute;
+        let scene = self.gaussians.scene();
+        let m = self.gaussians.moments();
+        let layer_grads = self.layer_grads.as_ref().map_or(0, |(_, g)| {
+            [&g.color, &g.reflection, &g.strength, &g.transmission, &g.geometry, &g.reflection_raw]
+                .iter()
+                .map(|b| b.size())
+                .sum()
+        });
+        crate::memory::GpuMemory {
+            parameters: Attribute::ALL.iter().map(|&a| scene.parameter(a).size()).sum::<u64>()
+                + scene.populations().size(),
+            moments: Attribute::ALL.iter().map(|&a| m[a].m.size() + m[a].v.size()).sum(),
+            frame: self.frame.memory_bytes(),
+            losses: self.losses.scratch_bytes() + layer_grads,
+            targets: self.targets.counts().resident_bytes,
+        }
+    }
+
+    /// The training views' GPU targets (their budget, uploads and evictions).
+    pub fn targets(&self) -> &TargetCache {
+        &self.targets
+    }
+
+    /// Hold at most `bytes` of training views on the GPU (the rest stream,
+    /// [`Trainer::prefetch`]).
+    pub fn set_target_budget(&mut self, bytes: u64) {
+        self.targets.set_budget(bytes);
+    }
+
+    /// Queue `view`'s upload ahead of the step that trains on it (when it is not resident).
+    pub fn prefetch(&mut self, view: &crate::data::View) -> Result<()> {
+        self.targets
+            .prefetch(&self.ctx, view)
+            .with_context(|| format!("uploading view {}", view.camera.name))
     }
 
     /// The parameters and Adam moments, read back.

@@ -3,7 +3,7 @@ use super::phase_clock::PhaseClock;
 use super::{StepStats, StepTimes, Trainer, psnr_of};
 use crate::data::View;
 use crate::densify::StepView;
-use crate::losses::{GpuTarget, LossLayers, LossSettings};
+use crate::losses::{LossLayers, LossSettings};
 use crate::settings::Stage;
 use anyhow::{Context, Result};
 use trgs_core::reference::RegulariserWeights;
@@ -53,16 +53,10 @@ impl Trainer {
         let scene = self.gaussians.scene();
         self.renderer.render_into(scene, &view.camera, &options, &mut self.frame)?;
         times.render = clock.lap(&self.ctx)?;
-        let target = match self.targets.entry(view.camera.name.clone()) {
-            std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
-            std::collections::hash_map::Entry::Vacant(e) => e.insert(GpuTarget::upload(
-                ctx,
-                &view.camera.name,
-                &view.image,
-                view.mask.as_ref(),
-                view.covered.as_ref(),
-            )?),
-        };
+        let target = self
+            .targets
+            .get(ctx, view)
+            .with_context(|| format!("uploading view {}", view.camera.name))?;
         let shape = (self.frame.width(), self.frame.height(), self.frame.plane_slots());
         if self.layer_grads.as_ref().is_none_or(|(s, _)| *s != shape) {
             self.layer_grads = Some((shape, LayerGrads::zeros(ctx, &self.frame)?));

@@ -8,6 +8,7 @@
 mod backward;
 mod densify;
 mod report;
+mod scale;
 mod train_step;
 
 use anyhow::{Context, Result};
@@ -45,6 +46,23 @@ struct Args {
     /// Only the densification measurement (rebuild on the GPU against the CPU)
     #[arg(long = "densify")]
     densify_only: bool,
+    /// Only the scale measurement: training steps with one plane and classic densification
+    /// over --scale-sizes x --scale-gaussians, with their GPU memory (printed as a Markdown
+    /// table; not part of the full run, and not written by --write)
+    #[arg(long)]
+    scale: bool,
+    /// Image sizes of --scale
+    #[arg(long, value_name = "WxH,...", value_delimiter = ',', value_parser = trgs_train::run::parse_size,
+          default_value = "256x192,800x600,1600x1200")]
+    scale_sizes: Vec<(u32, u32)>,
+    /// Gaussian counts of --scale
+    #[arg(
+        long,
+        value_name = "N,...",
+        value_delimiter = ',',
+        default_value = "100000,300000,1000000,3000000"
+    )]
+    scale_gaussians: Vec<usize>,
     /// Timed frames per configuration (the median is reported)
     #[arg(long, value_name = "N", default_value_t = 5)]
     reps: usize,
@@ -362,6 +380,9 @@ fn main() -> Result<()> {
     let ctx = GpuContext::new()?;
     let renderer = Renderer::new(&ctx);
     println!("adapter: {}", ctx.describe());
+    if args.scale {
+        return run_scale(&ctx, &args);
+    }
     let sizes: &[(u32, u32)] = if args.quick { &[(256, 192)] } else { &[(256, 192), (512, 384)] };
     let counts: &[usize] =
         if args.quick { &[10_000, 100_000] } else { &[10_000, 100_000, 500_000] };
@@ -492,5 +513,37 @@ fn main() -> Result<()> {
         trgs_core::io::write_atomic(path, report.as_bytes())?;
         println!("wrote {}", path.display());
     }
+    Ok(())
+}
+
+/// `--scale`: each size and count, printed as it is measured and then as one Markdown table.
+fn run_scale(ctx: &GpuContext, args: &Args) -> Result<()> {
+    use trgs_train::memory::human_bytes;
+    let mut lines = vec![
+        "| image | Gaussians | keys | step ms | densify step ms | densified to | parameters | moments | frame | losses | GPU total |".to_string(),
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|".to_string(),
+    ];
+    for &(width, height) in &args.scale_sizes {
+        for &gaussians in &args.scale_gaussians {
+            let r = scale::bench_scale(ctx, width, height, gaussians, args.reps.max(1))?;
+            let m = &r.memory;
+            let line = format!(
+                "| {width}x{height} | {} | {} | {:.0} | {:.0} | {} | {} | {} | {} | {} | {} |",
+                r.gaussians,
+                r.keys,
+                r.step_ms,
+                r.densify_step_ms,
+                r.densified_to,
+                human_bytes(m.parameters),
+                human_bytes(m.moments),
+                human_bytes(m.frame),
+                human_bytes(m.losses),
+                human_bytes(m.total())
+            );
+            println!("{line}");
+            lines.push(line);
+        }
+    }
+    println!("\n{}", lines.join("\n"));
     Ok(())
 }

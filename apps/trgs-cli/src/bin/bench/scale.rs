@@ -1,0 +1,88 @@
+//! The scale measurement of `bench --scale`: whole training steps of the capture-like room with
+//! one plane (a glass pane) at growing image sizes and Gaussian counts, classic densification
+//! on, with the step's time, the time of a step that densifies, and the GPU memory the trainer
+//! holds.
+use crate::median;
+use anyhow::Result;
+use std::time::Instant;
+use trgs_core::fixtures::{RoomDensity, RoomSpec, room_scene};
+use trgs_render::{GpuContext, Layer};
+use trgs_train::data::View;
+use trgs_train::densify::{ClassicSettings, Densification};
+use trgs_train::memory::GpuMemory;
+use trgs_train::settings::TrainSettings;
+use trgs_train::trainer::Trainer;
+
+/// One configuration's measurements.
+pub struct ScaleRow {
+    pub gaussians: usize,
+    /// Median whole step (render, losses, backward, Adam, densification statistics), wall clock.
+    pub step_ms: f64,
+    /// The step that densified (its statistics, decisions and the rebuild of every buffer).
+    pub densify_step_ms: f64,
+    /// Gaussians after that densification.
+    pub densified_to: usize,
+    /// The trainer's GPU buffers after the timed steps.
+    pub memory: GpuMemory,
+    /// The frame's tile keys (every view's).
+    pub keys: u64,
+}
+
+/// `steps` timed steps (after one untimed) of the joint stage with every loss, then one step that
+/// densifies. The target is the scene's own render darkened by 10%.
+pub fn bench_scale(
+    ctx: &GpuContext,
+    width: u32,
+    height: u32,
+    gaussians: usize,
+    steps: usize,
+) -> Result<ScaleRow> {
+    let spec = RoomSpec {
+        seed: 7,
+        gaussians,
+        planes: 1,
+        width,
+        height,
+        sh_degree: 3,
+        density: RoomDensity::AsCaptured,
+    };
+    let scene = room_scene(&spec);
+    let start = scene.gaussians.cast::<f32>();
+    let mut settings = TrainSettings::scaled(30_000);
+    settings.stage1 = 0;
+    settings.stage2 = 0;
+    settings.perturb = None;
+    let mut trainer = Trainer::new(ctx, &start, &scene.planes, settings, 1.0)?;
+    // Statistics every step, the decisions on the step after the timed ones.
+    let densify_at = steps as u32 + 2;
+    trainer.set_densification(&Densification::Classic(ClassicSettings {
+        from: 0,
+        until: u32::MAX,
+        every: densify_at,
+        opacity_reset_every: u32::MAX,
+        max_gaussians: 2 * gaussians,
+        ..ClassicSettings::scaled(30_000)
+    }));
+    let mut image = trainer.render(&scene.camera)?.read_layer(ctx, Layer::Color)?;
+    image.data.iter_mut().for_each(|v| *v *= 0.9);
+    let view = View::new(scene.camera.clone(), image.quantised());
+    trainer.train_step(&view)?;
+    let mut totals = Vec::new();
+    for _ in 0..steps {
+        totals.push(trainer.train_step(&view)?.times.total());
+    }
+    let memory = trainer.gpu_memory();
+    let keys = trainer.render(&scene.camera)?.key_count();
+    let t = Instant::now();
+    let stats = trainer.train_step(&view)?;
+    let densify_step_ms = t.elapsed().as_secs_f64() * 1e3;
+    anyhow::ensure!(!stats.densified.is_empty(), "step {densify_at} did not densify");
+    Ok(ScaleRow {
+        gaussians: start.len(),
+        step_ms: median(totals),
+        densify_step_ms,
+        densified_to: trainer.scene().len() as usize,
+        memory,
+        keys,
+    })
+}
