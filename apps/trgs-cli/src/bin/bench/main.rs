@@ -53,7 +53,7 @@ struct Args {
     scale: bool,
     /// Image sizes of --scale
     #[arg(long, value_name = "WxH,...", value_delimiter = ',', value_parser = trgs_train::run::parse_size,
-          default_value = "256x192,800x600,1600x1200")]
+          default_value = "256x192,800x600,1280x960,1600x1200")]
     scale_sizes: Vec<(u32, u32)>,
     /// Gaussian counts of --scale
     #[arg(
