@@ -36,23 +36,28 @@ pub fn budget_bytes(ctx: &GpuContext, mib: Option<u64>) -> u64 {
     mib.unwrap_or(default) << 20
 }
 
-/// GPU bytes of `view`'s target: RGBA8, and one u32 label a pixel with a glass mask.
+/// GPU bytes of `view`'s target.
 pub fn target_bytes(view: &View) -> u64 {
-    let pixels = u64::from(view.image.width) * u64::from(view.image.height);
-    pixels * if view.mask.is_some() { 8 } else { 4 }
+    bytes_of_target(view.image.width, view.image.height, view.mask.is_some())
 }
 
-/// Refuse a budget that cannot hold the largest of `views` (before any step runs).
-pub fn check_budget(budget: u64, views: &[View]) -> Result<(), TargetBudgetError> {
-    match views.iter().max_by_key(|v| target_bytes(v)) {
-        Some(v) if target_bytes(v) > budget => Err(TargetBudgetError::TooSmall {
-            budget_mib: budget >> 20,
-            name: v.camera.name.clone(),
-            bytes: target_bytes(v),
-            need_mib: target_bytes(v).div_ceil(1 << 20),
-        }),
-        _ => Ok(()),
+/// GPU bytes of a target of `width` x `height`: RGBA8, and one u32 label a pixel with a glass
+/// mask.
+pub fn bytes_of_target(width: u32, height: u32, with_mask: bool) -> u64 {
+    u64::from(width) * u64::from(height) * if with_mask { 8 } else { 4 }
+}
+
+/// Refuse a budget that cannot hold a target of `bytes` (the view `name`'s).
+pub fn check_budget(budget: u64, name: &str, bytes: u64) -> Result<(), TargetBudgetError> {
+    if bytes <= budget {
+        return Ok(());
     }
+    Err(TargetBudgetError::TooSmall {
+        budget_mib: budget >> 20,
+        name: name.to_string(),
+        bytes,
+        need_mib: bytes.div_ceil(1 << 20),
+    })
 }
 
 /// What the cache has done so far (for the tests and the log).
@@ -118,9 +123,7 @@ impl TargetCache {
             Some(i) => i,
             None => {
                 let bytes = target_bytes(view);
-                if bytes > self.budget {
-                    check_budget(self.budget, std::slice::from_ref(view))?;
-                }
+                check_budget(self.budget, name, bytes)?;
                 self.make_room(bytes);
                 let target = GpuTarget::upload(
                     ctx,

@@ -1,7 +1,7 @@
 //! Training views streamed under a GPU memory budget: a trainer holding two views at a time
-//! (each view uploaded a step ahead, the least recently used dropped) trains to the parameters
-//! of one holding every view (up to the order of atomic sums), and a budget that cannot hold one view is refused
-//! before the run starts, naming the view and the flag.
+//! (each view uploaded a step ahead, the least recently used dropped) makes the losses of one
+//! holding every view (to the order of atomic sums), and a budget that cannot hold one view is
+//! refused before the photos load, naming the view and the flag.
 use trgs_core::scratch::ScratchDir;
 use trgs_core::synthetic::{SyntheticConfig, generate, write_dataset};
 use trgs_render::GpuContext;
@@ -82,4 +82,5 @@ fn a_budget_below_one_view_is_refused_before_training() {
     assert!(message.contains("cannot hold one view"), "{message}");
     assert!(message.contains("--target-memory"), "{message}");
     assert!(message.contains("view_"), "the view is named: {message}");
+    assert!(!dir.join("run").exists(), "refused before the run folder was made");
 }

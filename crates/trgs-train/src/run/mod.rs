@@ -262,7 +262,6 @@ impl TrainingRun {
         };
         trainer.profile = config.profile;
         let budget = crate::targets::budget_bytes(&ctx, config.target_memory);
-        crate::targets::check_budget(budget, &data.train)?;
         trainer.set_target_budget(budget);
         let photos: u64 = data.train.iter().map(crate::targets::target_bytes).sum();
         if photos > budget {
@@ -520,17 +519,21 @@ fn view_names(data: &TrainingData) -> Vec<String> {
 }
 
 /// The dataset of `config` at its training resolution, with lines saying what it holds.
-/// Every view's training size against the device's limits, before the photos load: a view too
-/// large is refused now, naming it, rather than at its first step.
+/// Every view's training size against the device's limits and the training views' GPU memory
+/// budget, before the photos load: a view too large is refused now, naming it, rather than at
+/// its first step.
 fn check_view_sizes(
     ctx: &GpuContext,
     folder: &trgs_core::io::SceneFolder,
-    resolution: data::Resolution,
+    config: &RunConfig,
 ) -> Result<()> {
+    let budget = crate::targets::budget_bytes(ctx, config.target_memory);
     for v in &folder.views {
-        let (w, h) = data::target_size(v.camera.width(), v.camera.height(), resolution)?;
-        crate::losses::check_frame_size(ctx, w, h)
-            .with_context(|| format!("view {} ({})", v.camera.name, v.image_path.display()))?;
+        let (w, h) = data::target_size(v.camera.width(), v.camera.height(), config.resolution())?;
+        let at = || format!("view {} ({})", v.camera.name, v.image_path.display());
+        crate::losses::check_frame_size(ctx, w, h).with_context(at)?;
+        let bytes = crate::targets::bytes_of_target(w, h, v.mask_path.is_some());
+        crate::targets::check_budget(budget, &v.camera.name, bytes).with_context(at)?;
     }
     Ok(())
 }
@@ -544,7 +547,7 @@ fn load_data(
 ) -> Result<TrainingData> {
     let folder = trgs_core::io::SceneFolder::open(data_dir)
         .with_context(|| format!("opening the scene folder {}", data_dir.display()))?;
-    check_view_sizes(ctx, &folder, config.resolution())?;
+    check_view_sizes(ctx, &folder, config)?;
     let started = Instant::now();
     let mut data = TrainingData::load_with_progress(&folder, config.resolution(), loading)?;
     let seconds = started.elapsed().as_secs_f64();
