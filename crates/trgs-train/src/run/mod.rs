@@ -404,11 +404,20 @@ impl TrainingRun {
             }
         });
         let stats = stats.with_context(|| {
-            format!(
-                "training stopped at step {next}; `train --out {} --resume` continues from the \
-                 last checkpoint",
-                self.config().out.display()
-            )
+            let out = &self.config().out;
+            if out.join(CHECKPOINT_FILE).is_file() {
+                format!(
+                    "training stopped at step {next}; `train --out {} --resume` continues from \
+                     the last checkpoint",
+                    out.display()
+                )
+            } else {
+                format!(
+                    "training stopped at step {next}, before its first checkpoint (every {} \
+                     steps): there is nothing to resume",
+                    self.checkpoint_every
+                )
+            }
         })?;
         self.state.train_seconds += ts.elapsed().saturating_sub(eval_time).as_secs_f64();
         self.state.phase_ms.accumulate(&stats.times);
