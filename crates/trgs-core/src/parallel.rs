@@ -1,5 +1,5 @@
-//! Jobs spread over threads by index: the per-view work (tracing the synthetic views, loading
-//! photos) where each view is a pure function of its index.
+//! Jobs spread over threads: the per-view work (tracing the synthetic views, loading photos,
+//! costing a plane against every view's mask) where each view is a pure function of its index.
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Call `f(i)` for every `i` in `0..n` on up to `max_threads` threads (never more than the
@@ -29,6 +29,23 @@ pub fn for_each_index(n: usize, max_threads: usize, f: impl Fn(usize) -> bool + 
     });
 }
 
+/// `f` of every item, in order, computed on all cores (contiguous runs of items per thread).
+pub fn map_in_order<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync) -> Vec<R> {
+    let threads = std::thread::available_parallelism().map_or(1, |t| t.get());
+    let per_thread = items.len().div_ceil(threads).max(1);
+    let f = &f;
+    std::thread::scope(|scope| {
+        let handles: Vec<_> = items
+            .chunks(per_thread)
+            .map(|run| scope.spawn(move || run.iter().map(f).collect::<Vec<R>>()))
+            .collect();
+        handles
+            .into_iter()
+            .flat_map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+            .collect()
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -52,5 +69,15 @@ mod tests {
         // Index 3 stops the others: at most one index per thread after it.
         assert!(taken.load(Ordering::Relaxed) < 20, "{}", taken.load(Ordering::Relaxed));
         for_each_index(0, 4, |_| panic!("no index"));
+    }
+
+    #[test]
+    fn mapped_in_order() {
+        let items: Vec<u64> = (0..1001).collect();
+        assert_eq!(
+            map_in_order(&items, |&i| i * i),
+            items.iter().map(|i| i * i).collect::<Vec<_>>()
+        );
+        assert!(map_in_order(&[] as &[u8], |&b| b).is_empty());
     }
 }
