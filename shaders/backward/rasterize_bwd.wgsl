@@ -33,13 +33,15 @@
 #else
 @group(0) @binding(8) var<storage, read_write> grads: array<atomic<u32>>;
 #endif
+#ifdef PAGED
 // The records and gradients of the Gaussians from index params.page on
-// (shared/projected_pages.wgsl, PAGED_GRADS in shared/accumulate.wgsl).
+// (shared/projected_pages.wgsl, shared/accumulate.wgsl).
 @group(0) @binding(9) var<storage, read> projected_hi: array<ProjectedGaussian>;
 #ifdef FLOAT_ATOMICS
 @group(0) @binding(10) var<storage, read_write> grads_hi: array<atomic<f32>>;
 #else
 @group(0) @binding(10) var<storage, read_write> grads_hi: array<atomic<u32>>;
+#endif
 #endif
 
 // (mean, m, 1 for glass), conic with opacity, (colour, depth), the Gaussian's index.

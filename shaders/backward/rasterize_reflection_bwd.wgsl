@@ -27,13 +27,15 @@
 #else
 @group(0) @binding(6) var<storage, read_write> grads: array<atomic<u32>>;
 #endif
+#ifdef PAGED
 // The records and gradients of the Gaussians from index params.page on
-// (shared/projected_pages.wgsl, PAGED_GRADS in shared/accumulate.wgsl).
+// (shared/projected_pages.wgsl, shared/accumulate.wgsl).
 @group(0) @binding(7) var<storage, read> projected_hi: array<ProjectedGaussian>;
 #ifdef FLOAT_ATOMICS
 @group(0) @binding(8) var<storage, read_write> grads_hi: array<atomic<f32>>;
 #else
 @group(0) @binding(8) var<storage, read_write> grads_hi: array<atomic<u32>>;
+#endif
 #endif
 
 // mean, conic with opacity, (colour, reflection intensity a), the Gaussian's index.

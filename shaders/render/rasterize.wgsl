@@ -19,8 +19,10 @@
 // (D_t, V, M, 0) per pixel.
 @group(0) @binding(5) var<storage, read_write> geometry: array<vec4<f32>>;
 @group(0) @binding(6) var<storage, read_write> states: array<RasterState>;
+#ifdef PAGED
 // Projected records from index params.page on (shared/projected_pages.wgsl).
 @group(0) @binding(7) var<storage, read> projected_hi: array<ProjectedGaussian>;
+#endif
 
 // (mean, m, 1 for glass): the mask rides with the mean so that a step loads three vectors.
 var<workgroup> s_mean: array<vec4<f32>, TILE_PIXELS>;

@@ -22,8 +22,10 @@
 // The camera's rays, and the planes (this pass's plane is planes[params.slot]).
 @group(0) @binding(6) var<storage, read> camera: ComposeParams;
 @group(0) @binding(7) var<storage, read> planes: array<PlaneGpu>;
+#ifdef PAGED
 // Projected records from index params.page on (shared/projected_pages.wgsl).
 @group(0) @binding(8) var<storage, read> projected_hi: array<ProjectedGaussian>;
+#endif
 
 var<workgroup> s_mean: array<vec2<f32>, TILE_PIXELS>;
 var<workgroup> s_conic: array<vec4<f32>, TILE_PIXELS>;

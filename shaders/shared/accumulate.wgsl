@@ -24,8 +24,8 @@ fn add_to_grads(i: u32, v: f32) {
 #endif
 }
 
-#ifdef PAGED_GRADS
-// With PAGED_GRADS the gradient records are in two pages (toolkit::paged): those of the first
+#ifdef PAGED
+// With PAGED the gradient records are in two pages (toolkit::paged): those of the first
 // params.page Gaussians in `grads`, the rest in `grads_hi`, which the including shader declares
 // as it declares `grads`. The loop is written out again for `grads_hi`: a function cannot take
 // a pointer to a storage buffer without WGSL's unrestricted_pointer_parameters.

@@ -23,15 +23,26 @@ crate::kernel_registry! {
         /// `rasterize` with the depth-variance layer (for L_d).
         rasterize_depth_variance: "render/rasterize.wgsl" =>
             |c| [block_walk(c), vec!["DEPTH_VARIANCE"]].concat(),
+        /// The rasterize kernels with `_paged` read a scene of two pages (`toolkit::paged`); the
+        /// others, one page with nothing to choose.
+        rasterize_paged: "render/rasterize.wgsl" => |c| [block_walk(c), vec!["PAGED"]].concat(),
+        rasterize_depth_variance_paged: "render/rasterize.wgsl" =>
+            |c| [block_walk(c), vec!["DEPTH_VARIANCE", "PAGED"]].concat(),
         rasterize_reflection: "render/rasterize_reflection.wgsl" =>
             |c| [tile_rows(c), block_walk(c)].concat(),
+        rasterize_reflection_paged: "render/rasterize_reflection.wgsl" =>
+            |c| [tile_rows(c), block_walk(c), vec!["PAGED"]].concat(),
         compose: "render/compose.wgsl" => no_defines,
         display: "render/display.wgsl" => no_defines,
         compose_bwd: "backward/compose_bwd.wgsl" => accumulation,
         rasterize_bwd: "backward/rasterize_bwd.wgsl" =>
-            |c| [accumulation(c), tile_rows(c), block_walk(c), vec!["PAGED_GRADS"]].concat(),
+            |c| [accumulation(c), tile_rows(c), block_walk(c)].concat(),
+        rasterize_bwd_paged: "backward/rasterize_bwd.wgsl" =>
+            |c| [accumulation(c), tile_rows(c), block_walk(c), vec!["PAGED"]].concat(),
         rasterize_reflection_bwd: "backward/rasterize_reflection_bwd.wgsl" =>
-            |c| [accumulation(c), tile_rows(c), block_walk(c), vec!["PAGED_GRADS"]].concat(),
+            |c| [accumulation(c), tile_rows(c), block_walk(c)].concat(),
+        rasterize_reflection_bwd_paged: "backward/rasterize_reflection_bwd.wgsl" =>
+            |c| [accumulation(c), tile_rows(c), block_walk(c), vec!["PAGED"]].concat(),
         project_bwd: "backward/project_bwd.wgsl" => accumulation,
         /// `project_bwd` of a mirrored view: adds to the Gaussians' gradients (BWD_ADD).
         project_bwd_add: "backward/project_bwd.wgsl" =>

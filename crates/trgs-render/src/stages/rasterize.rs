@@ -50,19 +50,24 @@ pub fn record(
 ) {
     let p = RasterParams { page: projected.first_page_len(), ..params(grid, background) };
     let block = gpu::params(s.ctx, "trgs.rasterize.params", &p);
-    let k = if depth_variance { &s.kernels.rasterize_depth_variance } else { &s.kernels.rasterize };
-    let bind = k.bind(
-        s.ctx,
-        &[
-            block.as_entire_binding(),
-            projected.page_binding(0),
-            values.as_entire_binding(),
-            ranges.as_entire_binding(),
-            out.transmission.as_entire_binding(),
-            out.geometry.as_entire_binding(),
-            out.states.as_entire_binding(),
-            projected.page_binding(1),
-        ],
-    );
+    let k = match (depth_variance, projected.is_paged()) {
+        (false, false) => &s.kernels.rasterize,
+        (true, false) => &s.kernels.rasterize_depth_variance,
+        (false, true) => &s.kernels.rasterize_paged,
+        (true, true) => &s.kernels.rasterize_depth_variance_paged,
+    };
+    let mut entries = vec![
+        block.as_entire_binding(),
+        projected.page_binding(0),
+        values.as_entire_binding(),
+        ranges.as_entire_binding(),
+        out.transmission.as_entire_binding(),
+        out.geometry.as_entire_binding(),
+        out.states.as_entire_binding(),
+    ];
+    if projected.is_paged() {
+        entries.push(projected.page_binding(1));
+    }
+    let bind = k.bind(s.ctx, &entries);
     rec.dispatch("rasterize", k, &bind, [grid.tiles_x, grid.tiles_y, 1]);
 }

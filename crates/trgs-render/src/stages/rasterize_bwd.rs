@@ -35,22 +35,22 @@ pub fn record(
         ..super::rasterize::params(grid, background)
     };
     let block = gpu::params(s.ctx, "trgs.rasterize_bwd.params", &params);
-    let k = &s.kernels.rasterize_bwd;
-    let bind = k.bind(
-        s.ctx,
-        &[
-            block.as_entire_binding(),
-            lists.projected.page_binding(0),
-            lists.values.as_entire_binding(),
-            lists.ranges.as_entire_binding(),
-            layers.states.as_entire_binding(),
-            layers.geometry.as_entire_binding(),
-            grads.transmission.as_entire_binding(),
-            grads.geometry.as_entire_binding(),
-            projected_grads.page_binding(0),
-            lists.projected.page_binding(1),
-            projected_grads.page_binding(1),
-        ],
-    );
+    let paged = lists.projected.is_paged();
+    let k = if paged { &s.kernels.rasterize_bwd_paged } else { &s.kernels.rasterize_bwd };
+    let mut entries = vec![
+        block.as_entire_binding(),
+        lists.projected.page_binding(0),
+        lists.values.as_entire_binding(),
+        lists.ranges.as_entire_binding(),
+        layers.states.as_entire_binding(),
+        layers.geometry.as_entire_binding(),
+        grads.transmission.as_entire_binding(),
+        grads.geometry.as_entire_binding(),
+        projected_grads.page_binding(0),
+    ];
+    if paged {
+        entries.extend([lists.projected.page_binding(1), projected_grads.page_binding(1)]);
+    }
+    let bind = k.bind(s.ctx, &entries);
     rec.dispatch("rasterize_bwd", k, &bind, [grid.tiles_x, grid.tiles_y, 1]);
 }

@@ -46,21 +46,25 @@ pub fn record(
             ..params(grid, slot, footprint, tile_base)
         },
     );
-    let k = &s.kernels.rasterize_reflection;
-    let bind = k.bind(
-        s.ctx,
-        &[
-            block.as_entire_binding(),
-            projected.page_binding(0),
-            values.as_entire_binding(),
-            ranges.as_entire_binding(),
-            reflection_raw.as_entire_binding(),
-            states.as_entire_binding(),
-            rays.camera.as_entire_binding(),
-            rays.planes.as_entire_binding(),
-            projected.page_binding(1),
-        ],
-    );
+    let k = if projected.is_paged() {
+        &s.kernels.rasterize_reflection_paged
+    } else {
+        &s.kernels.rasterize_reflection
+    };
+    let mut entries = vec![
+        block.as_entire_binding(),
+        projected.page_binding(0),
+        values.as_entire_binding(),
+        ranges.as_entire_binding(),
+        reflection_raw.as_entire_binding(),
+        states.as_entire_binding(),
+        rays.camera.as_entire_binding(),
+        rays.planes.as_entire_binding(),
+    ];
+    if projected.is_paged() {
+        entries.push(projected.page_binding(1));
+    }
+    let bind = k.bind(s.ctx, &entries);
     let groups = [footprint.x1 - footprint.x0, footprint.y1 - footprint.y0, 1];
     rec.dispatch("rasterize_reflection", k, &bind, groups);
 }

@@ -30,21 +30,25 @@ pub fn record(
         ..super::rasterize_reflection::params(grid, slot, footprint, tile_base)
     };
     let block = gpu::params(s.ctx, "trgs.rasterize_reflection_bwd.params", &params);
-    let k = &s.kernels.rasterize_reflection_bwd;
-    let bind = k.bind(
-        s.ctx,
-        &[
-            block.as_entire_binding(),
-            lists.projected.page_binding(0),
-            lists.values.as_entire_binding(),
-            lists.ranges.as_entire_binding(),
-            layers.reflection_states.as_entire_binding(),
-            grads.reflection_raw.as_entire_binding(),
-            projected_grads.page_binding(0),
-            lists.projected.page_binding(1),
-            projected_grads.page_binding(1),
-        ],
-    );
+    let paged = lists.projected.is_paged();
+    let k = if paged {
+        &s.kernels.rasterize_reflection_bwd_paged
+    } else {
+        &s.kernels.rasterize_reflection_bwd
+    };
+    let mut entries = vec![
+        block.as_entire_binding(),
+        lists.projected.page_binding(0),
+        lists.values.as_entire_binding(),
+        lists.ranges.as_entire_binding(),
+        layers.reflection_states.as_entire_binding(),
+        grads.reflection_raw.as_entire_binding(),
+        projected_grads.page_binding(0),
+    ];
+    if paged {
+        entries.extend([lists.projected.page_binding(1), projected_grads.page_binding(1)]);
+    }
+    let bind = k.bind(s.ctx, &entries);
     let groups = [footprint.x1 - footprint.x0, footprint.y1 - footprint.y0, 1];
     rec.dispatch("rasterize_reflection_bwd", k, &bind, groups);
 }

@@ -5,7 +5,8 @@
 //! whole. At 64 bytes a record, a binding of 128 MiB (lavapipe's limit) holds about 2.1 million
 //! Gaussians. Such an array is therefore split into pages of [`Paged::page_len`] Gaussians, each
 //! page its own buffer: the rasterize kernels bind [`MAX_PAGES`] of them and pick the page by
-//! the index (`shared/projected_pages.wgsl`, `PAGED_GRADS` in `shared/accumulate.wgsl`); the
+//! the index (their `_paged` variants: `shared/projected_pages.wgsl`, `PAGED` in
+//! `shared/accumulate.wgsl`; a scene of one page runs the kernels without the choice); the
 //! per-Gaussian stages run over the scene's chunks, and a page holds a whole number of chunks
 //! ([`crate::GpuScene::page_len`]), so a chunk's range lies in one page.
 use super::gpu::{self, BufferPool};
@@ -20,9 +21,6 @@ pub const MAX_PAGES: u32 = 2;
 #[derive(Clone, Debug)]
 pub struct Paged {
     pages: Vec<wgpu::Buffer>,
-    /// Bound in place of the pages that do not exist (a buffer of its own, so that no
-    /// buffer is bound twice in one dispatch).
-    absent: wgpu::Buffer,
     page_len: u32,
     len: u32,
     stride: u64,
@@ -46,8 +44,7 @@ impl Paged {
                 pool.get(ctx, &format!("{label}.p{k}"), u64::from(records) * stride)
             })
             .collect();
-        let absent = pool.get(ctx, &format!("{label}.absent"), stride);
-        Self { pages, absent, page_len, len, stride }
+        Self { pages, page_len, len, stride }
     }
 
     /// Records in the first page (what the kernels' `page` parameter holds): records from this
@@ -72,6 +69,11 @@ impl Paged {
         &self.pages
     }
 
+    /// Whether there is a second page (the rasterize kernels' `_paged` variants then run).
+    pub fn is_paged(&self) -> bool {
+        self.pages.len() > 1
+    }
+
     /// Records `first..first + count` as one binding (they must lie in one page: the scene's
     /// chunks do).
     pub fn range(&self, first: u32, count: u32) -> wgpu::BindingResource<'_> {
@@ -89,10 +91,9 @@ impl Paged {
         )
     }
 
-    /// Page `k` whole as a binding, or a one-record buffer of this array's own where there is
-    /// no such page (the kernels never read it then).
+    /// Page `k` (below `pages().len()`) whole as a binding.
     pub fn page_binding(&self, k: usize) -> wgpu::BindingResource<'_> {
-        self.pages.get(k).unwrap_or(&self.absent).as_entire_binding()
+        self.pages[k].as_entire_binding()
     }
 
     /// Zero every page.

@@ -6,12 +6,9 @@ use crate::median;
 use anyhow::Result;
 use std::time::Instant;
 use trgs_core::fixtures::{RoomDensity, RoomSpec, room_scene};
-use trgs_render::{GpuContext, Layer};
-use trgs_train::data::View;
+use trgs_render::GpuContext;
 use trgs_train::densify::{ClassicSettings, Densification};
 use trgs_train::memory::GpuMemory;
-use trgs_train::settings::TrainSettings;
-use trgs_train::trainer::Trainer;
 
 /// One configuration's measurements.
 pub struct ScaleRow {
@@ -47,12 +44,7 @@ pub fn bench_scale(
         density: RoomDensity::AsCaptured,
     };
     let scene = room_scene(&spec);
-    let start = scene.gaussians.cast::<f32>();
-    let mut settings = TrainSettings::scaled(30_000);
-    settings.stage1 = 0;
-    settings.stage2 = 0;
-    settings.perturb = None;
-    let mut trainer = Trainer::new(ctx, &start, &scene.planes, settings, 1.0)?;
+    let (mut trainer, view) = crate::train_step::joint_stage_trainer(ctx, &scene)?;
     // Statistics every step, the decisions on the step after the timed ones.
     let densify_at = steps as u32 + 2;
     trainer.set_densification(&Densification::Classic(ClassicSettings {
@@ -63,9 +55,6 @@ pub fn bench_scale(
         max_gaussians: 2 * gaussians,
         ..ClassicSettings::scaled(30_000)
     }));
-    let mut image = trainer.render(&scene.camera)?.read_layer(ctx, Layer::Color)?;
-    image.data.iter_mut().for_each(|v| *v *= 0.9);
-    let view = View::new(scene.camera.clone(), image.quantised());
     trainer.train_step(&view)?;
     let mut totals = Vec::new();
     for _ in 0..steps {
@@ -78,7 +67,7 @@ pub fn bench_scale(
     let densify_step_ms = t.elapsed().as_secs_f64() * 1e3;
     anyhow::ensure!(!stats.densified.is_empty(), "step {densify_at} did not densify");
     Ok(ScaleRow {
-        gaussians: start.len(),
+        gaussians: scene.gaussians.len(),
         step_ms: median(totals),
         densify_step_ms,
         densified_to: trainer.scene().len() as usize,

@@ -2,7 +2,7 @@
 //! Adam) at 256x192 on the capture-like room with 100k Gaussians, with their phase breakdown.
 use crate::{median, room_100k, warm_up};
 use anyhow::Result;
-use trgs_core::fixtures::{RoomDensity, room_scene};
+use trgs_core::fixtures::{RoomDensity, Scene, room_scene};
 use trgs_render::{GpuContext, Layer};
 use trgs_train::data::View;
 use trgs_train::settings::TrainSettings;
@@ -25,18 +25,8 @@ pub struct TrainStepRow {
 /// and no densification: the target is the scene's own render darkened by 10%, so that every
 /// parameter gets a gradient.
 pub fn bench_train_step(ctx: &GpuContext, planes: usize, steps: usize) -> Result<TrainStepRow> {
-    let spec = room_100k(planes, RoomDensity::AsCaptured);
-    let scene = room_scene(&spec);
-    let gaussians = scene.gaussians.cast::<f32>();
-    let mut settings = TrainSettings::scaled(30_000);
-    // The joint stage from the first step: every loss and pass of the model is on.
-    settings.stage1 = 0;
-    settings.stage2 = 0;
-    settings.perturb = None;
-    let mut trainer = Trainer::new(ctx, &gaussians, &scene.planes, settings, 1.0)?;
-    let mut image = trainer.render(&scene.camera)?.read_layer(ctx, Layer::Color)?;
-    image.data.iter_mut().for_each(|v| *v *= 0.9);
-    let view = View::new(scene.camera.clone(), image.quantised());
+    let scene = room_scene(&room_100k(planes, RoomDensity::AsCaptured));
+    let (mut trainer, view) = joint_stage_trainer(ctx, &scene)?;
     warm_up(|| trainer.train_step(&view).map(drop))?;
     let (mut totals, mut phases) = (Vec::new(), vec![Vec::new(); 5]);
     for _ in 0..steps {
@@ -67,10 +57,25 @@ pub fn bench_train_step(ctx: &GpuContext, planes: usize, steps: usize) -> Result
     let names = trgs_train::trainer::StepTimes::default().phases().map(|(n, _)| n);
     Ok(TrainStepRow {
         planes,
-        gaussians: gaussians.len(),
+        gaussians: scene.gaussians.len(),
         steps,
         step_ms: median(totals),
         phases: names.into_iter().zip(phases.into_iter().map(median)).collect(),
         stages: samples.into_iter().map(|(n, v)| (n, median(v))).collect(),
     })
+}
+
+/// A trainer of `scene` in the joint stage from its first step (every loss and pass of the model
+/// on, no perturbation) and the view it trains on: the scene's own render darkened by 10%, so
+/// that every parameter gets a gradient.
+pub fn joint_stage_trainer(ctx: &GpuContext, scene: &Scene) -> Result<(Trainer, View)> {
+    let mut settings = TrainSettings::scaled(30_000);
+    settings.stage1 = 0;
+    settings.stage2 = 0;
+    settings.perturb = None;
+    let gaussians = scene.gaussians.cast::<f32>();
+    let trainer = Trainer::new(ctx, &gaussians, &scene.planes, settings, 1.0)?;
+    let mut image = trainer.render(&scene.camera)?.read_layer(ctx, Layer::Color)?;
+    image.data.iter_mut().for_each(|v| *v *= 0.9);
+    Ok((trainer, View::new(scene.camera.clone(), image.quantised())))
 }
