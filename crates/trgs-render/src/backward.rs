@@ -36,7 +36,6 @@ pub struct Gradients {
     pub planes: Vec<PlaneGrad>,
     /// Per view (0 = camera, then each mirrored pass): the screen-space gradients.
     projected_grads: Vec<Paged>,
-    gaussian_count: u32,
     stage_times: Option<Vec<(&'static str, f64)>>,
     kernel_times: Option<Vec<KernelTime>>,
 }
@@ -50,9 +49,7 @@ impl crate::toolkit::GradientStages for Gradients {
         let Some(b) = self.projected_grads.get(vi) else {
             return Ok(None);
         };
-        let mut records = b.read(ctx)?;
-        records.truncate(self.gaussian_count as usize);
-        Ok(Some(records))
+        b.read(ctx).map(Some)
     }
 
     fn projected_grads(&self, vi: usize) -> Option<&Paged> {
@@ -278,7 +275,6 @@ impl Renderer {
             gaussians: bufs.scene_grads,
             planes,
             projected_grads: bufs.projected_grads,
-            gaussian_count: scene.len(),
             stage_times: rec.stage_times(),
             kernel_times: rec.kernel_times(),
         })

@@ -467,9 +467,7 @@ impl crate::toolkit::FrameStages for Frame {
         let Some(v) = self.views.get(vi) else {
             return Ok(None);
         };
-        let mut records = v.projected.read(ctx)?;
-        records.truncate(self.gaussian_count() as usize);
-        Ok(Some(records))
+        v.projected.read(ctx).map(Some)
     }
 
     fn read_intermediates(

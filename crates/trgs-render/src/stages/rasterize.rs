@@ -58,16 +58,14 @@ pub fn record(
     };
     let mut entries = vec![
         block.as_entire_binding(),
-        projected.page_binding(0),
+        projected.first_page(),
         values.as_entire_binding(),
         ranges.as_entire_binding(),
         out.transmission.as_entire_binding(),
         out.geometry.as_entire_binding(),
         out.states.as_entire_binding(),
     ];
-    if projected.is_paged() {
-        entries.push(projected.page_binding(1));
-    }
+    entries.extend(projected.second_page());
     let bind = k.bind(s.ctx, &entries);
     rec.dispatch("rasterize", k, &bind, [grid.tiles_x, grid.tiles_y, 1]);
 }

@@ -39,18 +39,17 @@ pub fn record(
     let k = if paged { &s.kernels.rasterize_bwd_paged } else { &s.kernels.rasterize_bwd };
     let mut entries = vec![
         block.as_entire_binding(),
-        lists.projected.page_binding(0),
+        lists.projected.first_page(),
         lists.values.as_entire_binding(),
         lists.ranges.as_entire_binding(),
         layers.states.as_entire_binding(),
         layers.geometry.as_entire_binding(),
         grads.transmission.as_entire_binding(),
         grads.geometry.as_entire_binding(),
-        projected_grads.page_binding(0),
+        projected_grads.first_page(),
     ];
-    if paged {
-        entries.extend([lists.projected.page_binding(1), projected_grads.page_binding(1)]);
-    }
+    entries.extend(lists.projected.second_page());
+    entries.extend(projected_grads.second_page());
     let bind = k.bind(s.ctx, &entries);
     rec.dispatch("rasterize_bwd", k, &bind, [grid.tiles_x, grid.tiles_y, 1]);
 }

@@ -53,7 +53,7 @@ pub fn record(
     };
     let mut entries = vec![
         block.as_entire_binding(),
-        projected.page_binding(0),
+        projected.first_page(),
         values.as_entire_binding(),
         ranges.as_entire_binding(),
         reflection_raw.as_entire_binding(),
@@ -61,9 +61,7 @@ pub fn record(
         rays.camera.as_entire_binding(),
         rays.planes.as_entire_binding(),
     ];
-    if projected.is_paged() {
-        entries.push(projected.page_binding(1));
-    }
+    entries.extend(projected.second_page());
     let bind = k.bind(s.ctx, &entries);
     let groups = [footprint.x1 - footprint.x0, footprint.y1 - footprint.y0, 1];
     rec.dispatch("rasterize_reflection", k, &bind, groups);

@@ -38,16 +38,15 @@ pub fn record(
     };
     let mut entries = vec![
         block.as_entire_binding(),
-        lists.projected.page_binding(0),
+        lists.projected.first_page(),
         lists.values.as_entire_binding(),
         lists.ranges.as_entire_binding(),
         layers.reflection_states.as_entire_binding(),
         grads.reflection_raw.as_entire_binding(),
-        projected_grads.page_binding(0),
+        projected_grads.first_page(),
     ];
-    if paged {
-        entries.extend([lists.projected.page_binding(1), projected_grads.page_binding(1)]);
-    }
+    entries.extend(lists.projected.second_page());
+    entries.extend(projected_grads.second_page());
     let bind = k.bind(s.ctx, &entries);
     let groups = [footprint.x1 - footprint.x0, footprint.y1 - footprint.y0, 1];
     rec.dispatch("rasterize_reflection_bwd", k, &bind, groups);

@@ -38,13 +38,19 @@ impl Paged {
     ) -> Self {
         let page_len = page_len.max(1);
         let count = len.div_ceil(page_len).max(1);
-        let pages = (0..count)
+        let mut paged = Self { pages: Vec::new(), page_len, len, stride };
+        paged.pages = (0..count)
             .map(|k| {
-                let records = page_len.min(len.saturating_sub(k * page_len)).max(1);
-                pool.get(ctx, &format!("{label}.p{k}"), u64::from(records) * stride)
+                let bytes = u64::from(paged.records_in(k).max(1)) * stride;
+                pool.get(ctx, &format!("{label}.p{k}"), bytes)
             })
             .collect();
-        Self { pages, page_len, len, stride }
+        paged
+    }
+
+    /// Records held by page `k`.
+    fn records_in(&self, k: u32) -> u32 {
+        self.page_len.min(self.len.saturating_sub(k * self.page_len))
     }
 
     /// Records in the first page (what the kernels' `page` parameter holds): records from this
@@ -55,14 +61,6 @@ impl Paged {
 
     pub fn page_len(&self) -> u32 {
         self.page_len
-    }
-
-    pub fn len(&self) -> u32 {
-        self.len
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.len == 0
     }
 
     pub fn pages(&self) -> &[wgpu::Buffer] {
@@ -91,9 +89,14 @@ impl Paged {
         )
     }
 
-    /// Page `k` (below `pages().len()`) whole as a binding.
-    pub fn page_binding(&self, k: usize) -> wgpu::BindingResource<'_> {
-        self.pages[k].as_entire_binding()
+    /// The first page whole as a binding.
+    pub fn first_page(&self) -> wgpu::BindingResource<'_> {
+        self.pages[0].as_entire_binding()
+    }
+
+    /// The second page whole as a binding, if there is one (the `_paged` kernels bind it last).
+    pub fn second_page(&self) -> Option<wgpu::BindingResource<'_>> {
+        self.pages.get(1).map(wgpu::Buffer::as_entire_binding)
     }
 
     /// Zero every page.
@@ -108,14 +111,9 @@ impl Paged {
         let per_record = (self.stride as usize) / std::mem::size_of::<T>();
         let mut out = Vec::with_capacity(self.len as usize * per_record);
         for (k, p) in self.pages.iter().enumerate() {
-            let records = self.page_len.min(self.len.saturating_sub(k as u32 * self.page_len));
-            out.extend(gpu::read_buffer::<T>(ctx, p, 0, records as usize * per_record)?);
+            let records = self.records_in(k as u32) as usize;
+            out.extend(gpu::read_buffer::<T>(ctx, p, 0, records * per_record)?);
         }
         Ok(out)
-    }
-
-    /// Bytes held by the pages.
-    pub fn bytes(&self) -> u64 {
-        self.pages.iter().map(wgpu::Buffer::size).sum()
     }
 }
