@@ -12,7 +12,7 @@
 // With BLOCK_WALK a subgroup steps back only through the entries that can reach its block
 // (shared/block_walk.wgsl).
 #include "shared/common.wgsl"
-#include "shared/projected_pages.wgsl"
+#include "shared/raster_pages.wgsl"
 #include "shared/splat.wgsl"
 #include "shared/accumulate.wgsl"
 #include "shared/tile_rows.wgsl"
@@ -34,14 +34,16 @@
 @group(0) @binding(8) var<storage, read_write> grads: array<atomic<u32>>;
 #endif
 #ifdef PAGED
-// The records and gradients of the Gaussians from index params.page on
-// (shared/projected_pages.wgsl, shared/accumulate.wgsl).
+// The records and gradients of the Gaussians from index params.page on, and the sorted
+// key values from params.key_page on (shared/raster_pages.wgsl, shared/accumulate.wgsl).
 @group(0) @binding(9) var<storage, read> projected_hi: array<ProjectedGaussian>;
 #ifdef FLOAT_ATOMICS
 @group(0) @binding(10) var<storage, read_write> grads_hi: array<atomic<f32>>;
 #else
 @group(0) @binding(10) var<storage, read_write> grads_hi: array<atomic<u32>>;
 #endif
+// Sorted key values from index params.key_page on.
+@group(0) @binding(11) var<storage, read> values_hi: array<u32>;
 #endif
 
 // (mean, m, 1 for glass), conic with opacity, (colour, depth), the Gaussian's index.
@@ -143,7 +145,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
             let slot = lid + q * THREADS;
             let idx = start + r * TILE_PIXELS + slot;
             if idx < end {
-                let gi = values[idx];
+                let gi = value_at(idx);
                 let g = projected_at(gi);
                 s_mean[slot] = vec4<f32>(g.mean2d, g.mask, f32((g.flags & FLAG_GLASS) != 0u));
                 s_conic[slot] = g.conic;

@@ -13,6 +13,26 @@
 @group(0) @binding(4) var<storage, read> views: array<ViewTiles>;
 @group(0) @binding(5) var<storage, read_write> keys: array<u32>;
 @group(0) @binding(6) var<storage, read_write> values: array<u32>;
+#ifdef PAGED
+// The pairs from index params.page on (a key list of two pages, toolkit::paged).
+@group(0) @binding(7) var<storage, read_write> keys_hi: array<u32>;
+@group(0) @binding(8) var<storage, read_write> values_hi: array<u32>;
+
+fn write_pair(i: u32, key: u32, value: u32) {
+    if i < params.page {
+        keys[i] = key;
+        values[i] = value;
+    } else {
+        keys_hi[i - params.page] = key;
+        values_hi[i - params.page] = value;
+    }
+}
+#else
+fn write_pair(i: u32, key: u32, value: u32) {
+    keys[i] = key;
+    values[i] = value;
+}
+#endif
 
 @compute @workgroup_size(256)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
@@ -32,8 +52,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     var slot = offsets[k];
     for (var ty = y0; ty < y1; ty++) {
         for (var tx = x0; tx < x1; tx++) {
-            keys[slot] = t.tile_base + (ty - t.y0) * t.row + (tx - t.x0);
-            values[slot] = gaussian;
+            write_pair(slot, t.tile_base + (ty - t.y0) * t.row + (tx - t.x0), gaussian);
             slot++;
         }
     }

@@ -6,7 +6,7 @@
 // T_m below it ends M only. With DEPTH_VARIANCE, a second walk over the blended Gaussians gives
 // V = sum w |z - D_t| (it needs the final D_t); without, V is written as zero.
 #include "shared/common.wgsl"
-#include "shared/projected_pages.wgsl"
+#include "shared/raster_pages.wgsl"
 #include "shared/splat.wgsl"
 #include "shared/block_walk.wgsl"
 
@@ -20,8 +20,10 @@
 @group(0) @binding(5) var<storage, read_write> geometry: array<vec4<f32>>;
 @group(0) @binding(6) var<storage, read_write> states: array<RasterState>;
 #ifdef PAGED
-// Projected records from index params.page on (shared/projected_pages.wgsl).
+// Projected records from index params.page on (shared/raster_pages.wgsl).
 @group(0) @binding(7) var<storage, read> projected_hi: array<ProjectedGaussian>;
+// Sorted key values from index params.key_page on.
+@group(0) @binding(8) var<storage, read> values_hi: array<u32>;
 #endif
 
 // (mean, m, 1 for glass): the mask rides with the mean so that a step loads three vectors.
@@ -40,7 +42,7 @@ var<workgroup> num_walked: atomic<u32>;
 fn load_batch(start: u32, end: u32, round: u32, lid: u32, corner: vec2<f32>) {
     let idx = start + round * TILE_PIXELS + lid;
     if idx < end {
-        let g = projected_at(values[idx]);
+        let g = projected_at(value_at(idx));
         s_mean[lid] = vec4<f32>(g.mean2d, g.mask, f32((g.flags & FLAG_GLASS) != 0u));
         s_conic[lid] = g.conic;
         s_color[lid] = g.color;

@@ -5,7 +5,7 @@
 // transmittance; writes (C_raw, A) with C_raw = sum c w and A = sum a w into the plane's slot.
 // Other pixels keep the zeros the buffers were cleared to.
 #include "shared/common.wgsl"
-#include "shared/projected_pages.wgsl"
+#include "shared/raster_pages.wgsl"
 #include "shared/splat.wgsl"
 #include "shared/plane_hit.wgsl"
 // ROWS pixels per thread (four rows on CPU adapters, where they are faster: `bench`).
@@ -23,8 +23,10 @@
 @group(0) @binding(6) var<storage, read> camera: ComposeParams;
 @group(0) @binding(7) var<storage, read> planes: array<PlaneGpu>;
 #ifdef PAGED
-// Projected records from index params.page on (shared/projected_pages.wgsl).
+// Projected records from index params.page on (shared/raster_pages.wgsl).
 @group(0) @binding(8) var<storage, read> projected_hi: array<ProjectedGaussian>;
+// Sorted key values from index params.key_page on.
+@group(0) @binding(9) var<storage, read> values_hi: array<u32>;
 #endif
 
 var<workgroup> s_mean: array<vec2<f32>, TILE_PIXELS>;
@@ -93,7 +95,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
             let slot = lid + q * THREADS;
             let idx = start + r * TILE_PIXELS + slot;
             if idx < end {
-                let g = projected_at(values[idx]);
+                let g = projected_at(value_at(idx));
                 s_mean[slot] = g.mean2d;
                 s_conic[slot] = g.conic;
                 s_color[slot] = vec4<f32>(g.color.xyz, g.reflection);

@@ -5,11 +5,16 @@
 #include "shared/common.wgsl"
 #include "shared/block_width.wgsl"
 #include "shared/sort_digit.wgsl"
+#include "shared/key_pages.wgsl"
 
 @group(0) @binding(0) var<storage, read> params: SortParams;
 // Only the keys: counting needs no values.
 @group(0) @binding(1) var<storage, read> keys: array<u32>;
 @group(0) @binding(2) var<storage, read_write> hist: array<u32>;
+#ifdef PAGED
+// Keys from index params.page on (shared/key_pages.wgsl).
+@group(0) @binding(3) var<storage, read> keys_hi: array<u32>;
+#endif
 
 var<workgroup> counts: array<atomic<u32>, SORT_RADIX>;
 
@@ -38,7 +43,7 @@ fn main(
     for (var k = 0u; k < SORT_ITEMS; k++) {
         let slot = base + k;
         if slot < params.count {
-            atomicAdd(&counts[digit_in(keys[slot])], 1u);
+            atomicAdd(&counts[digit_in(key_at(slot))], 1u);
         }
     }
     workgroupBarrier();

@@ -6,6 +6,7 @@
 #include "shared/common.wgsl"
 #include "shared/block_width.wgsl"
 #include "shared/sort_digit.wgsl"
+#include "shared/key_pages.wgsl"
 
 @group(0) @binding(0) var<storage, read> params: SortParams;
 @group(0) @binding(1) var<storage, read> keys: array<u32>;
@@ -13,6 +14,39 @@
 @group(0) @binding(3) var<storage, read> hist: array<u32>;
 @group(0) @binding(4) var<storage, read_write> out_keys: array<u32>;
 @group(0) @binding(5) var<storage, read_write> out_values: array<u32>;
+#ifdef PAGED
+// The pairs from index params.page on, in and out (a list of two pages: shared/key_pages.wgsl).
+@group(0) @binding(6) var<storage, read> keys_hi: array<u32>;
+@group(0) @binding(7) var<storage, read> values_hi: array<u32>;
+@group(0) @binding(8) var<storage, read_write> out_keys_hi: array<u32>;
+@group(0) @binding(9) var<storage, read_write> out_values_hi: array<u32>;
+
+fn value_at(i: u32) -> u32 {
+    if i < params.page {
+        return values[i];
+    }
+    return values_hi[i - params.page];
+}
+
+fn write_pair(i: u32, key: u32, value: u32) {
+    if i < params.page {
+        out_keys[i] = key;
+        out_values[i] = value;
+    } else {
+        out_keys_hi[i - params.page] = key;
+        out_values_hi[i - params.page] = value;
+    }
+}
+#else
+fn value_at(i: u32) -> u32 {
+    return values[i];
+}
+
+fn write_pair(i: u32, key: u32, value: u32) {
+    out_keys[i] = key;
+    out_values[i] = value;
+}
+#endif
 
 // Packed per-digit counts of each thread: 16-bit fields, two digits per u32, SORT_PACKED_VECS
 // vec4s per thread.
@@ -39,7 +73,7 @@ fn main(
     for (var k = 0u; k < SORT_ITEMS; k++) {
         let slot = base + k;
         if slot < params.count {
-            let d = digit_in(keys[slot]);
+            let d = digit_in(key_at(slot));
             packed[d >> 1u] += 1u << ((d & 1u) * 16u);
         }
     }
@@ -74,15 +108,14 @@ fn main(
     for (var k = 0u; k < SORT_ITEMS; k++) {
         let slot = base + k;
         if slot < params.count {
-            let key = keys[slot];
-            let value = values[slot];
+            let key = key_at(slot);
+            let value = value_at(slot);
             let d = digit_in(key);
             let shift = (d & 1u) * 16u;
             let rank = (next[d >> 1u] >> shift) & 0xffffu;
             next[d >> 1u] += 1u << shift;
             let dest = block_base[d] + rank;
-            out_keys[dest] = key;
-            out_values[dest] = value;
+            write_pair(dest, key, value);
         }
     }
 }

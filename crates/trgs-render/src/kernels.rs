@@ -19,12 +19,20 @@ crate::kernel_registry! {
         sort_count: "render/sort_count.wgsl" => block_width,
         sort_scatter: "render/sort_scatter.wgsl" => block_width,
         tile_ranges: "render/tile_ranges.wgsl" => no_defines,
+        /// The key-list kernels with `_paged` handle a list of two pages (`toolkit::paged`): the
+        /// frame's tile keys beyond one binding.
+        emit_keys_paged: "render/emit_keys.wgsl" => |_| vec!["PAGED"],
+        sort_count_paged: "render/sort_count.wgsl" => |c| [block_width(c), vec!["PAGED"]].concat(),
+        sort_scatter_paged: "render/sort_scatter.wgsl" =>
+            |c| [block_width(c), vec!["PAGED"]].concat(),
+        tile_ranges_paged: "render/tile_ranges.wgsl" => |_| vec!["PAGED"],
         rasterize: "render/rasterize.wgsl" => block_walk,
         /// `rasterize` with the depth-variance layer (for L_d).
         rasterize_depth_variance: "render/rasterize.wgsl" =>
             |c| [block_walk(c), vec!["DEPTH_VARIANCE"]].concat(),
-        /// The rasterize kernels with `_paged` read a scene of two pages (`toolkit::paged`); the
-        /// others, one page with nothing to choose.
+        /// The rasterize kernels with `_paged` read a frame with a second page of projected
+        /// Gaussians or of key values (`toolkit::paged`); the others, one page of each with
+        /// nothing to choose.
         rasterize_paged: "render/rasterize.wgsl" => |c| [block_walk(c), vec!["PAGED"]].concat(),
         rasterize_depth_variance_paged: "render/rasterize.wgsl" =>
             |c| [block_walk(c), vec!["DEPTH_VARIANCE", "PAGED"]].concat(),

@@ -119,6 +119,8 @@ fn check_binding(
 pub struct Renderer {
     pub(crate) ctx: GpuContext,
     pub(crate) kernels: Kernels,
+    /// Keys in a page of the frame's key list ([`Renderer::set_key_page_len`]).
+    key_page_len: u32,
 }
 
 /// One view to project and bin: the real camera, or the camera mirrored about plane `plane`.
@@ -130,7 +132,25 @@ struct ViewSpec {
 
 impl Renderer {
     pub fn new(ctx: &GpuContext) -> Self {
-        Self { ctx: ctx.clone(), kernels: crate::kernels::RENDER_KERNELS.compile(ctx) }
+        let key_page_len = u32::try_from(ctx.binding_limit() / 4).unwrap_or(u32::MAX);
+        Self {
+            ctx: ctx.clone(),
+            kernels: crate::kernels::RENDER_KERNELS.compile(ctx),
+            key_page_len,
+        }
+    }
+
+    /// Keys in one page of the frame's key list: as many as one binding holds unless set lower
+    /// (tests split small frames to run the paged kernels). A frame holds at most
+    /// [`MAX_PAGES`] pages of keys.
+    pub fn key_page_len(&self) -> u32 {
+        self.key_page_len
+    }
+
+    /// Pages the key list every `keys` keys (at most one binding's worth).
+    pub fn set_key_page_len(&mut self, keys: u32) {
+        let most = u32::try_from(self.ctx.binding_limit() / 4).unwrap_or(u32::MAX);
+        self.key_page_len = keys.clamp(1, most);
     }
 
     pub fn context(&self) -> &GpuContext {
@@ -322,9 +342,17 @@ impl Renderer {
         // view's: the camera's whole grid, then each footprint), one sort by tile, one pass of
         // tile ranges; both rasterize passes; compose.
         let all_keys: u64 = view_keys.iter().sum();
-        // Checked before the u32 scan's total is trusted: a frame of 2^32 keys or more is far
-        // over any binding, and its total would have wrapped.
-        check_binding(ctx, camera, "tile keys (all views together)", all_keys * 4)?;
+        // Checked before the u32 scan's total is trusted: a frame of 2^32 keys or more is over
+        // two bindings of any adapter's, and its total would have wrapped.
+        let most_keys = u64::from(MAX_PAGES) * u64::from(self.key_page_len);
+        if all_keys > most_keys.min(u64::from(u32::MAX)) {
+            return Err(RenderError::FrameTooLarge {
+                name: camera.name.clone(),
+                what: "tile keys (all views together, in two bindings)",
+                bytes: all_keys * 4,
+                limit: most_keys.min(u64::from(u32::MAX)) * 4,
+            });
+        }
         debug_assert_eq!(all_keys, u64::from(total), "the views' key totals add up to the scan's");
         let (mut key_base, mut tile_base) = (0u32, 0u32);
         let mut tables = Vec::with_capacity(views.len());
@@ -342,25 +370,19 @@ impl Renderer {
             tile_base += v.limit.count();
         }
         let tiles = tile_base;
-        let bytes = u64::from(total) * 4;
-        let keys = KeyList {
-            keys: pool.get(ctx, "trgs.emit_keys.keys", bytes),
-            values: pool.get(ctx, "trgs.emit_keys.values", bytes),
-        };
+        let keys = KeyList::from_pool(ctx, pool, "trgs.emit_keys", total, self.key_page_len);
         let emit =
             EmitParams { entries: num_entries, gaussians: scene.len(), ..Default::default() };
         let o = &order.list.values;
         emit_keys::record(s, &mut rec, &emit, o, &entries, &offsets, &tables, &keys);
         let captured_keys = options.capture_intermediates.then(|| {
-            let mut copy = |name: &str, src: &wgpu::Buffer, pool: &mut gpu::BufferPool| {
-                let c = pool.get(ctx, &format!("trgs.capture.{name}"), bytes);
-                rec.encoder.copy_buffer_to_buffer(src, 0, &c, 0, bytes.max(16).min(src.size()));
-                c
-            };
-            KeyList {
-                keys: copy("keys", &keys.keys, pool),
-                values: copy("values", &keys.values, pool),
+            let copy = KeyList::from_pool(ctx, pool, "trgs.capture", total, self.key_page_len);
+            for (from, to) in [(&keys.keys, &copy.keys), (&keys.values, &copy.values)] {
+                for (src, dst) in from.pages().iter().zip(to.pages()) {
+                    rec.encoder.copy_buffer_to_buffer(src, 0, dst, 0, src.size().min(dst.size()));
+                }
             }
+            copy
         });
         let tile_digits: Vec<_> = sort::digits(sort::bits_below(tiles)).collect();
         let sorted = sort::record(

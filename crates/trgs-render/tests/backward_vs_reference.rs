@@ -393,16 +393,19 @@ fn projected_record(pg: &reference::ProjectedGrads, i: usize) -> [f64; 12] {
 /// The whole backward against the twin's: the real view's screen-space gradients (stage
 /// rasterize_bwd), then every Gaussian attribute and every plane parameter.
 fn check_backward(name: &str, scene: trgs_core::fixtures::Scene, block: bool) {
-    check_backward_in_pages(name, scene, block, None);
+    check_backward_in_pages(name, scene, block, None, false);
 }
 
 /// With `chunk`, the scene is bound `chunk` Gaussians at a time and each view's projected
 /// records and gradients are held in pages of two chunks (the layout of scenes of millions).
+/// With `key_pages`, the frame's key list is held in two pages, split in its middle (the
+/// layout of frames of tens of millions of keys).
 fn check_backward_in_pages(
     name: &str,
     mut scene: trgs_core::fixtures::Scene,
     block: bool,
     chunk: Option<u32>,
+    key_pages: bool,
 ) {
     // Tiny and huge scales on a few Gaussians (the hard cases of the acceptance).
     let n = scene.gaussians.len();
@@ -457,7 +460,7 @@ fn check_backward_in_pages(
     assert!(kinks * 50 <= n, "{name}: {kinks} of {n} Gaussians on a kink");
     for (mode, ctx) in contexts() {
         let what = format!("{name} ({mode})");
-        let renderer = Renderer::new(&ctx);
+        let mut renderer = Renderer::new(&ctx);
         let mut gpu_scene = GpuScene::upload(&ctx, &g32, &scene.planes).expect("valid scene");
         if let Some(c) = chunk {
             gpu_scene.set_chunk_size(c);
@@ -469,12 +472,21 @@ fn check_backward_in_pages(
             capture_intermediates: true,
             ..Default::default()
         };
+        if key_pages {
+            let whole =
+                renderer.render(&gpu_scene, &scene.camera, &render_options).expect("render");
+            renderer.set_key_page_len(whole.key_count() as u32 / 2 + 1);
+        }
         let mut frame =
             renderer.render(&gpu_scene, &scene.camera, &render_options).expect("render");
         if chunk.is_some() {
             let pages: Vec<usize> =
                 frame.views().iter().map(|v| v.projected.pages().len()).collect();
             assert!(pages.iter().all(|&p| p == 2), "{what}: pages per view {pages:?}");
+        }
+        if key_pages {
+            let keys = frame.views()[0].keys.as_ref().map(|k| k.keys.pages().len());
+            assert_eq!(keys, Some(2), "{what}: pages of the key list");
         }
         let layer_grads = LayerGrads::upload(&ctx, &frame, &grads).expect("finite gradients");
         let bwd = BackwardOptions { block_reflection_to_gaussians: block, profile: false };
@@ -549,7 +561,16 @@ fn backward_edge_on() {
 #[test]
 fn backward_two_planes_in_two_pages() {
     let scene = random_scene(&spec(58, 600, 2, 30.0));
-    check_backward_in_pages("2 planes, pages of 512", scene, false, Some(256));
+    check_backward_in_pages("2 planes, pages of 512", scene, false, Some(256), false);
+}
+
+/// The sorted key values past the key list's first page come from its second page in every
+/// replay; the projected records stay in one page (the gradients' second page is then a spare
+/// binding, never written).
+#[test]
+fn backward_two_planes_keys_in_two_pages() {
+    let scene = random_scene(&spec(59, 600, 2, 30.0));
+    check_backward_in_pages("2 planes, keys in two pages", scene, false, None, true);
 }
 
 #[test]

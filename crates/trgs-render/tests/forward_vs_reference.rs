@@ -49,25 +49,39 @@ fn compare(what: &str, gpu: &Image<f32>, cpu: &Image<f64>) -> usize {
     compare_values(what, &gpu.data, &cpu.data, cpu.channels as usize)
 }
 
-/// Returns how many views (the camera and the mirrored passes) the frame had.
-fn check_scene(name: &str, spec: SceneSpec, chunk: Option<u32>) -> usize {
-    check_given_scene(name, &random_scene(&spec), chunk)
+/// How a test splits the frame's arrays into pages (`trgs_render::toolkit::paged`), as scenes
+/// and frames beyond one binding are split.
+#[derive(Clone, Copy, Debug, Default)]
+struct Split {
+    /// The scene bound this many Gaussians at a time, in pages of two chunks.
+    chunk: Option<u32>,
+    /// The frame's key list in two pages, split in its middle.
+    keys: bool,
 }
 
-fn check_given_scene(name: &str, scene: &Scene, chunk: Option<u32>) -> usize {
+const WHOLE: Split = Split { chunk: None, keys: false };
+const CHUNKED: Split = Split { chunk: Some(256), keys: false };
+const KEYS_PAGED: Split = Split { chunk: None, keys: true };
+
+/// Returns how many views (the camera and the mirrored passes) the frame had.
+fn check_scene(name: &str, spec: SceneSpec, split: Split) -> usize {
+    check_given_scene(name, &random_scene(&spec), split)
+}
+
+fn check_given_scene(name: &str, scene: &Scene, split: Split) -> usize {
     let mut views = 0;
     for layout in [TileLayout::PixelPerThread, TileLayout::FourRowsPerThread] {
-        views = check_scene_in(&format!("{name} ({layout:?})"), scene, chunk, &ctx(layout));
+        views = check_scene_in(&format!("{name} ({layout:?})"), scene, split, &ctx(layout));
     }
     views
 }
 
-fn check_scene_in(name: &str, scene: &Scene, chunk: Option<u32>, ctx: &GpuContext) -> usize {
-    let renderer = Renderer::new(ctx);
+fn check_scene_in(name: &str, scene: &Scene, split: Split, ctx: &GpuContext) -> usize {
+    let mut renderer = Renderer::new(ctx);
     let g32: Gaussians<f32> = scene.gaussians.cast();
     let g = g32.cast::<f64>();
     let mut gpu_scene = GpuScene::upload(ctx, &g32, &scene.planes).expect("valid scene");
-    if let Some(c) = chunk {
+    if let Some(c) = split.chunk {
         // Pages of two chunks: with more than two chunks the rasterize passes read the
         // projected records from both of their pages.
         gpu_scene.set_chunk_size(c);
@@ -79,12 +93,25 @@ fn check_scene_in(name: &str, scene: &Scene, chunk: Option<u32>, ctx: &GpuContex
         background: [0.1, 0.2, 0.3],
         ..Default::default()
     };
+    if split.keys {
+        // The page boundary falls inside a sort block and, with planes, inside a view's keys.
+        let whole = renderer.render(&gpu_scene, &scene.camera, &options).expect("render");
+        renderer.set_key_page_len(whole.key_count() as u32 / 2 + 1);
+    }
     let frame = renderer.render(&gpu_scene, &scene.camera, &options).expect("render");
-    if let Some(c) = chunk {
+    if let Some(c) = split.chunk {
         let want = (scene.gaussians.len() as u32).div_ceil(2 * c) as usize;
         for v in frame.views() {
             assert_eq!(v.projected.pages().len(), want, "{name}: pages of projected records");
         }
+    }
+    if split.keys {
+        let pages = frame.views().iter().map(|v| v.keys.as_ref().map(|k| k.keys.pages().len()));
+        assert!(
+            pages.clone().all(|p| p == Some(2)),
+            "{name}: key pages {:?}",
+            pages.collect::<Vec<_>>()
+        );
     }
     let k = &scene.camera.intrinsics;
     let grid = TileGrid::new(k.width, k.height);
@@ -254,32 +281,48 @@ fn check_scene_in(name: &str, scene: &Scene, chunk: Option<u32>, ctx: &GpuContex
 
 #[test]
 fn no_plane_matches_reference() {
-    check_scene("no plane", spec(101, 1500, 0, 20.0), None);
+    check_scene("no plane", spec(101, 1500, 0, 20.0), WHOLE);
 }
 
 #[test]
 fn one_plane_matches_reference() {
-    check_scene("one plane", spec(102, 1500, 1, 25.0), None);
+    check_scene("one plane", spec(102, 1500, 1, 25.0), WHOLE);
 }
 
 #[test]
 fn two_planes_match_reference() {
-    check_scene("two planes", spec(103, 1500, 2, 30.0), None);
+    check_scene("two planes", spec(103, 1500, 2, 30.0), WHOLE);
 }
 
 #[test]
 fn four_planes_match_reference() {
     // Five views: the cheap culls run in two dispatches (CULL_VIEWS views each), the second
     // with an unused view slot.
-    let views = check_scene("four planes", spec(109, 1500, 4, 30.0), None);
+    let views = check_scene("four planes", spec(109, 1500, 4, 30.0), WHOLE);
     assert_eq!(views, 5, "every plane's mirrored pass ran");
 }
 
 #[test]
 fn chunked_four_planes_match_reference() {
     // Several chunks and several cull groups: each (chunk, group) dispatch and its work records.
-    let views = check_scene("chunked four planes", spec(110, 700, 4, 30.0), Some(256));
+    let views = check_scene("chunked four planes", spec(110, 700, 4, 30.0), CHUNKED);
     assert_eq!(views, 5, "every plane's mirrored pass ran");
+}
+
+/// The key list in two pages: emit_keys writes, the sort reads and scatters, tile_ranges and
+/// both rasterize passes read across the page boundary, with the projected records in one page
+/// (the paged rasterize kernels then bind its first page twice).
+#[test]
+fn key_list_in_two_pages_matches_reference() {
+    let views = check_scene("keys in two pages", spec(112, 1500, 2, 30.0), KEYS_PAGED);
+    assert_eq!(views, 3, "both planes' mirrored passes ran");
+}
+
+/// Both the projected records and the keys in two pages.
+#[test]
+fn chunked_key_list_in_two_pages_matches_reference() {
+    let split = Split { keys: true, ..CHUNKED };
+    check_scene("chunked, keys in two pages", spec(113, 700, 2, 30.0), split);
 }
 
 #[test]
@@ -289,24 +332,24 @@ fn plane_filling_the_image_matches_reference() {
     let mut scene = random_scene(&spec(111, 1500, 1, 20.0));
     scene.planes[0].width = 200.0;
     scene.planes[0].height = 200.0;
-    let views = check_given_scene("plane filling the image", &scene, None);
+    let views = check_given_scene("plane filling the image", &scene, WHOLE);
     assert_eq!(views, 2, "the plane's mirrored pass ran");
 }
 
 #[test]
 fn grazing_view_matches_reference() {
-    check_scene("grazing 80 deg", spec(104, 1200, 1, 80.0), None);
+    check_scene("grazing 80 deg", spec(104, 1200, 1, 80.0), WHOLE);
 }
 
 #[test]
 fn plane_seen_edge_on_matches_reference() {
-    check_scene("edge-on 89.9 deg", spec(105, 1200, 2, 89.9), None);
+    check_scene("edge-on 89.9 deg", spec(105, 1200, 2, 89.9), WHOLE);
 }
 
 #[test]
 fn chunked_bindings_match_reference() {
     // 700 Gaussians bound 256 at a time: the split that scenes above the binding limit use.
-    check_scene("chunked", spec(106, 700, 1, 40.0), Some(256));
+    check_scene("chunked", spec(106, 700, 1, 40.0), CHUNKED);
 }
 
 #[test]
@@ -315,14 +358,14 @@ fn many_gaussians_match_reference() {
     // blocks (4096 entries each, 16384 with wide blocks) with its count known on the GPU only,
     // the key list several blocks of every pass, and the scans two levels (1024 and 4096 values
     // a block).
-    check_scene("many", spec(107, 12_000, 2, 30.0), None);
+    check_scene("many", spec(107, 12_000, 2, 30.0), WHOLE);
 }
 
 #[test]
 fn partial_tiles_match_reference() {
     // 93x70: the last column and row of tiles are partial, and in the four-rows layout a thread
     // holds pixels on both sides of the bottom edge.
-    check_scene("93x70", SceneSpec { width: 93, height: 70, ..spec(108, 1500, 2, 35.0) }, None);
+    check_scene("93x70", SceneSpec { width: 93, height: 70, ..spec(108, 1500, 2, 35.0) }, WHOLE);
 }
 
 #[test]

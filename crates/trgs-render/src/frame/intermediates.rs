@@ -52,10 +52,9 @@ impl Frame {
         let (Some(keys), Some(view_ranges)) = (v.keys.as_ref(), v.ranges.as_ref()) else {
             return Ok(None);
         };
-        let (n, base) = (v.num_keys as usize, u64::from(v.key_base) * 4);
         let (sorted, sorted_values) = (
-            gpu::read_buffer::<u32>(ctx, &keys.keys, base, n)?,
-            gpu::read_buffer::<u32>(ctx, &keys.values, base, n)?,
+            keys.keys.read_range::<u32>(ctx, v.key_base, v.num_keys)?,
+            keys.values.read_range::<u32>(ctx, v.key_base, v.num_keys)?,
         );
         let sorted_keys = sorted.iter().map(|&t| v.grid_tile(&grid, t)).collect();
         let own = v.tile_base..v.tile_base + v.limit.count();
@@ -63,9 +62,8 @@ impl Frame {
         let emitted = match binning.emitted.as_ref() {
             None => None,
             Some(k) => {
-                let all = binning.total as usize;
-                let tiles: Vec<u32> = gpu::read_buffer(ctx, &k.keys, 0, all)?;
-                let values: Vec<u32> = gpu::read_buffer(ctx, &k.values, 0, all)?;
+                let tiles: Vec<u32> = k.keys.read_range(ctx, 0, binning.total)?;
+                let values: Vec<u32> = k.values.read_range(ctx, 0, binning.total)?;
                 Some(
                     tiles
                         .into_iter()
@@ -76,8 +74,7 @@ impl Frame {
                 )
             }
         };
-        let entries: Vec<u32> =
-            gpu::read_buffer(ctx, &binning.order.values, 0, binning.entries as usize)?;
+        let entries: Vec<u32> = binning.order.values.read_range(ctx, 0, binning.entries)?;
         let first = vi as u32 * self.gaussian_count;
         let order = entries
             .into_iter()
@@ -122,8 +119,8 @@ impl Frame {
         };
         let n = b.entries as usize;
         Ok(Some(DepthOrderIntermediates {
-            entries: gpu::read_buffer(ctx, &b.order.values, 0, n)?,
-            depths: gpu::read_buffer(ctx, &b.order.keys, 0, n)?,
+            entries: b.order.values.read_range(ctx, 0, b.entries)?,
+            depths: b.order.keys.read_range(ctx, 0, b.entries)?,
             offsets: gpu::read_buffer(ctx, &b.offsets, 0, n)?,
             total: b.total,
         }))

@@ -45,11 +45,8 @@ pub fn record(
     let slots = pool.get(s.ctx, label, u64::from(words.max(1)) * 4);
     rec.encoder.copy_buffer_to_buffer(&entries.present, 0, &slots, 0, u64::from(words) * 4);
     let total = prefix_sum::record_bits(s, rec, "depth_order", pool, label, &slots, words);
-    let bytes = u64::from(capacity.max(1)) * 4;
-    let list = KeyList {
-        keys: pool.get(s.ctx, "trgs.depth_order.keys", bytes),
-        values: pool.get(s.ctx, "trgs.depth_order.values", bytes),
-    };
+    // One page: the entries' rectangles (8 bytes each) are checked against a binding first.
+    let list = KeyList::from_pool(s.ctx, pool, "trgs.depth_order", capacity, capacity.max(1));
     let word_block = gpu::params(
         s.ctx,
         "trgs.depth_order.compact_params",
@@ -63,8 +60,8 @@ pub fn record(
             entries.present.as_entire_binding(),
             slots.as_entire_binding(),
             entries.depths.as_entire_binding(),
-            list.keys.as_entire_binding(),
-            list.values.as_entire_binding(),
+            list.keys.first_page(),
+            list.values.first_page(),
         ],
     );
     rec.dispatch("depth_order", k, &bind, grid_1d(words.div_ceil(256)));
@@ -85,7 +82,7 @@ pub fn record(
         &[
             block.as_entire_binding(),
             total.as_entire_binding(),
-            list.values.as_entire_binding(),
+            list.values.first_page(),
             entries.rects.as_entire_binding(),
             ordered_counts.as_entire_binding(),
         ],

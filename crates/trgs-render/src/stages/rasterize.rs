@@ -22,6 +22,12 @@ pub struct Pass1Outputs<'a> {
     pub states: &'a wgpu::Buffer,
 }
 
+/// Whether a rasterize pass (or its adjoint) over `projected` and `values` runs its `_paged`
+/// variant: when either has a second page.
+pub fn is_paged(projected: &Paged, values: &Paged) -> bool {
+    projected.is_paged() || values.is_paged()
+}
+
 /// The parameter block of pass 1 (and of its adjoint) over the whole of `grid`.
 pub fn params(grid: &TileGrid, background: [f32; 3]) -> RasterParams {
     RasterParams {
@@ -44,13 +50,18 @@ pub fn record(
     background: [f32; 3],
     depth_variance: bool,
     projected: &Paged,
-    values: &wgpu::Buffer,
+    values: &Paged,
     ranges: &wgpu::Buffer,
     out: &Pass1Outputs<'_>,
 ) {
-    let p = RasterParams { page: projected.first_page_len(), ..params(grid, background) };
+    let p = RasterParams {
+        page: projected.first_page_len(),
+        key_page: values.first_page_len(),
+        ..params(grid, background)
+    };
     let block = gpu::params(s.ctx, "trgs.rasterize.params", &p);
-    let k = match (depth_variance, projected.is_paged()) {
+    let paged = is_paged(projected, values);
+    let k = match (depth_variance, paged) {
         (false, false) => &s.kernels.rasterize,
         (true, false) => &s.kernels.rasterize_depth_variance,
         (false, true) => &s.kernels.rasterize_paged,
@@ -59,13 +70,15 @@ pub fn record(
     let mut entries = vec![
         block.as_entire_binding(),
         projected.first_page(),
-        values.as_entire_binding(),
+        values.first_page(),
         ranges.as_entire_binding(),
         out.transmission.as_entire_binding(),
         out.geometry.as_entire_binding(),
         out.states.as_entire_binding(),
     ];
-    entries.extend(projected.second_page());
+    if paged {
+        entries.extend([projected.second_page_or_first(), values.second_page_or_first()]);
+    }
     let bind = k.bind(s.ctx, &entries);
     rec.dispatch("rasterize", k, &bind, [grid.tiles_x, grid.tiles_y, 1]);
 }

@@ -13,8 +13,22 @@ use trgs_core::reference::TileGrid;
 #[derive(Clone, Copy, Debug)]
 pub struct ViewLists<'a> {
     pub projected: &'a Paged,
-    pub values: &'a wgpu::Buffer,
+    pub values: &'a Paged,
     pub ranges: &'a wgpu::Buffer,
+}
+
+impl ViewLists<'_> {
+    /// A `_paged` adjoint that runs for the key values' second page alone binds this in place of
+    /// the gradients' second page (a writable binding cannot repeat the first; never indexed).
+    pub(crate) fn spare_grads_page(
+        &self,
+        s: Stage<'_>,
+        paged: bool,
+        projected_grads: &Paged,
+    ) -> Option<wgpu::Buffer> {
+        (paged && !projected_grads.is_paged())
+            .then(|| gpu::storage(s.ctx, "trgs.rasterize_bwd.spare_page", 16))
+    }
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -32,15 +46,16 @@ pub fn record(
     let params = RasterParams {
         depth_variance: u32::from(depth_variance),
         page: lists.projected.first_page_len(),
+        key_page: lists.values.first_page_len(),
         ..super::rasterize::params(grid, background)
     };
     let block = gpu::params(s.ctx, "trgs.rasterize_bwd.params", &params);
-    let paged = lists.projected.is_paged();
+    let paged = super::rasterize::is_paged(lists.projected, lists.values);
     let k = if paged { &s.kernels.rasterize_bwd_paged } else { &s.kernels.rasterize_bwd };
     let mut entries = vec![
         block.as_entire_binding(),
         lists.projected.first_page(),
-        lists.values.as_entire_binding(),
+        lists.values.first_page(),
         lists.ranges.as_entire_binding(),
         layers.states.as_entire_binding(),
         layers.geometry.as_entire_binding(),
@@ -48,8 +63,14 @@ pub fn record(
         grads.geometry.as_entire_binding(),
         projected_grads.first_page(),
     ];
-    entries.extend(lists.projected.second_page());
-    entries.extend(projected_grads.second_page());
+    let spare = lists.spare_grads_page(s, paged, projected_grads);
+    if paged {
+        entries.push(lists.projected.second_page_or_first());
+        entries.extend(
+            projected_grads.second_page().or(spare.as_ref().map(|b| b.as_entire_binding())),
+        );
+        entries.push(lists.values.second_page_or_first());
+    }
     let bind = k.bind(s.ctx, &entries);
     rec.dispatch("rasterize_bwd", k, &bind, [grid.tiles_x, grid.tiles_y, 1]);
 }

@@ -29,7 +29,7 @@ pub fn record(
     footprint: &TileRect,
     tile_base: u32,
     projected: &Paged,
-    values: &wgpu::Buffer,
+    values: &Paged,
     ranges: &wgpu::Buffer,
     reflection_raw: &wgpu::Buffer,
     states: &wgpu::Buffer,
@@ -43,25 +43,26 @@ pub fn record(
         "trgs.rasterize_reflection.params",
         &RasterParams {
             page: projected.first_page_len(),
+            key_page: values.first_page_len(),
             ..params(grid, slot, footprint, tile_base)
         },
     );
-    let k = if projected.is_paged() {
-        &s.kernels.rasterize_reflection_paged
-    } else {
-        &s.kernels.rasterize_reflection
-    };
+    let paged = super::rasterize::is_paged(projected, values);
+    let k =
+        if paged { &s.kernels.rasterize_reflection_paged } else { &s.kernels.rasterize_reflection };
     let mut entries = vec![
         block.as_entire_binding(),
         projected.first_page(),
-        values.as_entire_binding(),
+        values.first_page(),
         ranges.as_entire_binding(),
         reflection_raw.as_entire_binding(),
         states.as_entire_binding(),
         rays.camera.as_entire_binding(),
         rays.planes.as_entire_binding(),
     ];
-    entries.extend(projected.second_page());
+    if paged {
+        entries.extend([projected.second_page_or_first(), values.second_page_or_first()]);
+    }
     let bind = k.bind(s.ctx, &entries);
     let groups = [footprint.x1 - footprint.x0, footprint.y1 - footprint.y0, 1];
     rec.dispatch("rasterize_reflection", k, &bind, groups);

@@ -27,10 +27,11 @@ pub fn record(
     }
     let params = crate::layout::RasterParams {
         page: lists.projected.first_page_len(),
+        key_page: lists.values.first_page_len(),
         ..super::rasterize_reflection::params(grid, slot, footprint, tile_base)
     };
     let block = gpu::params(s.ctx, "trgs.rasterize_reflection_bwd.params", &params);
-    let paged = lists.projected.is_paged();
+    let paged = super::rasterize::is_paged(lists.projected, lists.values);
     let k = if paged {
         &s.kernels.rasterize_reflection_bwd_paged
     } else {
@@ -39,14 +40,20 @@ pub fn record(
     let mut entries = vec![
         block.as_entire_binding(),
         lists.projected.first_page(),
-        lists.values.as_entire_binding(),
+        lists.values.first_page(),
         lists.ranges.as_entire_binding(),
         layers.reflection_states.as_entire_binding(),
         grads.reflection_raw.as_entire_binding(),
         projected_grads.first_page(),
     ];
-    entries.extend(lists.projected.second_page());
-    entries.extend(projected_grads.second_page());
+    let spare = lists.spare_grads_page(s, paged, projected_grads);
+    if paged {
+        entries.push(lists.projected.second_page_or_first());
+        entries.extend(
+            projected_grads.second_page().or(spare.as_ref().map(|b| b.as_entire_binding())),
+        );
+        entries.push(lists.values.second_page_or_first());
+    }
     let bind = k.bind(s.ctx, &entries);
     let groups = [footprint.x1 - footprint.x0, footprint.y1 - footprint.y0, 1];
     rec.dispatch("rasterize_reflection_bwd", k, &bind, groups);

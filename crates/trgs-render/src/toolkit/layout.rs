@@ -148,7 +148,9 @@ gpu_struct! {
         pub entries: u32,
         /// Gaussians in the scene (an entry's view is entry / gaussians).
         pub gaussians: u32,
-        pub pad0: u32,
+        /// Pairs in the key list's first page ([`crate::toolkit::paged`]); the rest are in the
+        /// second.
+        pub page: u32,
         pub pad1: u32,
     }
 }
@@ -174,7 +176,8 @@ gpu_struct! {
         pub blocks: u32,
         /// The workgroup permutation's step ([`crate::gpu::spread_step`]; 0: none).
         pub spread: u32,
-        pub pad2: u32,
+        /// `tile_ranges`: keys in the key list's first page ([`crate::toolkit::paged`]).
+        pub page: u32,
     }
 }
 
@@ -187,6 +190,12 @@ gpu_struct! {
         /// The workgroup permutation's step ([`crate::gpu::spread_step`]; 0: none).
         pub spread: u32,
         pub num_blocks: u32,
+        /// Pairs in the first page of the list ([`crate::toolkit::paged`]); the rest are in the
+        /// second.
+        pub page: u32,
+        pub pad1: u32,
+        pub pad2: u32,
+        pub pad3: u32,
     }
 }
 
@@ -212,7 +221,8 @@ gpu_struct! {
         /// Gaussians in the first page of the projected records and their gradients
         /// ([`crate::toolkit::paged`]); the rest are in the second.
         pub page: u32,
-        pub pad1: u32,
+        /// Values in the first page of the sorted key list; the rest are in the second.
+        pub key_page: u32,
         /// Colour behind the last transmittance of C_t.
         pub background: [f32; 4],
     }

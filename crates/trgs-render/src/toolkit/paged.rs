@@ -1,14 +1,18 @@
-//! Per-Gaussian arrays larger than one storage binding, held as pages.
+//! Arrays larger than one storage binding, held as pages.
 //!
 //! The rasterize passes and their adjoints read a view's projected Gaussians (and add to their
 //! gradient records) at any Gaussian index the sorted keys name, so they bind those arrays
 //! whole. At 64 bytes a record, a binding of 128 MiB (lavapipe's limit) holds about 2.1 million
 //! Gaussians. Such an array is therefore split into pages of [`Paged::page_len`] Gaussians, each
 //! page its own buffer: the rasterize kernels bind [`MAX_PAGES`] of them and pick the page by
-//! the index (their `_paged` variants: `shared/projected_pages.wgsl`, `PAGED` in
-//! `shared/accumulate.wgsl`; a scene of one page runs the kernels without the choice); the
+//! the index (their `_paged` variants: `shared/raster_pages.wgsl`, `PAGED` in
+//! `shared/accumulate.wgsl`; a frame of one page runs the kernels without the choice); the
 //! per-Gaussian stages run over the scene's chunks, and a page holds a whole number of chunks
 //! ([`crate::GpuScene::page_len`]), so a chunk's range lies in one page.
+//!
+//! The frame's tile keys are paged the same way ([`crate::stages::sort::KeyList`]): the key
+//! list is bound whole by `emit_keys`, `sort`, `tile_ranges` and the rasterize passes, and at 4
+//! bytes a key one binding of 128 MiB holds 33.5 million keys (`shared/key_pages.wgsl`).
 use super::gpu::{self, BufferPool};
 use crate::GpuContext;
 use crate::gpu::GpuError;
@@ -99,6 +103,13 @@ impl Paged {
         self.pages.get(1).map(wgpu::Buffer::as_entire_binding)
     }
 
+    /// The second page, or the first again where there is none: for a read-only binding of a
+    /// `_paged` kernel that runs for another array's second page (`page` then equals the
+    /// length, so the kernel never reads it).
+    pub fn second_page_or_first(&self) -> wgpu::BindingResource<'_> {
+        self.second_page().unwrap_or_else(|| self.first_page())
+    }
+
     /// Zero every page.
     pub fn clear(&self, encoder: &mut wgpu::CommandEncoder) {
         for p in &self.pages {
@@ -108,11 +119,26 @@ impl Paged {
 
     /// Every record, in order (blocking readback of each page).
     pub fn read<T: bytemuck::Pod>(&self, ctx: &GpuContext) -> Result<Vec<T>, GpuError> {
+        self.read_range(ctx, 0, self.len)
+    }
+
+    /// Records `first..first + count`, in order, across pages (blocking readback).
+    pub fn read_range<T: bytemuck::Pod>(
+        &self,
+        ctx: &GpuContext,
+        first: u32,
+        count: u32,
+    ) -> Result<Vec<T>, GpuError> {
         let per_record = (self.stride as usize) / std::mem::size_of::<T>();
-        let mut out = Vec::with_capacity(self.len as usize * per_record);
+        let end = (first + count).min(self.len);
+        let mut out = Vec::with_capacity(end.saturating_sub(first) as usize * per_record);
         for (k, p) in self.pages.iter().enumerate() {
-            let records = self.records_in(k as u32) as usize;
-            out.extend(gpu::read_buffer::<T>(ctx, p, 0, records * per_record)?);
+            let start = k as u32 * self.page_len;
+            let (lo, hi) = (first.max(start), end.min(start + self.records_in(k as u32)));
+            if lo < hi {
+                let offset = u64::from(lo - start) * self.stride;
+                out.extend(gpu::read_buffer::<T>(ctx, p, offset, (hi - lo) as usize * per_record)?);
+            }
         }
         Ok(out)
     }
