@@ -125,3 +125,33 @@ fn gpu_mcmc_stages_match_twins() {
     assert!(moved > n / 4, "the noise should move the transparent Gaussians: {moved}");
     assert!(worst <= 1.0, "GPU noise differs from the twin by {worst:.2} of the tolerance");
 }
+
+/// The planes' Gaussians added under MCMC keep the set within its cap: the least opaque of the
+/// Gaussians already there make room, and the added ones are all kept.
+#[test]
+fn planes_added_under_mcmc_stay_within_the_cap() {
+    use trgs_core::fixtures::{SceneSpec, random_scene};
+    use trgs_train::densify::Densification;
+    use trgs_train::settings::TrainSettings;
+    use trgs_train::trainer::Trainer;
+    let ctx = GpuContext::new().expect("adapter");
+    let mut rng = Rng::new(7);
+    let mut old = scene(300, &mut rng);
+    old.populations.iter_mut().for_each(|p| *p = Population::Primary);
+    let fixture = random_scene(&SceneSpec { planes: 1, ..SceneSpec::default() });
+    let mut added = scene(40, &mut rng);
+    added.opacity_logits.iter_mut().for_each(|o| *o = -20.0);
+    let mut trainer =
+        Trainer::new(&ctx, &old, &[], TrainSettings::scaled(100), 1.0).expect("trainer");
+    trainer.set_densification(&Densification::Mcmc(McmcSettings::scaled(100, 320)));
+    let dropped = trainer.add_planes(&fixture.planes, &[None], &added).expect("add planes");
+    assert_eq!(dropped, 20);
+    let after = trainer.gaussians().expect("readback");
+    assert_eq!(after.len(), 320);
+    // Every added Gaussian is there (the last 40 rows), and the 20 dropped were the least opaque.
+    assert_eq!(&after.means[280..], &added.means[..]);
+    let mut logits = old.opacity_logits.clone();
+    logits.sort_by(|a, b| b.total_cmp(a));
+    let kept_least = after.opacity_logits[..280].iter().copied().fold(f32::INFINITY, f32::min);
+    assert_eq!(kept_least, logits[279], "the most opaque 280 of the old are kept");
+}

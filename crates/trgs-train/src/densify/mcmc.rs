@@ -285,6 +285,10 @@ impl DensifyStrategy for McmcDensification {
         "mcmc"
     }
 
+    fn cap(&self) -> Option<usize> {
+        Some(self.settings.cap)
+    }
+
     fn record_before_adam(&self, step: &StepView<'_>, rec: &mut Recorder) {
         let grads = &step.grads.gaussians;
         self.kernels.record_regularise(step.ctx, rec, step.scene, grads, &self.settings);

@@ -5,7 +5,7 @@
 //! parameters and their Adam moments together.
 pub mod classic;
 pub mod mcmc;
-mod plan;
+pub(crate) mod plan;
 
 pub use classic::{ClassicDensification, ClassicSettings, DensifyReport, DensifyStats};
 pub use mcmc::{McmcDensification, McmcReport, McmcSettings};
@@ -113,6 +113,12 @@ pub trait DensifyStrategy: std::fmt::Debug + Send + Sync {
 
     /// The set was replaced by one of `n` Gaussians: per-Gaussian state starts over.
     fn restart(&mut self, _n: usize) {}
+
+    /// The most Gaussians the strategy allows, if it has a bound (MCMC's `--cap`): Gaussians
+    /// added from outside it (the planes' seeds) make room within it.
+    fn cap(&self) -> Option<usize> {
+        None
+    }
 
     /// Per-Gaussian statistics a checkpoint keeps (classic densification's).
     fn statistics(&self) -> Result<Option<DensifyStats>> {

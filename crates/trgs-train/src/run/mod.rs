@@ -519,7 +519,15 @@ impl TrainingRun {
                 added.append(r);
             }
         }
-        self.trainer.add_planes(&init.planes, &init.offset_limits, &added)
+        let added_count = added.len();
+        let dropped = self.trainer.add_planes(&init.planes, &init.offset_limits, &added)?;
+        if dropped > 0 {
+            self.events.push_back(RunEvent::Note(format!(
+                "the planes' {added_count} Gaussians would pass --cap: the {dropped} least opaque \
+                 were dropped"
+            )));
+        }
+        Ok(())
     }
 }
 

@@ -2,23 +2,28 @@
 //! parameters, and the opacity perturbation of what the cameras see through them.
 use super::Trainer;
 use crate::checkpoint::PlaneMoments;
+use crate::densify::plan::gather;
 use crate::perturb::{perturb_opacities, seen_through_planes};
 use crate::plane_adam::{OffsetLimit, PlaneRates, plane_adam};
 use crate::settings::Stage;
 use anyhow::{Context, Result};
 use trgs_core::reference::PlaneGrad;
-use trgs_core::scene::{Attribute, Gaussians, ReflectionPlane, attribute_widths};
+use trgs_core::scene::{Attribute, Gaussians, Population, ReflectionPlane, attribute_widths};
 
 impl Trainer {
     /// Add reflection planes, the bounds on their offsets (`limits[i]` for `planes[i]`; free where
     /// missing or None) and the Gaussians that come with them (their glass Gaussians and
     /// reflection seeds; zero moments) to the optimisation.
+    ///
+    /// Under a strategy with a cap (MCMC), the set stays within it: the least opaque of the
+    /// primary Gaussians already there are dropped to make room, as MCMC relocates its dead ones
+    /// (the new Gaussians are kept, up to the cap). Returns how many were dropped.
     pub fn add_planes(
         &mut self,
         planes: &[ReflectionPlane],
         limits: &[Option<OffsetLimit>],
         glass: &Gaussians<f32>,
-    ) -> Result<()> {
+    ) -> Result<usize> {
         let mut state = self.read_state()?;
         let n_old = state.gaussians.len();
         let g = &mut state.gaussians;
@@ -36,6 +41,16 @@ impl Trainer {
             state.m[a].resize(len, 0.0);
             state.v[a].resize(len, 0.0);
         }
+        let dropped = match self.densification.cap() {
+            Some(cap) if state.gaussians.len() > cap => {
+                let g = &state.gaussians;
+                let sources = within_cap(&g.opacity_logits, &g.populations, n_old, cap);
+                let dropped = state.gaussians.len() - sources.len();
+                state = gather(&state, &sources);
+                dropped
+            }
+            _ => 0,
+        };
         let mut all = self.planes().to_vec();
         all.extend_from_slice(planes);
         self.gaussians.scene_mut().set_planes(&all).context("initialised planes")?;
@@ -43,7 +58,8 @@ impl Trainer {
             offset_limit: limits.get(i).copied().flatten(),
             ..PlaneMoments::default()
         }));
-        self.set_state(&state)
+        self.set_state(&state)?;
+        Ok(dropped)
     }
 
     /// Adam on the planes' offset along the normal, normal and R0 logit ([`plane_adam`]).
@@ -97,5 +113,54 @@ impl Trainer {
         // Only the opacity buffer changes: the moments and densification statistics stay.
         self.gaussians.write_opacity_logits(&g.opacity_logits);
         Ok(n)
+    }
+}
+
+/// The rows kept when `cap` is smaller than the set of `opacity_logits.len()` Gaussians, of which
+/// those from `n_old` on were just added: the glass Gaussians already there (MCMC never moves
+/// them either), every added one (the first that fit if they alone exceed the room left), and
+/// the most opaque of the other old ones (ties to the lower index); in their order, with their
+/// moments.
+fn within_cap(
+    opacity_logits: &[f32],
+    populations: &[Population],
+    n_old: usize,
+    cap: usize,
+) -> Vec<(usize, bool)> {
+    let n = opacity_logits.len();
+    let (glass, mut primary): (Vec<usize>, Vec<usize>) =
+        (0..n_old).partition(|&i| populations[i] == Population::Glass);
+    let new = (n - n_old).min(cap.saturating_sub(glass.len()));
+    primary.sort_by(|&a, &b| opacity_logits[b].total_cmp(&opacity_logits[a]).then(a.cmp(&b)));
+    primary.truncate(cap.saturating_sub(glass.len() + new));
+    let mut old: Vec<usize> = glass.into_iter().chain(primary).collect();
+    old.sort_unstable();
+    old.into_iter().chain(n_old..n_old + new).map(|i| (i, true)).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::within_cap;
+    use trgs_core::scene::Population::{Glass, Primary};
+
+    fn rows(logits: &[f32], glass: &[usize], n_old: usize, cap: usize) -> Vec<usize> {
+        let pops: Vec<_> =
+            (0..logits.len()).map(|i| if glass.contains(&i) { Glass } else { Primary }).collect();
+        within_cap(logits, &pops, n_old, cap).into_iter().map(|(i, _)| i).collect()
+    }
+
+    #[test]
+    fn the_least_opaque_make_room_for_the_added() {
+        // Five old Gaussians, three added, a cap of six: the two least opaque old ones go.
+        let logits = [0.5, -3.0, 2.0, -1.0, 0.0, 9.0, 9.0, 9.0];
+        assert_eq!(rows(&logits, &[], 5, 6), [0, 2, 4, 5, 6, 7]);
+        // A glass Gaussian stays however transparent: the two least opaque primary ones go.
+        assert_eq!(rows(&logits, &[1], 5, 6), [0, 1, 2, 5, 6, 7]);
+    }
+
+    #[test]
+    fn ties_keep_the_lower_index_and_the_added_alone_are_cut_to_the_cap() {
+        assert_eq!(rows(&[1.0, 1.0, 1.0, 0.0], &[], 3, 3), [0, 1, 3]);
+        assert_eq!(rows(&[1.0, 0.0, 0.0, 0.0], &[], 1, 2), [1, 2]);
     }
 }
