@@ -67,6 +67,9 @@ pub struct TargetCounts {
     pub uploads: u64,
     /// Views dropped to stay under the budget.
     pub evictions: u64,
+    /// Uploads made by the step that needed the view (it was not queued ahead with
+    /// [`TargetCache::prefetch`]).
+    pub uploads_in_step: u64,
     /// Bytes held on the GPU now.
     pub resident_bytes: u64,
 }
@@ -112,11 +115,20 @@ impl TargetCache {
     /// copy runs on the GPU's queue before the next submission; the step that trains on `view`
     /// then finds it resident.
     pub fn prefetch(&mut self, ctx: &GpuContext, view: &View) -> Result<(), TargetError> {
-        self.get(ctx, view).map(|_| ())
+        self.fetch(ctx, view, true).map(|_| ())
     }
 
     /// `view`'s target, uploaded now if it is not resident.
     pub fn get(&mut self, ctx: &GpuContext, view: &View) -> Result<&GpuTarget, TargetError> {
+        self.fetch(ctx, view, false)
+    }
+
+    fn fetch(
+        &mut self,
+        ctx: &GpuContext,
+        view: &View,
+        ahead: bool,
+    ) -> Result<&GpuTarget, TargetError> {
         self.tick += 1;
         let name = &view.camera.name;
         let i = match self.entries.iter().position(|e| &e.name == name) {
@@ -133,6 +145,7 @@ impl TargetCache {
                     view.covered.as_ref(),
                 )?;
                 self.counts.uploads += 1;
+                self.counts.uploads_in_step += u64::from(!ahead);
                 self.counts.resident_bytes += bytes;
                 self.entries.push(Entry { name: name.clone(), target, bytes, used: 0 });
                 self.entries.len() - 1

@@ -47,7 +47,12 @@ fn streamed_views_train_as_resident_ones() {
     let views = data.train.len() as u64;
     assert_eq!(
         resident.targets().counts(),
-        TargetCounts { uploads: views, evictions: 0, resident_bytes: bytes.iter().sum() },
+        TargetCounts {
+            uploads: views,
+            evictions: 0,
+            uploads_in_step: views,
+            resident_bytes: bytes.iter().sum()
+        },
         "every view uploaded once and kept"
     );
     // At most three views fit: the second pass over the views uploads them again.
@@ -62,6 +67,32 @@ fn streamed_views_train_as_resident_ones() {
     for (k, (want, got)) in losses.iter().enumerate() {
         assert!((want - got).abs() <= 1e-4 * want, "step {k}: loss {got}, resident {want}");
     }
+}
+
+/// A run that streams its views uploads each one ahead of its step, the first view of every
+/// epoch included (its order is drawn when the previous epoch ends): only the very first step
+/// uploads its own view.
+#[test]
+fn a_run_uploads_every_view_ahead_across_epochs() {
+    let dir = ScratchDir::new("target-epochs");
+    let scene = dir.join("data");
+    // 320x240: about 0.3 MiB a view, so a budget of 1 MiB holds three of the ten training views.
+    let synthetic = SyntheticConfig { width: 320, height: 240, ..SyntheticConfig::small() };
+    write_dataset(&generate(&synthetic.without_glass()), &scene).expect("dataset");
+    let config = RunConfig {
+        data: Some(scene),
+        out: dir.join("run"),
+        iterations: 25,
+        eval_every: Some(1000),
+        sh_degree: 0,
+        target_memory: Some(1),
+        ..RunConfig::default()
+    };
+    let mut run = TrainingRun::new(config).expect("run");
+    run.run_to_end(|_| {}).expect("training");
+    let train_views = run.trainer().targets().counts();
+    assert!(train_views.evictions > 0, "the views were streamed: {train_views:?}");
+    assert_eq!(train_views.uploads_in_step, 1, "{train_views:?}");
 }
 
 #[test]

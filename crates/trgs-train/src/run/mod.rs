@@ -355,6 +355,16 @@ impl TrainingRun {
         train.chain(self.data.test.iter().map(|v| v.camera.clone())).collect()
     }
 
+    /// A new epoch's view order (a shuffle of the training views) once the last one is used up.
+    fn draw_epoch_if_done(&mut self) {
+        if self.state.order.is_empty() {
+            self.state.order = (0..self.data.train.len()).collect();
+            for i in (1..self.state.order.len()).rev() {
+                self.state.order.swap(i, self.rng.below(i + 1));
+            }
+        }
+    }
+
     /// Whether the run has finished (or failed): no more events will come.
     pub fn is_done(&self) -> bool {
         self.done && self.events.is_empty()
@@ -363,12 +373,7 @@ impl TrainingRun {
     /// One step, with the plane initialisation, evaluation and checkpoint that fall on it.
     fn advance(&mut self) -> Result<()> {
         let iterations = self.config().iterations;
-        if self.state.order.is_empty() {
-            self.state.order = (0..self.data.train.len()).collect();
-            for i in (1..self.state.order.len()).rev() {
-                self.state.order.swap(i, self.rng.below(i + 1));
-            }
-        }
+        self.draw_epoch_if_done();
         let Some(vi) = self.state.order.pop() else {
             bail!("{}: no training views", self.data_dir.display())
         };
@@ -397,7 +402,11 @@ impl TrainingRun {
         });
         let stats = stats.and_then(|stats| {
             // The next view's upload goes on the queue now, ahead of its step (a no-op when
-            // every view fits the budget and it is resident).
+            // every view fits the budget and it is resident); after an epoch's last step, the
+            // next epoch's order is drawn now so that its first view is uploaded ahead too.
+            if self.trainer.step < iterations {
+                self.draw_epoch_if_done();
+            }
             match self.state.order.last() {
                 Some(&next) => self.trainer.prefetch(&self.data.train[next]).map(|()| stats),
                 None => Ok(stats),
