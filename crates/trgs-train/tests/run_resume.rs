@@ -5,7 +5,7 @@
 use std::path::Path;
 use trgs_core::scratch::ScratchDir;
 use trgs_core::synthetic::{SyntheticConfig, generate, write_dataset};
-use trgs_train::run::{LOG_FILE, RunConfig, RunEvent, TrainingRun};
+use trgs_train::run::{LOG_FILE, ResumeOverrides, RunConfig, RunEvent, TrainingRun};
 
 fn logged_steps(log: &Path) -> Vec<u64> {
     std::fs::read_to_string(log)
@@ -71,7 +71,13 @@ fn a_stopped_run_resumes_through_the_library() {
     let logged = logged_steps(&out.join(LOG_FILE));
     assert_eq!(logged, (1..=40).collect::<Vec<u64>>(), "every step logged once");
 
-    let mut again = TrainingRun::resume(&out).expect("resume a finished run");
+    // The machine's GPU budget for the views may be set anew; nothing else changes.
+    let overrides = ResumeOverrides { target_memory: Some(3) };
+    let mut again = TrainingRun::resume_with_overrides(&out, &overrides, &|_, _| {})
+        .expect("resume a finished run");
+    assert_eq!(again.config().target_memory, Some(3));
+    assert_eq!(again.trainer().targets().budget(), 3 << 20);
+    assert_eq!(again.config(), &RunConfig { target_memory: Some(3), ..config.clone() });
     let mut trained = false;
     let summary =
         again.run_to_end(|e| trained |= matches!(e, RunEvent::Step(_))).expect("the results again");

@@ -6,7 +6,7 @@ use clap::{CommandFactory, FromArgMatches, Parser};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 use std::time::Duration;
-use trgs_train::run::{RunConfig, RunEvent, RunSummary, TrainingRun};
+use trgs_train::run::{ResumeOverrides, RunConfig, RunEvent, RunSummary, TrainingRun};
 use trgs_viewer::{LiveFeed, Snapshot, Source, ViewerOptions};
 
 /// The shortest time between two snapshots for the viewer (each is a readback of the scene).
@@ -24,7 +24,8 @@ const SNAPSHOT_INTERVAL: Duration = Duration::from_millis(500);
     after_help = "Continue an interrupted run: train --out DIR --resume"
 )]
 struct Cli {
-    /// Continue the run in --out from its checkpoint, with the settings it started with
+    /// Continue the run in --out from its checkpoint, with the settings it started with (only
+    /// --target-memory may be given anew: it depends on the machine, not the training)
     #[arg(long)]
     resume: bool,
     /// Show training live in the viewer window (also with --resume); closing the window lets
@@ -38,10 +39,11 @@ struct Cli {
 /// How the run starts.
 enum Start {
     New(RunConfig),
-    Resume(PathBuf),
+    Resume(PathBuf, ResumeOverrides),
 }
 
-/// The command line, refusing settings beside --resume (the run keeps its own).
+/// The command line, refusing settings beside --resume (the run keeps its own) other than the
+/// machine's (`ResumeOverrides`).
 fn parse() -> Result<(Start, bool)> {
     let command = Cli::command();
     let matches = command.clone().get_matches();
@@ -55,17 +57,19 @@ fn parse() -> Result<(Start, bool)> {
     }
     let given: Vec<String> = command
         .get_arguments()
-        .filter(|a| !matches!(a.get_id().as_str(), "out" | "resume" | "viewer"))
+        .filter(|a| !matches!(a.get_id().as_str(), "out" | "resume" | "viewer" | "target_memory"))
         .filter(|a| matches.value_source(a.get_id().as_str()) == Some(ValueSource::CommandLine))
         .filter_map(|a| a.get_long().map(|l| format!("--{l}")))
         .collect();
     if !given.is_empty() {
         bail!(
-            "--resume continues a run with the settings it started with; drop {}",
+            "--resume continues a run with the settings it started with (only --target-memory \
+             may be given anew); drop {}",
             given.join(" ")
         );
     }
-    Ok((Start::Resume(cli.config.out), cli.viewer))
+    let overrides = ResumeOverrides { target_memory: cli.config.target_memory };
+    Ok((Start::Resume(cli.config.out, overrides), cli.viewer))
 }
 
 fn main() -> Result<()> {
@@ -118,7 +122,9 @@ fn train(start: Start, feed: Option<&LiveFeed>) -> Result<()> {
     };
     let run = match start {
         Start::New(config) => TrainingRun::new_with_progress(config, &progress),
-        Start::Resume(out) => TrainingRun::resume_with_progress(&out, &progress),
+        Start::Resume(out, overrides) => {
+            TrainingRun::resume_with_overrides(&out, &overrides, &progress)
+        }
     };
     loading.finish_and_clear();
     let mut run = run?;

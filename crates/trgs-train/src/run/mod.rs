@@ -59,6 +59,15 @@ use trgs_core::rng::Rng;
 use trgs_core::scene::{Camera, ReflectionPlane};
 use trgs_render::GpuContext;
 
+/// What a resumed run may set anew: how the machine it now runs on holds the work, never what
+/// it trains (the run keeps every other setting it started with).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct ResumeOverrides {
+    /// `--target-memory` in MiB: the training views' GPU budget on this machine (a run stopped
+    /// by a lack of GPU memory resumes with a smaller one).
+    pub target_memory: Option<u64>,
+}
+
 /// What a run reports, in the order it happens.
 #[derive(Clone, Debug)]
 pub enum RunEvent {
@@ -152,21 +161,38 @@ impl TrainingRun {
     /// [`TrainingRun::resume`] with the photos' loading progress, as
     /// [`TrainingRun::new_with_progress`].
     pub fn resume_with_progress(out: &Path, loading: &LoadProgress) -> Result<Self> {
-        Self::resume_on(GpuContext::new()?, out, loading)
+        Self::resume_with_overrides(out, &ResumeOverrides::default(), loading)
+    }
+
+    /// [`TrainingRun::resume_with_progress`] with what the machine it resumes on sets anew.
+    pub fn resume_with_overrides(
+        out: &Path,
+        overrides: &ResumeOverrides,
+        loading: &LoadProgress,
+    ) -> Result<Self> {
+        Self::resume_on(GpuContext::new()?, out, overrides, loading)
     }
 
     /// [`TrainingRun::resume`] on `ctx`.
     pub fn resume_with_context(ctx: GpuContext, out: &Path) -> Result<Self> {
-        Self::resume_on(ctx, out, &|_, _| {})
+        Self::resume_on(ctx, out, &ResumeOverrides::default(), &|_, _| {})
     }
 
-    fn resume_on(ctx: GpuContext, out: &Path, loading: &LoadProgress) -> Result<Self> {
+    fn resume_on(
+        ctx: GpuContext,
+        out: &Path,
+        overrides: &ResumeOverrides,
+        loading: &LoadProgress,
+    ) -> Result<Self> {
         let path = out.join(CHECKPOINT_FILE);
         let ck = read_checkpoint(&path).with_context(|| {
             format!("--resume: no checkpoint to continue from in {}", out.display())
         })?;
         let mut state = RunState::of_checkpoint(&ck, &path)?;
         state.config.out = out.to_path_buf();
+        if let Some(mib) = overrides.target_memory {
+            state.config.target_memory = Some(mib);
+        }
         let note = if ck.step >= state.config.iterations {
             format!(
                 "{}: the run finished at step {}; writing its results again",
