@@ -17,7 +17,7 @@ pub struct ViewLists<'a> {
     pub ranges: &'a wgpu::Buffer,
 }
 
-impl ViewLists<'_> {
+impl<'a> ViewLists<'a> {
     /// A `_paged` adjoint that runs for the key values' second page alone binds this in place of
     /// the gradients' second page (a writable binding cannot repeat the first; never indexed).
     pub(crate) fn spare_grads_page(
@@ -28,6 +28,24 @@ impl ViewLists<'_> {
     ) -> Option<wgpu::Buffer> {
         (paged && !projected_grads.is_paged())
             .then(|| gpu::storage(s.ctx, "trgs.rasterize_bwd.spare_page", 16))
+    }
+
+    /// What a `_paged` adjoint binds after its own bindings: the second pages of the projected
+    /// records, of their gradients (`spare` where they have one page) and of the key values.
+    pub(crate) fn paged_tail<'b>(
+        &self,
+        projected_grads: &'b Paged,
+        spare: Option<&'b wgpu::Buffer>,
+    ) -> [wgpu::BindingResource<'b>; 3]
+    where
+        'a: 'b,
+    {
+        #[allow(clippy::expect_used)]
+        let grads_hi = projected_grads
+            .second_page()
+            .or(spare.map(wgpu::Buffer::as_entire_binding))
+            .expect("a spare page where the gradients have one (spare_grads_page)");
+        [self.projected.second_page_or_first(), grads_hi, self.values.second_page_or_first()]
     }
 }
 
@@ -65,11 +83,7 @@ pub fn record(
     ];
     let spare = lists.spare_grads_page(s, paged, projected_grads);
     if paged {
-        entries.push(lists.projected.second_page_or_first());
-        entries.extend(
-            projected_grads.second_page().or(spare.as_ref().map(|b| b.as_entire_binding())),
-        );
-        entries.push(lists.values.second_page_or_first());
+        entries.extend(lists.paged_tail(projected_grads, spare.as_ref()));
     }
     let bind = k.bind(s.ctx, &entries);
     rec.dispatch("rasterize_bwd", k, &bind, [grid.tiles_x, grid.tiles_y, 1]);

@@ -48,11 +48,7 @@ pub fn record(
     ];
     let spare = lists.spare_grads_page(s, paged, projected_grads);
     if paged {
-        entries.push(lists.projected.second_page_or_first());
-        entries.extend(
-            projected_grads.second_page().or(spare.as_ref().map(|b| b.as_entire_binding())),
-        );
-        entries.push(lists.values.second_page_or_first());
+        entries.extend(lists.paged_tail(projected_grads, spare.as_ref()));
     }
     let bind = k.bind(s.ctx, &entries);
     let groups = [footprint.x1 - footprint.x0, footprint.y1 - footprint.y0, 1];
