@@ -239,7 +239,7 @@ fn half_a_million_gaussians_render() {
 fn frames_over_the_binding_limit_are_refused_with_a_clear_error() {
     let ctx = GpuContext::new().unwrap_or_else(|e| panic!("{e}"));
     let limit = ctx.binding_limit();
-    let renderer = Renderer::new(&ctx);
+    let mut renderer = Renderer::new(&ctx);
     let s = random_scene(&SceneSpec { planes: 0, gaussians: 1, ..SceneSpec::default() });
     // An image whose per-pixel layers alone exceed one binding: refused before any kernel.
     let side = ((limit / 16) as f64).sqrt() as u32 + 1;
@@ -248,10 +248,13 @@ fn frames_over_the_binding_limit_are_refused_with_a_clear_error() {
     let scene = GpuScene::upload(&ctx, &s.gaussians.cast(), &[]).expect("valid");
     let err = renderer.render(&scene, &cam, &RenderOptions::default()).expect_err("too large");
     assert!(err.to_string().contains("image layers"), "{err}");
-    // A key list over the limit: Gaussians that each cover every tile of a 2048x2048 image.
+    // A key list over its two pages: Gaussians that each cover every tile of a 2048x2048
+    // image. The pages are set to eight Gaussians' keys each (at the binding limit it takes
+    // the same code path, with two thousand Gaussians and 67M keys counted first).
     let (w, h) = (2048u32, 2048u32);
     let tiles = u64::from(w / TILE_SIZE) * u64::from(h / TILE_SIZE);
-    let n = (limit / 4 / tiles + 1) as usize;
+    renderer.set_key_page_len(8 * tiles as u32);
+    let n = (2 * u64::from(renderer.key_page_len()) / tiles + 1) as usize;
     let mut g = Gaussians::<f32>::empty(0);
     for i in 0..n {
         let mean = [0.0, 0.0, 5.0 + 1e-4 * i as f32];
