@@ -70,6 +70,16 @@ fn a_stopped_run_resumes_through_the_library() {
     assert!(out.join("metrics.json").is_file() && out.join("model.ply").is_file());
     let logged = logged_steps(&out.join(LOG_FILE));
     assert_eq!(logged, (1..=40).collect::<Vec<u64>>(), "every step logged once");
+    // Every step line says what the step held: the frame's keys, GPU bytes and peak RAM.
+    let text = std::fs::read_to_string(out.join(LOG_FILE)).expect("the log");
+    for line in text.lines() {
+        let v: serde_json::Value = serde_json::from_str(line).expect("a JSON line");
+        if v.get("eval").is_none() {
+            for field in ["keys", "gpu_bytes", "peak_ram_bytes"] {
+                assert!(v[field].as_u64().is_some_and(|n| n > 0), "{field} in {line}");
+            }
+        }
+    }
 
     // The machine's GPU budget for the views may be set anew; nothing else changes.
     let overrides = ResumeOverrides { target_memory: Some(3) };

@@ -53,7 +53,7 @@ impl RunLog {
             .collect();
         let gpu: Vec<_> = stats.gpu_stages.iter().map(|(k, v)| serde_json::json!([k, v])).collect();
         let line = serde_json::json!({"step": step, "view": view,
-            "loss": stats.loss, "psnr": stats.psnr, "gaussians": gaussians,
+            "loss": stats.loss, "psnr": stats.psnr, "gaussians": gaussians, "keys": stats.keys,
             "seconds": seconds, "ms": phases, "gpu_ms": gpu, "perturbed": stats.perturbed,
             "gpu_bytes": memory.gpu.total(), "peak_ram_bytes": memory.peak_ram_bytes});
         self.line(&line)

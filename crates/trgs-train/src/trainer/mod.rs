@@ -33,6 +33,9 @@ pub struct StepStats {
     pub ssim: f64,
     /// PSNR of the rendered training view.
     pub psnr: f64,
+    /// Tile keys of the step's frame, every view's together ([`trgs_render::Frame::key_count`]):
+    /// what the sort orders and the rasterize passes walk, paged past one binding.
+    pub keys: u64,
     /// Where the step's wall-clock time went.
     pub times: StepTimes,
     /// With [`Trainer::profile`]: GPU milliseconds of every render and backward stage, from

@@ -53,6 +53,7 @@ impl Trainer {
         let scene = self.gaussians.scene();
         self.renderer.render_into(scene, &view.camera, &options, &mut self.frame)?;
         times.render = clock.lap(&self.ctx)?;
+        let keys = self.frame.key_count();
         let target = self
             .targets
             .get(ctx, view)
@@ -144,6 +145,7 @@ impl Trainer {
             l1: loss.l1,
             ssim: loss.ssim,
             psnr: psnr_of(loss.mse),
+            keys,
             times,
             gpu_stages,
             densified,
