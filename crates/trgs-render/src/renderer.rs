@@ -114,6 +114,11 @@ fn check_binding(
     Ok(())
 }
 
+/// Keys (4 bytes each) that one storage binding of `ctx` holds: a page of the key list.
+fn keys_in_one_binding(ctx: &GpuContext) -> u32 {
+    u32::try_from(ctx.binding_limit() / 4).unwrap_or(u32::MAX)
+}
+
 /// Renders [`GpuScene`]s on one device. Compiles its pipelines once.
 #[derive(Debug)]
 pub struct Renderer {
@@ -132,11 +137,10 @@ struct ViewSpec {
 
 impl Renderer {
     pub fn new(ctx: &GpuContext) -> Self {
-        let key_page_len = u32::try_from(ctx.binding_limit() / 4).unwrap_or(u32::MAX);
         Self {
             ctx: ctx.clone(),
             kernels: crate::kernels::RENDER_KERNELS.compile(ctx),
-            key_page_len,
+            key_page_len: keys_in_one_binding(ctx),
         }
     }
 
@@ -149,8 +153,7 @@ impl Renderer {
 
     /// Pages the key list every `keys` keys (at most one binding's worth).
     pub fn set_key_page_len(&mut self, keys: u32) {
-        let most = u32::try_from(self.ctx.binding_limit() / 4).unwrap_or(u32::MAX);
-        self.key_page_len = keys.clamp(1, most);
+        self.key_page_len = keys.clamp(1, keys_in_one_binding(&self.ctx));
     }
 
     pub fn context(&self) -> &GpuContext {
@@ -344,13 +347,13 @@ impl Renderer {
         let all_keys: u64 = view_keys.iter().sum();
         // Checked before the u32 scan's total is trusted: a frame of 2^32 keys or more is over
         // two bindings of any adapter's, and its total would have wrapped.
-        let most_keys = u64::from(MAX_PAGES) * u64::from(self.key_page_len);
-        if all_keys > most_keys.min(u64::from(u32::MAX)) {
+        let most_keys = (u64::from(MAX_PAGES) * u64::from(self.key_page_len)).min(u32::MAX.into());
+        if all_keys > most_keys {
             return Err(RenderError::FrameTooLarge {
                 name: camera.name.clone(),
                 what: "tile keys (all views together, in two bindings)",
                 bytes: all_keys * 4,
-                limit: most_keys.min(u64::from(u32::MAX)) * 4,
+                limit: most_keys * 4,
             });
         }
         debug_assert_eq!(all_keys, u64::from(total), "the views' key totals add up to the scan's");

@@ -1,10 +1,13 @@
-//! The folder a run trains on: the user's, or the built-in synthetic scene written into the run
-//! folder once.
+//! The folder a run trains on (the user's, or the built-in synthetic scene written into the run
+//! folder once) and its loading, checked against the device first.
 use super::config::RunConfig;
+use crate::data::{self, LoadProgress, TrainingData};
 use anyhow::{Context, Result, bail};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
 use trgs_core::io::write_atomic;
 use trgs_core::synthetic::write_generated;
+use trgs_render::GpuContext;
 
 /// The file that a complete demo dataset ends with: it names the built-in scene the folder holds
 /// (its `--demo-scene` value, then the other flags that shape it: `RunConfig::demo_flags`). It
@@ -53,4 +56,70 @@ pub fn dataset_dir(config: &RunConfig) -> Result<(PathBuf, Option<String>)> {
         dir.display()
     );
     Ok((dir, Some(note)))
+}
+
+/// Every view's training size against the device's limits and the training views' GPU memory
+/// budget, before the photos load: a view too large is refused now, naming it, rather than at
+/// its first step.
+fn check_view_sizes(
+    ctx: &GpuContext,
+    folder: &trgs_core::io::SceneFolder,
+    config: &RunConfig,
+) -> Result<()> {
+    let budget = crate::targets::budget_bytes(ctx, config.target_memory);
+    for v in &folder.views {
+        let (w, h) = data::target_size(v.camera.width(), v.camera.height(), config.resolution())?;
+        let at = || format!("view {} ({})", v.camera.name, v.image_path.display());
+        crate::losses::check_frame_size(ctx, w, h).with_context(at)?;
+        let bytes = crate::targets::bytes_of_target(w, h, v.mask_path.is_some());
+        crate::targets::check_budget(budget, &v.camera.name, bytes).with_context(at)?;
+    }
+    Ok(())
+}
+
+/// The dataset of `config` at its training resolution, with lines saying what it holds.
+pub(super) fn load_data(
+    ctx: &GpuContext,
+    config: &RunConfig,
+    data_dir: &Path,
+    note: &mut impl FnMut(String),
+    loading: &LoadProgress,
+) -> Result<TrainingData> {
+    let folder = trgs_core::io::SceneFolder::open(data_dir)
+        .with_context(|| format!("opening the scene folder {}", data_dir.display()))?;
+    check_view_sizes(ctx, &folder, config)?;
+    let started = Instant::now();
+    let mut data = TrainingData::load_with_progress(&folder, config.resolution(), loading)?;
+    let seconds = started.elapsed().as_secs_f64();
+    if config.no_planes {
+        data.materials.clear();
+    }
+    let (w, h) = data.size();
+    note(format!(
+        "dataset {}: {} training and {} test views at {w}x{h}, {} sparse points, extent {:.2} \
+         (loaded in {seconds:.1} s)",
+        data_dir.display(),
+        data.train.len(),
+        data.test.len(),
+        data.points.len(),
+        data.extent
+    ));
+    for line in &data.notes {
+        note(line.clone());
+    }
+    if config.no_planes {
+        note("--no-planes: training plain 3DGS".into());
+    } else if data.materials.is_empty() {
+        note("no glass masks: no reflection planes, training plain 3DGS".into());
+    } else {
+        note(format!(
+            "glass masks with labels {:?}: planes are initialised after stage 1",
+            data.materials
+        ));
+    }
+    let ablations = config.ablations.names();
+    if !ablations.is_empty() {
+        note(format!("ablations: {}", ablations.join(", ")));
+    }
+    Ok(data)
 }

@@ -43,7 +43,7 @@ pub use state::RunState;
 pub use crate::data::LoadProgress;
 
 use crate::checkpoint::{CHECKPOINT_FILE, Checkpoint, read_checkpoint, write_checkpoint};
-use crate::data::{self, TrainingData};
+use crate::data::TrainingData;
 use crate::eval::{Evaluation, evaluate};
 use crate::init::{SeedPoint, gaussians_from_points, random_points};
 use crate::plane_init::{PlaneInitSettings, initialise_planes};
@@ -221,7 +221,7 @@ impl TrainingRun {
         let mut note = |line: String| events.push(RunEvent::Note(line));
         let (data_dir, written) = dataset::dataset_dir(&config)?;
         written.into_iter().for_each(&mut note);
-        let data = load_data(&ctx, &config, &data_dir, &mut note, loading)?;
+        let data = dataset::load_data(&ctx, &config, &data_dir, &mut note, loading)?;
         let out = config.out.clone();
         std::fs::create_dir_all(&out)
             .with_context(|| format!("creating the output folder {}", out.display()))?;
@@ -568,70 +568,4 @@ impl TrainingRun {
 
 fn view_names(data: &TrainingData) -> Vec<String> {
     data.train.iter().map(|v| v.camera.name.clone()).collect()
-}
-
-/// The dataset of `config` at its training resolution, with lines saying what it holds.
-/// Every view's training size against the device's limits and the training views' GPU memory
-/// budget, before the photos load: a view too large is refused now, naming it, rather than at
-/// its first step.
-fn check_view_sizes(
-    ctx: &GpuContext,
-    folder: &trgs_core::io::SceneFolder,
-    config: &RunConfig,
-) -> Result<()> {
-    let budget = crate::targets::budget_bytes(ctx, config.target_memory);
-    for v in &folder.views {
-        let (w, h) = data::target_size(v.camera.width(), v.camera.height(), config.resolution())?;
-        let at = || format!("view {} ({})", v.camera.name, v.image_path.display());
-        crate::losses::check_frame_size(ctx, w, h).with_context(at)?;
-        let bytes = crate::targets::bytes_of_target(w, h, v.mask_path.is_some());
-        crate::targets::check_budget(budget, &v.camera.name, bytes).with_context(at)?;
-    }
-    Ok(())
-}
-
-fn load_data(
-    ctx: &GpuContext,
-    config: &RunConfig,
-    data_dir: &Path,
-    note: &mut impl FnMut(String),
-    loading: &LoadProgress,
-) -> Result<TrainingData> {
-    let folder = trgs_core::io::SceneFolder::open(data_dir)
-        .with_context(|| format!("opening the scene folder {}", data_dir.display()))?;
-    check_view_sizes(ctx, &folder, config)?;
-    let started = Instant::now();
-    let mut data = TrainingData::load_with_progress(&folder, config.resolution(), loading)?;
-    let seconds = started.elapsed().as_secs_f64();
-    if config.no_planes {
-        data.materials.clear();
-    }
-    let (w, h) = data.size();
-    note(format!(
-        "dataset {}: {} training and {} test views at {w}x{h}, {} sparse points, extent {:.2} \
-         (loaded in {seconds:.1} s)",
-        data_dir.display(),
-        data.train.len(),
-        data.test.len(),
-        data.points.len(),
-        data.extent
-    ));
-    for line in &data.notes {
-        note(line.clone());
-    }
-    if config.no_planes {
-        note("--no-planes: training plain 3DGS".into());
-    } else if data.materials.is_empty() {
-        note("no glass masks: no reflection planes, training plain 3DGS".into());
-    } else {
-        note(format!(
-            "glass masks with labels {:?}: planes are initialised after stage 1",
-            data.materials
-        ));
-    }
-    let ablations = config.ablations.names();
-    if !ablations.is_empty() {
-        note(format!("ablations: {}", ablations.join(", ")));
-    }
-    Ok(data)
 }
