@@ -3,7 +3,9 @@
 // `tile_base`, row by row within its limit), with the Gaussian's index as the value. One thread
 // per entry of the depth order, over every view at once, writing from the entry's offset (the
 // exclusive scan of the counts in that order): the list comes out front to back, so `sort`
-// orders it by tile alone and every tile's list stays front to back.
+// orders it by tile alone and every tile's list stays front to back. A key list sized from
+// earlier frames holds `params.capacity` pairs: the keys past it are dropped, and the frame
+// reports that it outgrew the list (`Frame::settle_keys`).
 #include "shared/common.wgsl"
 
 @group(0) @binding(0) var<storage, read> params: EmitParams;
@@ -13,12 +15,19 @@
 @group(0) @binding(4) var<storage, read> views: array<ViewTiles>;
 @group(0) @binding(5) var<storage, read_write> keys: array<u32>;
 @group(0) @binding(6) var<storage, read_write> values: array<u32>;
+// The scan's total of every view's keys, and where the keys the list holds are counted:
+// min(total, params.capacity), the count `sort` and `tile_ranges` then cover.
+@group(0) @binding(7) var<storage, read> total: array<u32>;
+@group(0) @binding(8) var<storage, read_write> kept: array<u32>;
 #ifdef PAGED
 // The pairs from index params.page on (a key list of two pages, toolkit::paged).
-@group(0) @binding(7) var<storage, read_write> keys_hi: array<u32>;
-@group(0) @binding(8) var<storage, read_write> values_hi: array<u32>;
+@group(0) @binding(9) var<storage, read_write> keys_hi: array<u32>;
+@group(0) @binding(10) var<storage, read_write> values_hi: array<u32>;
 
 fn write_pair(i: u32, key: u32, value: u32) {
+    if i >= params.capacity {
+        return;
+    }
     if i < params.page {
         keys[i] = key;
         values[i] = value;
@@ -29,14 +38,26 @@ fn write_pair(i: u32, key: u32, value: u32) {
 }
 #else
 fn write_pair(i: u32, key: u32, value: u32) {
+    if i >= params.capacity {
+        return;
+    }
     keys[i] = key;
     values[i] = value;
 }
 #endif
 
 @compute @workgroup_size(256)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let k = linear_index(gid, nwg, 256u);
+fn main(
+    @builtin(local_invocation_id) lid: vec3<u32>,
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+) {
+    // With the entries counted on the GPU the dispatch covers their capacity, the entries in its
+    // first blocks: `params.spread` deals those out evenly.
+    let k = spread_block(wid, nwg, params.spread) * 256u + lid.x;
+    if k == 0u {
+        kept[0] = min(total[0], params.capacity);
+    }
     if k >= params.entries {
         return;
     }

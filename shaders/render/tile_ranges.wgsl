@@ -12,8 +12,14 @@
 #endif
 
 @compute @workgroup_size(256)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let slot = linear_index(gid, nwg, 256u);
+fn main(
+    @builtin(local_invocation_id) lid: vec3<u32>,
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+) {
+    // A count known on the GPU only fills the first blocks of the capacity dispatched:
+    // `params.spread` deals them out evenly.
+    let slot = spread_block(wid, nwg, params.spread) * 256u + lid.x;
     let n = params.count;
     if slot >= n {
         return;

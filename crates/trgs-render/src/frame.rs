@@ -10,7 +10,9 @@ use trgs_core::reference::{TileGrid, TileRect};
 use trgs_core::scene::ViewTransform;
 
 mod intermediates;
+pub(crate) mod key_totals;
 pub use intermediates::{DepthOrderIntermediates, ViewIntermediates};
+pub use key_totals::{KeySizing, KeyTotals};
 
 /// The geometry stages of one view (the real camera is view 0, then one per mirrored pass).
 #[derive(Debug)]
@@ -99,6 +101,12 @@ pub struct Frame {
     has_pass: Vec<bool>,
     stage_times: Option<Vec<(&'static str, f64)>>,
     kernel_times: Option<Vec<KernelTime>>,
+    /// The last render's key totals, once known ([`Frame::settle_keys`]).
+    key_totals: Option<KeyTotals>,
+    /// Their readback, when the render did not wait for it.
+    pending_keys: Option<key_totals::PendingTotals>,
+    /// The most keys any render into this frame had (sizes lists from earlier frames).
+    largest_keys: u64,
 }
 
 /// A layer of a frame.
@@ -201,6 +209,8 @@ impl Frame {
         self.binning = None;
         self.stage_times = None;
         self.kernel_times = None;
+        self.key_totals = None;
+        self.pending_keys = None;
         // Until this render finishes the frame holds no image: a render that fails part way
         // leaves it "not rendered" (empty reads, BackwardError::NotRendered), never the previous
         // frame's buffers read with this frame's size.
@@ -309,7 +319,8 @@ impl Frame {
         self.kernel_times.as_deref()
     }
 
-    /// Total keys sorted over all views.
+    /// Total keys sorted over all views (of a list sized from earlier frames: once settled,
+    /// [`Frame::settle_keys`]).
     pub fn key_count(&self) -> u64 {
         self.views.iter().map(|v| u64::from(v.num_keys)).sum()
     }

@@ -87,10 +87,12 @@ impl ErrorScopes {
                 first.get_or_insert(GpuError::from_wgpu(self.what, &e));
             }
         }
-        match (first, self.ctx.lost()) {
-            (None, _) => Ok(()),
-            (Some(_), Some(reason)) => Err(lost(self.what, reason)),
-            (Some(e), None) => Err(e),
+        let Some(first) = first else {
+            return Ok(());
+        };
+        match loss_after_poll(&self.ctx) {
+            Some(reason) => Err(lost(self.what, reason)),
+            None => Err(first),
         }
     }
 
@@ -123,6 +125,22 @@ impl Drop for ErrorScopes {
 /// The loss of the device while doing `what`.
 pub(crate) fn lost(what: &str, detail: String) -> GpuError {
     GpuError::Lost { what: what.to_string(), detail }
+}
+
+/// Why the device was lost, if it was: the loss is learnt in a poll of the device, and an
+/// operation that did not wait for the GPU has not polled since, so it polls first (without
+/// waiting; a poll that panics on the lost device counts as one).
+fn loss_after_poll(ctx: &GpuContext) -> Option<String> {
+    if let Some(reason) = ctx.lost() {
+        return Some(reason);
+    }
+    let polled = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        ctx.device.poll(wgpu::PollType::Poll)
+    }));
+    match polled {
+        Ok(_) => ctx.lost(),
+        Err(_) => Some(ctx.lost().unwrap_or_else(|| "wgpu stopped while polling".to_string())),
+    }
 }
 
 /// Run `f` inside [`ErrorScopes`] named `what`.

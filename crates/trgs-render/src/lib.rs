@@ -64,7 +64,7 @@ pub use device::{
     TileLayout, device_descriptor, pick_adapter,
 };
 pub use display::{DisplayError, DisplayTarget, layer_mapping};
-pub use frame::{Frame, FrameImages, Layer, PlaneImages};
+pub use frame::{Frame, FrameImages, KeySizing, KeyTotals, Layer, PlaneImages};
 pub use gpu_error::GpuError;
 pub use layer_grads::{LayerGrads, LayerGradsError};
 pub use renderer::{RenderError, RenderOptions, Renderer};

@@ -1,7 +1,8 @@
 //! The forward renderer: the stages of the data flow (docs/ARCHITECTURE.md) for one camera, into
 //! a [`Frame`].
 use crate::GpuContext;
-use crate::frame::{Binning, Frame, ViewBuffers};
+use crate::frame::key_totals;
+use crate::frame::{Binning, Frame, KeySizing, KeyTotals, ViewBuffers};
 use crate::gpu::{self, GpuError, Recorder};
 use crate::kernels::Kernels;
 use crate::layer_grads::LayerGrads;
@@ -46,6 +47,9 @@ pub struct RenderOptions {
     /// Parts of the reflection model (Schlick, the intensity map A) switched off for ablations;
     /// the backward of the frame follows the same model.
     pub reflection: ReflectionModel,
+    /// How the frame's key list is sized: exactly, waiting for the binning's totals halfway
+    /// through the render, or from earlier frames without waiting ([`KeySizing`]).
+    pub key_sizing: KeySizing,
 }
 
 impl Default for RenderOptions {
@@ -59,6 +63,7 @@ impl Default for RenderOptions {
             sh_degree: None,
             capture_intermediates: false,
             reflection: ReflectionModel::default(),
+            key_sizing: KeySizing::Exact,
         }
     }
 }
@@ -244,7 +249,17 @@ impl Renderer {
                 });
             }
         }
+        // The previous render's totals, if still on their way, size this one's key list.
+        frame.settle_keys(ctx)?;
         frame.reset(grid, planes.len(), scene.len(), options);
+        // Over two bindings, or a u32 total that would have wrapped.
+        let most_keys = (u64::from(MAX_PAGES) * u64::from(self.key_page_len)).min(u32::MAX.into());
+        let estimate = match options.key_sizing {
+            KeySizing::FromEarlierFrames if !options.capture_intermediates => {
+                frame.key_capacity(most_keys)
+            }
+            _ => None,
+        };
         // Entry indices (view x Gaussian) are u32 (the key totals carry, see tile_counts).
         let capacity = specs.len() as u64 * u64::from(scene.len());
         if capacity > u64::from(u32::MAX) {
@@ -321,8 +336,7 @@ impl Renderer {
             &offsets,
             in_order,
         );
-        // [entries, (low word, carries) of each view's key total, key total]
-        let words = 2 * specs.len() + 2;
+        let words = key_totals::words(specs.len());
         let totals_staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("trgs.prefix_sum.totals"),
             size: 4 * words as u64,
@@ -333,53 +347,69 @@ impl Renderer {
         rec.encoder.copy_buffer_to_buffer(&order.entries, 0, &totals_staging, 0, 4);
         rec.encoder.copy_buffer_to_buffer(&entries.key_totals, 0, &totals_staging, 4, views_bytes);
         rec.encoder.copy_buffer_to_buffer(&total, 0, &totals_staging, 4 + views_bytes, 4);
-        rec.submit_and_wait(ctx)?;
-        let totals: Vec<u32> = gpu::map_and_read(ctx, &totals_staging, 4 * words)?;
-        let (num_entries, total) = (totals[0], totals[words - 1]);
-        let view_keys: Vec<u64> = totals[1..words - 1]
-            .chunks_exact(2)
-            .map(|w| u64::from(w[0]) | u64::from(w[1]) << 32)
-            .collect();
+        // The key list: sized exactly from the totals read back now, or from earlier frames with
+        // the counts left on the GPU (emit_keys drops what the list cannot hold).
+        let (capacity, exact) = match estimate {
+            Some(capacity) => (capacity, None),
+            None => {
+                rec.submit_and_wait(ctx)?;
+                let words: Vec<u32> = gpu::map_and_read(ctx, &totals_staging, 4 * words)?;
+                let totals = key_totals::Totals::decode(&words);
+                let all_keys = totals.keys();
+                debug_assert!(
+                    all_keys > most_keys || all_keys == u64::from(words[words.len() - 1]),
+                    "the views' key totals add up to the scan's"
+                );
+                // Checked before the u32 scan's total is trusted: a frame of 2^32 keys or more
+                // is over two bindings of any adapter's, and its total would have wrapped.
+                if all_keys > most_keys {
+                    return Err(RenderError::FrameTooLarge {
+                        name: camera.name.clone(),
+                        what: "tile keys (all views together, in two bindings)",
+                        bytes: all_keys * 4,
+                        limit: most_keys * 4,
+                    });
+                }
+                key_totals::assign(&mut views, &totals.view_keys);
+                // Below 2^32: checked above against a binding limit of at most 4 GiB.
+                (all_keys as u32, Some(totals))
+            }
+        };
 
         // Phase 2: every view's keys into one list (a view's tiles numbered after the previous
         // view's: the camera's whole grid, then each footprint), one sort by tile, one pass of
         // tile ranges; both rasterize passes; compose.
-        let all_keys: u64 = view_keys.iter().sum();
-        // Checked before the u32 scan's total is trusted: a frame of 2^32 keys or more is over
-        // two bindings of any adapter's, and its total would have wrapped.
-        let most_keys = (u64::from(MAX_PAGES) * u64::from(self.key_page_len)).min(u32::MAX.into());
-        if all_keys > most_keys {
-            return Err(RenderError::FrameTooLarge {
-                name: camera.name.clone(),
-                what: "tile keys (all views together, in two bindings)",
-                bytes: all_keys * 4,
-                limit: most_keys * 4,
-            });
-        }
-        debug_assert_eq!(all_keys, u64::from(total), "the views' key totals add up to the scan's");
-        let (mut key_base, mut tile_base) = (0u32, 0u32);
+        let mut tile_base = 0u32;
         let mut tables = Vec::with_capacity(views.len());
-        for (v, &keys) in views.iter_mut().zip(&view_keys) {
-            // Below 2^32 together: checked above against a binding limit of at most 4 GiB.
-            let keys = keys as u32;
-            (v.key_base, v.tile_base, v.num_keys) = (key_base, tile_base, keys);
+        for v in &mut views {
+            v.tile_base = tile_base;
             tables.push(ViewTiles {
                 tile_base,
                 x0: v.limit.x0,
                 y0: v.limit.y0,
                 row: v.limit.x1 - v.limit.x0,
             });
-            key_base += keys;
             tile_base += v.limit.count();
         }
         let tiles = tile_base;
-        let keys = KeyList::from_pool(ctx, pool, "trgs.emit_keys", total, self.key_page_len);
-        let emit =
-            EmitParams { entries: num_entries, gaussians: scene.len(), ..Default::default() };
+        let keys = KeyList::from_pool(ctx, pool, "trgs.emit_keys", capacity, self.key_page_len);
+        let kept = pool.get(ctx, "trgs.emit_keys.kept", 4);
+        let (in_order, held) = match &exact {
+            Some(t) => (ItemCount::Known(t.entries), ItemCount::Known(capacity)),
+            None => (
+                ItemCount::OnGpu { counter: &order.entries, capacity: entries.capacity },
+                ItemCount::OnGpu { counter: &kept, capacity },
+            ),
+        };
+        let emit = EmitParams { gaussians: scene.len(), ..Default::default() };
         let o = &order.list.values;
-        emit_keys::record(s, &mut rec, &emit, o, &entries, &offsets, &tables, &keys);
+        let counts = emit_keys::KeyCounts { total: &total, kept: &kept };
+        let offs = &offsets;
+        emit_keys::record(
+            s, &mut rec, &emit, in_order, capacity, o, &entries, offs, &tables, &keys, &counts,
+        );
         let captured_keys = options.capture_intermediates.then(|| {
-            let copy = KeyList::from_pool(ctx, pool, "trgs.capture", total, self.key_page_len);
+            let copy = KeyList::from_pool(ctx, pool, "trgs.capture", capacity, self.key_page_len);
             for (from, to) in [(&keys.keys, &copy.keys), (&keys.values, &copy.values)] {
                 for (src, dst) in from.pages().iter().zip(to.pages()) {
                     rec.encoder.copy_buffer_to_buffer(src, 0, dst, 0, src.size().min(dst.size()));
@@ -388,18 +418,10 @@ impl Renderer {
             copy
         });
         let tile_digits: Vec<_> = sort::digits(sort::bits_below(tiles)).collect();
-        let sorted = sort::record(
-            s,
-            &mut rec,
-            "sort",
-            pool,
-            "trgs.sort",
-            &keys,
-            ItemCount::Known(total),
-            &tile_digits,
-        );
+        let sorted =
+            sort::record(s, &mut rec, "sort", pool, "trgs.sort", &keys, held, &tile_digits);
         let ranges = pool.get(ctx, "trgs.tile_ranges.ranges", u64::from(tiles) * 8);
-        tile_ranges::record(s, &mut rec, &sorted.keys, total, &ranges);
+        tile_ranges::record(s, &mut rec, &sorted.keys, held, &ranges);
         for v in &mut views {
             v.keys = Some(sorted.clone());
             v.ranges = Some(ranges.clone());
@@ -407,8 +429,9 @@ impl Renderer {
         let binning = Binning {
             order: order.list,
             offsets,
-            entries: num_entries,
-            total,
+            // A list sized from earlier frames learns these when its totals arrive.
+            entries: exact.as_ref().map_or(0, |t| t.entries),
+            total: if exact.is_some() { capacity } else { 0 },
             emitted: captured_keys,
         };
         let layers = frame.layers(ctx, pixels);
@@ -488,8 +511,23 @@ impl Renderer {
                 },
             );
         }
-        rec.submit_and_wait(ctx)?;
+        if exact.is_some() {
+            rec.submit_and_wait(ctx)?;
+        } else {
+            rec.submit(ctx)?;
+        }
         frame.finish(views, binning, has_pass, Some(rays), &rec);
+        match exact {
+            Some(_) => {
+                let keys = u64::from(capacity);
+                frame.record_key_totals(KeyTotals { keys, capacity: keys });
+            }
+            None => frame.expect_key_totals(key_totals::PendingTotals::start(
+                totals_staging,
+                words,
+                u64::from(capacity),
+            )),
+        }
         Ok(())
     }
 

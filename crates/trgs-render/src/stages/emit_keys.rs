@@ -1,32 +1,51 @@
 //! Stage `emit_keys` (shaders/emit_keys.wgsl; twin `trgs_core::reference::emit_keys`): every
 //! view's keys at once, entry by entry of the depth order.
-use super::Stage;
 use super::sort::KeyList;
 use super::tile_counts::DepthEntries;
+use super::{ItemCount, Stage};
 use crate::gpu::{self, Recorder, grid_1d};
 use crate::layout::{EmitParams, ViewTiles};
 use crate::toolkit::paged::Paged;
 
-/// Write the keys (tile indices) and values (Gaussian indices) of the first `params.entries`
-/// entries of `order` into `keys`; `offsets` is the scan of their tile counts, `views` numbers
-/// each view's tiles in the shared list. `order` is one page; `keys` may have two.
+/// Where the keys go besides the list: the scan's `total` of every view's keys, and `kept`, into
+/// whose first word emit_keys writes min(total, the list's capacity), the count the sort and
+/// tile_ranges cover when it is known on the GPU only.
+pub struct KeyCounts<'a> {
+    pub total: &'a wgpu::Buffer,
+    pub kept: &'a wgpu::Buffer,
+}
+
+/// Write the keys (tile indices) and values (Gaussian indices) of the `entries` first entries
+/// of `order` into `keys`, at most `capacity` pairs; `offsets` is the scan of their tile counts,
+/// `views` numbers each view's tiles in the shared list. `order` is one page; `keys` may have
+/// two. `params` gives the scene's Gaussians; the rest of it is filled in here.
 #[allow(clippy::too_many_arguments)]
 pub fn record(
     s: Stage<'_>,
     rec: &mut Recorder,
     params: &EmitParams,
+    entries_count: ItemCount<'_>,
+    capacity: u32,
     order: &Paged,
     entries: &DepthEntries,
     offsets: &wgpu::Buffer,
     views: &[ViewTiles],
     keys: &KeyList,
+    counts: &KeyCounts<'_>,
 ) {
-    if params.entries == 0 {
-        return;
-    }
+    // Always dispatched, if only to write `kept`.
+    let groups = grid_1d(entries_count.capacity().div_ceil(256).max(1));
     let k = if keys.is_paged() { &s.kernels.emit_keys_paged } else { &s.kernels.emit_keys };
-    let params = EmitParams { page: keys.first_page_len(), ..*params };
+    let params = EmitParams {
+        entries: entries_count.capacity(),
+        page: keys.first_page_len(),
+        spread: entries_count.spread(groups),
+        capacity,
+        ..*params
+    };
     let block = gpu::params(s.ctx, "trgs.emit_keys.params", &params);
+    // EmitParams::entries is the block's first word.
+    entries_count.write_into(rec, &block);
     let table = gpu::storage_init(s.ctx, "trgs.emit_keys.views", views);
     let mut bindings = vec![
         block.as_entire_binding(),
@@ -36,9 +55,11 @@ pub fn record(
         table.as_entire_binding(),
         keys.keys.first_page(),
         keys.values.first_page(),
+        counts.total.as_entire_binding(),
+        counts.kept.as_entire_binding(),
     ];
     bindings.extend(keys.keys.second_page());
     bindings.extend(keys.values.second_page());
     let bind = k.bind(s.ctx, &bindings);
-    rec.dispatch("emit_keys", k, &bind, grid_1d(params.entries.div_ceil(256)));
+    rec.dispatch("emit_keys", k, &bind, groups);
 }

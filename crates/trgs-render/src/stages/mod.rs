@@ -58,7 +58,7 @@ impl ItemCount<'_> {
     }
 
     /// Copies a GPU count into the first word of `params` (where every parameter block that
-    /// takes one holds its count: checked below for the two that do).
+    /// takes one holds its count: checked below for those that do).
     pub fn write_into(&self, rec: &mut crate::gpu::Recorder, params: &wgpu::Buffer) {
         if let ItemCount::OnGpu { counter, .. } = *self {
             rec.encoder.copy_buffer_to_buffer(counter, 0, params, 0, 4);
@@ -69,3 +69,4 @@ impl ItemCount<'_> {
 // `ItemCount::write_into` writes a parameter block's first word.
 const _: () = assert!(std::mem::offset_of!(crate::layout::ScanParams, count) == 0);
 const _: () = assert!(std::mem::offset_of!(crate::layout::SortParams, count) == 0);
+const _: () = assert!(std::mem::offset_of!(crate::layout::EmitParams, entries) == 0);

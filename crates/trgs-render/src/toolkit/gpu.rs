@@ -334,6 +334,16 @@ impl Recorder {
     /// Submit the recorded work and wait for it; with profiling, add this submission's stage
     /// times. Leaves a fresh encoder for what follows.
     pub fn submit_and_wait(&mut self, ctx: &GpuContext) -> Result<(), GpuError> {
+        self.submit_then(ctx, true)
+    }
+
+    /// Submit the recorded work without waiting for it, unless profiling (whose stage times
+    /// are read back). Leaves a fresh encoder for what follows.
+    pub fn submit(&mut self, ctx: &GpuContext) -> Result<(), GpuError> {
+        self.submit_then(ctx, false)
+    }
+
+    fn submit_then(&mut self, ctx: &GpuContext, wait: bool) -> Result<(), GpuError> {
         let staging = self.profiler.as_ref().and_then(|p| p.record_resolve(ctx, &mut self.encoder));
         let encoder = std::mem::replace(
             &mut self.encoder,
@@ -344,7 +354,7 @@ impl Recorder {
         ctx.queue.submit([encoder.finish()]);
         if let (Some(p), Some(staging)) = (&mut self.profiler, staging) {
             p.add_resolved(ctx, &staging)?;
-        } else {
+        } else if wait {
             wait_for_gpu(ctx, "a recorded batch of passes")?;
         }
         Ok(())

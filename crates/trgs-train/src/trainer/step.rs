@@ -9,7 +9,7 @@ use anyhow::{Context, Result};
 use trgs_core::reference::RegulariserWeights;
 use trgs_core::scene::Attribute;
 use trgs_render::toolkit::gpu::Recorder;
-use trgs_render::{BackwardOptions, LayerGrads};
+use trgs_render::{BackwardOptions, KeySizing, LayerGrads};
 
 impl Trainer {
     /// One optimisation step on `view`.
@@ -51,47 +51,59 @@ impl Trainer {
         let mut times = StepTimes::default();
         let mut clock = PhaseClock::start();
         let scene = self.gaussians.scene();
-        self.renderer.render_into(scene, &view.camera, &options, &mut self.frame)?;
-        times.render = clock.lap(&self.ctx)?;
-        let keys = self.frame.key_count();
-        let target = self
-            .targets
-            .get(ctx, view)
-            .with_context(|| format!("uploading view {}", view.camera.name))?;
-        let shape = (self.frame.width(), self.frame.height(), self.frame.plane_slots());
-        if self.layer_grads.as_ref().is_none_or(|(s, _)| *s != shape) {
-            self.layer_grads = Some((shape, LayerGrads::zeros(ctx, &self.frame)?));
-        }
-        #[allow(clippy::expect_used)]
-        let layer_grads = &self.layer_grads.as_ref().expect("allocated above").1;
-        let s = &self.settings;
-        let loss_settings = LossSettings {
-            lambda_dssim: s.lambda_dssim,
-            regularisers: has_planes.then_some(RegulariserWeights {
-                depth: s.lambda_depth,
-                conflict: s.lambda_conflict,
-                mask: s.lambda_mask,
-            }),
+        // The key list is sized from earlier steps' frames, so the render does not wait for its
+        // binning; the totals arrive with the loss. A frame that outgrew the list dropped keys:
+        // it is rendered again, sized exactly, before anything learns from it.
+        options.key_sizing = KeySizing::FromEarlierFrames;
+        let (loss, loss_stages) = loop {
+            self.renderer.render_into(scene, &view.camera, &options, &mut self.frame)?;
+            times.render += clock.lap(&self.ctx)?;
+            let target = self
+                .targets
+                .get(ctx, view)
+                .with_context(|| format!("uploading view {}", view.camera.name))?;
+            let shape = (self.frame.width(), self.frame.height(), self.frame.plane_slots());
+            if self.layer_grads.as_ref().is_none_or(|(s, _)| *s != shape) {
+                self.layer_grads = Some((shape, LayerGrads::zeros(ctx, &self.frame)?));
+            }
+            #[allow(clippy::expect_used)]
+            let layer_grads = &self.layer_grads.as_ref().expect("allocated above").1;
+            let s = &self.settings;
+            let loss_settings = LossSettings {
+                lambda_dssim: s.lambda_dssim,
+                regularisers: has_planes.then_some(RegulariserWeights {
+                    depth: s.lambda_depth,
+                    conflict: s.lambda_conflict,
+                    mask: s.lambda_mask,
+                }),
+            };
+            let mut rec = Recorder::new(ctx, "trgs.train.loss", self.profile);
+            let pending = self
+                .losses
+                .record(
+                    ctx,
+                    &mut rec,
+                    &LossLayers::of_frame(&self.frame)?,
+                    target,
+                    layer_grads,
+                    &loss_settings,
+                )
+                .with_context(|| format!("loss of view {}", view.camera.name))?;
+            rec.submit_and_wait(ctx)?;
+            let loss = pending.read(ctx)?;
+            times.loss += clock.lap(&self.ctx)?;
+            let totals = self.frame.settle_keys(ctx)?;
+            if totals.is_none_or(|t| t.held()) {
+                break (loss, rec.stage_times().unwrap_or_default());
+            }
+            options.key_sizing = KeySizing::Exact;
         };
-        let mut rec = Recorder::new(ctx, "trgs.train.loss", self.profile);
-        let pending = self
-            .losses
-            .record(
-                ctx,
-                &mut rec,
-                &LossLayers::of_frame(&self.frame)?,
-                target,
-                layer_grads,
-                &loss_settings,
-            )
-            .with_context(|| format!("loss of view {}", view.camera.name))?;
-        rec.submit_and_wait(ctx)?;
-        let loss = pending.read(ctx)?;
+        let keys = self.frame.key_count();
         if !loss.value.is_finite() {
             anyhow::bail!("loss of view {}: not finite ({})", view.camera.name, loss.value);
         }
-        let loss_stages = rec.stage_times().unwrap_or_default();
-        times.loss = clock.lap(&self.ctx)?;
+        #[allow(clippy::expect_used)]
+        let layer_grads = &self.layer_grads.as_ref().expect("allocated with the loss").1;
         let backward = BackwardOptions {
             block_reflection_to_gaussians: stage == Stage::PlaneAdjustment,
             profile: self.profile,

@@ -1,0 +1,155 @@
+//! The frame's key totals (the depth order's entries, each view's tile keys), which size its key
+//! list: read back before the keys are emitted ([`KeySizing::Exact`]), or after the frame
+//! without waiting for it, the list sized from earlier frames ([`KeySizing::FromEarlierFrames`]).
+use super::{Frame, ViewBuffers};
+use crate::GpuContext;
+use crate::gpu::{self, GpuError};
+use std::sync::{Arc, OnceLock};
+
+/// How a frame's key list is sized.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum KeySizing {
+    /// Exactly: the render reads the key totals back between binning and emitting the keys,
+    /// waiting for the GPU there.
+    #[default]
+    Exact,
+    /// From the largest total this frame has held, with a quarter of headroom, without waiting:
+    /// the totals are read back after the frame ([`Frame::settle_keys`]), which then says
+    /// whether the list held every key. A frame that did not is wrong and must be rendered
+    /// again (the next render is sized from its totals). The first render into a frame, and
+    /// one that captures intermediates, are exact.
+    FromEarlierFrames,
+}
+
+/// What a frame's key list held.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct KeyTotals {
+    /// Keys of every view of the frame.
+    pub keys: u64,
+    /// Keys the list could hold.
+    pub capacity: u64,
+}
+
+impl KeyTotals {
+    /// Whether the list held every key (otherwise the frame dropped some).
+    pub fn held(&self) -> bool {
+        self.keys <= self.capacity
+    }
+}
+
+/// Words of the totals' readback for `views` views: [entries, (low word, carries) of each
+/// view's key total, the scan's total].
+pub(crate) fn words(views: usize) -> usize {
+    2 * views + 2
+}
+
+/// The totals as read back.
+pub(crate) struct Totals {
+    pub entries: u32,
+    pub view_keys: Vec<u64>,
+}
+
+impl Totals {
+    pub(crate) fn decode(words: &[u32]) -> Self {
+        let view_keys = words[1..words.len() - 1]
+            .chunks_exact(2)
+            .map(|w| u64::from(w[0]) | u64::from(w[1]) << 32)
+            .collect();
+        Self { entries: words[0], view_keys }
+    }
+
+    /// Keys of every view.
+    pub(crate) fn keys(&self) -> u64 {
+        self.view_keys.iter().sum()
+    }
+}
+
+/// Gives each view its share of the sorted key list: its keys follow the previous view's.
+pub(crate) fn assign(views: &mut [ViewBuffers], view_keys: &[u64]) {
+    let mut base = 0u64;
+    for (v, &keys) in views.iter_mut().zip(view_keys) {
+        v.key_base = u32::try_from(base).unwrap_or(u32::MAX);
+        v.num_keys = u32::try_from(keys).unwrap_or(u32::MAX);
+        base += keys;
+    }
+}
+
+/// A readback of the totals, submitted with its frame and not waited for.
+#[derive(Debug)]
+pub(crate) struct PendingTotals {
+    staging: wgpu::Buffer,
+    words: usize,
+    mapped: Arc<OnceLock<Result<(), wgpu::BufferAsyncError>>>,
+    capacity: u64,
+}
+
+impl PendingTotals {
+    /// Starts mapping `staging`, whose copies have been submitted, for a key list of
+    /// `capacity` keys.
+    pub(crate) fn start(staging: wgpu::Buffer, words: usize, capacity: u64) -> Self {
+        let mapped = Arc::new(OnceLock::new());
+        let done = Arc::clone(&mapped);
+        staging.slice(..).map_async(wgpu::MapMode::Read, move |r| {
+            let _ = done.set(r);
+        });
+        Self { staging, words, mapped, capacity }
+    }
+}
+
+impl Frame {
+    /// The key totals of the last render, and whether its key list held them. A list sized
+    /// from earlier frames gets them from their readback, waiting for the frame's GPU work only
+    /// if they have not arrived (a training step asks after reading its loss back, by when they
+    /// have). None before the first render.
+    pub fn settle_keys(&mut self, ctx: &GpuContext) -> Result<Option<KeyTotals>, GpuError> {
+        let Some(p) = self.pending_keys.take() else {
+            return Ok(self.key_totals);
+        };
+        const WHAT: &str = "reading a frame's key totals back";
+        if p.mapped.get().is_none() {
+            // Mapping callbacks run inside a poll of the device.
+            gpu::wait_for_gpu(ctx, "a frame's key totals")?;
+        }
+        let lost = |detail: String| crate::gpu_error::lost(WHAT, ctx.lost().unwrap_or(detail));
+        match p.mapped.get() {
+            Some(Ok(())) => {}
+            Some(Err(e)) => return Err(lost(e.to_string())),
+            None => return Err(lost("the mapping never completed".to_string())),
+        }
+        let words: Vec<u32> = {
+            let view = p.staging.slice(..).get_mapped_range().map_err(|e| lost(e.to_string()))?;
+            bytemuck::pod_collect_to_vec(&view[..4 * p.words])
+        };
+        p.staging.unmap();
+        let totals = Totals::decode(&words);
+        assign(&mut self.views, &totals.view_keys);
+        let settled = KeyTotals { keys: totals.keys(), capacity: p.capacity };
+        if let Some(b) = self.binning.as_mut() {
+            b.entries = totals.entries;
+            b.total = u32::try_from(settled.keys.min(settled.capacity)).unwrap_or(u32::MAX);
+        }
+        self.record_key_totals(settled);
+        Ok(Some(settled))
+    }
+
+    /// Records a render's totals, known now.
+    pub(crate) fn record_key_totals(&mut self, totals: KeyTotals) {
+        self.largest_keys = self.largest_keys.max(totals.keys);
+        self.key_totals = Some(totals);
+    }
+
+    /// The key list for a render that sizes it from earlier frames: the largest total this frame
+    /// has held with a quarter of headroom, at most `most`; None before any.
+    pub(crate) fn key_capacity(&self, most: u64) -> Option<u32> {
+        (self.largest_keys > 0).then(|| {
+            let k = self.largest_keys;
+            u32::try_from((k + k / 4).min(most)).unwrap_or(u32::MAX)
+        })
+    }
+
+    /// Leaves the totals of a render that sized its list from earlier frames to arrive later.
+    pub(crate) fn expect_key_totals(&mut self, pending: PendingTotals) {
+        self.key_totals = None;
+        self.pending_keys = Some(pending);
+    }
+}
