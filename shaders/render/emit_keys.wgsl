@@ -52,15 +52,23 @@ fn main(
     @builtin(workgroup_id) wid: vec3<u32>,
     @builtin(num_workgroups) nwg: vec3<u32>,
 ) {
-    // With the entries counted on the GPU the dispatch covers their capacity, the entries in its
-    // first blocks: `params.spread` deals those out evenly.
-    let k = spread_block(wid, nwg, params.spread) * 256u + lid.x;
-    if k == 0u {
+    let first = strided_first(wid, nwg);
+    if first == 0u && lid.x == 0u {
         kept[0] = min(total[0], params.capacity);
     }
-    if k >= params.entries {
-        return;
+    // Strided over the entries' blocks: with the entries counted on the GPU only, no workgroup
+    // passes over the empty blocks of their capacity.
+    let blocks = blocks_of(params.entries, 256u);
+    for (var block = first; block < blocks; block += strided_step(nwg)) {
+        let k = block * 256u + lid.x;
+        if k < params.entries {
+            emit_entry(k);
+        }
     }
+}
+
+// The keys of the depth order's entry `k`.
+fn emit_entry(k: u32) {
     let entry = order[k];
     let view = entry / params.gaussians;
     let gaussian = entry - view * params.gaussians;

@@ -17,13 +17,19 @@ fn main(
     @builtin(workgroup_id) wid: vec3<u32>,
     @builtin(num_workgroups) nwg: vec3<u32>,
 ) {
-    // A count known on the GPU only fills the first blocks of the capacity dispatched:
-    // `params.spread` deals them out evenly.
-    let slot = spread_block(wid, nwg, params.spread) * 256u + lid.x;
+    // Strided over the keys' blocks: with the count known on the GPU only, no workgroup passes
+    // over the empty blocks of the list's capacity.
     let n = params.count;
-    if slot >= n {
-        return;
+    for (var block = strided_first(wid, nwg); block < blocks_of(n, 256u); block += strided_step(nwg)) {
+        let slot = block * 256u + lid.x;
+        if slot < n {
+            range_edges(slot, n);
+        }
     }
+}
+
+// Where slot `slot` of the `n` sorted keys starts or ends its tile's range.
+fn range_edges(slot: u32, n: u32) {
     let tile = key_at(slot);
     if slot == 0u || key_at(slot - 1u) != tile {
         ranges[2u * tile] = slot;

@@ -23,6 +23,21 @@ fn spread_block(wid: vec3<u32>, nwg: vec3<u32>, step: u32) -> u32 {
     return ((wid.y * step) % nwg.y) * nwg.x + wid.x;
 }
 
+// The first block of workgroup `wid` in a strided dispatch (trgs_render::gpu::strided_grid) and
+// the stride between its blocks: the dispatch's workgroups.
+fn strided_first(wid: vec3<u32>, nwg: vec3<u32>) -> u32 {
+    return wid.x + wid.y * nwg.x;
+}
+
+fn strided_step(nwg: vec3<u32>) -> u32 {
+    return nwg.x * nwg.y;
+}
+
+// Blocks of `size` items that hold `count` items.
+fn blocks_of(count: u32, size: u32) -> u32 {
+    return count / size + select(0u, 1u, count % size != 0u);
+}
+
 fn sigmoid(x: f32) -> f32 {
     return 1.0 / (1.0 + exp(-x));
 }

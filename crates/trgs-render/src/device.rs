@@ -126,6 +126,8 @@ pub struct Capabilities {
     /// one block and skips together. On a CPU adapter a subgroup is one SIMD vector, which
     /// otherwise pays for every entry of its tile's list, reaching its pixels or not.
     pub block_walk: bool,
+    /// Workgroups of a strided dispatch at most ([`crate::gpu::strided_grid`]).
+    pub strided_groups: u32,
 }
 
 /// How to choose the device.
@@ -148,6 +150,10 @@ pub struct DeviceOptions {
     /// Whether pass 1 walks by 4 x 2 blocks ([`Capabilities::block_walk`]); None: where the
     /// adapter's subgroups allow it. Some(true) still needs subgroups (without them it is off).
     pub block_walk: Option<bool>,
+    /// Workgroups of a strided dispatch at most; None: the adapter's
+    /// ([`crate::gpu::strided_groups_for`]). Tests set a few, so that each workgroup takes
+    /// several blocks.
+    pub strided_groups: Option<u32>,
 }
 
 /// A wgpu device and queue with what they can do. Cloning shares the device.
@@ -307,6 +313,10 @@ impl GpuContext {
                     let info = adapter.get_info();
                     info.subgroup_max_size > 0 && info.subgroup_max_size <= 8
                 }),
+            strided_groups: options
+                .strided_groups
+                .unwrap_or_else(|| crate::gpu::strided_groups_for(adapter.get_info().device_type))
+                .clamp(1, crate::layout::MAX_WORKGROUPS),
         };
         let poison_fresh_buffers = options.poison_fresh_buffers
             || std::env::var("TRGS_POISON_BUFFERS").is_ok_and(|v| v == "1");

@@ -23,17 +23,19 @@ use common::{ATOL, RTOL, close, compare_values, spec, to_reference};
 /// A context with `layout`, and the scan and sort block width and pass 1's walk that go with it
 /// on a device of that kind (narrow blocks and the plain walk with one pixel per thread, as on a
 /// GPU; wide blocks and the walk by 4 x 2 blocks with four rows, as on a CPU adapter, where the
-/// subgroups allow it), so that both devices' kernels are checked here.
+/// subgroups allow it), so that both devices' kernels are checked here. The second also strides
+/// its strided dispatches over three workgroups, so that each takes several blocks.
 fn ctx(layout: TileLayout) -> GpuContext {
-    let (width, walk) = match layout {
-        TileLayout::PixelPerThread => (BlockWidth::Narrow, false),
-        TileLayout::FourRowsPerThread => (BlockWidth::Wide, true),
+    let (width, walk, strided) = match layout {
+        TileLayout::PixelPerThread => (BlockWidth::Narrow, false, None),
+        TileLayout::FourRowsPerThread => (BlockWidth::Wide, true, Some(3)),
     };
     let opts = DeviceOptions {
         poison_fresh_buffers: true,
         tile_layout: Some(layout),
         block_width: Some(width),
         block_walk: Some(walk),
+        strided_groups: strided,
         ..Default::default()
     };
     GpuContext::with_options(&opts).unwrap_or_else(|e| panic!("{e}"))

@@ -14,8 +14,14 @@ use trgs_render::{
 mod common;
 use common::spec;
 
+/// A context whose strided dispatches (emit_keys, tile_ranges) have three workgroups, so that
+/// each takes several blocks, below the count on the GPU and past it.
 fn ctx() -> GpuContext {
-    let opts = trgs_render::DeviceOptions { poison_fresh_buffers: true, ..Default::default() };
+    let opts = trgs_render::DeviceOptions {
+        poison_fresh_buffers: true,
+        strided_groups: Some(3),
+        ..Default::default()
+    };
     GpuContext::with_options(&opts).unwrap_or_else(|e| panic!("{e}"))
 }
 

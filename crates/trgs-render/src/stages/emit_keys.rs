@@ -3,7 +3,7 @@
 use super::sort::KeyList;
 use super::tile_counts::DepthEntries;
 use super::{ItemCount, Stage};
-use crate::gpu::{self, Recorder, grid_1d};
+use crate::gpu::{self, Recorder, strided_grid};
 use crate::layout::{EmitParams, ViewTiles};
 use crate::toolkit::paged::Paged;
 
@@ -34,12 +34,12 @@ pub fn record(
     counts: &KeyCounts<'_>,
 ) {
     // Always dispatched, if only to write `kept`.
-    let groups = grid_1d(entries_count.capacity().div_ceil(256).max(1));
+    let most = s.ctx.capabilities.strided_groups;
+    let groups = strided_grid(entries_count.capacity().div_ceil(256), most);
     let k = if keys.is_paged() { &s.kernels.emit_keys_paged } else { &s.kernels.emit_keys };
     let params = EmitParams {
         entries: entries_count.capacity(),
         page: keys.first_page_len(),
-        spread: entries_count.spread(groups),
         capacity,
         ..*params
     };

@@ -1,6 +1,6 @@
 //! Stage `tile_ranges` (shaders/tile_ranges.wgsl; twin `trgs_core::reference::tile_ranges`).
 use super::{ItemCount, Stage};
-use crate::gpu::{self, Recorder, grid_1d};
+use crate::gpu::{self, Recorder, strided_grid};
 use crate::layout::ScanParams;
 use crate::toolkit::paged::Paged;
 
@@ -17,13 +17,9 @@ pub fn record(
     let paged = sorted_tiles.is_paged();
     let k = if paged { &s.kernels.tile_ranges_paged } else { &s.kernels.tile_ranges };
     let page = sorted_tiles.first_page_len();
-    let groups = grid_1d(count.capacity().div_ceil(256));
-    let params = ScanParams {
-        count: count.capacity(),
-        page,
-        spread: count.spread(groups),
-        ..Default::default()
-    };
+    let most = s.ctx.capabilities.strided_groups;
+    let groups = strided_grid(count.capacity().div_ceil(256), most);
+    let params = ScanParams { count: count.capacity(), page, ..Default::default() };
     let block = gpu::params(s.ctx, "trgs.tile_ranges.params", &params);
     // ScanParams::count is the block's first word.
     count.write_into(rec, &block);

@@ -7,7 +7,10 @@ mod profiler;
 
 use crate::GpuContext;
 pub use crate::gpu_error::{ErrorScopes, GpuError, scoped};
-pub use grid::{grid_1d, spread_block, spread_step};
+pub use grid::{
+    STRIDED_GROUPS, STRIDED_GROUPS_CPU, grid_1d, spread_block, spread_step, strided_grid,
+    strided_groups_for,
+};
 pub use profiler::KernelTime;
 use profiler::Profiler;
 use std::collections::HashMap;

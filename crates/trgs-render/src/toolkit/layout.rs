@@ -151,15 +151,9 @@ gpu_struct! {
         /// Pairs in the key list's first page ([`crate::toolkit::paged`]); the rest are in the
         /// second.
         pub page: u32,
-        /// The workgroup permutation's step ([`crate::gpu::spread_step`]; 0: none), for a count
-        /// of entries known on the GPU only.
-        pub spread: u32,
         /// Pairs the key list holds: keys past it are dropped (a list sized from earlier frames
         /// that this one outgrew; the renderer reads the true total back and says so).
         pub capacity: u32,
-        pub pad0: u32,
-        pub pad1: u32,
-        pub pad2: u32,
     }
 }
 

@@ -76,6 +76,7 @@ pub fn every_capability_set() -> Vec<Capabilities> {
                             tile_layout,
                             block_width,
                             block_walk,
+                            strided_groups: crate::gpu::STRIDED_GROUPS,
                         });
                     }
                 }

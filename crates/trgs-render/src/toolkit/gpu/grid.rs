@@ -8,6 +8,34 @@ pub fn grid_1d(groups: u32) -> [u32; 3] {
     if groups <= MAX { [groups, 1, 1] } else { [MAX, groups.div_ceil(MAX), 1] }
 }
 
+/// Workgroups of a strided dispatch at most on a GPU: enough to fill a large one (a million
+/// threads of 256-thread workgroups).
+pub const STRIDED_GROUPS: u32 = 4096;
+
+/// Workgroups of a strided dispatch at most on a CPU adapter: a few per thread of a large CPU.
+/// lavapipe hands each thread one contiguous run of the workgroups, so a dispatch of more, over
+/// a capacity whose count fills only its first blocks, leaves the work to the first thread (see
+/// [`spread_step`]); strided, every workgroup takes an equal share of the blocks below the count.
+pub const STRIDED_GROUPS_CPU: u32 = 64;
+
+/// The strided dispatch's workgroups for an adapter of this type.
+pub fn strided_groups_for(device_type: wgpu::DeviceType) -> u32 {
+    match device_type {
+        wgpu::DeviceType::Cpu => STRIDED_GROUPS_CPU,
+        _ => STRIDED_GROUPS,
+    }
+}
+
+/// Workgroup counts of a strided dispatch over `blocks` blocks: at most `most` workgroups
+/// (`Capabilities::strided_groups`; at least one), each taking blocks `w, w + groups, ...`
+/// below the count the kernel reads (`strided_first` and `strided_step` in
+/// shaders/shared/common.wgsl). Why: a count known on the GPU only leaves most blocks of a
+/// dispatch over its capacity empty, and on lavapipe every empty workgroup still costs its
+/// launch; strided workgroups visit only the blocks below the count, each its share of them.
+pub fn strided_grid(blocks: u32, most: u32) -> [u32; 3] {
+    grid_1d(blocks.clamp(1, most.max(1)))
+}
+
 /// 1 / golden ratio: the step fraction whose multiples mod 1 are the most evenly spread.
 const INVERSE_GOLDEN_RATIO: f64 = 0.618_033_988_749_894_8;
 
