@@ -3,8 +3,7 @@
 //! without waiting for it, the list sized from earlier frames ([`KeySizing::FromEarlierFrames`]).
 use super::{Frame, ViewBuffers};
 use crate::GpuContext;
-use crate::gpu::{self, GpuError};
-use std::sync::{Arc, OnceLock};
+use crate::gpu::{GpuError, PendingRead};
 
 /// How a frame's key list is sized.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -77,9 +76,8 @@ pub(crate) fn assign(views: &mut [ViewBuffers], view_keys: &[u64]) {
 /// A readback of the totals, submitted with its frame and not waited for.
 #[derive(Debug)]
 pub(crate) struct PendingTotals {
-    staging: wgpu::Buffer,
+    read: PendingRead,
     words: usize,
-    mapped: Arc<OnceLock<Result<(), wgpu::BufferAsyncError>>>,
     capacity: u64,
 }
 
@@ -87,12 +85,7 @@ impl PendingTotals {
     /// Starts mapping `staging`, whose copies have been submitted, for a key list of
     /// `capacity` keys.
     pub(crate) fn start(staging: wgpu::Buffer, words: usize, capacity: u64) -> Self {
-        let mapped = Arc::new(OnceLock::new());
-        let done = Arc::clone(&mapped);
-        staging.slice(..).map_async(wgpu::MapMode::Read, move |r| {
-            let _ = done.set(r);
-        });
-        Self { staging, words, mapped, capacity }
+        Self { read: PendingRead::start(staging), words, capacity }
     }
 }
 
@@ -105,22 +98,7 @@ impl Frame {
         let Some(p) = self.pending_keys.take() else {
             return Ok(self.key_totals);
         };
-        const WHAT: &str = "reading a frame's key totals back";
-        if p.mapped.get().is_none() {
-            // Mapping callbacks run inside a poll of the device.
-            gpu::wait_for_gpu(ctx, "a frame's key totals")?;
-        }
-        let lost = |detail: String| crate::gpu_error::lost(WHAT, ctx.lost().unwrap_or(detail));
-        match p.mapped.get() {
-            Some(Ok(())) => {}
-            Some(Err(e)) => return Err(lost(e.to_string())),
-            None => return Err(lost("the mapping never completed".to_string())),
-        }
-        let words: Vec<u32> = {
-            let view = p.staging.slice(..).get_mapped_range().map_err(|e| lost(e.to_string()))?;
-            bytemuck::pod_collect_to_vec(&view[..4 * p.words])
-        };
-        p.staging.unmap();
+        let words: Vec<u32> = p.read.read(ctx, 4 * p.words)?;
         let totals = Totals::decode(&words);
         assign(&mut self.views, &totals.view_keys);
         let settled = KeyTotals { keys: totals.keys(), capacity: p.capacity };

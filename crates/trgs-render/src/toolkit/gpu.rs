@@ -179,39 +179,88 @@ pub fn wait_for_gpu(ctx: &GpuContext, what: &str) -> Result<(), GpuError> {
     }
 }
 
+const READBACK: &str = "reading back a buffer";
+
+/// The mapping of a MAP_READ buffer whose copies have been submitted, started without waiting
+/// for the GPU: read it when the values are needed ([`PendingRead::read`]), by when the work
+/// before it may have finished.
+#[derive(Debug)]
+pub struct PendingRead {
+    staging: wgpu::Buffer,
+    mapped: std::sync::Arc<std::sync::OnceLock<Result<(), wgpu::BufferAsyncError>>>,
+}
+
+impl PendingRead {
+    /// Starts mapping `staging`: call after the submission that copies into it.
+    pub fn start(staging: wgpu::Buffer) -> Self {
+        let mapped = std::sync::Arc::new(std::sync::OnceLock::new());
+        let done = std::sync::Arc::clone(&mapped);
+        staging.slice(..).map_async(wgpu::MapMode::Read, move |r| {
+            let _ = done.set(r);
+        });
+        Self { staging, mapped }
+    }
+
+    /// The first `bytes` bytes, waiting for the GPU only if the mapping has not completed.
+    pub fn read<T: bytemuck::Pod>(
+        self,
+        ctx: &GpuContext,
+        bytes: usize,
+    ) -> Result<Vec<T>, GpuError> {
+        let (waited, mapped) = self.wait(ctx);
+        waited?;
+        mapped.map_err(|detail| lost_reading(ctx, detail))?;
+        self.take(ctx, bytes)
+    }
+
+    /// Waits for the GPU unless the mapping has completed (its callback runs inside a poll of
+    /// the device): the wait's result, then the mapping's. A lost device (or a buffer that could
+    /// not be allocated) surfaces as a failed mapping, not as values that were never computed.
+    fn wait(&self, ctx: &GpuContext) -> (Result<(), GpuError>, Result<(), String>) {
+        let waited = match self.mapped.get() {
+            Some(_) => Ok(()),
+            None => wait_for_gpu(ctx, "its work before a readback"),
+        };
+        let mapped = match self.mapped.get() {
+            Some(Ok(())) => Ok(()),
+            Some(Err(e)) => Err(e.to_string()),
+            None => Err("the mapping never completed".to_string()),
+        };
+        (waited, mapped)
+    }
+
+    /// The mapped bytes, then unmaps.
+    fn take<T: bytemuck::Pod>(self, ctx: &GpuContext, bytes: usize) -> Result<Vec<T>, GpuError> {
+        let out = {
+            let slice = self.staging.slice(..);
+            let view = slice.get_mapped_range().map_err(|e| lost_reading(ctx, e.to_string()))?;
+            bytemuck::pod_collect_to_vec(&view[..bytes])
+        };
+        self.staging.unmap();
+        Ok(out)
+    }
+}
+
+/// A readback that failed for `detail`, or for the device's loss when it was lost.
+fn lost_reading(ctx: &GpuContext, detail: String) -> GpuError {
+    crate::gpu_error::lost(READBACK, ctx.lost().unwrap_or(detail))
+}
+
 /// Map a MAP_READ buffer whose copy has been submitted, and read its first `bytes` bytes.
 pub fn map_and_read<T: bytemuck::Pod>(
     ctx: &GpuContext,
     staging: &wgpu::Buffer,
     bytes: usize,
 ) -> Result<Vec<T>, GpuError> {
-    const WHAT: &str = "reading back a buffer";
-    let scopes = ErrorScopes::open(ctx, WHAT);
-    let slice = staging.slice(..);
-    let (tx, rx) = std::sync::mpsc::channel();
-    slice.map_async(wgpu::MapMode::Read, move |r| {
-        let _ = tx.send(r);
-    });
-    // A lost device (or a buffer that could not be allocated) surfaces here as a failed
-    // mapping: the caller gets an error instead of values that were never computed.
-    let waited = wait_for_gpu(ctx, "its work before a readback");
-    let mapped = match rx.try_recv() {
-        Ok(Ok(())) => Ok(()),
-        Ok(Err(e)) => Err(e.to_string()),
-        Err(_) => Err("the mapping never completed".to_string()),
-    };
+    let scopes = ErrorScopes::open(ctx, READBACK);
+    let pending = PendingRead::start(staging.clone());
+    let (waited, mapped) = pending.wait(ctx);
     // Most specific first: what wgpu refused (or the loss behind it), a wait that failed, then
     // a mapping that failed without either.
     scopes.close()?;
     waited?;
-    let lost = |detail: String| crate::gpu_error::lost(WHAT, ctx.lost().unwrap_or(detail));
-    mapped.map_err(lost)?;
-    let out = {
-        let view = slice.get_mapped_range().map_err(|e| lost(e.to_string()))?;
-        bytemuck::pod_collect_to_vec(&view[..bytes])
-    };
-    staging.unmap();
-    Ok(out)
+    mapped.map_err(|detail| lost_reading(ctx, detail))?;
+    pending.take(ctx, bytes)
 }
 
 /// A compute pipeline with the layout derived from its WGSL.

@@ -27,9 +27,9 @@ pub use crate::frame::{DepthOrderIntermediates, LayerBuffers, ViewBuffers, ViewI
 pub use crate::kernels::{BENCH_KERNELS, BenchKernelSpecs, BenchKernels, RENDER_KERNELS};
 pub use crate::kernels::{Kernels as RenderKernels, RenderKernelSpecs};
 pub use gpu::{
-    BufferPool, ErrorScopes, GPU_WAIT_LIMIT, Kernel, KernelTime, Recorder, gpu_wait_limit, grid_1d,
-    map_and_read, params, range, read_buffer, scoped, spread_block, spread_step, storage,
-    storage_init, wait_for_gpu,
+    BufferPool, ErrorScopes, GPU_WAIT_LIMIT, Kernel, KernelTime, PendingRead, Recorder,
+    gpu_wait_limit, grid_1d, map_and_read, params, range, read_buffer, scoped, spread_block,
+    spread_step, storage, storage_init, wait_for_gpu,
 };
 pub use registry::{KernelSpec, every_capability_set};
 
