@@ -16,7 +16,8 @@
 @group(0) @binding(5) var<storage, read_write> keys: array<u32>;
 @group(0) @binding(6) var<storage, read_write> values: array<u32>;
 // The scan's total of every view's keys, and where the keys the list holds are counted:
-// min(total, params.capacity), the count `sort` and `tile_ranges` then cover.
+// min(total, params.capacity), the count `sort` and `tile_ranges` then cover, then whether the
+// list dropped keys (1) or held them all (0), which a training step's `step_guard` reads.
 @group(0) @binding(7) var<storage, read> total: array<u32>;
 @group(0) @binding(8) var<storage, read_write> kept: array<u32>;
 #ifdef PAGED
@@ -55,6 +56,7 @@ fn main(
     let first = strided_first(wid, nwg);
     if first == 0u && lid.x == 0u {
         kept[0] = min(total[0], params.capacity);
+        kept[1] = select(0u, 1u, total[0] > params.capacity);
     }
     // Strided over the entries' blocks: with the entries counted on the GPU only, no workgroup
     // passes over the empty blocks of their capacity.

@@ -12,12 +12,14 @@
 @group(0) @binding(2) var<storage, read> grads: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read_write> m: array<vec4<f32>>;
 @group(0) @binding(4) var<storage, read_write> v: array<vec4<f32>>;
+// The step's `step_guard`: nothing changes while it is set.
+@group(0) @binding(5) var<storage, read> guard: array<u32>;
 
 @compute @workgroup_size(256)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let i = linear_index(gid, nwg, 256u);
     let first = 4u * i;
-    if first >= params.count {
+    if first >= params.count || guard[0] != 0u {
         return;
     }
     let float_index = vec4<u32>(first) + vec4<u32>(0u, 1u, 2u, 3u);

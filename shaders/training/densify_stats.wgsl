@@ -11,6 +11,8 @@
 // PROJECTED_GRAD_FLOATS per Gaussian; the first two are dL/d(mean2d).
 @group(0) @binding(2) var<storage, read> grads: array<f32>;
 @group(0) @binding(3) var<storage, read_write> stats: array<vec4<f32>>;
+// The step's `step_guard`: nothing is added while it is set.
+@group(0) @binding(4) var<storage, read> guard: array<u32>;
 
 // |v| without overflow for components near the f32 limit.
 fn norm2(v: vec2<f32>) -> f32 {
@@ -24,7 +26,7 @@ fn norm2(v: vec2<f32>) -> f32 {
 @compute @workgroup_size(256)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let i = linear_index(gid, nwg, 256u);
-    if i >= params.count {
+    if i >= params.count || guard[0] != 0u {
         return;
     }
     var s = stats[i];

@@ -10,11 +10,13 @@
 @group(0) @binding(3) var<storage, read> log_scales: array<f32>;
 @group(0) @binding(4) var<storage, read> opacity_logits: array<f32>;
 @group(0) @binding(5) var<storage, read> populations: array<u32>;
+// The step's `step_guard`: nothing moves while it is set.
+@group(0) @binding(6) var<storage, read> guard: array<u32>;
 
 @compute @workgroup_size(256)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let i = linear_index(gid, nwg, 256u);
-    if i >= params.count || populations[i] == POPULATION_GLASS {
+    if i >= params.count || populations[i] == POPULATION_GLASS || guard[0] != 0u {
         return;
     }
     let o = sigmoid(opacity_logits[i]);

@@ -3,9 +3,10 @@
 //! normal and R0 logit. The order is the reverse of the forward's (docs/ARCHITECTURE.md, "Data
 //! flow"): compose_bwd; rasterize_bwd and project_bwd of the real view; per plane
 //! rasterize_reflection_bwd and project_bwd of its mirrored view, whose view gradient then chains
-//! into the plane on the CPU (a dozen numbers per plane, the twin's own `mirrored_view_bwd`).
+//! into the plane on the CPU when it is read back ([`PlaneGradsRead`]). The pass is submitted and
+//! not waited for.
 use crate::frame::Frame;
-use crate::gpu::{self, GpuError, KernelTime, Recorder};
+use crate::gpu::{self, GpuError, KernelTime, PendingRead, Recorder};
 use crate::layer_grads::LayerGrads;
 use crate::layout::{BWD_ADD, BWD_NO_GAUSSIANS, BWD_VIEW, PROJECTED_GRAD_FLOATS, VIEW_GRAD_FLOATS};
 use crate::renderer::Renderer;
@@ -14,8 +15,9 @@ use crate::stages::rasterize_bwd::ViewLists;
 use crate::stages::{Stage, compose_bwd, project_bwd, rasterize_bwd, rasterize_reflection_bwd};
 use crate::toolkit::FrameStages;
 use crate::toolkit::paged::Paged;
-use glam::{DMat3, DVec3};
-use trgs_core::reference::{PlaneGrad, ViewGrads, mirrored_view_bwd, plane_grad};
+
+mod plane_grads;
+pub use plane_grads::PlaneGradsRead;
 
 /// Switches of the backward pass.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -32,8 +34,9 @@ pub struct BackwardOptions {
 pub struct Gradients {
     /// dL/d(each Gaussian attribute), on the GPU.
     pub gaussians: SceneGradBuffers,
-    /// dL/d(each plane's centre, unnormalised normal, R0 logit).
-    pub planes: Vec<PlaneGrad>,
+    /// dL/d(each plane's centre, unnormalised normal, R0 logit), read back on demand
+    /// ([`PlaneGradsRead::read`]): the backward does not wait for them.
+    pub planes: PlaneGradsRead,
     /// Per view (0 = camera, then each mirrored pass): the screen-space gradients.
     projected_grads: Vec<Paged>,
     stage_times: Option<Vec<(&'static str, f64)>>,
@@ -95,18 +98,6 @@ pub enum BackwardError {
     GradsForAnotherSize { grads: (u32, u32), frame: (u32, u32) },
     #[error(transparent)]
     Gpu(#[from] GpuError),
-}
-
-/// A mirrored view's gradient from its VIEW_GRAD_FLOATS (linear map by columns, translation,
-/// centre).
-fn view_grads(v: &[f32]) -> ViewGrads {
-    let d = |i: usize| f64::from(v[i]);
-    let col = |i: usize| DVec3::new(d(i), d(i + 1), d(i + 2));
-    ViewGrads {
-        linear: DMat3::from_cols(col(0), col(3), col(6)),
-        translation: col(9),
-        centre: col(12),
-    }
 }
 
 impl Renderer {
@@ -236,41 +227,36 @@ impl Renderer {
                 view_slot(vi),
             );
         }
-        // The plane sums and view gradients come back in one small readback.
-        let plane_bytes = bufs.plane_grads.size().min(frame.plane_slots() as u64 * 16);
-        let view_bytes = views.len() as u64 * bufs.view_stride;
-        let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("trgs.backward.plane_staging"),
-            size: plane_bytes + view_bytes,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        rec.encoder.copy_buffer_to_buffer(&bufs.plane_grads, 0, &staging, 0, plane_bytes);
-        rec.encoder.copy_buffer_to_buffer(&bufs.view_grads, 0, &staging, plane_bytes, view_bytes);
-        rec.submit_and_wait(ctx)?;
-        let flat: Vec<f32> = gpu::map_and_read(ctx, &staging, (plane_bytes + view_bytes) as usize)?;
-        let stride = (bufs.view_stride / 4) as usize;
-        let view_of = |vi: usize| {
-            let o = (plane_bytes / 4) as usize + vi * stride;
-            view_grads(&flat[o..o + VIEW_GRAD_FLOATS as usize])
+        // The plane sums and view gradients come back in one small readback, which the
+        // backward does not wait for (none without planes).
+        let planes = if scene.planes().is_empty() {
+            rec.submit(ctx)?;
+            PlaneGradsRead::default()
+        } else {
+            let plane_bytes = bufs.plane_grads.size().min(frame.plane_slots() as u64 * 16);
+            let view_bytes = views.len() as u64 * bufs.view_stride;
+            let bytes = plane_bytes + view_bytes;
+            let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("trgs.backward.plane_staging"),
+                size: bytes,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let enc = &mut rec.encoder;
+            enc.copy_buffer_to_buffer(&bufs.plane_grads, 0, &staging, 0, plane_bytes);
+            enc.copy_buffer_to_buffer(&bufs.view_grads, 0, &staging, plane_bytes, view_bytes);
+            let submission = rec.submit(ctx)?;
+            let mirrored = (0..scene.planes().len())
+                .map(|k| views.iter().position(|v| v.plane == Some(k)))
+                .collect();
+            PlaneGradsRead::pending(
+                PendingRead::after(staging, submission),
+                scene.planes().to_vec(),
+                views[0].view,
+                mirrored,
+                (plane_bytes, bufs.view_stride, bytes),
+            )
         };
-        let real = &views[0].view;
-        let planes = scene
-            .planes()
-            .iter()
-            .enumerate()
-            .map(|(k, plane)| {
-                let c = &flat[4 * k..4 * k + 4];
-                let mut g_n = DVec3::new(f64::from(c[1]), f64::from(c[2]), f64::from(c[3]));
-                let mut g_u = DVec3::ZERO;
-                if let Some(vi) = views.iter().position(|v| v.plane == Some(k)) {
-                    let (du, dn) = mirrored_view_bwd(plane, real, &view_of(vi));
-                    g_u += du;
-                    g_n += dn;
-                }
-                plane_grad(plane, g_u, g_n, f64::from(c[0]))
-            })
-            .collect();
         Ok(Gradients {
             gaussians: bufs.scene_grads,
             planes,

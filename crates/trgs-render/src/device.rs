@@ -170,6 +170,8 @@ pub struct GpuContext {
     loss: DeviceLoss,
     /// See [`GpuContext::binding_limit`].
     binding_limit: u64,
+    /// See [`GpuContext::waits`].
+    waits: std::sync::Arc<std::sync::atomic::AtomicU64>,
 }
 
 /// Where a device's lost callback leaves its reason, shared by every clone of the context.
@@ -334,6 +336,7 @@ impl GpuContext {
             poison_fresh_buffers,
             loss,
             binding_limit,
+            waits: Default::default(),
         })
     }
 
@@ -342,6 +345,18 @@ impl GpuContext {
     /// by.
     pub fn binding_limit(&self) -> u64 {
         self.binding_limit
+    }
+
+    /// How many times the CPU has blocked on this device so far (every wait for submitted work,
+    /// whether for a readback or a submission): how tests show that work is recorded without
+    /// waiting.
+    pub fn waits(&self) -> u64 {
+        self.waits.load(std::sync::atomic::Ordering::Relaxed)
+    }
+
+    /// Counts one wait ([`GpuContext::waits`]).
+    pub(crate) fn count_wait(&self) {
+        self.waits.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     }
 
     /// Why the device was lost, if it has been (known once the GPU was last waited for).

@@ -12,7 +12,7 @@ use trgs_core::scene::ViewTransform;
 mod intermediates;
 pub(crate) mod key_totals;
 pub use intermediates::{DepthOrderIntermediates, ViewIntermediates};
-pub use key_totals::{KeySizing, KeyTotals};
+pub use key_totals::{KeySizing, KeyTotals, PendingKeyTotals};
 
 /// The geometry stages of one view (the real camera is view 0, then one per mirrored pass).
 #[derive(Debug)]
@@ -52,6 +52,8 @@ pub(crate) struct Binning {
     pub total: u32,
     /// The keys as emitted, before the sort (with `capture_intermediates`).
     pub emitted: Option<KeyList>,
+    /// emit_keys' two words: the keys the list held, and whether it dropped some.
+    pub kept: wgpu::Buffer,
 }
 
 impl ViewBuffers {
@@ -104,9 +106,11 @@ pub struct Frame {
     /// The last render's key totals, once known ([`Frame::settle_keys`]).
     key_totals: Option<KeyTotals>,
     /// Their readback, when the render did not wait for it.
-    pending_keys: Option<key_totals::PendingTotals>,
+    pending_keys: Option<key_totals::PendingKeyTotals>,
     /// The most keys any render into this frame had (sizes lists from earlier frames).
     largest_keys: u64,
+    /// Renders into this frame so far (which render a readback of key totals belongs to).
+    renders: u64,
 }
 
 /// A layer of a frame.
@@ -211,6 +215,7 @@ impl Frame {
         self.kernel_times = None;
         self.key_totals = None;
         self.pending_keys = None;
+        self.renders += 1;
         // Until this render finishes the frame holds no image: a render that fails part way
         // leaves it "not rendered" (empty reads, BackwardError::NotRendered), never the previous
         // frame's buffers read with this frame's size.
@@ -317,6 +322,11 @@ impl Frame {
     /// The stage times split by kernel, when rendered with `profile`.
     pub fn kernel_times(&self) -> Option<&[KernelTime]> {
         self.kernel_times.as_deref()
+    }
+
+    /// Renders into this frame so far.
+    pub(crate) fn renders(&self) -> u64 {
+        self.renders
     }
 
     /// Total keys sorted over all views (of a list sized from earlier frames: once settled,

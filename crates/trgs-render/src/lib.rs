@@ -40,7 +40,8 @@
 //! let grads = renderer.backward(&gpu_scene, &mut frame, &upstream, &BackwardOptions::default())?;
 //! let per_gaussian = grads.gaussians.read(&ctx)?; // shaped like the scene's Gaussians
 //! assert_eq!(per_gaussian.len(), scene.gaussians.len());
-//! println!("dL/d(plane 0 centre) = {:?}", grads.planes[0].centre);
+//! let planes = grads.planes.read(&ctx)?; // read back now; the backward did not wait
+//! println!("dL/d(plane 0 centre) = {:?}", planes[0].centre);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 mod backward;
@@ -58,13 +59,13 @@ pub mod toolkit;
 // Short paths to the toolkit inside the crate.
 pub(crate) use toolkit::{gpu, layout};
 
-pub use backward::{BackwardError, BackwardOptions, Gradients};
+pub use backward::{BackwardError, BackwardOptions, Gradients, PlaneGradsRead};
 pub use device::{
     BlockWidth, Capabilities, DeviceError, DeviceOptions, GpuContext, STORAGE_BUFFERS_PER_STAGE,
     TileLayout, device_descriptor, pick_adapter,
 };
 pub use display::{DisplayError, DisplayTarget, layer_mapping};
-pub use frame::{Frame, FrameImages, KeySizing, KeyTotals, Layer, PlaneImages};
+pub use frame::{Frame, FrameImages, KeySizing, KeyTotals, Layer, PendingKeyTotals, PlaneImages};
 pub use gpu_error::GpuError;
 pub use layer_grads::{LayerGrads, LayerGradsError};
 pub use renderer::{RenderError, RenderOptions, Renderer};

@@ -3,7 +3,7 @@
 use crate::GpuContext;
 use crate::frame::key_totals;
 use crate::frame::{Binning, Frame, KeySizing, KeyTotals, ViewBuffers};
-use crate::gpu::{self, GpuError, Recorder};
+use crate::gpu::{self, GpuError, PendingRead, Recorder};
 use crate::kernels::Kernels;
 use crate::layer_grads::LayerGrads;
 use crate::layout::{EmitParams, TileParams, ViewTiles};
@@ -393,7 +393,7 @@ impl Renderer {
         }
         let tiles = tile_base;
         let keys = KeyList::from_pool(ctx, pool, "trgs.emit_keys", capacity, self.key_page_len);
-        let kept = pool.get(ctx, "trgs.emit_keys.kept", 4);
+        let kept = pool.get(ctx, "trgs.emit_keys.kept", 8);
         let (in_order, held) = match &exact {
             Some(t) => (ItemCount::Known(t.entries), ItemCount::Known(capacity)),
             None => (
@@ -433,6 +433,7 @@ impl Renderer {
             entries: exact.as_ref().map_or(0, |t| t.entries),
             total: if exact.is_some() { capacity } else { 0 },
             emitted: captured_keys,
+            kept: kept.clone(),
         };
         let layers = frame.layers(ctx, pixels);
         let primary = &views[0];
@@ -511,21 +512,23 @@ impl Renderer {
                 },
             );
         }
-        if exact.is_some() {
+        let submission = if exact.is_some() {
             rec.submit_and_wait(ctx)?;
+            None
         } else {
-            rec.submit(ctx)?;
-        }
+            Some(rec.submit(ctx)?)
+        };
         frame.finish(views, binning, has_pass, Some(rays), &rec);
-        match exact {
-            Some(_) => {
+        match submission {
+            None => {
                 let keys = u64::from(capacity);
                 frame.record_key_totals(KeyTotals { keys, capacity: keys });
             }
-            None => frame.expect_key_totals(key_totals::PendingTotals::start(
-                totals_staging,
+            Some(submission) => frame.expect_key_totals(key_totals::PendingKeyTotals::start(
+                PendingRead::after(totals_staging, submission),
                 words,
                 u64::from(capacity),
+                frame.renders(),
             )),
         }
         Ok(())

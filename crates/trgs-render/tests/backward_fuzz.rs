@@ -87,7 +87,7 @@ fn random_finite_inputs_give_finite_gradients() {
         let out = renderer.backward(&gpu_scene, &mut frame, &layer_grads, &bwd).expect("backward");
         let g = out.gaussians.read(&ctx).expect("readback");
         assert!(all_finite(&g), "seed {seed}: a Gaussian gradient is not finite");
-        for p in &out.planes {
+        for p in &out.planes.read(&ctx).expect("plane readback") {
             let v = [p.centre.to_array(), p.normal.to_array(), [p.r0_logit; 3]];
             assert!(v.iter().flatten().all(|x| x.is_finite()), "seed {seed}: plane gradient {p:?}");
         }
@@ -106,7 +106,7 @@ fn empty_scene_has_empty_gradients() {
     let out = renderer.backward(&gpu_scene, &mut frame, &grads, &BackwardOptions::default());
     let out = out.expect("backward");
     assert!(out.gaussians.read(&ctx).expect("readback").is_empty());
-    assert_eq!(out.planes.len(), 1);
+    assert_eq!(out.planes.read(&ctx).expect("plane readback").len(), 1);
 }
 
 #[test]

@@ -518,8 +518,9 @@ fn check_backward_in_pages(
         check_scaled(&format!("{what} sh"), &flat(&gg.sh), &flat64(&c.sh));
         check_scaled(&format!("{what} mask_logits"), &gg.mask_logits, &c.mask_logits);
         check_scaled(&format!("{what} log_reflections"), &gg.log_reflections, &c.log_reflections);
-        assert_eq!(out.planes.len(), cpu.planes.len());
-        for (k, (gp, cp)) in out.planes.iter().zip(&cpu.planes).enumerate() {
+        let planes = out.planes.read(&ctx).expect("plane readback");
+        assert_eq!(planes.len(), cpu.planes.len());
+        for (k, (gp, cp)) in planes.iter().zip(&cpu.planes).enumerate() {
             let gv = [gp.centre.to_array(), gp.normal.to_array(), [gp.r0_logit, 0.0, 0.0]];
             let cv = [cp.centre.to_array(), cp.normal.to_array(), [cp.r0_logit, 0.0, 0.0]];
             for (part, (a, b)) in ["centre", "normal", "r0_logit"].iter().zip(gv.iter().zip(&cv)) {

@@ -66,7 +66,7 @@ impl Adam {
     }
 
     /// Record step `t` (1-based) with learning rates `rate` of `values` from `grads` (both of
-    /// `moments.len` floats).
+    /// `moments.len` floats), unless `guard` (a [`crate::step_guard`] word) is set when it runs.
     pub fn record(
         &self,
         ctx: &GpuContext,
@@ -76,6 +76,7 @@ impl Adam {
         moments: &AdamMoments,
         rate: &AdamRate,
         t: u32,
+        guard: &wgpu::Buffer,
     ) {
         let (bias1, bias2) = self.settings.bias_corrections(t);
         let mut first = 0;
@@ -105,6 +106,7 @@ impl Adam {
                     range(grads, o, n),
                     range(&moments.m, o, n),
                     range(&moments.v, o, n),
+                    guard.as_entire_binding(),
                 ],
             );
             // Four floats a thread (adam.wgsl); the bindings cover the last vec4 whole, since

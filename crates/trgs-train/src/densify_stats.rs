@@ -73,6 +73,7 @@ impl GpuDensifyStats {
         frame: &Frame,
         grads: &Gradients,
         views: usize,
+        guard: &wgpu::Buffer,
     ) {
         let count = self.len as u32;
         // A training step renders the current set before it adds, so the frame always matches;
@@ -108,6 +109,7 @@ impl GpuDensifyStats {
                             u64::from(first) * stats_bytes,
                             u64::from(n) * stats_bytes,
                         ),
+                        guard.as_entire_binding(),
                     ],
                 );
                 rec.dispatch("densify_stats", &self.kernel, &bind, grid_1d(n.div_ceil(256)));

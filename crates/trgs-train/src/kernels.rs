@@ -17,5 +17,6 @@ trgs_render::kernel_registry! {
         mcmc_regularise: "training/mcmc_regularise.wgsl" => no_defines,
         mcmc_noise: "training/mcmc_noise.wgsl" => no_defines,
         gather_rows: "training/gather_rows.wgsl" => no_defines,
+        step_guard: "training/step_guard.wgsl" => no_defines,
     }
 }

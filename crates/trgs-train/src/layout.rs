@@ -1,6 +1,7 @@
 //! The training stages' GPU structs and constants, declared once here in Rust; the WGSL every
 //! training kernel sees ([`prelude`]) is the renderer's prelude followed by these, generated.
 use trgs_core::metrics::{SSIM_C1, SSIM_C2, SSIM_RADIUS, SSIM_WINDOW, gaussian_window};
+use trgs_core::reference::{GUARD_KEYS_DROPPED, GUARD_LOSS_NOT_FINITE};
 use trgs_core::reference::{MAX_REGULARISED_LOG_SCALE, NOISE_GATE_STEEPNESS, NOISE_GATE_THRESHOLD};
 use trgs_render::gpu_struct;
 use trgs_render::toolkit::layout::{StructInfo, float, struct_info, wgsl_constants};
@@ -99,6 +100,16 @@ gpu_struct! {
     }
 }
 
+gpu_struct! {
+    /// Parameters of `step_guard`: `count` vec4s of loss sums to check.
+    pub struct StepGuardParams {
+        pub count: u32,
+        pub pad0: u32,
+        pub pad1: u32,
+        pub pad2: u32,
+    }
+}
+
 /// `gather_rows`' source-index bit for an output row that starts from zero (when honoured).
 pub const GATHER_ZERO: u32 = 1 << 31;
 
@@ -114,6 +125,7 @@ pub fn all_structs() -> Vec<StructInfo> {
         struct_info::<McmcParams>(),
         struct_info::<DensifyStatsParams>(),
         struct_info::<GatherParams>(),
+        struct_info::<StepGuardParams>(),
     ]
 }
 
@@ -126,6 +138,8 @@ pub fn prelude() -> String {
         ("LOSS_STRIP", LOSS_STRIP),
         ("GATHER_ZERO", GATHER_ZERO),
         ("UNCOVERED_LABEL", UNCOVERED_LABEL),
+        ("GUARD_KEYS_DROPPED", GUARD_KEYS_DROPPED),
+        ("GUARD_LOSS_NOT_FINITE", GUARD_LOSS_NOT_FINITE),
     ];
     let f32s = [
         ("NOISE_GATE_STEEPNESS".to_string(), NOISE_GATE_STEEPNESS),

@@ -33,6 +33,7 @@ pub mod plane_init;
 pub mod reflection_seed;
 pub mod run;
 pub mod settings;
+pub mod step_guard;
 pub mod targets;
 pub mod trainer;
 pub use trgs_core as core;

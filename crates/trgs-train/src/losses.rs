@@ -193,6 +193,22 @@ impl PendingLoss {
     /// Sum the strips' sums (blocking read of 32 bytes per strip).
     pub fn read(&self, ctx: &GpuContext) -> Result<LossValues, GpuError> {
         let partials = gpu::read_buffer::<[f32; 4]>(ctx, &self.partials, 0, 2 * self.strips)?;
+        Ok(self.values_of(&partials))
+    }
+
+    /// The strips' sums on the GPU ([`PendingLoss::partial_vec4s`] vec4s), for a readback of
+    /// the caller's own.
+    pub fn partials(&self) -> &wgpu::Buffer {
+        &self.partials
+    }
+
+    /// How many vec4s of sums [`PendingLoss::partials`] holds (two per strip).
+    pub fn partial_vec4s(&self) -> u32 {
+        2 * self.strips as u32
+    }
+
+    /// The values from the strips' sums as read back (`partial_vec4s` of them).
+    pub fn values_of(&self, partials: &[[f32; 4]]) -> LossValues {
         let total = |slot: usize| {
             partials.iter().skip(slot).step_by(2).fold([0.0f64; 3], |acc, p| {
                 [acc[0] + f64::from(p[0]), acc[1] + f64::from(p[1]), acc[2] + f64::from(p[2])]
@@ -206,7 +222,7 @@ impl PendingLoss {
             [0.0; 3]
         };
         let lambda = self.lambda_dssim;
-        Ok(LossValues {
+        LossValues {
             value: (1.0 - lambda) * l1 + lambda * (1.0 - ssim),
             l1,
             ssim,
@@ -214,7 +230,7 @@ impl PendingLoss {
             depth,
             conflict,
             mask,
-        })
+        }
     }
 }
 

@@ -48,7 +48,8 @@ fn gpu_adam_matches_twin() {
         let lr = 1e-3 * f64::from(t);
         let rate = AdamRate { lr, lead_lr: 20.0 * lr, lead: 3, stride: 48 };
         let mut rec = Recorder::new(&ctx, "test.adam", false);
-        adam_gpu.record(&ctx, &mut rec, &values, &g_buf, &moments, &rate, t);
+        let open = trgs_train::step_guard::open(&ctx);
+        adam_gpu.record(&ctx, &mut rec, &values, &g_buf, &moments, &rate, t, &open);
         rec.submit_and_wait(&ctx).expect("GPU work");
         adam(&mut params, &grads, &mut m, &mut v, &rate, t, &adam_gpu.settings);
         for (i, s) in step_sum.iter_mut().enumerate() {

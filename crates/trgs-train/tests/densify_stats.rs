@@ -71,7 +71,14 @@ fn gpu_densify_stats_match_twin() {
         let mut twin = DensifyStats::new(n);
         for _ in 0..2 {
             let mut rec = Recorder::new(&ctx, "test.densify_stats", false);
-            gpu.record_add(&ctx, &mut rec, &frame, &grads, views);
+            gpu.record_add(
+                &ctx,
+                &mut rec,
+                &frame,
+                &grads,
+                views,
+                &trgs_train::step_guard::open(&ctx),
+            );
             rec.submit_and_wait(&ctx).expect("GPU work");
             twin.add(&passes[..views], frame.width(), frame.height());
         }

@@ -93,7 +93,8 @@ fn gpu_mcmc_stages_match_twins() {
     let lr = AdamRate::uniform(1.6e-4 * 2.0);
     let seed = 77;
     let mut rec = Recorder::new(&ctx, "test.mcmc", false);
-    kernels.record_noise(&ctx, &mut rec, &gpu_scene, &settings, &lr, seed);
+    let open = trgs_train::step_guard::open(&ctx);
+    kernels.record_noise(&ctx, &mut rec, &gpu_scene, &settings, &lr, seed, &open);
     rec.submit_and_wait(&ctx).expect("GPU work");
     let mut want = twin.clone();
     mcmc_noise(&mut want, settings.noise_rate * lr.lr, seed);

@@ -29,6 +29,7 @@ mod rasterize_reflection_bwd;
 mod regularisers;
 mod render;
 mod sort;
+mod step_guard;
 mod tile_counts;
 mod tile_ranges;
 
@@ -64,6 +65,7 @@ pub use regularisers::{
 };
 pub use render::{RenderSettings, ViewPass, check_render_settings, render, render_view};
 pub use sort::sort_keys;
+pub use step_guard::{GUARD_KEYS_DROPPED, GUARD_LOSS_NOT_FINITE, step_guard};
 pub use tile_counts::{TileGrid, tile_counts, tile_rect};
 pub use tile_ranges::tile_ranges;
 

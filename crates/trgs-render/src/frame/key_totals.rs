@@ -73,19 +73,27 @@ pub(crate) fn assign(views: &mut [ViewBuffers], view_keys: &[u64]) {
     }
 }
 
-/// A readback of the totals, submitted with its frame and not waited for.
+/// A readback of a render's key totals, submitted with its frame and not waited for: settled
+/// by its frame ([`Frame::settle_keys`]), or taken out of it ([`Frame::take_pending_keys`]) and
+/// settled later, after the frame has been rendered again ([`Frame::settle_pending_keys`]).
 #[derive(Debug)]
-pub(crate) struct PendingTotals {
+pub struct PendingKeyTotals {
     read: PendingRead,
     words: usize,
     capacity: u64,
+    /// Which render of its frame it belongs to.
+    render: u64,
 }
 
-impl PendingTotals {
-    /// Starts mapping `staging`, whose copies have been submitted, for a key list of
-    /// `capacity` keys.
-    pub(crate) fn start(staging: wgpu::Buffer, words: usize, capacity: u64) -> Self {
-        Self { read: PendingRead::start(staging), words, capacity }
+impl PendingKeyTotals {
+    /// The totals' mapping `read`, for a key list of `capacity` keys, of render `render`.
+    pub(crate) fn start(read: PendingRead, words: usize, capacity: u64, render: u64) -> Self {
+        Self { read, words, capacity, render }
+    }
+
+    /// Whether the totals have arrived (reading them then does not wait).
+    pub fn is_ready(&self) -> bool {
+        self.read.is_ready()
     }
 }
 
@@ -95,19 +103,49 @@ impl Frame {
     /// if they have not arrived (a training step asks after reading its loss back, by when they
     /// have). None before the first render.
     pub fn settle_keys(&mut self, ctx: &GpuContext) -> Result<Option<KeyTotals>, GpuError> {
-        let Some(p) = self.pending_keys.take() else {
-            return Ok(self.key_totals);
-        };
+        match self.pending_keys.take() {
+            Some(p) => self.settle_pending_keys(ctx, p).map(Some),
+            None => Ok(self.key_totals),
+        }
+    }
+
+    /// The readback of the last render's key totals, when the render did not wait for them:
+    /// taken out of the frame, so that the frame can be rendered again before they arrive
+    /// (a training step finished after the next one was recorded). None when they are known.
+    pub fn take_pending_keys(&mut self) -> Option<PendingKeyTotals> {
+        self.pending_keys.take()
+    }
+
+    /// The key totals of `pending` (taken from this frame), waiting for its render only if they
+    /// have not arrived; they size this frame's later key lists. When the frame still holds the
+    /// render they belong to, they also describe it ([`Frame::key_count`]).
+    pub fn settle_pending_keys(
+        &mut self,
+        ctx: &GpuContext,
+        pending: PendingKeyTotals,
+    ) -> Result<KeyTotals, GpuError> {
+        let p = pending;
         let words: Vec<u32> = p.read.read(ctx, 4 * p.words)?;
         let totals = Totals::decode(&words);
-        assign(&mut self.views, &totals.view_keys);
         let settled = KeyTotals { keys: totals.keys(), capacity: p.capacity };
-        if let Some(b) = self.binning.as_mut() {
-            b.entries = totals.entries;
-            b.total = u32::try_from(settled.keys.min(settled.capacity)).unwrap_or(u32::MAX);
+        self.largest_keys = self.largest_keys.max(settled.keys);
+        if p.render == self.renders {
+            assign(&mut self.views, &totals.view_keys);
+            if let Some(b) = self.binning.as_mut() {
+                b.entries = totals.entries;
+                b.total = u32::try_from(settled.keys.min(settled.capacity)).unwrap_or(u32::MAX);
+            }
+            self.key_totals = Some(settled);
         }
-        self.record_key_totals(settled);
-        Ok(Some(settled))
+        Ok(settled)
+    }
+
+    /// A buffer whose second u32 (byte offset 4) the last render set to 1 on the GPU if its key
+    /// list dropped keys and to 0 if it held them (written by `emit_keys`, under either
+    /// sizing): what a training step gates its updates on before the totals come back. None
+    /// before the first render.
+    pub fn key_overflow_flag(&self) -> Option<&wgpu::Buffer> {
+        self.binning.as_ref().map(|b| &b.kept)
     }
 
     /// Records a render's totals, known now.
@@ -126,7 +164,8 @@ impl Frame {
     }
 
     /// Leaves the totals of a render that sized its list from earlier frames to arrive later.
-    pub(crate) fn expect_key_totals(&mut self, pending: PendingTotals) {
+    pub(crate) fn expect_key_totals(&mut self, pending: PendingKeyTotals) {
+        debug_assert_eq!(pending.render, self.renders, "the totals of this render");
         self.key_totals = None;
         self.pending_keys = Some(pending);
     }

@@ -9,7 +9,8 @@ use crate::toolkit::paged::Paged;
 
 /// Where the keys go besides the list: the scan's `total` of every view's keys, and `kept`, into
 /// whose first word emit_keys writes min(total, the list's capacity), the count the sort and
-/// tile_ranges cover when it is known on the GPU only.
+/// tile_ranges cover when it is known on the GPU only, and into its second whether the list
+/// dropped keys (1) or not (0).
 pub struct KeyCounts<'a> {
     pub total: &'a wgpu::Buffer,
     pub kept: &'a wgpu::Buffer,

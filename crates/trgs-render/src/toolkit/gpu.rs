@@ -156,8 +156,20 @@ pub fn gpu_wait_limit() -> std::time::Duration {
 /// returned as [`GpuError::Lost`] (the panic hook still prints its message). The device is gone
 /// by then, so no state that could be used afterwards is left half-updated.
 pub fn wait_for_gpu(ctx: &GpuContext, what: &str) -> Result<(), GpuError> {
+    wait_for_submission(ctx, what, None)
+}
+
+/// [`wait_for_gpu`] for `submission` and what was submitted before it (everything when None):
+/// work submitted after it may still be running when this returns. Counted in
+/// [`GpuContext::waits`].
+pub fn wait_for_submission(
+    ctx: &GpuContext,
+    what: &str,
+    submission: Option<wgpu::SubmissionIndex>,
+) -> Result<(), GpuError> {
+    ctx.count_wait();
     let limit = gpu_wait_limit();
-    let wait = wgpu::PollType::Wait { submission_index: None, timeout: Some(limit) };
+    let wait = wgpu::PollType::Wait { submission_index: submission, timeout: Some(limit) };
     let polled = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| ctx.device.poll(wait)));
     let lost = |detail: String| {
         crate::gpu_error::lost(&format!("waiting for {what}"), ctx.lost().unwrap_or(detail))
@@ -188,6 +200,9 @@ const READBACK: &str = "reading back a buffer";
 pub struct PendingRead {
     staging: wgpu::Buffer,
     mapped: std::sync::Arc<std::sync::OnceLock<Result<(), wgpu::BufferAsyncError>>>,
+    /// The submission that copies into `staging`, when known: a read then waits for it alone,
+    /// not for work submitted after it.
+    submission: Option<wgpu::SubmissionIndex>,
 }
 
 impl PendingRead {
@@ -198,7 +213,20 @@ impl PendingRead {
         staging.slice(..).map_async(wgpu::MapMode::Read, move |r| {
             let _ = done.set(r);
         });
-        Self { staging, mapped }
+        Self { staging, mapped, submission: None }
+    }
+
+    /// Starts mapping `staging`, which `submission` copies into: reading it waits for that
+    /// submission only, so a step read back after the next one was submitted leaves the GPU
+    /// busy with the next one.
+    pub fn after(staging: wgpu::Buffer, submission: wgpu::SubmissionIndex) -> Self {
+        Self { submission: Some(submission), ..Self::start(staging) }
+    }
+
+    /// Whether the values have arrived (as of the device's last poll): reading them then does
+    /// not wait.
+    pub fn is_ready(&self) -> bool {
+        self.mapped.get().is_some()
     }
 
     /// The first `bytes` bytes, waiting for the GPU only if the mapping has not completed.
@@ -219,7 +247,7 @@ impl PendingRead {
     fn wait(&self, ctx: &GpuContext) -> (Result<(), GpuError>, Result<(), String>) {
         let waited = match self.mapped.get() {
             Some(_) => Ok(()),
-            None => wait_for_gpu(ctx, "its work before a readback"),
+            None => wait_for_submission(ctx, "its work before a readback", self.submission.clone()),
         };
         let mapped = match self.mapped.get() {
             Some(Ok(())) => Ok(()),
@@ -386,16 +414,20 @@ impl Recorder {
     /// Submit the recorded work and wait for it; with profiling, add this submission's stage
     /// times. Leaves a fresh encoder for what follows.
     pub fn submit_and_wait(&mut self, ctx: &GpuContext) -> Result<(), GpuError> {
-        self.submit_then(ctx, true)
+        self.submit_then(ctx, true).map(drop)
     }
 
     /// Submit the recorded work without waiting for it, unless profiling (whose stage times
     /// are read back). Leaves a fresh encoder for what follows.
-    pub fn submit(&mut self, ctx: &GpuContext) -> Result<(), GpuError> {
+    pub fn submit(&mut self, ctx: &GpuContext) -> Result<wgpu::SubmissionIndex, GpuError> {
         self.submit_then(ctx, false)
     }
 
-    fn submit_then(&mut self, ctx: &GpuContext, wait: bool) -> Result<(), GpuError> {
+    fn submit_then(
+        &mut self,
+        ctx: &GpuContext,
+        wait: bool,
+    ) -> Result<wgpu::SubmissionIndex, GpuError> {
         let staging = self.profiler.as_ref().and_then(|p| p.record_resolve(ctx, &mut self.encoder));
         let encoder = std::mem::replace(
             &mut self.encoder,
@@ -403,13 +435,13 @@ impl Recorder {
                 label: Some("trgs.recorder"),
             }),
         );
-        ctx.queue.submit([encoder.finish()]);
+        let index = ctx.queue.submit([encoder.finish()]);
         if let (Some(p), Some(staging)) = (&mut self.profiler, staging) {
             p.add_resolved(ctx, &staging)?;
         } else if wait {
             wait_for_gpu(ctx, "a recorded batch of passes")?;
         }
-        Ok(())
+        Ok(index)
     }
 
     /// Milliseconds per stage (in first-recorded order), when profiling.

@@ -187,7 +187,7 @@ impl DensifyStrategy for ClassicDensification {
         // `DensifyStats::add`). In stage 2 the reflection's gradient does not reach the
         // Gaussians: its passes hold zeros.
         let views = if step.stage == Stage::Joint { step.frame.views().len() } else { 1 };
-        self.stats.record_add(step.ctx, rec, step.frame, step.grads, views);
+        self.stats.record_add(step.ctx, rec, step.frame, step.grads, views, step.guard);
     }
 
     fn maintain(

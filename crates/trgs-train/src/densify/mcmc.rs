@@ -298,7 +298,8 @@ impl DensifyStrategy for McmcDensification {
         // A seed per step (the step survives a resume, so the noise does too).
         let seed = (step.seed as u32).wrapping_mul(0x9e37_79b9) ^ step.step;
         let position = &step.rates[Attribute::Means];
-        self.kernels.record_noise(step.ctx, rec, step.scene, &self.settings, position, seed);
+        let (ctx, scene, guard) = (step.ctx, step.scene, step.guard);
+        self.kernels.record_noise(ctx, rec, scene, &self.settings, position, seed, guard);
     }
 
     fn maintain(
@@ -375,6 +376,7 @@ impl McmcKernels {
         settings: &McmcSettings,
         position_lr: &AdamRate,
         seed: u32,
+        guard: &wgpu::Buffer,
     ) {
         let base = McmcParams {
             seed,
@@ -395,6 +397,7 @@ impl McmcKernels {
                     range(p[Attribute::LogScales], f * 12, c * 12),
                     range(p[Attribute::OpacityLogits], f * 4, c * 4),
                     range(scene.populations(), f * 4, c * 4),
+                    guard.as_entire_binding(),
                 ],
             );
             rec.dispatch("mcmc_noise", &self.noise, &bind, grid_1d(count.div_ceil(256)));

@@ -72,6 +72,9 @@ pub struct StepView<'a> {
     pub rates: &'a PerAttribute<AdamRate>,
     /// The run's seed.
     pub seed: u64,
+    /// The step's guard word ([`crate::step_guard`]): the updates a strategy records change
+    /// nothing while it is set.
+    pub guard: &'a wgpu::Buffer,
 }
 
 /// What a strategy did to the set after a step.

@@ -17,6 +17,7 @@ mod planes;
 mod step;
 mod step_times;
 
+pub use step::StepInFlight;
 pub use step_times::StepTimes;
 
 use anyhow::{Context, Result};
@@ -28,6 +29,8 @@ use trgs_render::{Frame, GpuContext, GpuScene, LayerGrads, RenderOptions, Render
 /// What one step measured and did.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StepStats {
+    /// The step's number, counted from 1.
+    pub step: u32,
     pub loss: f64,
     pub l1: f64,
     pub ssim: f64,
@@ -36,6 +39,10 @@ pub struct StepStats {
     /// Tile keys of the step's frame, every view's together ([`trgs_render::Frame::key_count`]):
     /// what the sort orders and the rasterize passes walk, paged past one binding.
     pub keys: u64,
+    /// The step's frame outgrew its key list (sized from earlier frames): its updates changed
+    /// nothing (the step's guard), and the next frame is sized exactly. Only a step finished
+    /// after the next was recorded can be skipped: [`Trainer::train_step`] takes it again.
+    pub skipped: bool,
     /// Where the step's wall-clock time went.
     pub times: StepTimes,
     /// With [`Trainer::profile`]: GPU milliseconds of every render and backward stage, from
@@ -72,6 +79,14 @@ pub struct Trainer {
     rng: Rng,
     /// Time every GPU stage of each step with timestamp queries ([`StepStats::gpu_stages`]).
     pub profile: bool,
+    /// Wait for the GPU at the end of each phase of a step, so that [`StepTimes`] gives each
+    /// phase its GPU time (the step then waits where it otherwise would not).
+    pub time_phases: bool,
+    /// The word that lets a step's updates change the model ([`crate::step_guard`]).
+    guard: crate::step_guard::StepGuard,
+    /// Size the next frame's key list exactly (after a frame outgrew its list, or the set
+    /// changed).
+    exact_keys_next: bool,
     /// Centres of the training cameras (the opacity perturbation selects what they see through
     /// a plane).
     camera_centres: Vec<glam::DVec3>,
@@ -115,6 +130,9 @@ impl Trainer {
             extent,
             densification: Box::new(NoDensification),
             profile: false,
+            time_phases: false,
+            guard: crate::step_guard::StepGuard::new(ctx),
+            exact_keys_next: false,
             camera_centres: Vec::new(),
         }
     }
@@ -225,6 +243,7 @@ impl Trainer {
         trgs_render::toolkit::gpu::scoped(&ctx, "uploading the training state", || {
             self.gaussians.replace(state)?;
             self.densification.restart(state.gaussians.len());
+            self.exact_keys_next = true;
             Ok(())
         })
     }
@@ -243,6 +262,7 @@ impl Trainer {
     ) -> Result<R> {
         let out = edit(&mut self.gaussians, &mut self.rng, self.extent)?;
         self.densification.restart(self.gaussians.len());
+        self.exact_keys_next = true;
         Ok(out)
     }
 

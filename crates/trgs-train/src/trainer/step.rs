@@ -1,15 +1,61 @@
-//! The training step itself.
+//! The training step itself, in two halves: [`Trainer::record_step`] records and submits the
+//! render, losses, guard, backward and Adam without waiting for the GPU, and
+//! [`Trainer::finish_step`] reads what came back (loss, guard, key totals, plane gradients) and
+//! steps the planes. [`Trainer::train_step`] does both, then the maintenance; a pipelined loop
+//! finishes step N after recording step N + 1, so that the GPU always has the next step queued.
 use super::phase_clock::PhaseClock;
 use super::{StepStats, StepTimes, Trainer, psnr_of};
 use crate::data::View;
-use crate::densify::StepView;
-use crate::losses::{LossLayers, LossSettings};
+use crate::densify::{DensifyEvent, StepView};
+use crate::losses::{LossLayers, LossSettings, PendingLoss};
 use crate::settings::Stage;
 use anyhow::{Context, Result};
-use trgs_core::reference::RegulariserWeights;
+use trgs_core::reference::{GUARD_KEYS_DROPPED, GUARD_LOSS_NOT_FINITE, RegulariserWeights};
 use trgs_core::scene::Attribute;
-use trgs_render::toolkit::gpu::Recorder;
-use trgs_render::{BackwardOptions, KeySizing, LayerGrads};
+use trgs_render::PlaneGradsRead;
+use trgs_render::toolkit::gpu::{PendingRead, Recorder};
+use trgs_render::{BackwardOptions, KeySizing, KeyTotals, LayerGrads, PendingKeyTotals};
+
+/// A step recorded and submitted ([`Trainer::record_step`]) whose results are on their way
+/// back; [`Trainer::finish_step`] reads them.
+#[derive(Debug)]
+#[must_use = "a step's loss and plane gradients are applied when it is finished"]
+pub struct StepInFlight {
+    /// The step's number, from 1.
+    step: u32,
+    view: String,
+    /// The guard word (16 bytes), then the loss strips' sums.
+    readback: PendingRead,
+    loss: PendingLoss,
+    keys: StepKeys,
+    planes: PlaneGradsRead,
+    times: StepTimes,
+    gpu_stages: Vec<(&'static str, f64)>,
+}
+
+/// The key totals of a step's frame: known when it was sized exactly, else on their way back.
+#[derive(Debug)]
+enum StepKeys {
+    Known(Option<KeyTotals>),
+    Pending(PendingKeyTotals),
+}
+
+impl StepInFlight {
+    /// The step's number, counted from 1.
+    pub fn step(&self) -> u32 {
+        self.step
+    }
+
+    /// Whether everything the step reads back has arrived: finishing it then does not wait.
+    pub fn is_ready(&self) -> bool {
+        self.readback.is_ready()
+            && self.planes.is_ready()
+            && match &self.keys {
+                StepKeys::Known(_) => true,
+                StepKeys::Pending(p) => p.is_ready(),
+            }
+    }
+}
 
 impl Trainer {
     /// One optimisation step on `view`.
@@ -23,6 +69,9 @@ impl Trainer {
     /// model the step made, not the moment an opacity reset or perturbation knocked it back
     /// (the training recovers from those within a few steps). Its time is not in the step's
     /// phase times.
+    ///
+    /// A step whose frame outgrew its key list (sized from earlier frames) changed nothing; it
+    /// is taken again with the list sized exactly, so that every step here trains.
     /// A GPU failure (out of memory, a lost device) ends the step with an error, not a panic.
     pub fn train_step_then(
         &mut self,
@@ -31,15 +80,63 @@ impl Trainer {
     ) -> Result<StepStats> {
         let ctx = self.ctx.clone();
         trgs_render::toolkit::gpu::scoped(&ctx, "a training step", || {
-            self.train_step_scoped(view, before_maintenance)
+            let mut stats = loop {
+                let in_flight = self.record_step_scoped(view)?;
+                let stats = self.finish_step_scoped(in_flight)?;
+                if !stats.skipped {
+                    break stats;
+                }
+                self.step -= 1;
+                self.exact_keys_next = true;
+            };
+            before_maintenance(self)?;
+            let clock = PhaseClock::start(self.waits_between_phases());
+            (stats.densified, stats.perturbed) = self.maintain_scoped()?;
+            stats.times.densify = clock.elapsed(&self.ctx)?;
+            Ok(stats)
         })
     }
 
-    fn train_step_scoped(
-        &mut self,
-        view: &View,
-        before_maintenance: impl FnOnce(&Trainer) -> Result<()>,
-    ) -> Result<StepStats> {
+    /// Record and submit step `self.step + 1` on `view` (render, losses, guard, backward, Adam on
+    /// the Gaussians), advancing `step`, without waiting for the GPU (unless profiling or timing
+    /// phases, or when the frame is sized exactly: the first step, and the step after one that
+    /// outgrew its key list or changed the set). Then call [`Trainer::maintain`] for this step,
+    /// and [`Trainer::finish_step`] for it, in that order, before the step after next is recorded.
+    ///
+    /// The step's updates are guarded on the GPU (`step_guard`): if its frame dropped keys or its
+    /// loss is not finite, they change nothing, and finishing it says which.
+    pub fn record_step(&mut self, view: &View) -> Result<StepInFlight> {
+        let ctx = self.ctx.clone();
+        trgs_render::toolkit::gpu::scoped(&ctx, "recording a training step", || {
+            self.record_step_scoped(view)
+        })
+    }
+
+    /// Read back what `in_flight` computed (waiting only for its own GPU work), step the planes
+    /// by its gradients, and say what it measured. A step whose frame dropped keys changed
+    /// nothing and is returned with `skipped` set; a step whose loss is not finite is an error
+    /// (it changed nothing either).
+    pub fn finish_step(&mut self, in_flight: StepInFlight) -> Result<StepStats> {
+        let ctx = self.ctx.clone();
+        trgs_render::toolkit::gpu::scoped(&ctx, "finishing a training step", || {
+            self.finish_step_scoped(in_flight)
+        })
+    }
+
+    /// The densification strategy's maintenance and the opacity perturbation after step
+    /// `self.step`, when their schedules run them: what the strategy did, and how many
+    /// Gaussians were perturbed. A change of the set sizes the next frame's key list exactly.
+    pub fn maintain(&mut self) -> Result<(Vec<DensifyEvent>, usize)> {
+        let ctx = self.ctx.clone();
+        trgs_render::toolkit::gpu::scoped(&ctx, "densifying", || self.maintain_scoped())
+    }
+
+    /// Whether each phase of a step waits for the GPU before its lap is taken.
+    fn waits_between_phases(&self) -> bool {
+        self.profile || self.time_phases
+    }
+
+    fn record_step_scoped(&mut self, view: &View) -> Result<StepInFlight> {
         let ctx = &self.ctx;
         let stage = self.settings.stage(self.step);
         let has_planes = !self.planes().is_empty();
@@ -48,68 +145,76 @@ impl Trainer {
         options.sh_degree = Some(self.settings.active_sh_degree(self.step + 1));
         options.depth_variance = has_planes && self.settings.lambda_depth > 0.0;
         options.profile = self.profile;
-        let mut times = StepTimes::default();
-        let mut clock = PhaseClock::start();
-        let scene = self.gaussians.scene();
         // The key list is sized from earlier steps' frames, so the render does not wait for its
-        // binning; the totals arrive with the loss. A frame that outgrew the list dropped keys:
-        // it is rendered again, sized exactly, before anything learns from it.
-        options.key_sizing = KeySizing::FromEarlierFrames;
-        let (loss, loss_stages) = loop {
-            self.renderer.render_into(scene, &view.camera, &options, &mut self.frame)?;
-            times.render += clock.lap(&self.ctx)?;
-            let target = self
-                .targets
-                .get(ctx, view)
-                .with_context(|| format!("uploading view {}", view.camera.name))?;
-            let shape = (self.frame.width(), self.frame.height(), self.frame.plane_slots());
-            if self.layer_grads.as_ref().is_none_or(|(s, _)| *s != shape) {
-                self.layer_grads = Some((shape, LayerGrads::zeros(ctx, &self.frame)?));
-            }
-            #[allow(clippy::expect_used)]
-            let layer_grads = &self.layer_grads.as_ref().expect("allocated above").1;
-            let s = &self.settings;
-            let loss_settings = LossSettings {
-                lambda_dssim: s.lambda_dssim,
-                regularisers: has_planes.then_some(RegulariserWeights {
-                    depth: s.lambda_depth,
-                    conflict: s.lambda_conflict,
-                    mask: s.lambda_mask,
-                }),
-            };
-            let mut rec = Recorder::new(ctx, "trgs.train.loss", self.profile);
-            let pending = self
-                .losses
-                .record(
-                    ctx,
-                    &mut rec,
-                    &LossLayers::of_frame(&self.frame)?,
-                    target,
-                    layer_grads,
-                    &loss_settings,
-                )
-                .with_context(|| format!("loss of view {}", view.camera.name))?;
-            rec.submit_and_wait(ctx)?;
-            let loss = pending.read(ctx)?;
-            times.loss += clock.lap(&self.ctx)?;
-            let totals = self.frame.settle_keys(ctx)?;
-            if totals.is_none_or(|t| t.held()) {
-                break (loss, rec.stage_times().unwrap_or_default());
-            }
-            options.key_sizing = KeySizing::Exact;
+        // binning; the guard keeps a frame that outgrew it from changing anything.
+        options.key_sizing = if std::mem::take(&mut self.exact_keys_next) {
+            KeySizing::Exact
+        } else {
+            KeySizing::FromEarlierFrames
         };
-        let keys = self.frame.key_count();
-        if !loss.value.is_finite() {
-            anyhow::bail!("loss of view {}: not finite ({})", view.camera.name, loss.value);
+        let mut times = StepTimes::default();
+        let mut clock = PhaseClock::start(self.waits_between_phases());
+        let scene = self.gaussians.scene();
+        self.renderer.render_into(scene, &view.camera, &options, &mut self.frame)?;
+        let keys = match self.frame.take_pending_keys() {
+            Some(p) => StepKeys::Pending(p),
+            // Sized exactly: known now, without waiting.
+            None => StepKeys::Known(self.frame.settle_keys(ctx)?),
+        };
+        times.render = clock.lap(ctx)?;
+        let target = self
+            .targets
+            .get(ctx, view)
+            .with_context(|| format!("uploading view {}", view.camera.name))?;
+        let shape = (self.frame.width(), self.frame.height(), self.frame.plane_slots());
+        if self.layer_grads.as_ref().is_none_or(|(s, _)| *s != shape) {
+            self.layer_grads = Some((shape, LayerGrads::zeros(ctx, &self.frame)?));
         }
         #[allow(clippy::expect_used)]
-        let layer_grads = &self.layer_grads.as_ref().expect("allocated with the loss").1;
+        let layer_grads = &self.layer_grads.as_ref().expect("allocated above").1;
+        let s = &self.settings;
+        let loss_settings = LossSettings {
+            lambda_dssim: s.lambda_dssim,
+            regularisers: has_planes.then_some(RegulariserWeights {
+                depth: s.lambda_depth,
+                conflict: s.lambda_conflict,
+                mask: s.lambda_mask,
+            }),
+        };
+        let mut rec = Recorder::new(ctx, "trgs.train.loss", self.profile);
+        let loss = self
+            .losses
+            .record(
+                ctx,
+                &mut rec,
+                &LossLayers::of_frame(&self.frame)?,
+                target,
+                layer_grads,
+                &loss_settings,
+            )
+            .with_context(|| format!("loss of view {}", view.camera.name))?;
+        #[allow(clippy::expect_used)]
+        let kept = self.frame.key_overflow_flag().expect("the frame was rendered above");
+        let (sums, vec4s) = (loss.partials(), loss.partial_vec4s());
+        self.guard.record(ctx, &mut rec, sums, vec4s, kept);
+        let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("trgs.train.step_readback"),
+            size: 16 + u64::from(vec4s) * 16,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        rec.encoder.copy_buffer_to_buffer(self.guard.word(), 0, &staging, 0, 16);
+        rec.encoder.copy_buffer_to_buffer(sums, 0, &staging, 16, u64::from(vec4s) * 16);
+        let submission = rec.submit(ctx)?;
+        let readback = PendingRead::after(staging, submission);
+        let loss_stages = rec.stage_times().unwrap_or_default();
+        times.loss = clock.lap(ctx)?;
         let backward = BackwardOptions {
             block_reflection_to_gaussians: stage == Stage::PlaneAdjustment,
             profile: self.profile,
         };
-        let g = self.renderer.backward(scene, &mut self.frame, layer_grads, &backward)?;
-        times.backward = clock.lap(&self.ctx)?;
+        let mut g = self.renderer.backward(scene, &mut self.frame, layer_grads, &backward)?;
+        times.backward = clock.lap(ctx)?;
         let gpu_stages: Vec<_> =
             [self.frame.stage_times(), Some(&loss_stages[..]), g.stage_times()]
                 .into_iter()
@@ -125,7 +230,8 @@ impl Trainer {
             self.extent,
             scene.sh_coeffs(),
         );
-        let view = StepView {
+        let guard = self.guard.word();
+        let step_view = StepView {
             ctx,
             scene,
             frame: &self.frame,
@@ -134,34 +240,77 @@ impl Trainer {
             stage,
             rates: &rates,
             seed: self.settings.seed,
+            guard,
         };
         let mut rec = Recorder::new(ctx, "trgs.train.adam", false);
-        self.densification.record_before_adam(&view, &mut rec);
+        self.densification.record_before_adam(&step_view, &mut rec);
         let moments = self.gaussians.moments();
         for a in Attribute::ALL {
             let (values, grads) = (scene.parameter(a), g.gaussians.parameter(a));
-            self.adam.record(ctx, &mut rec, values, grads, &moments[a], &rates[a], t);
+            self.adam.record(ctx, &mut rec, values, grads, &moments[a], &rates[a], t, guard);
         }
-        self.densification.record_after_adam(&view, &mut rec);
-        rec.submit_and_wait(ctx)?;
-        self.step_planes(&g.planes, t)?;
-        times.adam = clock.lap(&self.ctx)?;
-        before_maintenance(self)?;
-        clock.lap(&self.ctx)?;
+        self.densification.record_after_adam(&step_view, &mut rec);
+        rec.submit(ctx)?;
+        times.adam = clock.lap(ctx)?;
+        Ok(StepInFlight {
+            step: t,
+            view: view.camera.name.clone(),
+            readback,
+            loss,
+            keys,
+            planes: std::mem::take(&mut g.planes),
+            times,
+            gpu_stages,
+        })
+    }
+
+    fn finish_step_scoped(&mut self, in_flight: StepInFlight) -> Result<StepStats> {
+        let ctx = &self.ctx.clone();
+        let clock = PhaseClock::start(false);
+        let StepInFlight { step, view, readback, loss, keys, planes, mut times, gpu_stages } =
+            in_flight;
+        let words: Vec<u32> = readback.read(ctx, 16 * (1 + loss.partial_vec4s() as usize))?;
+        let guard = words[0];
+        let values = loss.values_of(bytemuck::cast_slice(&words[4..]));
+        let keys = match keys {
+            StepKeys::Pending(p) => Some(self.frame.settle_pending_keys(ctx, p)?),
+            StepKeys::Known(k) => k,
+        };
+        if guard & GUARD_LOSS_NOT_FINITE != 0 || !values.value.is_finite() {
+            anyhow::bail!("loss of view {view}: not finite ({})", values.value);
+        }
+        let skipped = guard & GUARD_KEYS_DROPPED != 0;
+        let planes = planes.read(ctx)?;
+        if skipped {
+            // What a list sized from earlier frames could not hold sizes the next one exactly.
+            self.exact_keys_next = true;
+        } else {
+            self.step_planes(&planes, step)?;
+        }
+        times.readback = clock.elapsed(ctx)?;
+        Ok(StepStats {
+            step,
+            loss: values.value,
+            l1: values.l1,
+            ssim: values.ssim,
+            psnr: psnr_of(values.mse),
+            keys: keys.map_or(0, |k| k.keys),
+            skipped,
+            times,
+            gpu_stages,
+            densified: Vec::new(),
+            perturbed: 0,
+        })
+    }
+
+    fn maintain_scoped(&mut self) -> Result<(Vec<DensifyEvent>, usize)> {
+        let t = self.step;
         let densified =
             self.densification.maintain(t, &mut self.gaussians, &mut self.rng, self.extent)?;
         let perturbed = self.perturb_step()?;
-        times.densify = clock.lap(&self.ctx)?;
-        Ok(StepStats {
-            loss: loss.value,
-            l1: loss.l1,
-            ssim: loss.ssim,
-            psnr: psnr_of(loss.mse),
-            keys,
-            times,
-            gpu_stages,
-            densified,
-            perturbed,
-        })
+        if !densified.is_empty() {
+            self.exact_keys_next = true;
+        }
+        Ok((densified, perturbed))
     }
 }

@@ -1,7 +1,9 @@
 //! Wall-clock milliseconds of each phase of a training step.
 
-/// Wall-clock milliseconds of each phase of a step. Every phase ends with the GPU idle (the
-/// step reads back between phases anyway), so the phases add up to the step.
+/// Wall-clock milliseconds of each phase of a step. With [`super::Trainer::time_phases`] (or
+/// profiling) every phase ends with the GPU idle, so each holds its GPU work and the phases add
+/// up to the step; otherwise the first four are the CPU's time recording them (nothing waits)
+/// and the GPU's time shows in `readback`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct StepTimes {
     /// Forward render of every pass.
@@ -10,24 +12,29 @@ pub struct StepTimes {
     pub loss: f64,
     /// The adjoint passes and the plane-gradient readback.
     pub backward: f64,
-    /// Adam on the Gaussians (GPU) and the planes (CPU), and the densification statistics.
+    /// Adam on the Gaussians and the densification statistics (GPU).
     pub adam: f64,
+    /// Reading the step's loss, guard, key totals and plane gradients back (waiting for the
+    /// GPU when they have not arrived), and Adam on the planes (CPU).
+    #[serde(default)]
+    pub readback: f64,
     /// Densification, pruning, opacity reset and perturbation, when their schedules run them.
     pub densify: f64,
 }
 
 impl StepTimes {
     pub fn total(&self) -> f64 {
-        self.render + self.loss + self.backward + self.adam + self.densify
+        self.render + self.loss + self.backward + self.adam + self.readback + self.densify
     }
 
     /// The phases as (name, ms) pairs, for logs and reports.
-    pub fn phases(&self) -> [(&'static str, f64); 5] {
+    pub fn phases(&self) -> [(&'static str, f64); 6] {
         [
             ("render", self.render),
             ("loss", self.loss),
             ("backward", self.backward),
             ("adam", self.adam),
+            ("readback", self.readback),
             ("densify", self.densify),
         ]
     }
@@ -38,6 +45,7 @@ impl StepTimes {
         self.loss += other.loss;
         self.backward += other.backward;
         self.adam += other.adam;
+        self.readback += other.readback;
         self.densify += other.densify;
     }
 }

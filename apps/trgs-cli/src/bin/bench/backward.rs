@@ -62,7 +62,10 @@ pub fn bench_backward(
         // A fresh copy of the upstream gradients (the backward consumes them), not timed.
         let layer_grads = LayerGrads::upload(ctx, &frame, &grads)?;
         let t = Instant::now();
-        renderer.backward(&scene, &mut frame, &layer_grads, &plain)?;
+        let out = renderer.backward(&scene, &mut frame, &layer_grads, &plain)?;
+        // The backward does not wait for its GPU work: the timed span ends when it is done.
+        trgs_render::toolkit::gpu::wait_for_gpu(ctx, "the backward")?;
+        out.planes.read(ctx)?;
         let b = t.elapsed().as_secs_f64() * 1e3;
         fwd.push(f);
         bwd.push(b);

@@ -474,9 +474,10 @@ fn main() -> Result<()> {
         for planes in 0..=1 {
             let t = bench_train_step(&ctx, planes, args.reps.max(1))?;
             println!(
-                "training step, 256x192 {} Gaussians {planes} planes: {:.1} ms ({})",
+                "training step, 256x192 {} Gaussians {planes} planes: {:.1} ms, pipelined {:.1} ms ({})",
                 t.gaussians,
                 t.step_ms,
+                t.pipelined_ms,
                 t.phases
                     .iter()
                     .map(|(n, ms)| format!("{n} {ms:.1}"))

@@ -255,17 +255,21 @@ fn train_step_section(s: &mut String, steps: &[TrainStepRow]) {
         s,
         "Whole `Trainer::train_step` calls on the capture-like room, joint stage (every loss of the \
          paper on, SH degree 3, no densification), target: the scene's own render darkened by 10%. \
-         Wall ms: medians over {} steps; each phase ends with the GPU idle, so the phases add up \
-         to the step. GPU ms: medians of the timestamp-query time of each stage, summed over the \
-         views of a step.\n",
+         Step ms: median wall clock of a step taken alone (`train_step`, which waits for its \
+         results); pipelined ms: wall clock per step of a loop that finishes each step after \
+         recording the next (as `train` runs), over {0} steps. Phase ms: medians over {0} steps \
+         with the GPU idle at the end of each phase (`Trainer::time_phases`). GPU ms: medians of \
+         the timestamp-query time of each stage, summed over the views of a step.\n",
         steps[0].steps
     );
     let names: Vec<&str> = steps[0].phases.iter().map(|p| p.0).collect();
-    let _ = writeln!(s, "| planes | step ms | {} |", names.join(" ms | ") + " ms");
-    let _ = writeln!(s, "|---:|---:|{}", "---:|".repeat(names.len()));
+    let _ = writeln!(s, "| planes | step ms | pipelined ms | {} |", names.join(" ms | ") + " ms");
+    let _ = writeln!(s, "|---:|---:|---:|{}", "---:|".repeat(names.len()));
     for t in steps {
         let cells: Vec<String> = t.phases.iter().map(|p| format!("{:.1}", p.1)).collect();
-        let _ = writeln!(s, "| {} | {:.1} | {} |", t.planes, t.step_ms, cells.join(" | "));
+        let (step, pipelined) = (t.step_ms, t.pipelined_ms);
+        let _ =
+            writeln!(s, "| {} | {step:.1} | {pipelined:.1} | {} |", t.planes, cells.join(" | "));
     }
     let _ = writeln!(s, "\n#### Training-step GPU stages (ms, median)\n");
     let rows: Vec<(String, &[(&str, f64)])> =

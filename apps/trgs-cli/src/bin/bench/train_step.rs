@@ -13,9 +13,14 @@ pub struct TrainStepRow {
     pub planes: usize,
     pub gaussians: usize,
     pub steps: usize,
-    /// Median whole step, wall clock.
+    /// Median whole step, wall clock, one step at a time (`Trainer::train_step`: each waits for
+    /// its own results).
     pub step_ms: f64,
-    /// Median of each phase (render, loss, backward, adam, densify), wall clock.
+    /// Wall clock per step of a pipelined loop (each step finished after the next is recorded,
+    /// as `train` runs), over `steps` steps, median of three such runs.
+    pub pipelined_ms: f64,
+    /// Median of each phase (render, loss, backward, adam, readback, densify), wall clock, with
+    /// the GPU idle at the end of each (`Trainer::time_phases`).
     pub phases: Vec<(&'static str, f64)>,
     /// Median GPU ms of each stage (timestamp queries) of a profiled step.
     pub stages: Vec<(&'static str, f64)>,
@@ -28,14 +33,34 @@ pub fn bench_train_step(ctx: &GpuContext, planes: usize, steps: usize) -> Result
     let scene = room_scene(&room_100k(planes, RoomDensity::AsCaptured));
     let (mut trainer, view) = joint_stage_trainer(ctx, &scene)?;
     warm_up(|| trainer.train_step(&view).map(drop))?;
-    let (mut totals, mut phases) = (Vec::new(), vec![Vec::new(); 5]);
+    let mut totals = Vec::new();
+    for _ in 0..steps {
+        let t = std::time::Instant::now();
+        trainer.train_step(&view)?;
+        totals.push(t.elapsed().as_secs_f64() * 1e3);
+    }
+    let mut pipelined = Vec::new();
+    for _ in 0..3 {
+        let t = std::time::Instant::now();
+        let mut in_flight = trainer.record_step(&view)?;
+        for _ in 1..steps {
+            let next = trainer.record_step(&view)?;
+            trainer.maintain()?;
+            trainer.finish_step(std::mem::replace(&mut in_flight, next))?;
+        }
+        trainer.maintain()?;
+        trainer.finish_step(in_flight)?;
+        pipelined.push(t.elapsed().as_secs_f64() * 1e3 / steps as f64);
+    }
+    trainer.time_phases = true;
+    let mut phases = vec![Vec::new(); trgs_train::trainer::StepTimes::default().phases().len()];
     for _ in 0..steps {
         let s = trainer.train_step(&view)?;
-        totals.push(s.times.total());
         for (k, (_, ms)) in s.times.phases().into_iter().enumerate() {
             phases[k].push(ms);
         }
     }
+    trainer.time_phases = false;
     trainer.profile = true;
     let mut samples: Vec<(&'static str, Vec<f64>)> = Vec::new();
     for _ in 0..steps {
@@ -60,6 +85,7 @@ pub fn bench_train_step(ctx: &GpuContext, planes: usize, steps: usize) -> Result
         gaussians: scene.gaussians.len(),
         steps,
         step_ms: median(totals),
+        pipelined_ms: median(pipelined),
         phases: names.into_iter().zip(phases.into_iter().map(median)).collect(),
         stages: samples.into_iter().map(|(n, v)| (n, median(v))).collect(),
     })
