@@ -128,6 +128,12 @@ pub struct Capabilities {
     pub block_walk: bool,
     /// Workgroups of a strided dispatch at most ([`crate::gpu::strided_grid`]).
     pub strided_groups: u32,
+    /// Whether work is recorded while the device runs what was submitted before it. On a GPU
+    /// that keeps it busy; a CPU adapter runs the work on the cores that would record the next,
+    /// where recording only slows its threads down (a training step with a plane took about a
+    /// fifth longer on lavapipe: `bench --train-step`), so a training step there lets the queue
+    /// drain at the end of each phase instead. Readbacks stay asynchronous either way.
+    pub records_while_busy: bool,
 }
 
 /// How to choose the device.
@@ -154,6 +160,9 @@ pub struct DeviceOptions {
     /// ([`crate::gpu::strided_groups_for`]). Tests set a few, so that each workgroup takes
     /// several blocks.
     pub strided_groups: Option<u32>,
+    /// [`Capabilities::records_while_busy`]; None: on any adapter but a CPU one. Tests on a CPU
+    /// adapter set it to check that a step records without waiting.
+    pub records_while_busy: Option<bool>,
 }
 
 /// A wgpu device and queue with what they can do. Cloning shares the device.
@@ -319,6 +328,9 @@ impl GpuContext {
                 .strided_groups
                 .unwrap_or_else(|| crate::gpu::strided_groups_for(adapter.get_info().device_type))
                 .clamp(1, crate::layout::MAX_WORKGROUPS),
+            records_while_busy: options
+                .records_while_busy
+                .unwrap_or(adapter.get_info().device_type != wgpu::DeviceType::Cpu),
         };
         let poison_fresh_buffers = options.poison_fresh_buffers
             || std::env::var("TRGS_POISON_BUFFERS").is_ok_and(|v| v == "1");

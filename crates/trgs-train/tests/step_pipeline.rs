@@ -4,10 +4,17 @@
 //! later) changes nothing, on the GPU, before the trainer knows.
 use trgs_core::fixtures::{SceneSpec, random_scene};
 use trgs_core::scene::{Camera, Gaussians, ReflectionPlane};
-use trgs_render::{GpuContext, Layer};
+use trgs_render::{DeviceOptions, GpuContext, Layer};
 use trgs_train::data::View;
 use trgs_train::settings::TrainSettings;
 use trgs_train::trainer::Trainer;
+
+/// A context that records while the device is busy, as on a GPU (a CPU adapter waits between a
+/// step's phases by default, `Capabilities::records_while_busy`).
+fn ctx() -> GpuContext {
+    let options = DeviceOptions { records_while_busy: Some(true), ..Default::default() };
+    GpuContext::with_options(&options).expect("adapter")
+}
 
 /// A view of `camera` whose photo is the trainer's own render, darkened.
 fn view_of(trainer: &Trainer, camera: &Camera) -> View {
@@ -31,7 +38,7 @@ fn trainer(
 
 #[test]
 fn recording_a_step_waits_for_nothing() {
-    let ctx = GpuContext::new().expect("adapter");
+    let ctx = ctx();
     for planes in [0, 1] {
         let (mut trainer, camera, _, _) = trainer(&ctx, planes);
         let view = view_of(&trainer, &camera);
@@ -45,13 +52,14 @@ fn recording_a_step_waits_for_nothing() {
         let a = trainer.finish_step(first).expect("finish");
         let b = trainer.finish_step(second).expect("finish");
         assert_eq!((a.step, b.step), (2, 3));
+        assert_eq!((a.record_waits, b.record_waits), (0, 0));
         assert!(!a.skipped && !b.skipped && a.loss.is_finite() && b.loss.is_finite());
     }
 }
 
 #[test]
 fn a_pipelined_loop_trains_as_single_steps_do() {
-    let ctx = GpuContext::new().expect("adapter");
+    let ctx = ctx();
     let (mut single, camera, gaussians, planes) = trainer(&ctx, 0);
     let view = view_of(&single, &camera);
     let settings = single.settings.clone();
@@ -78,7 +86,7 @@ fn a_pipelined_loop_trains_as_single_steps_do() {
 
 #[test]
 fn a_frame_that_outgrows_its_list_changes_nothing_before_it_is_known() {
-    let ctx = GpuContext::new().expect("adapter");
+    let ctx = ctx();
     let (mut trainer, camera, _, _) = trainer(&ctx, 1);
     // The same camera at a sixteenth of the pixels: far fewer tile keys, so that the list
     // sized from it cannot hold the big view's.

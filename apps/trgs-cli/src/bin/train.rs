@@ -144,6 +144,16 @@ fn train(start: Start, feed: Option<&LiveFeed>) -> Result<()> {
             RunEvent::Note(line) => say(&bar, line),
             RunEvent::Step(s) => {
                 bar.set_position(u64::from(s.step));
+                if s.stats.skipped {
+                    say(
+                        &bar,
+                        format!(
+                            "step {}: its frame outgrew the key list sized from earlier steps, so \
+                             it changed nothing; the next frame is sized exactly",
+                            s.step
+                        ),
+                    );
+                }
                 let (loss, psnr) = (s.stats.loss, s.stats.psnr);
                 let ram = s.memory.peak_ram_bytes.map_or(String::new(), |b| {
                     format!("  RAM peak {}", trgs_train::memory::human_bytes(b))

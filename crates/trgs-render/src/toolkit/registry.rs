@@ -77,6 +77,7 @@ pub fn every_capability_set() -> Vec<Capabilities> {
                             block_width,
                             block_walk,
                             strided_groups: crate::gpu::STRIDED_GROUPS,
+                            records_while_busy: true,
                         });
                     }
                 }

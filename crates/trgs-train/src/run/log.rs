@@ -55,6 +55,7 @@ impl RunLog {
         let line = serde_json::json!({"step": step, "view": view,
             "loss": stats.loss, "psnr": stats.psnr, "gaussians": gaussians, "keys": stats.keys,
             "seconds": seconds, "ms": phases, "gpu_ms": gpu, "perturbed": stats.perturbed,
+            "skipped": stats.skipped, "record_waits": stats.record_waits,
             "gpu_bytes": memory.gpu.total(), "peak_ram_bytes": memory.peak_ram_bytes});
         self.line(&line)
     }

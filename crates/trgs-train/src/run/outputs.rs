@@ -110,6 +110,7 @@ fn metrics_json(s: &RunSummary, data: &TrainingData, state: &RunState) -> serde_
         "train_seconds": s.train_seconds,
         "step_ms": step_ms,
         "steps": s.steps,
+        "skipped_steps": state.skipped_steps,
         "gaussians": s.gaussians,
         "planes": s.planes,
         "render_fps": s.render_fps,

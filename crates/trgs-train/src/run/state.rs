@@ -33,6 +33,10 @@ pub struct RunState {
     /// it).
     #[serde(default)]
     pub peak_gpu_bytes: u64,
+    /// Steps whose frame outgrew its key list, found after the next step was recorded: they
+    /// changed nothing (`StepStats::skipped`).
+    #[serde(default)]
+    pub skipped_steps: u32,
 }
 
 impl RunState {

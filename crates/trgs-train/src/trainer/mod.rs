@@ -43,6 +43,11 @@ pub struct StepStats {
     /// nothing (the step's guard), and the next frame is sized exactly. Only a step finished
     /// after the next was recorded can be skipped: [`Trainer::train_step`] takes it again.
     pub skipped: bool,
+    /// How many times recording the step waited for the GPU ([`GpuContext::waits`]): none,
+    /// unless its key list was sized exactly (the first step, the one after a skipped step or a
+    /// change of the set), phases are timed, or the adapter is a CPU one (which waits at the end
+    /// of each phase: `Capabilities::records_while_busy`).
+    pub record_waits: u64,
     /// Where the step's wall-clock time went.
     pub times: StepTimes,
     /// With [`Trainer::profile`]: GPU milliseconds of every render and backward stage, from

@@ -31,6 +31,8 @@ pub struct StepInFlight {
     planes: PlaneGradsRead,
     times: StepTimes,
     gpu_stages: Vec<(&'static str, f64)>,
+    /// Waits for the GPU while it was recorded.
+    record_waits: u64,
 }
 
 /// The key totals of a step's frame: known when it was sized exactly, else on their way back.
@@ -99,8 +101,9 @@ impl Trainer {
 
     /// Record and submit step `self.step + 1` on `view` (render, losses, guard, backward, Adam on
     /// the Gaussians), advancing `step`, without waiting for the GPU (unless profiling or timing
-    /// phases, or when the frame is sized exactly: the first step, and the step after one that
-    /// outgrew its key list or changed the set). Then call [`Trainer::maintain`] for this step,
+    /// phases, on a CPU adapter (`Capabilities::records_while_busy`), or when the frame is sized
+    /// exactly: the first step, and the step after one that outgrew its key list or changed the
+    /// set). Then call [`Trainer::maintain`] for this step,
     /// and [`Trainer::finish_step`] for it, in that order, before the step after next is recorded.
     ///
     /// The step's updates are guarded on the GPU (`step_guard`): if its frame dropped keys or its
@@ -131,13 +134,16 @@ impl Trainer {
         trgs_render::toolkit::gpu::scoped(&ctx, "densifying", || self.maintain_scoped())
     }
 
-    /// Whether each phase of a step waits for the GPU before its lap is taken.
+    /// Whether each phase of a step waits for the GPU before its lap is taken: to time it, or
+    /// where recording the next phase would only slow the device down (a CPU adapter,
+    /// `Capabilities::records_while_busy`).
     fn waits_between_phases(&self) -> bool {
-        self.profile || self.time_phases
+        self.profile || self.time_phases || !self.ctx.capabilities.records_while_busy
     }
 
     fn record_step_scoped(&mut self, view: &View) -> Result<StepInFlight> {
         let ctx = &self.ctx;
+        let waits = ctx.waits();
         let stage = self.settings.stage(self.step);
         let has_planes = !self.planes().is_empty();
         let mut options = self.render_options();
@@ -261,14 +267,24 @@ impl Trainer {
             planes: std::mem::take(&mut g.planes),
             times,
             gpu_stages,
+            record_waits: ctx.waits() - waits,
         })
     }
 
     fn finish_step_scoped(&mut self, in_flight: StepInFlight) -> Result<StepStats> {
         let ctx = &self.ctx.clone();
         let clock = PhaseClock::start(false);
-        let StepInFlight { step, view, readback, loss, keys, planes, mut times, gpu_stages } =
-            in_flight;
+        let StepInFlight {
+            step,
+            view,
+            readback,
+            loss,
+            keys,
+            planes,
+            mut times,
+            gpu_stages,
+            record_waits,
+        } = in_flight;
         let words: Vec<u32> = readback.read(ctx, 16 * (1 + loss.partial_vec4s() as usize))?;
         let guard = words[0];
         let values = loss.values_of(bytemuck::cast_slice(&words[4..]));
@@ -296,6 +312,7 @@ impl Trainer {
             psnr: psnr_of(values.mse),
             keys: keys.map_or(0, |k| k.keys),
             skipped,
+            record_waits,
             times,
             gpu_stages,
             densified: Vec::new(),
