@@ -160,7 +160,8 @@ pub struct DeviceOptions {
     /// ([`crate::gpu::strided_groups_for`]). Tests set a few, so that each workgroup takes
     /// several blocks.
     pub strided_groups: Option<u32>,
-    /// [`Capabilities::records_while_busy`]; None: on any adapter but a CPU one. Tests on a CPU
+    /// [`Capabilities::records_while_busy`]; None: as the environment sets
+    /// `TRGS_RECORD_WHILE_BUSY` (1 or 0), else on any adapter but a CPU one. Tests on a CPU
     /// adapter set it to check that a step records without waiting.
     pub records_while_busy: Option<bool>,
 }
@@ -330,6 +331,11 @@ impl GpuContext {
                 .clamp(1, crate::layout::MAX_WORKGROUPS),
             records_while_busy: options
                 .records_while_busy
+                .or_else(|| match std::env::var("TRGS_RECORD_WHILE_BUSY").as_deref() {
+                    Ok("1") => Some(true),
+                    Ok("0") => Some(false),
+                    _ => None,
+                })
                 .unwrap_or(adapter.get_info().device_type != wgpu::DeviceType::Cpu),
         };
         let poison_fresh_buffers = options.poison_fresh_buffers
