@@ -46,12 +46,6 @@ impl PlaneGradsRead {
         Self { pending: Some(p) }
     }
 
-    /// Whether the values have arrived (reading them then does not wait). Always for a scene
-    /// without planes.
-    pub fn is_ready(&self) -> bool {
-        self.pending.as_ref().is_none_or(|p| p.read.is_ready())
-    }
-
     /// The planes' gradients, in the scene's order (empty without planes), waiting for the
     /// backward pass only if they have not arrived.
     pub fn read(self, ctx: &GpuContext) -> Result<Vec<PlaneGrad>, GpuError> {

@@ -90,11 +90,6 @@ impl PendingKeyTotals {
     pub(crate) fn start(read: PendingRead, words: usize, capacity: u64, render: u64) -> Self {
         Self { read, words, capacity, render }
     }
-
-    /// Whether the totals have arrived (reading them then does not wait).
-    pub fn is_ready(&self) -> bool {
-        self.read.is_ready()
-    }
 }
 
 impl Frame {

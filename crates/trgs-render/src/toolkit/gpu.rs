@@ -223,12 +223,6 @@ impl PendingRead {
         Self { submission: Some(submission), ..Self::start(staging) }
     }
 
-    /// Whether the values have arrived (as of the device's last poll): reading them then does
-    /// not wait.
-    pub fn is_ready(&self) -> bool {
-        self.mapped.get().is_some()
-    }
-
     /// The first `bytes` bytes, waiting for the GPU only if the mapping has not completed.
     pub fn read<T: bytemuck::Pod>(
         self,

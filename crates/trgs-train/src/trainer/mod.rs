@@ -164,6 +164,8 @@ impl Trainer {
     }
 
     /// Everything needed to continue this run later, with `extra` for the caller's own state.
+    /// Finish a step in flight first ([`Trainer::finish_step`]): its plane gradients are not
+    /// applied before.
     pub fn checkpoint(&self, extra: serde_json::Value) -> Result<Checkpoint> {
         Ok(Checkpoint {
             step: self.step,

@@ -47,16 +47,6 @@ impl StepInFlight {
     pub fn step(&self) -> u32 {
         self.step
     }
-
-    /// Whether everything the step reads back has arrived: finishing it then does not wait.
-    pub fn is_ready(&self) -> bool {
-        self.readback.is_ready()
-            && self.planes.is_ready()
-            && match &self.keys {
-                StepKeys::Known(_) => true,
-                StepKeys::Pending(p) => p.is_ready(),
-            }
-    }
 }
 
 impl Trainer {
@@ -103,8 +93,9 @@ impl Trainer {
     /// the Gaussians), advancing `step`, without waiting for the GPU (unless profiling or timing
     /// phases, on a CPU adapter (`Capabilities::records_while_busy`), or when the frame is sized
     /// exactly: the first step, and the step after one that outgrew its key list or changed the
-    /// set). Then call [`Trainer::maintain`] for this step,
-    /// and [`Trainer::finish_step`] for it, in that order, before the step after next is recorded.
+    /// set). Call [`Trainer::maintain`] before the next step is recorded, and
+    /// [`Trainer::finish_step`] with what this returns before the step after next is (a
+    /// pipelined loop finishes it after recording the next one).
     ///
     /// The step's updates are guarded on the GPU (`step_guard`): if its frame dropped keys or its
     /// loss is not finite, they change nothing, and finishing it says which.
@@ -298,7 +289,9 @@ impl Trainer {
         let skipped = guard & GUARD_KEYS_DROPPED != 0;
         let planes = planes.read(ctx)?;
         if skipped {
-            // What a list sized from earlier frames could not hold sizes the next one exactly.
+            // The next frame recorded is sized exactly: a list sized from earlier frames is
+            // capped at two pages, and a frame over them must be refused by name, not skipped
+            // again and again.
             self.exact_keys_next = true;
         } else {
             self.step_planes(&planes, step)?;
