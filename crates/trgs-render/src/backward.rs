@@ -236,12 +236,7 @@ impl Renderer {
             let plane_bytes = bufs.plane_grads.size().min(frame.plane_slots() as u64 * 16);
             let view_bytes = views.len() as u64 * bufs.view_stride;
             let bytes = plane_bytes + view_bytes;
-            let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("trgs.backward.plane_staging"),
-                size: bytes,
-                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
+            let staging = gpu::staging(ctx, "trgs.backward.plane_staging", bytes);
             let enc = &mut rec.encoder;
             enc.copy_buffer_to_buffer(&bufs.plane_grads, 0, &staging, 0, plane_bytes);
             enc.copy_buffer_to_buffer(&bufs.view_grads, 0, &staging, plane_bytes, view_bytes);

@@ -130,8 +130,8 @@ pub struct Capabilities {
     pub strided_groups: u32,
     /// Whether work is recorded while the device runs what was submitted before it. On a GPU
     /// that keeps it busy; a CPU adapter runs the work on the cores that would record the next,
-    /// where recording only slows its threads down (a training step with a plane took about a
-    /// fifth longer on lavapipe: `bench --train-step`), so a training step there lets the queue
+    /// where recording only slows its threads down (`bench --train-step` with
+    /// `TRGS_RECORD_WHILE_BUSY=1`, docs/BENCHMARKS.md), so a training step there lets the queue
     /// drain at the end of each phase instead. Readbacks stay asynchronous either way.
     pub records_while_busy: bool,
 }

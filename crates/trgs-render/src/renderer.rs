@@ -337,12 +337,7 @@ impl Renderer {
             in_order,
         );
         let words = key_totals::words(specs.len());
-        let totals_staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("trgs.prefix_sum.totals"),
-            size: 4 * words as u64,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let totals_staging = gpu::staging(ctx, "trgs.prefix_sum.totals", 4 * words as u64);
         let views_bytes = 8 * specs.len() as u64;
         rec.encoder.copy_buffer_to_buffer(&order.entries, 0, &totals_staging, 0, 4);
         rec.encoder.copy_buffer_to_buffer(&entries.key_totals, 0, &totals_staging, 4, views_bytes);

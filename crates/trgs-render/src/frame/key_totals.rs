@@ -14,9 +14,10 @@ pub enum KeySizing {
     Exact,
     /// From the largest total this frame has held, with a quarter of headroom, without waiting:
     /// the totals are read back after the frame ([`Frame::settle_keys`]), which then says
-    /// whether the list held every key. A frame that did not is wrong and must be rendered
-    /// again (the next render is sized from its totals). The first render into a frame, and
-    /// one that captures intermediates, are exact.
+    /// whether the list held every key. A frame that did not is wrong: render it again (the
+    /// next render is sized from its totals), or, not to wait for the totals, gate what learns
+    /// from it on the GPU by [`Frame::key_overflow_flag`] (a training step's `step_guard`). The
+    /// first render into a frame, and one that captures intermediates, are exact.
     FromEarlierFrames,
 }
 

@@ -97,6 +97,17 @@ pub fn params<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, value: &T) -> wgp
     filled_at_creation(ctx, label, size, usage, bytes, 0)
 }
 
+/// A buffer of `size` bytes to copy GPU results into and map for reading ([`PendingRead`],
+/// [`map_and_read`]).
+pub fn staging(ctx: &GpuContext, label: &str, size: u64) -> wgpu::Buffer {
+    ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
 /// Read `count` values of `T` from `buffer` at byte `offset` (blocking).
 pub fn read_buffer<T: bytemuck::Pod>(
     ctx: &GpuContext,
@@ -111,12 +122,7 @@ pub fn read_buffer<T: bytemuck::Pod>(
     let size = bytes.div_ceil(4) * 4;
     // The staging buffer and the copy may fail too (no memory left, a lost device).
     let scopes = ErrorScopes::open(ctx, "copying a buffer for readback");
-    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("trgs.readback.staging"),
-        size,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
+    let staging = staging(ctx, "trgs.readback.staging", size);
     let mut enc = ctx
         .device
         .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("trgs.readback") });

@@ -13,7 +13,7 @@ use anyhow::{Context, Result};
 use trgs_core::reference::{GUARD_KEYS_DROPPED, GUARD_LOSS_NOT_FINITE, RegulariserWeights};
 use trgs_core::scene::Attribute;
 use trgs_render::PlaneGradsRead;
-use trgs_render::toolkit::gpu::{PendingRead, Recorder};
+use trgs_render::toolkit::gpu::{self, PendingRead, Recorder};
 use trgs_render::{BackwardOptions, KeySizing, KeyTotals, LayerGrads, PendingKeyTotals};
 
 /// A step recorded and submitted ([`Trainer::record_step`]) whose results are on their way
@@ -71,15 +71,15 @@ impl Trainer {
         before_maintenance: impl FnOnce(&Trainer) -> Result<()>,
     ) -> Result<StepStats> {
         let ctx = self.ctx.clone();
-        trgs_render::toolkit::gpu::scoped(&ctx, "a training step", || {
+        gpu::scoped(&ctx, "a training step", || {
             let mut stats = loop {
                 let in_flight = self.record_step_scoped(view)?;
                 let stats = self.finish_step_scoped(in_flight)?;
                 if !stats.skipped {
                     break stats;
                 }
+                // Nothing changed; finishing it sized the next frame exactly.
                 self.step -= 1;
-                self.exact_keys_next = true;
             };
             before_maintenance(self)?;
             let clock = PhaseClock::start(self.waits_between_phases());
@@ -101,9 +101,7 @@ impl Trainer {
     /// loss is not finite, they change nothing, and finishing it says which.
     pub fn record_step(&mut self, view: &View) -> Result<StepInFlight> {
         let ctx = self.ctx.clone();
-        trgs_render::toolkit::gpu::scoped(&ctx, "recording a training step", || {
-            self.record_step_scoped(view)
-        })
+        gpu::scoped(&ctx, "recording a training step", || self.record_step_scoped(view))
     }
 
     /// Read back what `in_flight` computed (waiting only for its own GPU work), step the planes
@@ -112,9 +110,7 @@ impl Trainer {
     /// (it changed nothing either).
     pub fn finish_step(&mut self, in_flight: StepInFlight) -> Result<StepStats> {
         let ctx = self.ctx.clone();
-        trgs_render::toolkit::gpu::scoped(&ctx, "finishing a training step", || {
-            self.finish_step_scoped(in_flight)
-        })
+        gpu::scoped(&ctx, "finishing a training step", || self.finish_step_scoped(in_flight))
     }
 
     /// The densification strategy's maintenance and the opacity perturbation after step
@@ -122,7 +118,7 @@ impl Trainer {
     /// Gaussians were perturbed. A change of the set sizes the next frame's key list exactly.
     pub fn maintain(&mut self) -> Result<(Vec<DensifyEvent>, usize)> {
         let ctx = self.ctx.clone();
-        trgs_render::toolkit::gpu::scoped(&ctx, "densifying", || self.maintain_scoped())
+        gpu::scoped(&ctx, "densifying", || self.maintain_scoped())
     }
 
     /// Whether each phase of a step waits for the GPU before its lap is taken: to time it, or
@@ -194,12 +190,7 @@ impl Trainer {
         let kept = self.frame.key_overflow_flag().expect("the frame was rendered above");
         let (sums, vec4s) = (loss.partials(), loss.partial_vec4s());
         self.guard.record(ctx, &mut rec, sums, vec4s, kept);
-        let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("trgs.train.step_readback"),
-            size: 16 + u64::from(vec4s) * 16,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let staging = gpu::staging(ctx, "trgs.train.step_readback", 16 + u64::from(vec4s) * 16);
         rec.encoder.copy_buffer_to_buffer(self.guard.word(), 0, &staging, 0, 16);
         rec.encoder.copy_buffer_to_buffer(sums, 0, &staging, 16, u64::from(vec4s) * 16);
         let submission = rec.submit(ctx)?;
