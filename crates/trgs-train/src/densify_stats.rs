@@ -54,6 +54,11 @@ impl GpuDensifyStats {
         self.len = stats.count.len();
     }
 
+    /// The statistics on the GPU (`densify_plan` decides from them in place).
+    pub fn buffer(&self) -> &wgpu::Buffer {
+        &self.buffer
+    }
+
     /// The statistics, read back.
     pub fn read(&self, ctx: &GpuContext) -> Result<DensifyStats, gpu::GpuError> {
         let data: Vec<[f32; STATS_FLOATS]> = gpu::read_buffer(ctx, &self.buffer, 0, self.len)?;

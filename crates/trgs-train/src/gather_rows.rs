@@ -7,7 +7,7 @@
 use crate::adam::AdamMoments;
 use crate::densify::RowPlan;
 use crate::layout::{GATHER_ZERO, GatherParams};
-use trgs_core::scene::PerAttribute;
+use trgs_core::scene::{Attribute, PerAttribute};
 use trgs_render::toolkit::gpu::{self, Kernel, Recorder, grid_1d, range};
 use trgs_render::{GpuContext, GpuScene};
 
@@ -39,6 +39,12 @@ impl GatherSources {
             buffer: gpu::storage_init(ctx, "trgs.gather_rows.sources", &words),
             len: words.len() as u32,
         }
+    }
+
+    /// Sources made on the GPU (`densify_plan`): the first `len` words of `buffer`.
+    pub fn from_buffer(buffer: wgpu::Buffer, len: u32) -> Self {
+        debug_assert!(u64::from(len) * 4 <= buffer.size(), "{len} sources in a shorter buffer");
+        Self { buffer, len }
     }
 
     pub fn len(&self) -> u32 {
@@ -132,15 +138,30 @@ impl GpuRowGather {
         moments: &PerAttribute<AdamMoments>,
         plan: &RowPlan,
     ) -> Result<(GpuScene, PerAttribute<AdamMoments>), gpu::GpuError> {
-        let scopes = gpu::ErrorScopes::open(ctx, "rebuilding the Gaussians");
         let sources = GatherSources::new(ctx, &plan.sources);
+        let given = plan.given_words();
+        self.apply_sources(ctx, scene, moments, &sources, &given, |_, _| {})
+    }
+
+    /// The scene and moments gathered by `sources`, with the attributes in `given` written as
+    /// given; `then` records what edits the new scene before the one submission (the split
+    /// children's means and scales of `densify_plan`).
+    pub fn apply_sources(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        moments: &PerAttribute<AdamMoments>,
+        sources: &GatherSources,
+        given: &[(Attribute, Vec<u32>)],
+        then: impl FnOnce(&mut Recorder, &GpuScene),
+    ) -> Result<(GpuScene, PerAttribute<AdamMoments>), gpu::GpuError> {
+        let scopes = gpu::ErrorScopes::open(ctx, "rebuilding the Gaussians");
         let n_src = scene.len();
         let mut rec = Recorder::new(ctx, "trgs.gather_rows", false);
-        let given = plan.given_words();
         let rebuilt = scene.rebuilt(sources.len(), |buffer, width, label| {
             match given.iter().find(|(a, _)| label == format!("trgs.scene.{}", a.name())) {
                 Some((_, words)) => gpu::storage_init(ctx, label, words),
-                None => self.record(ctx, &mut rec, label, buffer, n_src, width, &sources, false),
+                None => self.record(ctx, &mut rec, label, buffer, n_src, width, sources, false),
             }
         });
         let widths = scene.attribute_widths();
@@ -148,11 +169,12 @@ impl GpuRowGather {
             let (mo, width) = (&moments[a], widths[a]);
             let mut gather = |b: &wgpu::Buffer, which: &str| {
                 let label = format!("trgs.adam.{}.{which}", a.name());
-                self.record(ctx, &mut rec, &label, b, n_src, width, &sources, true)
+                self.record(ctx, &mut rec, &label, b, n_src, width, sources, true)
             };
             let (m, v) = (gather(&mo.m, "m"), gather(&mo.v, "v"));
             AdamMoments { m, v, len: u64::from(sources.len()) * u64::from(width) }
         });
+        then(&mut rec, &rebuilt);
         let waited = rec.submit_and_wait(ctx);
         scopes.close_after(waited.map(|()| (rebuilt, moments)))
     }

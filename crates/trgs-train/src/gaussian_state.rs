@@ -3,9 +3,12 @@
 //! uses), so that no edit leaves a parameter and its moments out of step.
 use crate::adam::AdamMoments;
 use crate::densify::{Geometry, RowPlan, TrainState};
+use crate::densify_plan::{DensifyPlanGpu, GpuDensifyPlan};
 use crate::gather_rows::GpuRowGather;
+use crate::opacity_reset::GpuOpacityReset;
 use anyhow::{Context, Result};
 use trgs_core::scene::{Attribute, Gaussians, PerAttribute, ReflectionPlane};
+use trgs_render::toolkit::gpu::Recorder;
 use trgs_render::{GpuContext, GpuScene};
 
 /// Parameters and Adam moments of every Gaussian, on the GPU.
@@ -16,6 +19,7 @@ pub struct GaussianState {
     moments: PerAttribute<AdamMoments>,
     /// Rebuilds the parameters and moments by a [`RowPlan`] on the GPU.
     gather: GpuRowGather,
+    opacity_reset: GpuOpacityReset,
 }
 
 impl GaussianState {
@@ -30,7 +34,7 @@ impl GaussianState {
         let widths = scene.attribute_widths();
         let moments =
             PerAttribute::from_fn(|a| AdamMoments::zeros(ctx, a.name(), n * u64::from(widths[a])));
-        Ok(Self { ctx: ctx.clone(), scene, moments, gather: GpuRowGather::new(ctx) })
+        Ok(Self::holding(ctx, scene, moments))
     }
 
     /// Upload `state` (parameters and moments, a checkpoint's or an edit's) and `planes`.
@@ -40,7 +44,7 @@ impl GaussianState {
         planes: &[ReflectionPlane],
     ) -> Result<Self> {
         let (scene, moments) = upload(ctx, state, planes)?;
-        Ok(Self { ctx: ctx.clone(), scene, moments, gather: GpuRowGather::new(ctx) })
+        Ok(Self::holding(ctx, scene, moments))
     }
 
     pub fn scene(&self) -> &GpuScene {
@@ -120,6 +124,30 @@ impl GaussianState {
         })
     }
 
+    /// Densify by a plan decided on the GPU (stage `densify_plan`): the parameters and moments
+    /// gathered by its sources, then the split children's means and scales.
+    pub fn apply_gpu_plan(
+        &mut self,
+        planner: &GpuDensifyPlan,
+        plan: &DensifyPlanGpu,
+    ) -> Result<()> {
+        let ctx = self.ctx.clone();
+        trgs_render::toolkit::gpu::scoped(&ctx, "densifying", || {
+            let old = &self.scene;
+            let (scene, moments) = self.gather.apply_sources(
+                &ctx,
+                old,
+                &self.moments,
+                &plan.sources,
+                &[],
+                |rec, new| planner.record_children(&ctx, rec, plan, old, new),
+            )?;
+            self.scene = scene;
+            self.moments = moments;
+            Ok(())
+        })
+    }
+
     /// [`GaussianState::apply_plan`] through the CPU: the whole state read back, rebuilt by
     /// [`RowPlan::apply`] (the twin) and uploaded. For tests and the benchmark.
     pub fn apply_plan_on_cpu(&mut self, plan: &RowPlan) -> Result<()> {
@@ -156,20 +184,26 @@ impl GaussianState {
         self.ctx.queue.write_buffer(opacity, 0, bytemuck::cast_slice(logits));
     }
 
-    /// Change every opacity logit by `edit` and restart the opacities' Adam moments (3DGS's
-    /// opacity reset); the other parameters and moments stay.
-    pub fn reset_opacities(&mut self, edit: impl FnOnce(&mut [f32])) -> Result<()> {
-        let opacity = self.scene.parameter(Attribute::OpacityLogits);
-        let mut logits: Vec<f32> =
-            trgs_render::toolkit::gpu::read_buffer(&self.ctx, opacity, 0, self.len())?;
-        edit(&mut logits);
-        self.write_opacity_logits(&logits);
-        let moments = &self.moments[Attribute::OpacityLogits];
-        let mut enc = self.ctx.device.create_command_encoder(&Default::default());
-        enc.clear_buffer(&moments.m, 0, None);
-        enc.clear_buffer(&moments.v, 0, None);
-        self.ctx.queue.submit([enc.finish()]);
-        Ok(())
+    /// Cap every opacity logit at `cap` and restart the opacities' Adam moments (3DGS's opacity
+    /// reset), on the GPU (stage `opacity_reset`); the other parameters and moments stay.
+    pub fn cap_opacities(&mut self, cap: f32) -> Result<()> {
+        let ctx = self.ctx.clone();
+        trgs_render::toolkit::gpu::scoped(&ctx, "resetting the opacities", || {
+            let mut rec = Recorder::new(&ctx, "trgs.opacity_reset", false);
+            self.opacity_reset.record(&ctx, &mut rec, &self.scene, cap);
+            let moments = &self.moments[Attribute::OpacityLogits];
+            rec.encoder.clear_buffer(&moments.m, 0, None);
+            rec.encoder.clear_buffer(&moments.v, 0, None);
+            rec.submit(&ctx)?;
+            Ok(())
+        })
+    }
+}
+
+impl GaussianState {
+    fn holding(ctx: &GpuContext, scene: GpuScene, moments: PerAttribute<AdamMoments>) -> Self {
+        let (gather, opacity_reset) = (GpuRowGather::new(ctx), GpuOpacityReset::new(ctx));
+        Self { ctx: ctx.clone(), scene, moments, gather, opacity_reset }
     }
 }
 

@@ -17,6 +17,11 @@ trgs_render::kernel_registry! {
         mcmc_regularise: "training/mcmc_regularise.wgsl" => no_defines,
         mcmc_noise: "training/mcmc_noise.wgsl" => no_defines,
         gather_rows: "training/gather_rows.wgsl" => no_defines,
+        densify_plan_candidates: "training/densify_plan_candidates.wgsl" => no_defines,
+        densify_plan_rows: "training/densify_plan_rows.wgsl" => no_defines,
+        densify_plan_sources: "training/densify_plan_sources.wgsl" => no_defines,
+        densify_plan_children: "training/densify_plan_children.wgsl" => no_defines,
+        opacity_reset: "training/opacity_reset.wgsl" => no_defines,
         step_guard: "training/step_guard.wgsl" => no_defines,
     }
 }

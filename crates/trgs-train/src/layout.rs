@@ -113,6 +113,53 @@ gpu_struct! {
 /// `gather_rows`' source-index bit for an output row that starts from zero (when honoured).
 pub const GATHER_ZERO: u32 = 1 << 31;
 
+gpu_struct! {
+    /// Parameters of the `densify_plan` kernels over `count` Gaussians: classic densification's
+    /// thresholds as the f32 values its twin compares (`classic::Rules`), as logits and log
+    /// scales.
+    pub struct DensifyPlanParams {
+        pub count: u32,
+        /// Gaussians that may still be added under `max_gaussians`.
+        pub room: u32,
+        /// 1: prune Gaussians too large on screen or in the world (after the first reset).
+        pub prune_large: u32,
+        /// Numbers the split children's random draws.
+        pub seed: u32,
+        /// Average screen-space gradient norm at which a Gaussian densifies.
+        pub grad_threshold: f32,
+        /// Opacity logits below this are transparent (pruned, never densified).
+        pub transparent_logit: f32,
+        /// Largest log scale above which a densifying Gaussian splits rather than clones.
+        pub clone_log_scale: f32,
+        /// Largest log scale above which a Gaussian is pruned (with `prune_large`).
+        pub prune_log_scale: f32,
+        /// A split parent's largest log scale above which its children are pruned at once.
+        pub child_prune_log_scale: f32,
+        /// Screen radius in pixels above which a Gaussian is pruned (with `prune_large`).
+        pub max_screen_radius: f32,
+        /// ln(1.6): what a child's log scales lose.
+        pub child_log_shrink: f32,
+        pub pad0: u32,
+    }
+}
+
+gpu_struct! {
+    /// Parameters of `opacity_reset` over `count` Gaussians.
+    pub struct OpacityResetParams {
+        pub count: u32,
+        /// The largest opacity logit left.
+        pub cap: f32,
+        pub pad0: u32,
+        pub pad1: u32,
+    }
+}
+
+/// `densify_plan`'s decision bits per Gaussian: it survives (keeping its Adam moments), it is
+/// cloned, it is split into two children (and replaced by them).
+pub const DENSIFY_SURVIVOR: u32 = 1;
+pub const DENSIFY_CLONE: u32 = 2;
+pub const DENSIFY_CHILDREN: u32 = 4;
+
 /// The glass label of a target pixel the photo does not cover (`GpuTarget`): the mask loss skips
 /// it, as it has no label.
 pub const UNCOVERED_LABEL: u32 = u32::MAX;
@@ -125,6 +172,8 @@ pub fn all_structs() -> Vec<StructInfo> {
         struct_info::<McmcParams>(),
         struct_info::<DensifyStatsParams>(),
         struct_info::<GatherParams>(),
+        struct_info::<DensifyPlanParams>(),
+        struct_info::<OpacityResetParams>(),
         struct_info::<StepGuardParams>(),
     ]
 }
@@ -137,6 +186,9 @@ pub fn prelude() -> String {
     let u32s = [
         ("LOSS_STRIP", LOSS_STRIP),
         ("GATHER_ZERO", GATHER_ZERO),
+        ("DENSIFY_SURVIVOR", DENSIFY_SURVIVOR),
+        ("DENSIFY_CLONE", DENSIFY_CLONE),
+        ("DENSIFY_CHILDREN", DENSIFY_CHILDREN),
         ("UNCOVERED_LABEL", UNCOVERED_LABEL),
         ("GUARD_KEYS_DROPPED", GUARD_KEYS_DROPPED),
         ("GUARD_LOSS_NOT_FINITE", GUARD_LOSS_NOT_FINITE),

@@ -12,12 +12,15 @@
 //! - [`memory`]: the GPU bytes a trainer holds and the process's peak RAM;
 //! - [`eval`]: test metrics, renders and comparisons with a synthetic scene's ground truth;
 //! - the training stages on the GPU, each with its CPU twin in `trgs_core::reference`:
-//!   [`adam`], [`losses`], [`densify_stats`], [`gather_rows`] (and MCMC's in [`densify::mcmc`]),
+//!   [`adam`], [`losses`], [`densify_stats`], [`densify_plan`], [`gather_rows`], [`opacity_reset`],
+//!   [`step_guard`]
+//!   (and MCMC's in [`densify::mcmc`]),
 //!   their kernels registered in [`kernels`] and their GPU structs declared in [`layout`].
 pub mod adam;
 pub mod checkpoint;
 pub mod data;
 pub mod densify;
+pub mod densify_plan;
 pub mod densify_stats;
 pub mod eval;
 pub mod gather_rows;
@@ -27,6 +30,7 @@ pub mod kernels;
 pub mod layout;
 pub mod losses;
 pub mod memory;
+pub mod opacity_reset;
 pub mod perturb;
 pub mod plane_adam;
 pub mod plane_init;

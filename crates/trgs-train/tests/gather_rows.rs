@@ -179,6 +179,9 @@ fn densification_on_the_gpu_matches_the_cpu_rebuild() {
     };
     let n = ck.state.gaussians.len();
     let mut classic = ClassicDensification::resumed(&ctx, settings.clone(), n, Some(stats));
+    // Decided on the CPU here, so that the rebuild is compared bit for bit (tests/densify_plan.rs
+    // checks the decisions made on the GPU).
+    classic.decide_on_cpu();
     let report = gpu
         .edit_gaussians(|g, rng, extent| classic.densify_now(g, rng, extent, true))
         .expect("densify on the GPU");

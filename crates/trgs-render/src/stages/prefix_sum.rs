@@ -20,7 +20,7 @@ pub fn record(
     count: ItemCount<'_>,
 ) -> wgpu::Buffer {
     let scan = Scan { stage, label, kernel: &s.kernels.prefix_sum };
-    scan_level(s, rec, pool, &scan, data, count, 0)
+    scan_level(s.into(), rec, pool, &scan, data, count, 0)
 }
 
 /// Scan the set bits of `words` words of the bit mask `data` in place: each word becomes the
@@ -36,7 +36,7 @@ pub fn record_bits(
     words: u32,
 ) -> wgpu::Buffer {
     let scan = Scan { stage, label, kernel: &s.kernels.prefix_sum_bits };
-    scan_level(s, rec, pool, &scan, data, ItemCount::Known(words), 0)
+    scan_level(s.into(), rec, pool, &scan, data, ItemCount::Known(words), 0)
 }
 
 /// One scan's names and its first level's kernel (the levels above scan plain sums).
@@ -46,8 +46,22 @@ struct Scan<'a> {
     kernel: &'a Kernel,
 }
 
+/// The kernels of the levels above the first (plain sums), and the join.
+#[derive(Clone, Copy)]
+struct Levels<'a> {
+    ctx: &'a crate::GpuContext,
+    sums: &'a Kernel,
+    add: &'a Kernel,
+}
+
+impl<'a> From<Stage<'a>> for Levels<'a> {
+    fn from(s: Stage<'a>) -> Self {
+        Self { ctx: s.ctx, sums: &s.kernels.prefix_sum, add: &s.kernels.prefix_sum_add }
+    }
+}
+
 fn scan_level(
-    s: Stage<'_>,
+    s: Levels<'_>,
     rec: &mut Recorder,
     pool: &mut BufferPool,
     scan: &Scan<'_>,
@@ -77,13 +91,47 @@ fn scan_level(
         return sums;
     }
     let sums_count = ItemCount::Known(blocks);
-    let sums_scan = Scan { kernel: &s.kernels.prefix_sum, ..*scan };
+    let sums_scan = Scan { kernel: s.sums, ..*scan };
     let total = scan_level(s, rec, pool, &sums_scan, &sums, sums_count, level + 1);
-    let add = &s.kernels.prefix_sum_add;
+    let add = s.add;
     let bind = add.bind(
         s.ctx,
         &[block.as_entire_binding(), data.as_entire_binding(), sums.as_entire_binding()],
     );
     rec.dispatch(scan.stage, add, &bind, groups);
     total
+}
+
+/// Stage `prefix_sum` for stages outside the renderer (trgs-train's densification): the scan's
+/// two kernels, built once.
+#[derive(Debug)]
+pub struct PrefixSum {
+    sums: Kernel,
+    add: Kernel,
+}
+
+impl PrefixSum {
+    pub fn new(ctx: &crate::GpuContext) -> Self {
+        let k = &crate::kernels::RENDER_KERNELS;
+        Self { sums: k.prefix_sum.build(ctx), add: k.prefix_sum_add.build(ctx) }
+    }
+
+    /// Scan the first `count` values of `data` (bound whole) in place into their exclusive
+    /// prefix sums; returns the buffer whose first u32 is the total. `stage` names the
+    /// dispatches, `label` the temporaries in `pool`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record(
+        &self,
+        ctx: &crate::GpuContext,
+        rec: &mut Recorder,
+        stage: &'static str,
+        pool: &mut BufferPool,
+        label: &str,
+        data: &wgpu::Buffer,
+        count: u32,
+    ) -> wgpu::Buffer {
+        let levels = Levels { ctx, sums: &self.sums, add: &self.add };
+        let scan = Scan { stage, label, kernel: &self.sums };
+        scan_level(levels, rec, pool, &scan, data, ItemCount::Known(count), 0)
+    }
 }

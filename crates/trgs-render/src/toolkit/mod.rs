@@ -26,6 +26,7 @@ pub mod shader;
 pub use crate::frame::{DepthOrderIntermediates, LayerBuffers, ViewBuffers, ViewIntermediates};
 pub use crate::kernels::{BENCH_KERNELS, BenchKernelSpecs, BenchKernels, RENDER_KERNELS};
 pub use crate::kernels::{Kernels as RenderKernels, RenderKernelSpecs};
+pub use crate::stages::prefix_sum::PrefixSum;
 pub use gpu::{
     BufferPool, ErrorScopes, GPU_WAIT_LIMIT, Kernel, KernelTime, PendingRead, Recorder,
     gpu_wait_limit, grid_1d, map_and_read, params, range, read_buffer, scoped, spread_block,

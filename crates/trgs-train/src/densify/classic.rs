@@ -2,15 +2,20 @@
 //! whose mean moves the image a lot (large average screen-space position gradient) are cloned
 //! when small and split in two when large; transparent, huge or screen-filling ones are pruned;
 //! opacities are reset to at most 0.01 at intervals. Every `every` steps the decisions are made
-//! on the CPU from a few attributes read back ([`Geometry`]) into a [`RowPlan`], which the GPU
-//! carries out over every parameter and Adam moment (`gather_rows`): survivors keep their
-//! moments, new Gaussians start from zero moments, as in the reference code.
-use super::{DensifyEvent, DensifyStrategy, Geometry, RowPlan, StepView, TrainState, sigmoid};
+//! on the GPU (`densify_plan`, from the statistics and the Gaussians in place; its twin is
+//! [`plan_densify`], which also decides for sets too large for the stage's bindings, from a few
+//! attributes read back), and the GPU rebuilds every parameter and Adam moment by them
+//! (`gather_rows`): survivors keep their moments, new Gaussians start from zero moments, as in
+//! the reference code.
+use super::{DensifyEvent, DensifyStrategy, Geometry, RowPlan, StepView, TrainState};
+use crate::densify_plan::GpuDensifyPlan;
 use crate::densify_stats::GpuDensifyStats;
 use crate::gaussian_state::GaussianState;
+use crate::layout::DensifyPlanParams;
 use crate::settings::{Stage, scale_len};
 use anyhow::Result;
 use glam::{DMat3, DQuat, DVec3};
+use trgs_core::reference::noise_normal;
 use trgs_core::rng::Rng;
 use trgs_render::GpuContext;
 use trgs_render::toolkit::FrameStages;
@@ -134,6 +139,9 @@ pub struct ClassicDensification {
     ctx: GpuContext,
     settings: ClassicSettings,
     stats: GpuDensifyStats,
+    planner: GpuDensifyPlan,
+    /// Decide on the GPU where the set fits (see [`ClassicDensification::decide_on_cpu`]).
+    on_gpu: bool,
 }
 
 impl ClassicDensification {
@@ -148,7 +156,8 @@ impl ClassicDensification {
             Some(s) => GpuDensifyStats::from_stats(ctx, s),
             None => GpuDensifyStats::new(ctx, n),
         };
-        Self { ctx: ctx.clone(), settings, stats }
+        let planner = GpuDensifyPlan::new(ctx);
+        Self { ctx: ctx.clone(), settings, stats, planner, on_gpu: true }
     }
 
     pub fn settings(&self) -> &ClassicSettings {
@@ -156,7 +165,9 @@ impl ClassicDensification {
     }
 
     /// Densify and prune now, from the statistics gathered since the last time (the schedule
-    /// calls it every `every` steps); the statistics start over.
+    /// calls it every `every` steps); the statistics start over. Decided on the GPU
+    /// (`densify_plan`) when the set fits its bindings, otherwise on the CPU from the few
+    /// attributes read back; both draw one seed from `rng` and make the same plan.
     pub fn densify_now(
         &mut self,
         gaussians: &mut GaussianState,
@@ -164,13 +175,30 @@ impl ClassicDensification {
         extent: f64,
         prune_large: bool,
     ) -> Result<DensifyReport> {
-        let stats = self.stats.read(&self.ctx)?;
-        let geometry = gaussians.geometry()?;
-        let (plan, report) =
-            plan_densify(&geometry, &stats, &self.settings, extent, prune_large, rng);
-        gaussians.apply_plan(&plan)?;
-        self.stats.reset(&self.ctx, plan.sources.len());
+        let n = gaussians.len();
+        let (report, rows) = if self.on_gpu && GpuDensifyPlan::fits(&self.ctx, n) {
+            let seed = plan_seed(rng);
+            let params = plan_params(&self.settings, extent, prune_large, n, seed);
+            let plan =
+                self.planner.plan(&self.ctx, gaussians.scene(), self.stats.buffer(), &params)?;
+            gaussians.apply_gpu_plan(&self.planner, &plan)?;
+            (plan.report, plan.sources.len() as usize)
+        } else {
+            let stats = self.stats.read(&self.ctx)?;
+            let geometry = gaussians.geometry()?;
+            let (plan, report) =
+                plan_densify(&geometry, &stats, &self.settings, extent, prune_large, rng);
+            gaussians.apply_plan(&plan)?;
+            (report, plan.sources.len())
+        };
+        self.stats.reset(&self.ctx, rows);
         Ok(report)
+    }
+
+    /// Decide on the CPU from attributes read back, as sets too large for `densify_plan`'s
+    /// bindings are (for tests and `bench --densify`).
+    pub fn decide_on_cpu(&mut self) {
+        self.on_gpu = false;
     }
 }
 
@@ -207,7 +235,7 @@ impl DensifyStrategy for ClassicDensification {
         if self.settings.resets_opacity_at(step) {
             // In place: only the opacities and their moments change, so the statistics
             // gathered since the last densification stay.
-            gaussians.reset_opacities(cap_opacity_logits)?;
+            gaussians.cap_opacities(reset_cap())?;
             events.push(DensifyEvent::OpacityReset);
         }
         Ok(events)
@@ -241,8 +269,103 @@ pub fn densify_and_prune(
     (plan.apply(state), report)
 }
 
-/// The plan of one densify-and-prune step: survivors, clones and split children, with the
-/// children's means and scales.
+/// Classic densification's thresholds for a set of `n` Gaussians, as the f32 values that the
+/// GPU's `densify_plan` and its twin [`plan_densify`] both compare: an opacity as its logit, a
+/// world size as a log scale, the average gradient as a product (`sum >= threshold * count`),
+/// so that no rounding of an exp, a sigmoid or a quotient can tell the two apart.
+pub fn plan_params(
+    settings: &ClassicSettings,
+    extent: f64,
+    prune_large: bool,
+    n: usize,
+    seed: u32,
+) -> DensifyPlanParams {
+    let m = settings.min_opacity;
+    DensifyPlanParams {
+        count: n as u32,
+        room: settings.max_gaussians.saturating_sub(n).min(u32::MAX as usize) as u32,
+        prune_large: u32::from(prune_large),
+        seed,
+        grad_threshold: settings.grad_threshold as f32,
+        transparent_logit: (m / (1.0 - m)).ln() as f32,
+        clone_log_scale: (settings.percent_dense * extent).ln() as f32,
+        prune_log_scale: (0.1 * extent).ln() as f32,
+        // A child's scale is its parent's over 1.6: over 0.1 extent when the parent's is over
+        // 0.16 extent.
+        child_prune_log_scale: (0.16 * extent).ln() as f32,
+        max_screen_radius: settings.max_screen_radius as f32,
+        child_log_shrink: 1.6f64.ln() as f32,
+        pad0: 0,
+    }
+}
+
+/// What becomes of one Gaussian (the twin of `densify_plan_rows`' decision).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct Fate {
+    /// It stays, with its Adam moments.
+    survivor: bool,
+    clone: bool,
+    /// It densifies by splitting (counted even when its children are pruned at once).
+    split: bool,
+    /// Its two children are kept.
+    children: bool,
+    /// How many the step prunes of it and its children.
+    pruned: usize,
+}
+
+/// The rules of shaders/shared/densify_rules.wgsl and densify_plan_rows.wgsl on the CPU.
+struct Rules<'a> {
+    p: &'a DensifyPlanParams,
+    g: &'a Geometry,
+    stats: &'a DensifyStats,
+}
+
+impl Rules<'_> {
+    fn transparent(&self, i: usize) -> bool {
+        self.g.opacity_logits[i] < self.p.transparent_logit
+    }
+
+    fn candidate(&self, i: usize) -> bool {
+        let (sum, count) = (self.stats.grad_sum[i] as f32, self.stats.count[i] as f32);
+        count > 0.0 && !self.transparent(i) && sum >= self.p.grad_threshold * count
+    }
+
+    fn max_log_scale(&self, i: usize) -> f32 {
+        let s = self.g.log_scales[i];
+        s[0].max(s[1]).max(s[2])
+    }
+
+    /// Gaussian `i`'s fate, `rank` being the number of candidates before it.
+    fn fate(&self, i: usize, rank: u32) -> Fate {
+        let p = self.p;
+        let size = self.max_log_scale(i);
+        let large = p.prune_large != 0;
+        let prune = self.transparent(i)
+            || (large
+                && (self.stats.max_radius[i] as f32 > p.max_screen_radius
+                    || size > p.prune_log_scale));
+        let densify = self.candidate(i) && rank < p.room;
+        let split = densify && size > p.clone_log_scale;
+        let children = split && !(large && size > p.child_prune_log_scale);
+        Fate {
+            survivor: !split && !prune,
+            clone: densify && !split && !prune,
+            split,
+            children,
+            pruned: usize::from(!split && prune) + if split && !children { 2 } else { 0 },
+        }
+    }
+}
+
+/// The plan of one densify-and-prune step, the twin of the GPU's `densify_plan`: each Gaussian
+/// in index order makes its rows of the new set, its survivor (keeping its moments), its clone,
+/// or the two children that replace it when it splits, with the children's means and scales.
+/// Densification is decided in index order while `max_gaussians` leaves room; a transparent
+/// Gaussian is neither cloned nor split (3DGS prunes the new ones too, and they inherit its
+/// opacity); a Gaussian pruned for its size is not cloned (the clone would only bring it back);
+/// split children still over the world-size limit are pruned at once (3DGS prunes after
+/// densifying). The children's means are the parent's plus R (s * z), z drawn by
+/// `noise_normal` numbered 2 i + k from a seed drawn from `rng`.
 pub fn plan_densify(
     g: &Geometry,
     stats: &DensifyStats,
@@ -252,79 +375,40 @@ pub fn plan_densify(
     rng: &mut Rng,
 ) -> (RowPlan, DensifyReport) {
     let n = g.len();
-    let max_scale = |i: usize| {
-        let s = g.log_scales[i];
-        f64::from(s[0].max(s[1]).max(s[2])).exp()
-    };
+    let p = plan_params(settings, extent, prune_large, n, plan_seed(rng));
+    let rules = Rules { p: &p, g, stats };
     let mut report = DensifyReport::default();
-    let mut room = settings.max_gaussians.saturating_sub(n);
-    let transparent = |i: usize| sigmoid(f64::from(g.opacity_logits[i])) < settings.min_opacity;
-    let prune = |i: usize| {
-        transparent(i)
-            || (prune_large
-                && (stats.max_radius[i] > settings.max_screen_radius
-                    || max_scale(i) > 0.1 * extent))
-    };
-    let mut clone = vec![false; n];
-    let mut split = vec![false; n];
+    let mut sources: Vec<(usize, bool)> = Vec::with_capacity(n);
+    let mut means: Vec<[f32; 3]> = Vec::with_capacity(n);
+    let mut log_scales: Vec<[f32; 3]> = Vec::with_capacity(n);
+    let mut rank = 0u32;
     for i in 0..n {
-        // A transparent Gaussian is neither cloned nor split: 3DGS prunes the new Gaussians too,
-        // and they inherit the opacity.
-        if stats.count[i] == 0 || room == 0 || transparent(i) {
-            continue;
-        }
-        let avg = stats.grad_sum[i] / f64::from(stats.count[i]);
-        if !(avg >= settings.grad_threshold) {
-            continue;
-        }
-        if max_scale(i) <= settings.percent_dense * extent {
-            clone[i] = true;
-            report.cloned += 1;
-        } else {
-            split[i] = true;
-            report.split += 1;
-        }
-        room -= 1;
-    }
-    // Survivors (split parents are replaced by their children), then clones, then children.
-    let mut sources: Vec<(usize, bool)> = Vec::with_capacity(n + report.cloned + 2 * report.split);
-    for i in 0..n {
-        if split[i] || prune(i) {
-            if !split[i] {
-                report.pruned += 1;
+        let fate = rules.fate(i, rank);
+        rank += u32::from(rules.candidate(i));
+        report.cloned += usize::from(fate.clone);
+        report.split += usize::from(fate.split);
+        report.pruned += fate.pruned;
+        // The survivor keeps its moments; the clone restarts them.
+        for (made, keep) in [(fate.survivor, true), (fate.clone, false)] {
+            if made {
+                sources.push((i, keep));
+                means.push(g.means[i]);
+                log_scales.push(g.log_scales[i]);
             }
+        }
+        if !fate.children {
             continue;
         }
-        sources.push((i, true));
-    }
-    // A clone of a Gaussian pruned for its screen size would only bring it back.
-    let clones: Vec<usize> = (0..n).filter(|&i| clone[i] && !prune(i)).collect();
-    report.cloned = clones.len();
-    sources.extend(clones.into_iter().map(|i| (i, false)));
-    let first_child = sources.len();
-    // 3DGS prunes after densifying, over the new Gaussians too: children still over the
-    // world-size limit go at once (a clone is small by construction, so none is).
-    let child_too_large = |i: usize| prune_large && max_scale(i) / 1.6 > 0.1 * extent;
-    let parents: Vec<usize> = (0..n).filter(|&i| split[i] && !child_too_large(i)).collect();
-    report.pruned += 2 * (report.split - parents.len());
-    for &i in &parents {
-        sources.push((i, false));
-        sources.push((i, false));
-    }
-    let mut means: Vec<[f32; 3]> = sources.iter().map(|&(i, _)| g.means[i]).collect();
-    let mut log_scales: Vec<[f32; 3]> = sources.iter().map(|&(i, _)| g.log_scales[i]).collect();
-    // Children: means drawn from the parent's Gaussian, scales divided by 0.8 N (N = 2).
-    for (c, &i) in parents.iter().enumerate() {
         let q = g.rotations[i].map(f64::from);
         let rot = DMat3::from_quat(DQuat::from_xyzw(q[1], q[2], q[3], q[0]).normalize());
-        let s = g.log_scales[i].map(|v| f64::from(v).exp());
+        let s = DVec3::from_array(g.log_scales[i].map(|v| f64::from(v).exp()));
         let mean = DVec3::from_array(g.means[i].map(f64::from));
-        for k in 0..2 {
-            let j = first_child + 2 * c + k;
-            let local = DVec3::new(s[0] * rng.normal(), s[1] * rng.normal(), s[2] * rng.normal());
-            let p = mean + rot * local;
-            means[j] = p.to_array().map(|v| v as f32);
-            log_scales[j] = g.log_scales[i].map(|v| (f64::from(v) - (0.8f64 * 2.0).ln()) as f32);
+        for k in 0..2u32 {
+            let item = 2 * i as u32 + k;
+            let z = DVec3::from_array([0, 1, 2].map(|c| noise_normal(p.seed, item, c)));
+            sources.push((i, false));
+            means.push((mean + rot * (s * z)).to_array().map(|v| v as f32));
+            log_scales.push(g.log_scales[i].map(|v| v - p.child_log_shrink));
         }
     }
     let plan =
@@ -332,17 +416,32 @@ pub fn plan_densify(
     (plan, report)
 }
 
-/// 3DGS's opacity reset of the logits: every opacity becomes at most 0.01.
+/// The seed of one densification's random draws (one draw of the run's generator, on the GPU
+/// and in the twin alike).
+pub(crate) fn plan_seed(rng: &mut Rng) -> u32 {
+    rng.next_u64() as u32
+}
+
+/// The logit of 3DGS's opacity reset: every opacity becomes at most 0.01.
+pub fn reset_cap() -> f32 {
+    (0.01f64 / 0.99).ln() as f32
+}
+
+/// 3DGS's opacity reset of the logits (the twin of `opacity_reset`, which training runs).
 pub fn cap_opacity_logits(logits: &mut [f32]) {
-    let cap = (0.01f64 / 0.99).ln() as f32;
+    let cap = reset_cap();
     for o in logits {
-        *o = o.min(cap);
+        // A NaN becomes the cap too, as on the GPU.
+        if !(*o <= cap) {
+            *o = cap;
+        }
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::densify::sigmoid;
     use trgs_core::scene::{Attribute, Gaussians, PerAttribute, Population, attribute_widths};
 
     fn state(n: usize) -> TrainState {
@@ -404,15 +503,21 @@ mod tests {
         let settings = ClassicSettings::scaled(30_000);
         let (out, report) = densify_and_prune(&s, &stats, &settings, 1.0, false, &mut Rng::new(1));
         assert_eq!(report, DensifyReport { cloned: 1, split: 1, pruned: 1 });
-        // Survivors 0, 2; the clone of 0 (3 is pruned, so not cloned); two children of 1.
+        // In index order: 0 and its clone, the two children of 1, then 2 (3 is pruned, so not
+        // cloned). Survivors keep their moments; the clone and the children restart.
         assert_eq!(out.gaussians.len(), 5);
         let means = &out.m[Attribute::Means];
         assert_eq!(means.len(), 15);
-        assert_eq!(&means[..6], &[1.0; 6]);
-        assert_eq!(&means[6..], &[0.0; 9]);
-        assert_eq!(out.gaussians.means[2], [0.0, 0.0, 0.0]);
-        let child = out.gaussians.log_scales[3][0];
-        assert!((f64::from(child) + 1.6f64.ln()).abs() < 1e-6);
+        assert_eq!(&means[..3], &[1.0; 3]);
+        assert_eq!(&means[3..12], &[0.0; 9]);
+        assert_eq!(&means[12..], &[1.0; 3]);
+        assert_eq!(out.gaussians.means[1], [0.0, 0.0, 0.0]);
+        assert_eq!(out.gaussians.means[4], [2.0, 0.0, 0.0]);
+        for child in [2, 3] {
+            let s = out.gaussians.log_scales[child][0];
+            assert!((f64::from(s) + 1.6f64.ln()).abs() < 1e-6, "child {child}: {s}");
+            assert_ne!(out.gaussians.means[child], [1.0, 0.0, 0.0], "child {child} moved");
+        }
     }
 
     #[test]

@@ -1,0 +1,165 @@
+//! Stage `densify_plan` on the GPU (shaders/training/densify_plan_*.wgsl; twin
+//! [`crate::densify::classic::plan_densify`]): classic densification decided on the GPU, from the
+//! statistics `densify_stats` gathered and the Gaussians in place, without reading either back.
+//! Four passes and two scans make the `gather_rows` sources of the new set: flag the candidates,
+//! rank them (a scan), decide each Gaussian's rows, place them (a scan), write the sources; after
+//! the gather, the split children take their means and scales. Only the four counters the
+//! rebuild is sized by (cloned, split, pruned, rows) cross to the CPU.
+use crate::densify::DensifyReport;
+use crate::gather_rows::GatherSources;
+use crate::kernels::TRAINING_KERNELS;
+use crate::layout::DensifyPlanParams;
+use trgs_core::scene::Attribute;
+use trgs_render::toolkit::PrefixSum;
+use trgs_render::toolkit::gpu::{self, BufferPool, Kernel, Recorder, grid_1d};
+use trgs_render::{GpuContext, GpuScene};
+
+/// The stage's kernels, built once per run.
+#[derive(Debug)]
+pub struct GpuDensifyPlan {
+    candidates: Kernel,
+    rows: Kernel,
+    sources: Kernel,
+    children: Kernel,
+    scan: PrefixSum,
+}
+
+/// A plan decided on the GPU: the sources `gather_rows` copies the new set from, and what the
+/// children's pass reads.
+#[derive(Debug)]
+pub struct DensifyPlanGpu {
+    pub sources: GatherSources,
+    pub report: DensifyReport,
+    params: wgpu::Buffer,
+    count: u32,
+    decisions: wgpu::Buffer,
+    first_rows: wgpu::Buffer,
+}
+
+impl GpuDensifyPlan {
+    pub fn new(ctx: &GpuContext) -> Self {
+        let k = &TRAINING_KERNELS;
+        Self {
+            candidates: k.densify_plan_candidates.build(ctx),
+            rows: k.densify_plan_rows.build(ctx),
+            sources: k.densify_plan_sources.build(ctx),
+            children: k.densify_plan_children.build(ctx),
+            scan: PrefixSum::new(ctx),
+        }
+    }
+
+    /// Whether a set of `n` Gaussians fits the stage: it binds each per-Gaussian buffer whole
+    /// (the statistics and rotations, 16 bytes per Gaussian, are the widest) and the new set's
+    /// means (at most two rows per Gaussian). Larger sets are planned on the CPU.
+    pub fn fits(ctx: &GpuContext, n: usize) -> bool {
+        (n as u64) * 24 <= ctx.binding_limit() && n < (1 << 30)
+    }
+
+    /// Decide on the GPU: records the passes, waits for them and reads the four counters.
+    pub fn plan(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        stats: &wgpu::Buffer,
+        params: &DensifyPlanParams,
+    ) -> Result<DensifyPlanGpu, gpu::GpuError> {
+        let n = params.count;
+        debug_assert_eq!(n, scene.len(), "a plan of another set");
+        let scopes = gpu::ErrorScopes::open(ctx, "deciding the densification");
+        let words = |label: &str, len: u32| gpu::storage(ctx, label, u64::from(len.max(1)) * 4);
+        let block = gpu::params(ctx, "trgs.densify_plan.params", params);
+        let ranks = words("trgs.densify_plan.ranks", n);
+        let first_rows = words("trgs.densify_plan.first_rows", n);
+        let decisions = words("trgs.densify_plan.decisions", n);
+        // At most two rows per Gaussian: a survivor and its clone, or two children.
+        let sources = words("trgs.densify_plan.sources", 2 * n);
+        let counts = words("trgs.densify_plan.counts", 4);
+        let p = scene.parameters();
+        let (opacity, log_scales) = (p[Attribute::OpacityLogits], p[Attribute::LogScales]);
+        let groups = grid_1d(n.div_ceil(256));
+        let mut pool = BufferPool::default();
+        let mut rec = Recorder::new(ctx, "trgs.densify_plan", false);
+        rec.encoder.clear_buffer(&counts, 0, None);
+        if n > 0 {
+            let entries = [&block, stats, opacity, &ranks].map(|b| b.as_entire_binding());
+            let bind = self.candidates.bind(ctx, &entries);
+            rec.dispatch("densify_plan", &self.candidates, &bind, groups);
+            self.scan.record(
+                ctx,
+                &mut rec,
+                "densify_plan",
+                &mut pool,
+                "trgs.densify_plan.ranks",
+                &ranks,
+                n,
+            );
+            let entries =
+                [&block, stats, opacity, log_scales, &ranks, &first_rows, &decisions, &counts]
+                    .map(|b| b.as_entire_binding());
+            let bind = self.rows.bind(ctx, &entries);
+            rec.dispatch("densify_plan", &self.rows, &bind, groups);
+            let total = self.scan.record(
+                ctx,
+                &mut rec,
+                "densify_plan",
+                &mut pool,
+                "trgs.densify_plan.first_rows",
+                &first_rows,
+                n,
+            );
+            rec.encoder.copy_buffer_to_buffer(&total, 0, &counts, 12, 4);
+            let entries =
+                [&block, &decisions, &first_rows, &sources].map(|b| b.as_entire_binding());
+            let bind = self.sources.bind(ctx, &entries);
+            rec.dispatch("densify_plan", &self.sources, &bind, groups);
+        }
+        let waited = rec.submit_and_wait(ctx);
+        let read = waited.and_then(|()| gpu::read_buffer::<u32>(ctx, &counts, 0, 4));
+        let [cloned, split, pruned, rows] = match scopes.close_after(read) {
+            Ok(c) => [c[0], c[1], c[2], c[3]],
+            Err(e) => return Err(e),
+        };
+        let report = DensifyReport {
+            cloned: cloned as usize,
+            split: split as usize,
+            pruned: pruned as usize,
+        };
+        Ok(DensifyPlanGpu {
+            sources: GatherSources::from_buffer(sources, rows),
+            report,
+            params: block,
+            count: n,
+            decisions,
+            first_rows,
+        })
+    }
+
+    /// Record the children's pass: their means and scales in `new` (gathered by `plan`'s
+    /// sources from `old`), from their parents in `old`.
+    pub fn record_children(
+        &self,
+        ctx: &GpuContext,
+        rec: &mut Recorder,
+        plan: &DensifyPlanGpu,
+        old: &GpuScene,
+        new: &GpuScene,
+    ) {
+        if plan.count == 0 || plan.report.split == 0 {
+            return;
+        }
+        let (p, q) = (old.parameters(), new.parameters());
+        let entries = [
+            &plan.params,
+            &plan.decisions,
+            &plan.first_rows,
+            p[Attribute::Means],
+            p[Attribute::Rotations],
+            p[Attribute::LogScales],
+            q[Attribute::Means],
+            q[Attribute::LogScales],
+        ]
+        .map(|b| b.as_entire_binding());
+        let bind = self.children.bind(ctx, &entries);
+        rec.dispatch("densify_plan", &self.children, &bind, grid_1d(plan.count.div_ceil(256)));
+    }
+}
