@@ -139,12 +139,18 @@ impl GpuRowGather {
         plan: &RowPlan,
     ) -> Result<(GpuScene, PerAttribute<AdamMoments>), gpu::GpuError> {
         let sources = GatherSources::new(ctx, &plan.sources);
-        let given = plan.given_words();
+        let given: Vec<(Attribute, wgpu::Buffer)> = plan
+            .given_words()
+            .into_iter()
+            .map(|(a, words)| {
+                (a, gpu::storage_init(ctx, &format!("trgs.scene.{}", a.name()), &words))
+            })
+            .collect();
         self.apply_sources(ctx, scene, moments, &sources, &given, |_, _| {})
     }
 
-    /// The scene and moments gathered by `sources`, with the attributes in `given` written as
-    /// given; `then` records what edits the new scene before the one submission (the split
+    /// The scene and moments gathered by `sources`, with the attributes in `given` taken as
+    /// given (buffers of the new set's size); `then` records what edits the new scene before the one submission (the split
     /// children's means and scales of `densify_plan`).
     pub fn apply_sources(
         &self,
@@ -152,7 +158,7 @@ impl GpuRowGather {
         scene: &GpuScene,
         moments: &PerAttribute<AdamMoments>,
         sources: &GatherSources,
-        given: &[(Attribute, Vec<u32>)],
+        given: &[(Attribute, wgpu::Buffer)],
         then: impl FnOnce(&mut Recorder, &GpuScene),
     ) -> Result<(GpuScene, PerAttribute<AdamMoments>), gpu::GpuError> {
         let scopes = gpu::ErrorScopes::open(ctx, "rebuilding the Gaussians");
@@ -160,7 +166,7 @@ impl GpuRowGather {
         let mut rec = Recorder::new(ctx, "trgs.gather_rows", false);
         let rebuilt = scene.rebuilt(sources.len(), |buffer, width, label| {
             match given.iter().find(|(a, _)| label == format!("trgs.scene.{}", a.name())) {
-                Some((_, words)) => gpu::storage_init(ctx, label, words),
+                Some((_, buffer)) => buffer.clone(),
                 None => self.record(ctx, &mut rec, label, buffer, n_src, width, sources, false),
             }
         });

@@ -5,6 +5,7 @@ use crate::adam::AdamMoments;
 use crate::densify::{Geometry, RowPlan, TrainState};
 use crate::densify_plan::{DensifyPlanGpu, GpuDensifyPlan};
 use crate::gather_rows::GpuRowGather;
+use crate::mcmc_relocate::RelocationGpu;
 use crate::opacity_reset::GpuOpacityReset;
 use anyhow::{Context, Result};
 use trgs_core::scene::{Attribute, Gaussians, PerAttribute, ReflectionPlane};
@@ -141,6 +142,29 @@ impl GaussianState {
                 &plan.sources,
                 &[],
                 |rec, new| planner.record_children(&ctx, rec, plan, old, new),
+            )?;
+            self.scene = scene;
+            self.moments = moments;
+            Ok(())
+        })
+    }
+
+    /// Relocate by a plan decided on the GPU (stage `mcmc_relocate`): the parameters and moments
+    /// gathered by its sources, with its opacities and log scales.
+    pub fn apply_relocation(&mut self, plan: &RelocationGpu) -> Result<()> {
+        let ctx = self.ctx.clone();
+        trgs_render::toolkit::gpu::scoped(&ctx, "relocating", || {
+            let given = [
+                (Attribute::OpacityLogits, plan.opacity_logits.clone()),
+                (Attribute::LogScales, plan.log_scales.clone()),
+            ];
+            let (scene, moments) = self.gather.apply_sources(
+                &ctx,
+                &self.scene,
+                &self.moments,
+                &plan.sources,
+                &given,
+                |_, _| {},
             )?;
             self.scene = scene;
             self.moments = moments;

@@ -22,6 +22,11 @@ trgs_render::kernel_registry! {
         densify_plan_sources: "training/densify_plan_sources.wgsl" => no_defines,
         densify_plan_children: "training/densify_plan_children.wgsl" => no_defines,
         opacity_reset: "training/opacity_reset.wgsl" => no_defines,
+        mcmc_relocate_weights: "training/mcmc_relocate_weights.wgsl" => no_defines,
+        mcmc_relocate_draw: "training/mcmc_relocate_draw.wgsl" => no_defines,
+        mcmc_relocate_shares: "training/mcmc_relocate_shares.wgsl" => no_defines,
+        mcmc_relocate_slots: "training/mcmc_relocate_slots.wgsl" => no_defines,
+        mcmc_relocate_append: "training/mcmc_relocate_append.wgsl" => no_defines,
         step_guard: "training/step_guard.wgsl" => no_defines,
     }
 }

@@ -1,5 +1,8 @@
 //! The training stages' GPU structs and constants, declared once here in Rust; the WGSL every
 //! training kernel sees ([`prelude`]) is the renderer's prelude followed by these, generated.
+use crate::densify::mcmc::{
+    MAX_SHARE, RELOCATION_BIN_LO, RELOCATION_BINS, RELOCATION_BINS_PER_UNIT,
+};
 use trgs_core::metrics::{SSIM_C1, SSIM_C2, SSIM_RADIUS, SSIM_WINDOW, gaussian_window};
 use trgs_core::reference::{GUARD_KEYS_DROPPED, GUARD_LOSS_NOT_FINITE};
 use trgs_core::reference::{MAX_REGULARISED_LOG_SCALE, NOISE_GATE_STEEPNESS, NOISE_GATE_THRESHOLD};
@@ -154,6 +157,24 @@ gpu_struct! {
     }
 }
 
+gpu_struct! {
+    /// Parameters of the `mcmc_relocate` kernels over a set of `count` Gaussians.
+    pub struct McmcRelocateParams {
+        pub count: u32,
+        /// Gaussians the growth adds (its draws).
+        pub growth: u32,
+        /// The seed of this round's draws.
+        pub seed: u32,
+        pub pad0: u32,
+        /// Opacity logits at or below this are dead.
+        pub dead_logit: f32,
+        /// Where Eq. 9's new opacity logits are clamped.
+        pub min_logit: f32,
+        pub max_logit: f32,
+        pub pad1: u32,
+    }
+}
+
 /// `densify_plan`'s decision bits per Gaussian: it survives (keeping its Adam moments), it is
 /// cloned, it is split into two children (and replaced by them).
 pub const DENSIFY_SURVIVOR: u32 = 1;
@@ -174,6 +195,7 @@ pub fn all_structs() -> Vec<StructInfo> {
         struct_info::<GatherParams>(),
         struct_info::<DensifyPlanParams>(),
         struct_info::<OpacityResetParams>(),
+        struct_info::<McmcRelocateParams>(),
         struct_info::<StepGuardParams>(),
     ]
 }
@@ -189,6 +211,8 @@ pub fn prelude() -> String {
         ("DENSIFY_SURVIVOR", DENSIFY_SURVIVOR),
         ("DENSIFY_CLONE", DENSIFY_CLONE),
         ("DENSIFY_CHILDREN", DENSIFY_CHILDREN),
+        ("RELOCATION_BINS", RELOCATION_BINS),
+        ("MAX_SHARE", MAX_SHARE as u32),
         ("UNCOVERED_LABEL", UNCOVERED_LABEL),
         ("GUARD_KEYS_DROPPED", GUARD_KEYS_DROPPED),
         ("GUARD_LOSS_NOT_FINITE", GUARD_LOSS_NOT_FINITE),
@@ -197,6 +221,8 @@ pub fn prelude() -> String {
         ("NOISE_GATE_STEEPNESS".to_string(), NOISE_GATE_STEEPNESS),
         ("NOISE_GATE_THRESHOLD".to_string(), NOISE_GATE_THRESHOLD),
         ("MAX_REGULARISED_LOG_SCALE".to_string(), MAX_REGULARISED_LOG_SCALE),
+        ("RELOCATION_BIN_LO".to_string(), f64::from(RELOCATION_BIN_LO)),
+        ("RELOCATION_BINS_PER_UNIT".to_string(), f64::from(RELOCATION_BINS_PER_UNIT)),
         ("SSIM_C1".to_string(), SSIM_C1),
         ("SSIM_C2".to_string(), SSIM_C2),
     ];

@@ -14,7 +14,7 @@
 //! - the training stages on the GPU, each with its CPU twin in `trgs_core::reference`:
 //!   [`adam`], [`losses`], [`densify_stats`], [`densify_plan`], [`gather_rows`], [`opacity_reset`],
 //!   [`step_guard`]
-//!   (and MCMC's in [`densify::mcmc`]),
+//!   and MCMC's ([`mcmc_relocate`], the others in [`densify::mcmc`]),
 //!   their kernels registered in [`kernels`] and their GPU structs declared in [`layout`].
 pub mod adam;
 pub mod checkpoint;
@@ -29,6 +29,7 @@ pub mod init;
 pub mod kernels;
 pub mod layout;
 pub mod losses;
+pub mod mcmc_relocate;
 pub mod memory;
 pub mod opacity_reset;
 pub mod perturb;

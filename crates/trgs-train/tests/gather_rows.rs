@@ -211,6 +211,8 @@ fn relocation_on_the_gpu_matches_the_cpu_rebuild() {
     let (mut gpu, mut cpu, ck) = trainers(&ctx);
     let settings = McmcSettings::scaled(30_000, 1600);
     let mut mcmc = McmcDensification::new(&ctx, settings.clone());
+    // Decided on the CPU here (tests/mcmc_relocate.rs checks the decisions made on the GPU).
+    mcmc.decide_on_cpu();
     let report = gpu.edit_gaussians(|g, rng, _| mcmc.relocate_now(g, rng)).expect("relocate");
     let mut rng = Rng::from_state(ck.rng_state);
     let geometry = Geometry::of(&ck.state.gaussians);

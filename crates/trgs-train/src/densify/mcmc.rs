@@ -2,10 +2,10 @@
 //! densification selected by `--densify mcmc`:
 //! - every step, the regularisers' gradients (`mcmc_regularise`) before Adam and the exploration
 //!   noise on the means (`mcmc_noise`) after it, both on the GPU;
-//! - every `every` steps of [from, until), planned on the CPU from the opacities, scales and
-//!   populations read back and carried out on the GPU (`gather_rows`): dead Gaussians
-//!   (opacity at most `min_opacity`) are moved onto live ones drawn in proportion to their
-//!   opacity, then 5% more Gaussians are added the same way, up to `cap`. A Gaussian that receives
+//! - every `every` steps of [from, until), decided on the GPU (`mcmc_relocate`, twin
+//!   [`plan_relocation`]) and carried out there (`gather_rows`): dead Gaussians (opacity at most
+//!   `min_opacity`) are moved onto live ones drawn in proportion to their opacity, then 5% more
+//!   Gaussians are added the same way, up to `cap`. A Gaussian that receives
 //!   N - 1 copies and its copies all take the opacity and scale of the paper's Eq. 9, so that the
 //!   N of them render about as the one did. Moved and sampled Gaussians restart their Adam moments.
 //!
@@ -15,9 +15,10 @@ use super::{DensifyEvent, DensifyStrategy, Geometry, RowPlan, StepView, TrainSta
 use crate::gaussian_state::GaussianState;
 use crate::kernels::TRAINING_KERNELS;
 use crate::layout::McmcParams;
+use crate::mcmc_relocate::GpuRelocation;
 use crate::settings::scale_len;
 use anyhow::Result;
-use trgs_core::reference::AdamRate;
+use trgs_core::reference::{AdamRate, pcg_hash};
 use trgs_core::rng::Rng;
 use trgs_core::scene::{Attribute, Population};
 use trgs_render::toolkit::gpu::{self, Kernel, Recorder, grid_1d, range};
@@ -112,39 +113,120 @@ fn logit(p: f64) -> f32 {
     (p / (1.0 - p)).ln() as f32
 }
 
-/// Draw `count` indices among `candidates` with probability proportional to `weights[index]`.
-fn sample_by_weight(
-    candidates: &[usize],
-    weights: &[f64],
-    count: usize,
-    rng: &mut Rng,
-) -> Vec<usize> {
-    let mut cumulative = Vec::with_capacity(candidates.len());
-    let mut total = 0.0;
-    for &i in candidates {
-        total += weights[i];
-        cumulative.push(total);
+/// Opacity bins of relocation: logits in [-16, 16) at 1/64, clamped at both ends. Relocation
+/// draws in proportion to a bin's opacity and applies Eq. 9 from a table by bin, so that the GPU
+/// (`mcmc_relocate`) and the twin make the same draws and write the same bits: both compute a
+/// bin with one correctly rounded subtraction and an exact multiplication, where a sigmoid or
+/// Eq. 9's alternating sums would round differently on each side. A bin spans a 1/64 step of the
+/// logit: its opacity is within 0.4% of any in it.
+pub const RELOCATION_BINS: u32 = 2048;
+pub const RELOCATION_BIN_LO: f32 = -16.0;
+pub const RELOCATION_BINS_PER_UNIT: f32 = 64.0;
+
+/// The bin of an opacity logit.
+pub fn opacity_bin(logit: f32) -> u32 {
+    let x = ((logit - RELOCATION_BIN_LO) * RELOCATION_BINS_PER_UNIT).floor();
+    x.clamp(0.0, (RELOCATION_BINS - 1) as f32) as u32
+}
+
+/// The opacity at the centre of bin `b`.
+fn bin_opacity(b: u32) -> f64 {
+    sigmoid(
+        f64::from(RELOCATION_BIN_LO) + (f64::from(b) + 0.5) / f64::from(RELOCATION_BINS_PER_UNIT),
+    )
+}
+
+/// Eq. 9 by bin and share: entry `b * (MAX_SHARE - 1) + share - 2` holds the logit of the new
+/// opacity (before the clamp into [min_opacity, 1 - 1e-7], which [`RelocationLimits`] applies)
+/// and the log of the scale factor, for `share` Gaussians (2 ..= MAX_SHARE) replacing one of bin
+/// `b`'s opacity. Built once (about 2000 x 49 evaluations of [`relocation`]).
+pub fn relocation_table() -> &'static [[f32; 2]] {
+    static TABLE: std::sync::OnceLock<Vec<[f32; 2]>> = std::sync::OnceLock::new();
+    TABLE.get_or_init(|| {
+        let mut t = Vec::with_capacity(RELOCATION_BINS as usize * (MAX_SHARE - 1));
+        for b in 0..RELOCATION_BINS {
+            for share in 2..=MAX_SHARE {
+                // No clamp here: the floor keeps the logit finite, the limits clamp it later.
+                let (o, factor) = relocation(bin_opacity(b), share, 0.0);
+                t.push([logit(o.min(1.0 - 1e-12)), factor.ln() as f32]);
+            }
+        }
+        t
+    })
+}
+
+/// Where the relocated opacities are clamped, as logits, and which are dead.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RelocationLimits {
+    /// Logits at or below this are dead.
+    pub dead_logit: f32,
+    pub min_logit: f32,
+    pub max_logit: f32,
+}
+
+impl RelocationLimits {
+    pub fn new(min_opacity: f64) -> Self {
+        let dead = logit(min_opacity);
+        Self { dead_logit: dead, min_logit: dead, max_logit: logit(1.0 - 1e-7) }
     }
-    if candidates.is_empty() || !(total > 0.0) {
+
+    /// The table's entry for `share` Gaussians replacing one of logit `l`: the new logit
+    /// (clamped) and the log scale factor.
+    pub fn share(&self, l: f32, share: usize) -> (f32, f32) {
+        let index = opacity_bin(l) as usize * (MAX_SHARE - 1) + share.clamp(2, MAX_SHARE) - 2;
+        let [new, ln_factor] = relocation_table()[index];
+        (new.clamp(self.min_logit, self.max_logit), ln_factor)
+    }
+}
+
+/// Integer draw weights by bin for a set of `n`: each bin's opacity in units of 2^-S, with S as
+/// large as keeps the sum over `n` Gaussians within a u32 (the GPU's scan), at least 1 so that
+/// every candidate can be drawn. S is 12 at 1M Gaussians: the faintest live opacity (0.005) is
+/// then weighted within 3%.
+pub fn weight_table(n: usize) -> Vec<u32> {
+    let s = (f64::from(u32::MAX) / n.max(1) as f64).log2().floor().clamp(0.0, 24.0);
+    let unit = 2f64.powf(s);
+    (0..RELOCATION_BINS).map(|b| ((bin_opacity(b) * unit).round() as u32).max(1)).collect()
+}
+
+/// Draw `j` of a relocation with seed `seed`, from weights whose exclusive scan is `cumulative`
+/// with sum `total` (> 0): the last index whose cumulative weight is at most a uniform integer
+/// below `total`, which has a non-zero weight. Integer arithmetic: the GPU draws the same.
+pub fn draw(seed: u32, j: u32, cumulative: &[u32], total: u32) -> usize {
+    let r = pcg_hash(j ^ pcg_hash(seed));
+    let u = ((u64::from(r) * u64::from(total)) >> 32) as u32;
+    cumulative.partition_point(|&c| c <= u) - 1
+}
+
+/// The exclusive scan of `w` and its total.
+fn exclusive_scan(w: &[u32]) -> (Vec<u32>, u32) {
+    let mut total = 0u32;
+    let scan = w
+        .iter()
+        .map(|&x| {
+            let before = total;
+            total += x;
+            before
+        })
+        .collect();
+    (scan, total)
+}
+
+/// `count` draws among the rows whose weight `w` is non-zero (none when all are zero).
+fn draws(seed: u32, w: &[u32], count: usize) -> Vec<usize> {
+    let (cumulative, total) = exclusive_scan(w);
+    if total == 0 {
         return Vec::new();
     }
-    (0..count)
-        .map(|_| {
-            let u = rng.uniform() * total;
-            let k = cumulative.partition_point(|&c| c <= u).min(candidates.len() - 1);
-            candidates[k]
-        })
-        .collect()
+    (0..count as u32).map(|j| draw(seed, j, &cumulative, total)).collect()
 }
 
 /// Give each source of `counts` (copies it receives) its share's opacity and scale, and mark its
 /// moments to restart.
-fn apply_shares(rows: &mut Rows, counts: &[(usize, usize)], min_opacity: f64) {
+fn apply_shares(rows: &mut Rows, counts: &[(usize, usize)], limits: &RelocationLimits) {
     for &(src, copies) in counts {
-        let o = sigmoid(f64::from(rows.opacity_logits[src]));
-        let (new_o, factor) = relocation(o, copies + 1, min_opacity);
-        rows.opacity_logits[src] = logit(new_o);
-        let ln_factor = factor.ln() as f32;
+        let (l, ln_factor) = limits.share(rows.opacity_logits[src], copies + 1);
+        rows.opacity_logits[src] = l;
         rows.log_scales[src] = rows.log_scales[src].map(|s| s + ln_factor);
         rows.sources[src].1 = false;
     }
@@ -168,12 +250,18 @@ impl Rows {
         self.populations[to] = self.populations[from];
     }
 
-    fn opacities(&self) -> Vec<f64> {
-        self.opacity_logits.iter().map(|&l| sigmoid(f64::from(l))).collect()
-    }
-
     fn primary(&self, i: usize) -> bool {
         self.populations[i] == Population::Primary
+    }
+
+    /// The draw weights of the rows (primary ones, that `alive` accepts).
+    fn weights(&self, table: &[u32], alive: impl Fn(usize) -> bool) -> Vec<u32> {
+        (0..self.sources.len())
+            .map(|i| {
+                let live = self.primary(i) && alive(i);
+                if live { table[opacity_bin(self.opacity_logits[i]) as usize] } else { 0 }
+            })
+            .collect()
     }
 }
 
@@ -202,39 +290,54 @@ pub fn relocate_and_grow(
     (plan.apply(state), report)
 }
 
-/// The plan of one relocation step ([`relocate_and_grow`] runs it on the CPU, training on the
-/// GPU): the rows it copies, with every row's opacity and scale.
+/// How many Gaussians a relocation step of a set of `n` adds (growth up to the cap).
+pub fn growth_rows(settings: &McmcSettings, n: usize) -> usize {
+    let target = ((settings.growth * n as f64) as usize).min(settings.cap);
+    target.saturating_sub(n)
+}
+
+/// The seeds of one relocation step's two rounds of draws (two draws of the run's generator, on
+/// the GPU and in the twin alike).
+pub(crate) fn relocation_seeds(rng: &mut Rng) -> [u32; 2] {
+    [rng.next_u64() as u32, rng.next_u64() as u32]
+}
+
+/// The plan of one relocation step, the twin of the GPU's `mcmc_relocate` ([`relocate_and_grow`]
+/// runs it on the CPU): the rows it copies, with every row's opacity and scale. Dead primary
+/// Gaussians (logit at or below min_opacity's) take copies of live primary ones drawn in
+/// proportion to their opacity; then the set grows by `growth` (up to `cap`) with copies of
+/// primary Gaussians drawn by their new opacities. A Gaussian that receives N - 1 copies and its
+/// copies all take Eq. 9's opacity and scale for N.
 pub fn plan_relocation(
     g: &Geometry,
     settings: &McmcSettings,
     rng: &mut Rng,
 ) -> (RowPlan, McmcReport) {
     let n = g.len();
+    let [seed_relocate, seed_grow] = relocation_seeds(rng);
+    let limits = RelocationLimits::new(settings.min_opacity);
+    let table = weight_table(n);
     let mut rows = Rows {
         sources: (0..n).map(|i| (i, true)).collect(),
         opacity_logits: g.opacity_logits.clone(),
         log_scales: g.log_scales.clone(),
         populations: g.populations.clone(),
     };
-    let o = rows.opacities();
+    let dead_at = |l: f32| l <= limits.dead_logit;
     let dead: Vec<usize> =
-        (0..n).filter(|&i| rows.primary(i) && o[i] <= settings.min_opacity).collect();
-    let alive: Vec<usize> =
-        (0..n).filter(|&i| rows.primary(i) && o[i] > settings.min_opacity).collect();
-    let sources = sample_by_weight(&alive, &o, dead.len(), rng);
-    apply_shares(&mut rows, &tally(&sources), settings.min_opacity);
+        (0..n).filter(|&i| rows.primary(i) && dead_at(rows.opacity_logits[i])).collect();
+    let alive = rows.weights(&table, |i| !dead_at(g.opacity_logits[i]));
+    let sources = draws(seed_relocate, &alive, dead.len());
+    apply_shares(&mut rows, &tally(&sources), &limits);
     // Each dead slot becomes a copy of its (updated) source, with zero moments.
     for (&d, &src) in dead.iter().zip(&sources) {
         rows.copy(d, src);
     }
     let relocated = sources.len();
     // Growth: sample among every primary Gaussian by its (new) opacity.
-    let target = ((settings.growth * n as f64) as usize).min(settings.cap);
-    let wanted = target.saturating_sub(n);
-    let o = rows.opacities();
-    let candidates: Vec<usize> = (0..n).filter(|&i| rows.primary(i)).collect();
-    let added_from = sample_by_weight(&candidates, &o, wanted, rng);
-    apply_shares(&mut rows, &tally(&added_from), settings.min_opacity);
+    let candidates = rows.weights(&table, |_| true);
+    let added_from = draws(seed_grow, &candidates, growth_rows(settings, n));
+    apply_shares(&mut rows, &tally(&added_from), &limits);
     for &i in &added_from {
         rows.sources.push((i, true));
         rows.opacity_logits.push(0.0);
@@ -255,28 +358,55 @@ pub fn plan_relocation(
 /// MCMC densification as a [`DensifyStrategy`].
 #[derive(Debug)]
 pub struct McmcDensification {
+    ctx: GpuContext,
     settings: McmcSettings,
     kernels: McmcKernels,
+    relocation: GpuRelocation,
+    /// Decide on the GPU where the set fits (see [`McmcDensification::decide_on_cpu`]).
+    on_gpu: bool,
 }
 
 impl McmcDensification {
     pub fn new(ctx: &GpuContext, settings: McmcSettings) -> Self {
-        Self { settings, kernels: McmcKernels::new(ctx) }
+        Self {
+            ctx: ctx.clone(),
+            settings,
+            kernels: McmcKernels::new(ctx),
+            relocation: GpuRelocation::new(ctx),
+            on_gpu: true,
+        }
     }
 
     pub fn settings(&self) -> &McmcSettings {
         &self.settings
     }
 
-    /// A relocation and growth step now (the schedule calls it every `every` steps).
+    /// Decide on the CPU from attributes read back, as sets too large for `mcmc_relocate`'s
+    /// bindings are (for tests and `bench --densify`).
+    pub fn decide_on_cpu(&mut self) {
+        self.on_gpu = false;
+    }
+
+    /// A relocation and growth step now (the schedule calls it every `every` steps). Decided on
+    /// the GPU (`mcmc_relocate`) when the set fits its bindings, otherwise on the CPU from the
+    /// few attributes read back; both draw two seeds from `rng` and make the same plan.
     pub fn relocate_now(
         &mut self,
         gaussians: &mut GaussianState,
         rng: &mut Rng,
     ) -> Result<McmcReport> {
-        let (plan, report) = plan_relocation(&gaussians.geometry()?, &self.settings, rng);
-        gaussians.apply_plan(&plan)?;
-        Ok(report)
+        let (n, growth) = (gaussians.len(), growth_rows(&self.settings, gaussians.len()));
+        if !(self.on_gpu && GpuRelocation::fits(&self.ctx, n, growth)) {
+            let (plan, report) = plan_relocation(&gaussians.geometry()?, &self.settings, rng);
+            gaussians.apply_plan(&plan)?;
+            return Ok(report);
+        }
+        let limits = RelocationLimits::new(self.settings.min_opacity);
+        let seeds = relocation_seeds(rng);
+        let scene = gaussians.scene();
+        let plan = self.relocation.plan(&self.ctx, scene, &limits, growth as u32, seeds)?;
+        gaussians.apply_relocation(&plan)?;
+        Ok(plan.report)
     }
 }
 

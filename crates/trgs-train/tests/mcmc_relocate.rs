@@ -1,0 +1,113 @@
+//! Stage `mcmc_relocate` (3DGS-MCMC's relocation and growth decided on the GPU) against its twin
+//! `plan_relocation` applied on the CPU, bit for bit: the report, every row's source, every
+//! parameter and Adam moment. Hard cases: scans of several blocks, one live Gaussian drawn past
+//! Eq. 9's largest share, every primary Gaussian dead (nothing to draw from), no primary
+//! Gaussian at all (no growth), the cap reached, and an empty set.
+use trgs_core::fixtures::{SceneSpec, random_scene};
+use trgs_core::rng::Rng;
+use trgs_core::scene::{Attribute, Gaussians, PerAttribute, Population, attribute_widths};
+use trgs_render::{DeviceOptions, GpuContext};
+use trgs_train::densify::mcmc::{McmcDensification, McmcSettings, plan_relocation};
+use trgs_train::densify::{Geometry, McmcReport, TrainState};
+use trgs_train::gaussian_state::GaussianState;
+
+fn ctx() -> GpuContext {
+    GpuContext::with_options(&DeviceOptions { poison_fresh_buffers: true, ..Default::default() })
+        .expect("adapter")
+}
+
+/// `n` Gaussians (SH degree 1, 10% glass) with opacities from dead (a quarter at or below
+/// 0.005) to opaque, and moments that differ in every word.
+fn case(n: usize, seed: u64) -> TrainState {
+    let spec = SceneSpec {
+        seed,
+        gaussians: n,
+        planes: 1,
+        width: 32,
+        height: 24,
+        view_angle_deg: 30.0,
+        sh_degree: 1,
+        glass_fraction: 0.1,
+    };
+    let mut g: Gaussians<f32> = random_scene(&spec).gaussians.cast();
+    let mut rng = Rng::new(seed + 1);
+    for i in 0..n {
+        let l = rng.range(-7.0, -1.5) as f32;
+        g.log_scales[i] = [l, l - 0.3, l - 0.6];
+        g.opacity_logits[i] = rng.range(-9.0, 4.0) as f32;
+    }
+    let w = attribute_widths(g.sh_coeffs());
+    let moments = |base: f32| {
+        PerAttribute::from_fn(|a| {
+            (0..n * w[a]).map(|k| base + (a.index() * 100_000 + k) as f32).collect()
+        })
+    };
+    TrainState { m: moments(0.5), v: moments(-0.25), gaussians: g }
+}
+
+/// Relocate `state` on the GPU and by the twin; compare bit for bit; the report.
+fn check(ctx: &GpuContext, state: &TrainState, settings: &McmcSettings) -> McmcReport {
+    let seed = 31;
+    let mut gpu = GaussianState::from_state(ctx, state, &[]).expect("upload");
+    let mut mcmc = McmcDensification::new(ctx, settings.clone());
+    let report = mcmc.relocate_now(&mut gpu, &mut Rng::new(seed)).expect("relocate on the GPU");
+    let geometry = Geometry::of(&state.gaussians);
+    let (plan, twin_report) = plan_relocation(&geometry, settings, &mut Rng::new(seed));
+    assert_eq!(report, twin_report, "the report");
+    let twin = plan.apply(state);
+    let got = gpu.read().expect("readback");
+    assert_eq!(got.gaussians.len(), twin.gaussians.len(), "the count");
+    assert!(got.gaussians == twin.gaussians, "the Gaussians differ");
+    for a in Attribute::ALL {
+        assert!(got.m[a] == twin.m[a], "first moments of {a:?}");
+        assert!(got.v[a] == twin.v[a], "second moments of {a:?}");
+    }
+    report
+}
+
+fn settings(cap: usize) -> McmcSettings {
+    McmcSettings::scaled(30_000, cap)
+}
+
+#[test]
+fn the_gpu_relocates_as_the_twin_does() {
+    let ctx = ctx();
+    // 9000 Gaussians: more than two blocks of the scans on every adapter.
+    let state = case(9000, 5);
+    let r = check(&ctx, &state, &settings(20_000));
+    println!("{r:?}");
+    assert!(r.relocated > 1000 && r.added == 450, "{r:?}");
+    // At the cap: relocation alone.
+    let r = check(&ctx, &state, &settings(9000));
+    assert!(r.relocated > 1000 && r.added == 0, "{r:?}");
+}
+
+#[test]
+fn one_live_gaussian_takes_every_draw() {
+    let ctx = ctx();
+    let mut state = case(400, 6);
+    let g = &mut state.gaussians;
+    g.populations.fill(Population::Primary);
+    g.opacity_logits.fill(-8.0);
+    g.opacity_logits[123] = 3.0;
+    // 399 draws on one Gaussian: Eq. 9's share is clamped at its largest.
+    let r = check(&ctx, &state, &settings(1000));
+    assert_eq!(r, McmcReport { relocated: 399, added: 20 });
+}
+
+#[test]
+fn nothing_to_draw_from() {
+    let ctx = ctx();
+    // Every primary Gaussian dead: none relocates, but they can still be drawn to grow.
+    let mut state = case(500, 7);
+    state.gaussians.opacity_logits.fill(-8.0);
+    let r = check(&ctx, &state, &settings(1000));
+    assert_eq!(r.relocated, 0);
+    assert_eq!(r.added, 25);
+    // Only glass: nothing moves and nothing grows.
+    state.gaussians.populations.fill(Population::Glass);
+    let r = check(&ctx, &state, &settings(1000));
+    assert_eq!(r, McmcReport::default());
+    let r = check(&ctx, &case(0, 8), &settings(1000));
+    assert_eq!(r, McmcReport::default());
+}
