@@ -200,14 +200,6 @@ impl GaussianState {
         Ok(())
     }
 
-    /// Replace the opacity logits on the GPU (the other parameters and all moments stay); one
-    /// per Gaussian.
-    pub(crate) fn write_opacity_logits(&self, logits: &[f32]) {
-        debug_assert_eq!(logits.len(), self.len(), "one opacity logit per Gaussian");
-        let opacity = self.scene.parameter(Attribute::OpacityLogits);
-        self.ctx.queue.write_buffer(opacity, 0, bytemuck::cast_slice(logits));
-    }
-
     /// Cap every opacity logit at `cap` and restart the opacities' Adam moments (3DGS's opacity
     /// reset), on the GPU (stage `opacity_reset`); the other parameters and moments stay.
     pub fn cap_opacities(&mut self, cap: f32) -> Result<()> {

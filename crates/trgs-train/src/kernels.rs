@@ -27,6 +27,7 @@ trgs_render::kernel_registry! {
         mcmc_relocate_shares: "training/mcmc_relocate_shares.wgsl" => no_defines,
         mcmc_relocate_slots: "training/mcmc_relocate_slots.wgsl" => no_defines,
         mcmc_relocate_append: "training/mcmc_relocate_append.wgsl" => no_defines,
+        perturb: "training/perturb.wgsl" => no_defines,
         step_guard: "training/step_guard.wgsl" => no_defines,
     }
 }

@@ -175,6 +175,33 @@ gpu_struct! {
     }
 }
 
+gpu_struct! {
+    /// A plane as `perturb` tests it: its centre with the margin behind it (w), its unit normal
+    /// with half its width (w), its width axis with half its height (w), and its height axis.
+    pub struct PerturbPlane {
+        pub centre: [f32; 4],
+        pub normal: [f32; 4],
+        pub axis: [f32; 4],
+        pub bitangent: [f32; 4],
+    }
+}
+
+gpu_struct! {
+    /// Parameters of `perturb` over `count` Gaussians.
+    pub struct PerturbParams {
+        pub count: u32,
+        pub planes: u32,
+        pub cameras: u32,
+        pub seed: u32,
+        pub amplitude: f32,
+        /// Opacities are clamped into [clamp, 1 - clamp].
+        pub clamp: f32,
+        /// Index in the scene of this range's first Gaussian (numbers the noise).
+        pub first: u32,
+        pub pad0: u32,
+    }
+}
+
 /// `densify_plan`'s decision bits per Gaussian: it survives (keeping its Adam moments), it is
 /// cloned, it is split into two children (and replaced by them).
 pub const DENSIFY_SURVIVOR: u32 = 1;
@@ -196,6 +223,8 @@ pub fn all_structs() -> Vec<StructInfo> {
         struct_info::<DensifyPlanParams>(),
         struct_info::<OpacityResetParams>(),
         struct_info::<McmcRelocateParams>(),
+        struct_info::<PerturbPlane>(),
+        struct_info::<PerturbParams>(),
         struct_info::<StepGuardParams>(),
     ]
 }

@@ -1,10 +1,15 @@
 //! Opacity perturbation (paper, appendix "Opacity perturbation"): every so often in stage 3, the
 //! primary Gaussians seen through a plane get uniform noise on their opacity, which shakes both
 //! the depth variance and the gradient similarity out of a local optimum; the Gaussians that
-//! belong in the transmission recover, reflection ghosts behind the glass do not.
+//! belong in the transmission recover, reflection ghosts behind the glass do not. Training runs
+//! it on the GPU (stage `perturb`, [`GpuPerturb`]); [`seen_through_planes`] and
+//! [`perturb_opacities`] are its twin.
+use crate::layout::{PerturbParams, PerturbPlane};
 use glam::DVec3;
-use trgs_core::rng::Rng;
-use trgs_core::scene::{Gaussians, Population, ReflectionPlane};
+use trgs_core::reference::pcg_hash;
+use trgs_core::scene::{Attribute, Gaussians, Population, ReflectionPlane};
+use trgs_render::toolkit::gpu::{self, Kernel, Recorder, grid_1d, range};
+use trgs_render::{GpuContext, GpuScene};
 
 /// The paper's noise: uniform in [-0.4, 0.4] on the opacity (not its logit).
 pub const PERTURB_AMPLITUDE: f64 = 0.4;
@@ -59,26 +64,115 @@ pub fn seen_through_planes(
     selected
 }
 
-/// Add uniform noise in [-amplitude, amplitude] to the opacity of the selected Gaussians and
-/// clamp; returns how many were perturbed.
+/// The uniform number in [0, 1) of Gaussian `i`'s noise at `seed` (24 bits, which f32 holds).
+fn noise_uniform(seed: u32, i: u32) -> f64 {
+    f64::from(pcg_hash(i ^ pcg_hash(seed)) >> 8) / 16_777_216.0
+}
+
+/// Add uniform noise in [-amplitude, amplitude) to the opacity of the selected Gaussians and
+/// clamp (the twin of `perturb`'s noise: Gaussian i's number is drawn from `seed` by its index);
+/// returns how many were perturbed.
 pub fn perturb_opacities(
     g: &mut Gaussians<f32>,
     selected: &[bool],
     amplitude: f64,
-    rng: &mut Rng,
+    seed: u32,
 ) -> usize {
     let mut count = 0;
-    for (logit, &sel) in g.opacity_logits.iter_mut().zip(selected) {
+    for (i, (logit, &sel)) in g.opacity_logits.iter_mut().zip(selected).enumerate() {
         if !sel {
             continue;
         }
         let o = 1.0 / (1.0 + (-f64::from(*logit)).exp());
-        let noisy =
-            (o + rng.range(-amplitude, amplitude)).clamp(OPACITY_CLAMP, 1.0 - OPACITY_CLAMP);
+        let noise = amplitude * (2.0 * noise_uniform(seed, i as u32) - 1.0);
+        let noisy = (o + noise).clamp(OPACITY_CLAMP, 1.0 - OPACITY_CLAMP);
         *logit = (noisy / (1.0 - noisy)).ln() as f32;
         count += 1;
     }
     count
+}
+
+/// The planes as `perturb` reads them.
+pub fn perturb_planes(planes: &[ReflectionPlane]) -> Vec<PerturbPlane> {
+    let v = |v: DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
+    planes
+        .iter()
+        .map(|p| PerturbPlane {
+            centre: v(p.centre, BEHIND_MARGIN * p.width.min(p.height)),
+            normal: v(p.unit_normal(), 0.5 * p.width),
+            axis: v(p.axis, 0.5 * p.height),
+            bitangent: v(p.bitangent(), 0.0),
+        })
+        .collect()
+}
+
+/// Stage `perturb` on the GPU: the selection of [`seen_through_planes`] and the noise of
+/// [`perturb_opacities`] in place, without reading the Gaussians back.
+#[derive(Debug)]
+pub struct GpuPerturb {
+    kernel: Kernel,
+}
+
+impl GpuPerturb {
+    pub fn new(ctx: &GpuContext) -> Self {
+        Self { kernel: crate::kernels::TRAINING_KERNELS.perturb.build(ctx) }
+    }
+
+    /// Perturb the opacities of `scene`'s Gaussians that the cameras at `camera_centres` see
+    /// through its planes; waits for the GPU and returns how many it perturbed (one counter
+    /// read back).
+    pub fn run(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        camera_centres: &[DVec3],
+        amplitude: f64,
+        seed: u32,
+    ) -> Result<usize, gpu::GpuError> {
+        let planes = perturb_planes(scene.planes());
+        if planes.is_empty() || camera_centres.is_empty() || scene.is_empty() {
+            return Ok(0);
+        }
+        let scopes = gpu::ErrorScopes::open(ctx, "perturbing the opacities");
+        let cameras: Vec<[f32; 4]> =
+            camera_centres.iter().map(|c| [c.x as f32, c.y as f32, c.z as f32, 0.0]).collect();
+        let planes_buffer = gpu::storage_init(ctx, "trgs.perturb.planes", &planes);
+        let cameras_buffer = gpu::storage_init(ctx, "trgs.perturb.cameras", &cameras);
+        let count = gpu::storage_init(ctx, "trgs.perturb.count", &[0u32]);
+        let p = scene.parameters();
+        let (means, opacity) = (p[Attribute::Means], p[Attribute::OpacityLogits]);
+        let mut rec = Recorder::new(ctx, "trgs.perturb", false);
+        for (first, n) in scene.chunks() {
+            let params = PerturbParams {
+                count: n,
+                planes: planes.len() as u32,
+                cameras: cameras.len() as u32,
+                seed,
+                amplitude: amplitude as f32,
+                clamp: OPACITY_CLAMP as f32,
+                first,
+                pad0: 0,
+            };
+            let block = gpu::params(ctx, "trgs.perturb.params", &params);
+            let (f, c) = (u64::from(first), u64::from(n));
+            let bind = self.kernel.bind(
+                ctx,
+                &[
+                    block.as_entire_binding(),
+                    planes_buffer.as_entire_binding(),
+                    cameras_buffer.as_entire_binding(),
+                    range(means, f * 12, c * 12),
+                    range(scene.populations(), f * 4, c * 4),
+                    range(opacity, f * 4, c * 4),
+                    count.as_entire_binding(),
+                ],
+            );
+            rec.dispatch("perturb", &self.kernel, &bind, grid_1d(n.div_ceil(256)));
+        }
+        let waited = rec.submit_and_wait(ctx);
+        let read = waited.and_then(|()| gpu::read_buffer::<u32>(ctx, &count, 0, 1));
+        Ok(scopes.close_after(read)?[0] as usize)
+    }
 }
 
 #[cfg(test)]
@@ -120,8 +214,7 @@ mod tests {
         }
         let before = g.opacity_logits.clone();
         let selected: Vec<bool> = (0..400).map(|i| i % 2 == 0).collect();
-        let mut rng = Rng::new(9);
-        let n = perturb_opacities(&mut g, &selected, PERTURB_AMPLITUDE, &mut rng);
+        let n = perturb_opacities(&mut g, &selected, PERTURB_AMPLITUDE, 9);
         assert_eq!(n, 200);
         let sig = |l: f32| 1.0 / (1.0 + (-f64::from(l)).exp());
         let mut moved = 0;

@@ -195,6 +195,11 @@ impl ClassicDensification {
         Ok(report)
     }
 
+    /// Replace the statistics gathered so far (a checkpoint's; the benchmark's).
+    pub fn set_statistics(&mut self, stats: &DensifyStats) {
+        self.stats.upload(&self.ctx, stats);
+    }
+
     /// Decide on the CPU from attributes read back, as sets too large for `densify_plan`'s
     /// bindings are (for tests and `bench --densify`).
     pub fn decide_on_cpu(&mut self) {

@@ -95,6 +95,8 @@ pub struct Trainer {
     /// Centres of the training cameras (the opacity perturbation selects what they see through
     /// a plane).
     camera_centres: Vec<glam::DVec3>,
+    /// The opacity perturbation's kernel (stage `perturb`).
+    perturb: crate::perturb::GpuPerturb,
 }
 
 impl Trainer {
@@ -139,6 +141,7 @@ impl Trainer {
             guard: crate::step_guard::StepGuard::new(ctx),
             exact_keys_next: false,
             camera_centres: Vec::new(),
+            perturb: crate::perturb::GpuPerturb::new(ctx),
         }
     }
 

@@ -3,7 +3,6 @@
 use super::Trainer;
 use crate::checkpoint::PlaneMoments;
 use crate::densify::plan::gather;
-use crate::perturb::{perturb_opacities, seen_through_planes};
 use crate::plane_adam::{OffsetLimit, PlaneRates, plane_adam};
 use crate::settings::Stage;
 use anyhow::{Context, Result};
@@ -107,12 +106,10 @@ impl Trainer {
         {
             return Ok(0);
         }
-        let mut g = self.gaussians()?;
-        let selected = seen_through_planes(&g, self.planes(), &self.camera_centres);
-        let n = perturb_opacities(&mut g, &selected, p.amplitude, &mut self.rng);
         // Only the opacity buffer changes: the moments and densification statistics stay.
-        self.gaussians.write_opacity_logits(&g.opacity_logits);
-        Ok(n)
+        let seed = self.rng.next_u64() as u32;
+        let (ctx, scene) = (&self.ctx, self.gaussians.scene());
+        Ok(self.perturb.run(ctx, scene, &self.camera_centres, p.amplitude, seed)?)
     }
 }
 

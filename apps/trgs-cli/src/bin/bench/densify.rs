@@ -1,7 +1,9 @@
 //! The densification measurement of `bench`: one classic densify-and-prune and one MCMC
-//! relocation of the capture-like room's Gaussians (SH degree 3) through the trainer, the set
-//! rebuilt on the GPU (`gather_rows`, as training does) and, alternating with it, through the
-//! CPU (the whole state read back, rebuilt and uploaded, as training did before).
+//! relocation of the capture-like room's Gaussians (SH degree 3) through the trainer, three ways
+//! in turn: decided and rebuilt on the GPU (`densify_plan` / `mcmc_relocate`, then `gather_rows`,
+//! as training does); decided on the CPU from the attributes read back and rebuilt on the GPU
+//! (as sets too large for the deciding stages' bindings are); and through the CPU (the whole
+//! state read back, rebuilt and uploaded).
 use crate::median;
 use anyhow::Result;
 use std::fmt::Write as _;
@@ -10,8 +12,8 @@ use trgs_core::fixtures::{RoomDensity, RoomSpec, room_scene};
 use trgs_core::rng::Rng;
 use trgs_render::GpuContext;
 use trgs_train::densify::classic::plan_densify;
-use trgs_train::densify::mcmc::{McmcSettings, plan_relocation};
-use trgs_train::densify::{ClassicSettings, DensifyStats, Geometry, RowPlan};
+use trgs_train::densify::mcmc::{McmcDensification, McmcSettings, plan_relocation};
+use trgs_train::densify::{ClassicDensification, ClassicSettings, DensifyStats, Geometry, RowPlan};
 use trgs_train::settings::TrainSettings;
 use trgs_train::trainer::Trainer;
 
@@ -30,6 +32,8 @@ pub struct DensifyRow {
     pub gpu_ms: f64,
     /// The rebuild through the CPU (`Trainer::apply_plan_on_cpu`).
     pub cpu_ms: f64,
+    /// Deciding and rebuilding on the GPU (the strategy's own step, as training takes it).
+    pub decided_on_gpu_ms: f64,
 }
 
 fn trainer(ctx: &GpuContext, gaussians: usize) -> Result<Trainer> {
@@ -59,20 +63,44 @@ fn statistics(n: usize) -> DensifyStats {
     stats
 }
 
-/// Time `reps` rebuilds by `plan` each way, alternating; the set is rebuilt from the same state
-/// every time (a plan keeps the row count when applied to its own input's count).
+/// The strategy's own step on the GPU, as training takes it: the rows after it and its time in
+/// ms (deciding and rebuilding, from an idle GPU to an idle GPU; building the strategy and
+/// uploading its statistics are not timed).
+type GpuStep<'a> = dyn FnMut(&mut Trainer) -> Result<(usize, f64)> + 'a;
+
+/// Time `step` on `t` from an idle GPU to an idle GPU.
+fn timed(
+    t: &mut Trainer,
+    step: impl FnOnce(&mut Trainer) -> Result<usize>,
+) -> Result<(usize, f64)> {
+    let ctx = t.context().clone();
+    trgs_render::toolkit::gpu::wait_for_gpu(&ctx, "the set-up")?;
+    let clock = Instant::now();
+    let rows = step(t)?;
+    trgs_render::toolkit::gpu::wait_for_gpu(&ctx, "the step")?;
+    Ok((rows, clock.elapsed().as_secs_f64() * 1e3))
+}
+
+/// Time `reps` rebuilds by `plan` each way and `reps` steps of `on_gpu`, in turn; the set is
+/// rebuilt from the same state every time (a plan keeps the row count when applied to its own
+/// input's count).
 fn time_rebuilds(
     t: &mut Trainer,
     kind: &'static str,
     plan_of: impl Fn(&Geometry) -> RowPlan,
+    on_gpu: &mut GpuStep<'_>,
     reps: usize,
 ) -> Result<DensifyRow> {
     let ctx = t.context().clone();
     let start = t.read_state()?;
     let (mut read, mut planning, mut gpu, mut cpu) = (vec![], vec![], vec![], vec![]);
+    let mut decided = vec![];
     let mut rows = 0;
     for _ in 0..reps {
-        for on_gpu in [true, false] {
+        t.set_state(&start)?;
+        let (gpu_rows, ms) = on_gpu(t)?;
+        decided.push(ms);
+        for rebuild_on_gpu in [true, false] {
             t.set_state(&start)?;
             trgs_render::toolkit::gpu::wait_for_gpu(&ctx, "the upload")?;
             let clock = Instant::now();
@@ -83,15 +111,19 @@ fn time_rebuilds(
             planning.push(clock.elapsed().as_secs_f64() * 1e3);
             rows = plan.sources.len();
             let clock = Instant::now();
-            if on_gpu {
+            if rebuild_on_gpu {
                 t.apply_plan(&plan)?;
             } else {
                 t.apply_plan_on_cpu(&plan)?;
             }
             trgs_render::toolkit::gpu::wait_for_gpu(&ctx, "the rebuild")?;
             let ms = clock.elapsed().as_secs_f64() * 1e3;
-            if on_gpu { gpu.push(ms) } else { cpu.push(ms) }
+            if rebuild_on_gpu { gpu.push(ms) } else { cpu.push(ms) }
         }
+        anyhow::ensure!(
+            rows == gpu_rows,
+            "{kind}: {gpu_rows} rows decided on the GPU, {rows} on the CPU"
+        );
     }
     Ok(DensifyRow {
         kind,
@@ -102,6 +134,7 @@ fn time_rebuilds(
         plan_ms: median(planning),
         gpu_ms: median(gpu),
         cpu_ms: median(cpu),
+        decided_on_gpu_ms: median(decided),
     })
 }
 
@@ -110,17 +143,38 @@ pub fn bench_densify(ctx: &GpuContext, gaussians: usize, reps: usize) -> Result<
     let n = t.scene().len() as usize;
     let stats = statistics(n);
     let classic = ClassicSettings::scaled(30_000);
+    let mut strategy = ClassicDensification::resumed(ctx, classic.clone(), n, Some(&stats));
+    let mut classic_step = |t: &mut Trainer| {
+        strategy.set_statistics(&stats);
+        timed(t, |t| {
+            t.edit_gaussians(|g, _, extent| {
+                strategy.densify_now(g, &mut Rng::new(3), extent, true)?;
+                Ok(g.len())
+            })
+        })
+    };
     let densify = time_rebuilds(
         &mut t,
         "classic densify-and-prune",
         |g| plan_densify(g, &stats, &classic, 1.0, true, &mut Rng::new(3)).0,
+        &mut classic_step,
         reps,
     )?;
     let mcmc = McmcSettings::scaled(30_000, 2 * n);
+    let mut relocation = McmcDensification::new(ctx, mcmc.clone());
+    let mut mcmc_step = |t: &mut Trainer| {
+        timed(t, |t| {
+            t.edit_gaussians(|g, _, _| {
+                relocation.relocate_now(g, &mut Rng::new(3))?;
+                Ok(g.len())
+            })
+        })
+    };
     let relocate = time_rebuilds(
         &mut t,
         "MCMC relocation",
         |g| plan_relocation(g, &mcmc, &mut Rng::new(3)).0,
+        &mut mcmc_step,
         reps,
     )?;
     Ok(vec![densify, relocate])
@@ -130,31 +184,36 @@ pub fn densify_section(s: &mut String, rows: &[DensifyRow]) {
     let _ = writeln!(s, "\n### Densification (capture-like room, SH degree 3, one plane)\n");
     let _ = writeln!(
         s,
-        "One densification's rebuild of the Gaussians and their Adam moments, through the trainer: \
-         on the GPU (`gather_rows`, as training does) and through the CPU (the whole state read \
-         back, rebuilt by the twin `RowPlan::apply` and uploaded), alternating; medians over {} \
-         of each. The decisions are the same either way: reading back the attributes they need \
-         (`Trainer::geometry`) and planning on the CPU. Classic: statistics under which 5% of the \
-         Gaussians densify; MCMC: the room's transparent Gaussians relocated and 5% added.\n",
+        "One densification through the trainer, three ways in turn, medians over {} of each: \
+         decided and rebuilt on the GPU (`densify_plan` / `mcmc_relocate`, then `gather_rows`: \
+         what training does); decided on the CPU from the attributes read back \
+         (`Trainer::geometry`, then `plan_densify` / `plan_relocation`) and rebuilt on the GPU \
+         (what sets too large for the deciding stages' bindings do); and the same decisions \
+         with the whole state read back, rebuilt by the twin `RowPlan::apply` and uploaded. \
+         Both deciders make the same plan (the bench checks the row counts). Classic: \
+         statistics under which 5% of the Gaussians densify; MCMC: the room's transparent \
+         Gaussians relocated and 5% added.\n",
         rows.first().map_or(0, |r| r.reps)
     );
     let _ = writeln!(
         s,
-        "| densification | Gaussians | after | read decisions ms | plan ms | rebuild on the GPU ms | rebuild through the CPU ms | through the CPU / on the GPU |"
+        "| densification | Gaussians | after | decided and rebuilt on the GPU ms | read decisions ms | plan on the CPU ms | rebuild on the GPU ms | CPU-decided / GPU-decided | rebuild through the CPU ms |"
     );
-    let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|");
+    let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|---:|");
     for r in rows {
+        let cpu_decided = r.read_ms + r.plan_ms + r.gpu_ms;
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2}x |",
+            "| {} | {} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2}x | {:.1} |",
             r.kind,
             r.gaussians,
             r.rows,
+            r.decided_on_gpu_ms,
             r.read_ms,
             r.plan_ms,
             r.gpu_ms,
+            cpu_decided / r.decided_on_gpu_ms,
             r.cpu_ms,
-            r.cpu_ms / r.gpu_ms
         );
     }
 }

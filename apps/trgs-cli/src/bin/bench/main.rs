@@ -493,8 +493,15 @@ fn main() -> Result<()> {
         for &gaussians in sizes {
             for r in bench_densify(&ctx, gaussians, args.reps.max(1))? {
                 println!(
-                    "{}, {} -> {} Gaussians: read {:.1} ms, plan {:.1} ms, rebuild on the GPU {:.1} ms, through the CPU {:.1} ms",
-                    r.kind, r.gaussians, r.rows, r.read_ms, r.plan_ms, r.gpu_ms, r.cpu_ms
+                    "{}, {} -> {} Gaussians: decided and rebuilt on the GPU {:.1} ms; read {:.1} ms, plan {:.1} ms, rebuild on the GPU {:.1} ms, through the CPU {:.1} ms",
+                    r.kind,
+                    r.gaussians,
+                    r.rows,
+                    r.decided_on_gpu_ms,
+                    r.read_ms,
+                    r.plan_ms,
+                    r.gpu_ms,
+                    r.cpu_ms
                 );
                 densify.push(r);
             }
