@@ -1,9 +1,9 @@
 //! Stage `gather_rows` on the GPU (shaders/training/gather_rows.wgsl; twin [`RowPlan::apply`]):
 //! rebuild the Gaussians' attribute and Adam-moment buffers from a [`RowPlan`] without reading
-//! them back. Densification decides from a few attributes (means, rotations, scales, opacities,
-//! populations: 15 words per Gaussian); the parameters with their two moments are about 180 words
-//! at SH degree 3, and reading the whole state back, editing it on the CPU and uploading it again
-//! costs many steps' time (`bench --densify` measures both ways).
+//! them back: the sources come from the deciding stages on the GPU (`densify_plan`,
+//! `mcmc_relocate`) or from a plan made on the CPU. The parameters with their two moments are
+//! about 180 words per Gaussian at SH degree 3, and reading the whole state back, editing it on
+//! the CPU and uploading it again costs many steps' time (`bench --densify` measures the ways).
 use crate::adam::AdamMoments;
 use crate::densify::RowPlan;
 use crate::layout::{GATHER_ZERO, GatherParams};

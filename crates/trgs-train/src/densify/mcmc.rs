@@ -29,8 +29,8 @@ use trgs_render::{GpuContext, GpuScene, SceneGradBuffers};
 /// `N_max - 1` with its binomial table of `N_max = 51` rows.
 pub const MAX_SHARE: usize = 50;
 
-/// The shortest relocation interval in steps (each relocation reads a few attributes back, plans
-/// on the CPU and rebuilds every buffer: several steps' time, `bench --densify`).
+/// The shortest relocation interval in steps (each relocation waits for its counters and
+/// rebuilds every buffer: several steps' time, `bench --densify`).
 pub const MIN_RELOCATION_INTERVAL: u32 = 5;
 
 /// 3DGS-MCMC's opacity learning rate (its `arguments/__init__.py`), twice 3DGS's 0.025: its

@@ -1,5 +1,6 @@
-//! The rebuild of the Gaussian set that densification and relocation plan on the CPU and the
-//! GPU carries out (`gather_rows`), and what they decide from.
+//! The rebuild of the Gaussian set as a plan on the CPU (the deciding stages' twins make one, and
+//! so do sets too large for those stages' bindings), which the GPU carries out (`gather_rows`),
+//! and what such a plan is decided from.
 use trgs_core::scene::{Attribute, Gaussians, PerAttribute, Population, attribute_widths};
 
 /// Parameters and Adam moments of a set of Gaussians, edited together.
@@ -38,8 +39,9 @@ pub(crate) fn sigmoid(x: f64) -> f64 {
     1.0 / (1.0 + (-x).exp())
 }
 
-/// The attributes densification decides from (classic and MCMC), read back on their own: 15
-/// words per Gaussian, where the parameters and their Adam moments are about 180 at SH degree 3.
+/// The attributes densification decides from (classic and MCMC), read back on their own when
+/// it decides on the CPU: 15 words per Gaussian, where the parameters and their Adam moments
+/// are about 180 at SH degree 3.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Geometry {
     pub means: Vec<[f32; 3]>,
@@ -71,9 +73,9 @@ impl Geometry {
 
 /// A rebuild of the Gaussian set: output row j is a copy of input row `sources[j].0`, with its
 /// Adam moments when `sources[j].1` and zero moments otherwise; the attributes given here are
-/// replaced whole (e.g. the split children's means and scales). Densification and relocation
-/// plan on the CPU from a [`Geometry`]; the plan runs on the GPU (`gather_rows`), or on the CPU
-/// with [`RowPlan::apply`], its twin.
+/// replaced whole (e.g. the split children's means and scales). The twins of the deciding stages
+/// make one from a [`Geometry`]; it runs on the GPU (`gather_rows`), or on the CPU with
+/// [`RowPlan::apply`], its twin.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct RowPlan {
     pub sources: Vec<(usize, bool)>,
