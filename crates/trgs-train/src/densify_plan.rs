@@ -115,10 +115,8 @@ impl GpuDensifyPlan {
         }
         let waited = rec.submit_and_wait(ctx);
         let read = waited.and_then(|()| gpu::read_buffer::<u32>(ctx, &counts, 0, 4));
-        let [cloned, split, pruned, rows] = match scopes.close_after(read) {
-            Ok(c) => [c[0], c[1], c[2], c[3]],
-            Err(e) => return Err(e),
-        };
+        let c = scopes.close_after(read)?;
+        let (cloned, split, pruned, rows) = (c[0], c[1], c[2], c[3]);
         let report = DensifyReport {
             cloned: cloned as usize,
             split: split as usize,
