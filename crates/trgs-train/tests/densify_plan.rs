@@ -3,9 +3,10 @@
 //! moment bit for bit, and the split children's means within f32 rounding of the twin's f64.
 //! Hard cases: a scan of several blocks, the room under `max_gaussians` running out part way,
 //! the size prune on and off, a set pruned to nothing, and an empty set.
-use trgs_core::fixtures::{SceneSpec, random_scene};
+mod common;
+
 use trgs_core::rng::Rng;
-use trgs_core::scene::{Attribute, Gaussians, PerAttribute, attribute_widths};
+use trgs_core::scene::Attribute;
 use trgs_render::{DeviceOptions, GpuContext};
 use trgs_train::densify::classic::plan_densify;
 use trgs_train::densify::{
@@ -18,38 +19,16 @@ fn ctx() -> GpuContext {
         .expect("adapter")
 }
 
-/// `n` Gaussians (SH degree 1, 10% glass) with sizes on both sides of the clone/split line (1%
-/// of the extent) and of the prune line (10%), opacities down to transparent ones, statistics
-/// on both sides of the gradient threshold, and moments that differ in every word.
+/// A set (`common::random_state`) with statistics on both sides of the gradient threshold.
 fn case(n: usize, seed: u64) -> (TrainState, DensifyStats) {
-    let spec = SceneSpec {
-        seed,
-        gaussians: n,
-        planes: 1,
-        width: 32,
-        height: 24,
-        view_angle_deg: 30.0,
-        sh_degree: 1,
-        glass_fraction: 0.1,
-    };
-    let mut g: Gaussians<f32> = random_scene(&spec).gaussians.cast();
-    let mut rng = Rng::new(seed + 1);
+    let (state, mut rng) = common::random_state(n, seed, (-8.0, 4.0));
     let mut stats = DensifyStats::new(n);
     for i in 0..n {
-        let l = rng.range(-7.0, -1.5) as f32;
-        g.log_scales[i] = [l, l - 0.3, l - 0.6];
-        g.opacity_logits[i] = rng.range(-8.0, 4.0) as f32;
         stats.count[i] = rng.below(4) as u32;
         stats.grad_sum[i] = f64::from(rng.range(0.0, 1e-3) as f32);
         stats.max_radius[i] = f64::from(rng.range(0.0, 30.0) as f32);
     }
-    let w = attribute_widths(g.sh_coeffs());
-    let moments = |base: f32| {
-        PerAttribute::from_fn(|a| {
-            (0..n * w[a]).map(|k| base + (a.index() * 100_000 + k) as f32).collect()
-        })
-    };
-    (TrainState { m: moments(0.5), v: moments(-0.25), gaussians: g }, stats)
+    (state, stats)
 }
 
 /// Densify `state` on the GPU and by the twin; compare; the report.

@@ -3,9 +3,10 @@
 //! parameter and Adam moment. Hard cases: scans of several blocks, one live Gaussian drawn past
 //! Eq. 9's largest share, every primary Gaussian dead (nothing to draw from), no primary
 //! Gaussian at all (no growth), the cap reached, and an empty set.
-use trgs_core::fixtures::{SceneSpec, random_scene};
+mod common;
+
 use trgs_core::rng::Rng;
-use trgs_core::scene::{Attribute, Gaussians, PerAttribute, Population, attribute_widths};
+use trgs_core::scene::{Attribute, Population};
 use trgs_render::{DeviceOptions, GpuContext};
 use trgs_train::densify::mcmc::{McmcDensification, McmcSettings, plan_relocation};
 use trgs_train::densify::{Geometry, McmcReport, TrainState};
@@ -16,33 +17,10 @@ fn ctx() -> GpuContext {
         .expect("adapter")
 }
 
-/// `n` Gaussians (SH degree 1, 10% glass) with opacities from dead (a quarter at or below
-/// 0.005) to opaque, and moments that differ in every word.
+/// A set (`common::random_state`) with opacities from dead (a quarter at or below 0.005) to
+/// opaque.
 fn case(n: usize, seed: u64) -> TrainState {
-    let spec = SceneSpec {
-        seed,
-        gaussians: n,
-        planes: 1,
-        width: 32,
-        height: 24,
-        view_angle_deg: 30.0,
-        sh_degree: 1,
-        glass_fraction: 0.1,
-    };
-    let mut g: Gaussians<f32> = random_scene(&spec).gaussians.cast();
-    let mut rng = Rng::new(seed + 1);
-    for i in 0..n {
-        let l = rng.range(-7.0, -1.5) as f32;
-        g.log_scales[i] = [l, l - 0.3, l - 0.6];
-        g.opacity_logits[i] = rng.range(-9.0, 4.0) as f32;
-    }
-    let w = attribute_widths(g.sh_coeffs());
-    let moments = |base: f32| {
-        PerAttribute::from_fn(|a| {
-            (0..n * w[a]).map(|k| base + (a.index() * 100_000 + k) as f32).collect()
-        })
-    };
-    TrainState { m: moments(0.5), v: moments(-0.25), gaussians: g }
+    common::random_state(n, seed, (-9.0, 4.0)).0
 }
 
 /// Relocate `state` on the GPU and by the twin; compare bit for bit; the report.

@@ -36,6 +36,26 @@ pub struct DensifyRow {
     pub decided_on_gpu_ms: f64,
 }
 
+impl std::fmt::Display for DensifyRow {
+    /// The progress line of one row.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let r = self;
+        write!(
+            f,
+            "{}, {} -> {} Gaussians: decided and rebuilt on the GPU {:.1} ms; read {:.1} ms, \
+             plan {:.1} ms, rebuild on the GPU {:.1} ms, through the CPU {:.1} ms",
+            r.kind,
+            r.gaussians,
+            r.rows,
+            r.decided_on_gpu_ms,
+            r.read_ms,
+            r.plan_ms,
+            r.gpu_ms,
+            r.cpu_ms
+        )
+    }
+}
+
 fn trainer(ctx: &GpuContext, gaussians: usize) -> Result<Trainer> {
     let spec = RoomSpec {
         seed: 7,

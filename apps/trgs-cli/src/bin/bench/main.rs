@@ -492,17 +492,7 @@ fn main() -> Result<()> {
         let sizes: &[usize] = if args.quick { &[100_000] } else { &[100_000, 300_000] };
         for &gaussians in sizes {
             for r in bench_densify(&ctx, gaussians, args.reps.max(1))? {
-                println!(
-                    "{}, {} -> {} Gaussians: decided and rebuilt on the GPU {:.1} ms; read {:.1} ms, plan {:.1} ms, rebuild on the GPU {:.1} ms, through the CPU {:.1} ms",
-                    r.kind,
-                    r.gaussians,
-                    r.rows,
-                    r.decided_on_gpu_ms,
-                    r.read_ms,
-                    r.plan_ms,
-                    r.gpu_ms,
-                    r.cpu_ms
-                );
+                println!("{r}");
                 densify.push(r);
             }
         }
