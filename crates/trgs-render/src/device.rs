@@ -182,6 +182,8 @@ pub struct GpuContext {
     binding_limit: u64,
     /// See [`GpuContext::waits`].
     waits: std::sync::Arc<std::sync::atomic::AtomicU64>,
+    /// Bytes read back so far ([`GpuContext::bytes_read`]).
+    bytes_read: std::sync::Arc<std::sync::atomic::AtomicU64>,
 }
 
 /// Where a device's lost callback leaves its reason, shared by every clone of the context.
@@ -355,6 +357,7 @@ impl GpuContext {
             loss,
             binding_limit,
             waits: Default::default(),
+            bytes_read: Default::default(),
         })
     }
 
@@ -375,6 +378,17 @@ impl GpuContext {
     /// Counts one wait ([`GpuContext::waits`]).
     pub(crate) fn count_wait(&self) {
         self.waits.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    }
+
+    /// How many bytes every readback from this device has returned so far: how tests show that
+    /// a stage decides on the GPU without reading the Gaussians back.
+    pub fn bytes_read(&self) -> u64 {
+        self.bytes_read.load(std::sync::atomic::Ordering::Relaxed)
+    }
+
+    /// Counts `bytes` read back ([`GpuContext::bytes_read`]).
+    pub(crate) fn count_read(&self, bytes: usize) {
+        self.bytes_read.fetch_add(bytes as u64, std::sync::atomic::Ordering::Relaxed);
     }
 
     /// Why the device was lost, if it has been (known once the GPU was last waited for).

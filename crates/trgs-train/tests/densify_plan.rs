@@ -43,9 +43,12 @@ fn check(
     let mut gpu = GaussianState::from_state(ctx, state, &[]).expect("upload");
     let n = state.gaussians.len();
     let mut classic = ClassicDensification::resumed(ctx, settings.clone(), n, Some(stats));
+    let read_before = ctx.bytes_read();
     let report = classic
         .densify_now(&mut gpu, &mut Rng::new(seed), extent, prune_large)
         .expect("densify on the GPU");
+    // Decided on the GPU: only the four counters (cloned, split, pruned, rows) come back.
+    assert_eq!(ctx.bytes_read() - read_before, 16, "bytes read back to densify");
     let geometry = Geometry::of(&state.gaussians);
     let (plan, twin_report) =
         plan_densify(&geometry, stats, settings, extent, prune_large, &mut Rng::new(seed));

@@ -28,7 +28,10 @@ fn check(ctx: &GpuContext, state: &TrainState, settings: &McmcSettings) -> McmcR
     let seed = 31;
     let mut gpu = GaussianState::from_state(ctx, state, &[]).expect("upload");
     let mut mcmc = McmcDensification::new(ctx, settings.clone());
+    let read_before = ctx.bytes_read();
     let report = mcmc.relocate_now(&mut gpu, &mut Rng::new(seed)).expect("relocate on the GPU");
+    // Decided on the GPU: only the dead count and the two weight totals come back.
+    assert_eq!(ctx.bytes_read() - read_before, 12, "bytes read back to relocate");
     let geometry = Geometry::of(&state.gaussians);
     let (plan, twin_report) = plan_relocation(&geometry, settings, &mut Rng::new(seed));
     assert_eq!(report, twin_report, "the report");

@@ -22,7 +22,9 @@ fn the_gpu_caps_as_the_twin_does() {
     let state =
         TrainState { gaussians: g, m: PerAttribute::from_fn(ones), v: PerAttribute::from_fn(ones) };
     let mut gpu = GaussianState::from_state(&ctx, &state, &[]).expect("upload");
+    let read_before = ctx.bytes_read();
     gpu.cap_opacities(reset_cap()).expect("reset");
+    assert_eq!(ctx.bytes_read(), read_before, "the reset reads nothing back");
     let got = gpu.read().expect("readback");
     let mut want = state.clone();
     cap_opacity_logits(&mut want.gaussians.opacity_logits);

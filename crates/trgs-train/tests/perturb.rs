@@ -71,9 +71,11 @@ fn the_gpu_perturbs_as_the_twin_does() {
     // The means as f32 are what both sides see.
     let scene = GpuScene::upload(&ctx, &g, &planes).expect("upload");
     let seed = 0x5eed;
-    let count = GpuPerturb::new(&ctx)
-        .run(&ctx, &scene, &cameras, PERTURB_AMPLITUDE, seed)
-        .expect("perturb on the GPU");
+    let perturb = GpuPerturb::new(&ctx);
+    let read_before = ctx.bytes_read();
+    let count =
+        perturb.run(&ctx, &scene, &cameras, PERTURB_AMPLITUDE, seed).expect("perturb on the GPU");
+    assert_eq!(ctx.bytes_read() - read_before, 4, "only the count comes back");
     let got = scene.read(&ctx).expect("readback");
     let selected = seen_through_planes(&g, &planes, &cameras);
     let mut twin = g.clone();
@@ -91,6 +93,6 @@ fn the_gpu_perturbs_as_the_twin_does() {
         assert!((sigmoid(a) - sigmoid(b)).abs() < 2e-6, "Gaussian {i}: {a} against {b}");
     }
     // A scene without cameras perturbs nothing.
-    let none = GpuPerturb::new(&ctx).run(&ctx, &scene, &[], PERTURB_AMPLITUDE, seed);
+    let none = perturb.run(&ctx, &scene, &[], PERTURB_AMPLITUDE, seed);
     assert_eq!(none.expect("no cameras"), 0);
 }

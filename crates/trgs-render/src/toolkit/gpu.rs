@@ -265,6 +265,7 @@ impl PendingRead {
             bytemuck::pod_collect_to_vec(&view[..bytes])
         };
         self.staging.unmap();
+        ctx.count_read(bytes);
         Ok(out)
     }
 }
