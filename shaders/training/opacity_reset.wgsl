@@ -1,4 +1,4 @@
-// Stage `opacity_reset` (twin: trgs_train::densify::classic::cap_opacity_logits): 3DGS's opacity
+// Stage `opacity_reset` (twin: trgs_train::densify::classic::opacity_reset_logits): 3DGS's opacity
 // reset in place, every opacity logit capped at `cap`, one thread per Gaussian. The opacities'
 // Adam moments are cleared beside it; nothing is read back.
 #include "shared/common.wgsl"

@@ -27,7 +27,7 @@ pub struct GpuDensifyPlan {
 /// A plan decided on the GPU: the sources `gather_rows` copies the new set from, and what the
 /// children's pass reads.
 #[derive(Debug)]
-pub struct DensifyPlanGpu {
+pub struct DensifyPlanOutput {
     pub sources: GatherSources,
     pub report: DensifyReport,
     params: wgpu::Buffer,
@@ -62,7 +62,7 @@ impl GpuDensifyPlan {
         scene: &GpuScene,
         stats: &wgpu::Buffer,
         params: &DensifyPlanParams,
-    ) -> Result<DensifyPlanGpu, gpu::GpuError> {
+    ) -> Result<DensifyPlanOutput, gpu::GpuError> {
         let n = params.count;
         debug_assert_eq!(n, scene.len(), "a plan of another set");
         let scopes = gpu::ErrorScopes::open(ctx, "deciding the densification");
@@ -122,7 +122,7 @@ impl GpuDensifyPlan {
             split: split as usize,
             pruned: pruned as usize,
         };
-        Ok(DensifyPlanGpu {
+        Ok(DensifyPlanOutput {
             sources: GatherSources::from_buffer(sources, rows),
             report,
             params: block,
@@ -138,7 +138,7 @@ impl GpuDensifyPlan {
         &self,
         ctx: &GpuContext,
         rec: &mut Recorder,
-        plan: &DensifyPlanGpu,
+        plan: &DensifyPlanOutput,
         old: &GpuScene,
         new: &GpuScene,
     ) {

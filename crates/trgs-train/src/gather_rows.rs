@@ -41,7 +41,8 @@ impl GatherSources {
         }
     }
 
-    /// Sources made on the GPU (`densify_plan`): the first `len` words of `buffer`.
+    /// Sources made on the GPU (`densify_plan`, `mcmc_relocate`): the first `len` words of
+    /// `buffer`.
     pub fn from_buffer(buffer: wgpu::Buffer, len: u32) -> Self {
         debug_assert!(u64::from(len) * 4 <= buffer.size(), "{len} sources in a shorter buffer");
         Self { buffer, len }
@@ -150,8 +151,8 @@ impl GpuRowGather {
     }
 
     /// The scene and moments gathered by `sources`, with the attributes in `given` taken as
-    /// given (buffers of the new set's size); `then` records what edits the new scene before the one submission (the split
-    /// children's means and scales of `densify_plan`).
+    /// given (buffers of the new set's size); `then` records what edits the new scene before
+    /// the one submission (the split children's means and scales of `densify_plan`).
     pub fn apply_sources(
         &self,
         ctx: &GpuContext,

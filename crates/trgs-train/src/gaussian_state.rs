@@ -3,9 +3,9 @@
 //! uses), so that no edit leaves a parameter and its moments out of step.
 use crate::adam::AdamMoments;
 use crate::densify::{Geometry, RowPlan, TrainState};
-use crate::densify_plan::{DensifyPlanGpu, GpuDensifyPlan};
+use crate::densify_plan::{DensifyPlanOutput, GpuDensifyPlan};
 use crate::gather_rows::GpuRowGather;
-use crate::mcmc_relocate::RelocationGpu;
+use crate::mcmc_relocate::McmcRelocateOutput;
 use crate::opacity_reset::GpuOpacityReset;
 use anyhow::{Context, Result};
 use trgs_core::scene::{Attribute, Gaussians, PerAttribute, ReflectionPlane};
@@ -127,10 +127,10 @@ impl GaussianState {
 
     /// Densify by a plan decided on the GPU (stage `densify_plan`): the parameters and moments
     /// gathered by its sources, then the split children's means and scales.
-    pub fn apply_gpu_plan(
+    pub fn apply_densify_plan(
         &mut self,
         planner: &GpuDensifyPlan,
-        plan: &DensifyPlanGpu,
+        plan: &DensifyPlanOutput,
     ) -> Result<()> {
         let ctx = self.ctx.clone();
         trgs_render::toolkit::gpu::scoped(&ctx, "densifying", || {
@@ -151,7 +151,7 @@ impl GaussianState {
 
     /// Relocate by a plan decided on the GPU (stage `mcmc_relocate`): the parameters and moments
     /// gathered by its sources, with its opacities and log scales.
-    pub fn apply_relocation(&mut self, plan: &RelocationGpu) -> Result<()> {
+    pub fn apply_mcmc_relocate(&mut self, plan: &McmcRelocateOutput) -> Result<()> {
         let ctx = self.ctx.clone();
         trgs_render::toolkit::gpu::scoped(&ctx, "relocating", || {
             let given = [
@@ -202,7 +202,7 @@ impl GaussianState {
 
     /// Cap every opacity logit at `cap` and restart the opacities' Adam moments (3DGS's opacity
     /// reset), on the GPU (stage `opacity_reset`); the other parameters and moments stay.
-    pub fn cap_opacities(&mut self, cap: f32) -> Result<()> {
+    pub fn opacity_reset(&mut self, cap: f32) -> Result<()> {
         let ctx = self.ctx.clone();
         trgs_render::toolkit::gpu::scoped(&ctx, "resetting the opacities", || {
             let mut rec = Recorder::new(&ctx, "trgs.opacity_reset", false);

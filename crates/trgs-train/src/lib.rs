@@ -11,11 +11,12 @@
 //!   a memory budget; [`checkpoint`]: resumable state on disk;
 //! - [`memory`]: the GPU bytes a trainer holds and the process's peak RAM;
 //! - [`eval`]: test metrics, renders and comparisons with a synthetic scene's ground truth;
-//! - the training stages on the GPU, each with its CPU twin in `trgs_core::reference`:
-//!   [`adam`], [`losses`], [`densify_stats`], [`densify_plan`], [`gather_rows`], [`opacity_reset`],
-//!   [`step_guard`]
-//!   and MCMC's ([`mcmc_relocate`], the others in [`densify::mcmc`]),
-//!   their kernels registered in [`kernels`] and their GPU structs declared in [`layout`].
+//! - the training stages on the GPU, each with its CPU twin (in `trgs_core::reference`, or beside
+//!   the strategy it serves for those that rebuild the set: [`densify::classic`],
+//!   [`densify::mcmc`], [`perturb`], [`densify::RowPlan`]): [`adam`], [`losses`],
+//!   [`densify_stats`], [`densify_plan`], [`gather_rows`], [`opacity_reset`], [`step_guard`],
+//!   [`perturb`] and MCMC's ([`mcmc_relocate`], the others in [`densify::mcmc`]); their kernels
+//!   are registered in [`kernels`] and their GPU structs declared in [`layout`].
 pub mod adam;
 pub mod checkpoint;
 pub mod data;

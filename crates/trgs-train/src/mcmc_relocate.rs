@@ -18,7 +18,7 @@ use trgs_render::{GpuContext, GpuScene};
 
 /// The stage's kernels and its Eq. 9 table, built once per run.
 #[derive(Debug)]
-pub struct GpuRelocation {
+pub struct GpuMcmcRelocate {
     weights: Kernel,
     draw: Kernel,
     shares: Kernel,
@@ -30,14 +30,14 @@ pub struct GpuRelocation {
 
 /// A relocation decided on the GPU: the new set's sources and the attributes it gives whole.
 #[derive(Debug)]
-pub struct RelocationGpu {
+pub struct McmcRelocateOutput {
     pub sources: GatherSources,
     pub opacity_logits: wgpu::Buffer,
     pub log_scales: wgpu::Buffer,
     pub report: McmcReport,
 }
 
-impl GpuRelocation {
+impl GpuMcmcRelocate {
     pub fn new(ctx: &GpuContext) -> Self {
         let k = &TRAINING_KERNELS;
         Self {
@@ -66,7 +66,7 @@ impl GpuRelocation {
         limits: &RelocationLimits,
         growth: u32,
         seeds: [u32; 2],
-    ) -> Result<RelocationGpu, gpu::GpuError> {
+    ) -> Result<McmcRelocateOutput, gpu::GpuError> {
         let n = scene.len();
         let rows = n + growth;
         let scopes = gpu::ErrorScopes::open(ctx, "deciding the relocation");
@@ -201,7 +201,7 @@ impl GpuRelocation {
             ctx.queue.submit([enc.finish()]);
             (o, l)
         };
-        Ok(RelocationGpu {
+        Ok(McmcRelocateOutput {
             sources: GatherSources::from_buffer(sources, len),
             opacity_logits: opacity,
             log_scales,

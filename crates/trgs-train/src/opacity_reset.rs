@@ -1,5 +1,5 @@
 //! Stage `opacity_reset` on the GPU (shaders/training/opacity_reset.wgsl; twin
-//! [`crate::densify::classic::cap_opacity_logits`]): every opacity logit capped in place, without
+//! [`crate::densify::classic::opacity_reset_logits`]): every opacity logit capped in place, without
 //! reading the opacities back.
 use crate::kernels::TRAINING_KERNELS;
 use crate::layout::OpacityResetParams;

@@ -181,7 +181,7 @@ impl ClassicDensification {
             let params = plan_params(&self.settings, extent, prune_large, n, seed);
             let plan =
                 self.planner.plan(&self.ctx, gaussians.scene(), self.stats.buffer(), &params)?;
-            gaussians.apply_gpu_plan(&self.planner, &plan)?;
+            gaussians.apply_densify_plan(&self.planner, &plan)?;
             (plan.report, plan.sources.len() as usize)
         } else {
             let stats = self.stats.read(&self.ctx)?;
@@ -240,7 +240,7 @@ impl DensifyStrategy for ClassicDensification {
         if self.settings.resets_opacity_at(step) {
             // In place: only the opacities and their moments change, so the statistics
             // gathered since the last densification stay.
-            gaussians.cap_opacities(reset_cap())?;
+            gaussians.opacity_reset(opacity_reset_cap())?;
             events.push(DensifyEvent::OpacityReset);
         }
         Ok(events)
@@ -298,7 +298,8 @@ pub fn plan_params(
         // A child's scale is its parent's over 1.6: over 0.1 extent when the parent's is over
         // 0.16 extent.
         child_prune_log_scale: (0.16 * extent).ln() as f32,
-        max_screen_radius: settings.max_screen_radius as f32,
+        // f32::MAX for "off" (infinite): WGSL may assume no infinities.
+        max_screen_radius: (settings.max_screen_radius as f32).min(f32::MAX),
         child_log_shrink: 1.6f64.ln() as f32,
         pad0: 0,
     }
@@ -428,13 +429,13 @@ pub(crate) fn plan_seed(rng: &mut Rng) -> u32 {
 }
 
 /// The logit of 3DGS's opacity reset: every opacity becomes at most 0.01.
-pub fn reset_cap() -> f32 {
+pub fn opacity_reset_cap() -> f32 {
     (0.01f64 / 0.99).ln() as f32
 }
 
 /// 3DGS's opacity reset of the logits (the twin of `opacity_reset`, which training runs).
-pub fn cap_opacity_logits(logits: &mut [f32]) {
-    let cap = reset_cap();
+pub fn opacity_reset_logits(logits: &mut [f32]) {
+    let cap = opacity_reset_cap();
     for o in logits {
         // A NaN becomes the cap too, as on the GPU.
         if !(*o <= cap) {
@@ -555,7 +556,7 @@ mod tests {
     #[test]
     fn reset_caps_opacity() {
         let mut logits = vec![5.0, -6.0];
-        cap_opacity_logits(&mut logits);
+        opacity_reset_logits(&mut logits);
         assert!((sigmoid(f64::from(logits[0])) - 0.01).abs() < 1e-6);
         assert_eq!(logits[1], -6.0);
     }

@@ -15,7 +15,7 @@ use super::{DensifyEvent, DensifyStrategy, Geometry, RowPlan, StepView, TrainSta
 use crate::gaussian_state::GaussianState;
 use crate::kernels::TRAINING_KERNELS;
 use crate::layout::McmcParams;
-use crate::mcmc_relocate::GpuRelocation;
+use crate::mcmc_relocate::GpuMcmcRelocate;
 use crate::settings::scale_len;
 use anyhow::Result;
 use trgs_core::reference::{AdamRate, pcg_hash};
@@ -58,8 +58,8 @@ pub struct McmcSettings {
 
 impl McmcSettings {
     /// The paper's settings with the count capped at `cap`. The relocation interval scales with
-    /// the run like every other length (at least 5 steps, which bounds the cost of the CPU
-    /// relocation in very short runs): growing 5% per relocation, a run then reaches its cap at
+    /// the run like every other length (at least 5 steps, which bounds the cost of the
+    /// relocations, each a wait for its counters and a rebuild, in very short runs): growing 5% per relocation, a run then reaches its cap at
     /// the same fraction of its length as the paper's run does. A fixed floor of 20 steps made a
     /// 2000-step run reach its cap at 64% of the run, where classic densification has its count
     /// at 50%, and MCMC trained with about half as many Gaussians until then.
@@ -361,7 +361,7 @@ pub struct McmcDensification {
     ctx: GpuContext,
     settings: McmcSettings,
     kernels: McmcKernels,
-    relocation: GpuRelocation,
+    relocation: GpuMcmcRelocate,
     /// Decide on the GPU where the set fits (see [`McmcDensification::decide_on_cpu`]).
     on_gpu: bool,
 }
@@ -372,7 +372,7 @@ impl McmcDensification {
             ctx: ctx.clone(),
             settings,
             kernels: McmcKernels::new(ctx),
-            relocation: GpuRelocation::new(ctx),
+            relocation: GpuMcmcRelocate::new(ctx),
             on_gpu: true,
         }
     }
@@ -396,7 +396,7 @@ impl McmcDensification {
         rng: &mut Rng,
     ) -> Result<McmcReport> {
         let (n, growth) = (gaussians.len(), growth_rows(&self.settings, gaussians.len()));
-        if !(self.on_gpu && GpuRelocation::fits(&self.ctx, n, growth)) {
+        if !(self.on_gpu && GpuMcmcRelocate::fits(&self.ctx, n, growth)) {
             let (plan, report) = plan_relocation(&gaussians.geometry()?, &self.settings, rng);
             gaussians.apply_plan(&plan)?;
             return Ok(report);
@@ -405,7 +405,7 @@ impl McmcDensification {
         let seeds = relocation_seeds(rng);
         let scene = gaussians.scene();
         let plan = self.relocation.plan(&self.ctx, scene, &limits, growth as u32, seeds)?;
-        gaussians.apply_relocation(&plan)?;
+        gaussians.apply_mcmc_relocate(&plan)?;
         Ok(plan.report)
     }
 }
