@@ -1,4 +1,4 @@
-// Stage `mcmc_relocate`, the shares of either round (twin: trgs_train::densify::mcmc::apply_shares), one thread
+// Stage `mcmc_relocate`, the shares of either round (twin: trgs_train::densify::mcmc::relocate::apply_shares), one thread
 // per Gaussian: a row drawn N - 1 times takes Eq. 9's opacity and scale for N (from the table by
 // its opacity bin, clamped) and restarts its Adam moments; its copies take the same values.
 #include "shared/common.wgsl"

@@ -39,7 +39,7 @@ pub struct OffsetLimit {
 }
 
 impl OffsetLimit {
-    /// A finite anchor and a finite tolerance of at least 0 (what [`Self::apply`] needs).
+    /// A finite anchor and a finite tolerance of at least 0 (what `apply` needs).
     pub fn is_valid(&self) -> bool {
         self.anchor.iter().all(|v| v.is_finite())
             && self.tolerance.is_finite()
