@@ -113,8 +113,7 @@ impl GpuDensifyPlan {
             let bind = self.sources.bind(ctx, &entries);
             rec.dispatch("densify_plan", &self.sources, &bind, groups);
         }
-        let waited = rec.submit_and_wait(ctx);
-        let read = waited.and_then(|()| gpu::read_buffer::<u32>(ctx, &counts, 0, 4));
+        let read = rec.submit_and_read::<u32>(ctx, &counts, 4);
         let c = scopes.close_after(read)?;
         let (cloned, split, pruned, rows) = (c[0], c[1], c[2], c[3]);
         let report = DensifyReport {

@@ -154,8 +154,13 @@ impl GpuMcmcRelocate {
                 ],
             );
             rec.dispatch("mcmc_relocate", &self.slots, &g, per_gaussian);
-            let second_total = scan(&mut rec, "trgs.mcmc_relocate.weights2", &weights);
+            for (k, total) in [&dead_total, &first_total].into_iter().enumerate() {
+                rec.encoder.copy_buffer_to_buffer(total, 0, &counts, 4 * k as u64, 4);
+            }
+            // Without growth the third counter stays 0 (cleared): nothing is added.
             if growth > 0 {
+                let second_total = scan(&mut rec, "trgs.mcmc_relocate.weights2", &weights);
+                rec.encoder.copy_buffer_to_buffer(&second_total, 0, &counts, 8, 4);
                 let per_draw = grid_1d(growth.div_ceil(256));
                 let g = bind(
                     &self.draw,
@@ -173,12 +178,8 @@ impl GpuMcmcRelocate {
                 );
                 rec.dispatch("mcmc_relocate", &self.append, &g, per_draw);
             }
-            for (k, total) in [&dead_total, &first_total, &second_total].into_iter().enumerate() {
-                rec.encoder.copy_buffer_to_buffer(total, 0, &counts, 4 * k as u64, 4);
-            }
         }
-        let waited = rec.submit_and_wait(ctx);
-        let read = waited.and_then(|()| gpu::read_buffer::<u32>(ctx, &counts, 0, 3));
+        let read = rec.submit_and_read::<u32>(ctx, &counts, 3);
         let c = scopes.close_after(read)?;
         let (dead_count, first_total, second_total) = (c[0], c[1], c[2]);
         let report = McmcReport {

@@ -169,8 +169,7 @@ impl GpuPerturb {
             );
             rec.dispatch("perturb", &self.kernel, &bind, grid_1d(n.div_ceil(256)));
         }
-        let waited = rec.submit_and_wait(ctx);
-        let read = waited.and_then(|()| gpu::read_buffer::<u32>(ctx, &count, 0, 1));
+        let read = rec.submit_and_read::<u32>(ctx, &count, 1);
         Ok(scopes.close_after(read)?[0] as usize)
     }
 }

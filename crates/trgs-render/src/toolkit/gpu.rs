@@ -445,6 +445,25 @@ impl Recorder {
         Ok(index)
     }
 
+    /// Submit the recorded work with a copy of the first `count` values of `buffer` behind it,
+    /// and read them back: one wait, where a submission waited for and a separate readback make
+    /// two (the deciding stages' counters).
+    pub fn submit_and_read<T: bytemuck::Pod>(
+        &mut self,
+        ctx: &GpuContext,
+        buffer: &wgpu::Buffer,
+        count: usize,
+    ) -> Result<Vec<T>, GpuError> {
+        let bytes = count * std::mem::size_of::<T>();
+        let size = (bytes as u64).div_ceil(4).max(1) * 4;
+        let staging = staging(ctx, "trgs.readback.staging", size);
+        if bytes > 0 {
+            self.encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+        }
+        let submission = self.submit(ctx)?;
+        PendingRead::after(staging, submission).read(ctx, bytes)
+    }
+
     /// Milliseconds per stage (in first-recorded order), when profiling.
     pub fn stage_times(&self) -> Option<Vec<(&'static str, f64)>> {
         self.profiler.as_ref().map(Profiler::stage_times)
