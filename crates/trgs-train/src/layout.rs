@@ -118,8 +118,8 @@ pub const GATHER_ZERO: u32 = 1 << 31;
 
 gpu_struct! {
     /// Parameters of the `densify_plan` kernels over `count` Gaussians: classic densification's
-    /// thresholds as the f32 values its twin compares (`classic::Rules`), as logits and log
-    /// scales.
+    /// thresholds as the f32 values its twin compares (`classic::decide::Rules`), as logits and
+    /// log scales.
     pub struct DensifyPlanParams {
         pub count: u32,
         /// Gaussians that may still be added under `max_gaussians`.
