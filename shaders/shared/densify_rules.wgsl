@@ -1,8 +1,8 @@
 // The rules of classic densification that more than one `densify_plan` kernel applies (twin:
-// trgs_train::densify::classic::decide::Rules, which compares the same f32 values the same
-// way). The including kernel declares `params: DensifyPlanParams`, `stats` (densify_stats' records) and
-// `opacity_logits`. The thresholds come as logits and log scales, so that no kernel rounds an
-// exp or a sigmoid that its twin would round differently.
+// trgs_train::densify::classic::decide::Rules, which compares the same f32 values the same way).
+// The including kernel declares `params: DensifyPlanParams`, `stats` (densify_stats' records) and
+// `opacity_logits`. The thresholds come as logits and log scales, so that no kernel rounds an exp
+// or a sigmoid that its twin would round differently.
 
 fn is_transparent(i: u32) -> bool {
     return opacity_logits[i] < params.transparent_logit;
