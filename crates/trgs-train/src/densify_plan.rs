@@ -66,7 +66,7 @@ impl GpuDensifyPlan {
         let n = params.count;
         debug_assert_eq!(n, scene.len(), "a plan of another set");
         let scopes = gpu::ErrorScopes::open(ctx, "deciding the densification");
-        let words = |label: &str, len: u32| gpu::storage(ctx, label, u64::from(len.max(1)) * 4);
+        let words = |label: &str, len: u32| gpu::storage_words(ctx, label, len);
         let block = gpu::params(ctx, "trgs.densify_plan.params", params);
         let ranks = words("trgs.densify_plan.ranks", n);
         let first_rows = words("trgs.densify_plan.first_rows", n);

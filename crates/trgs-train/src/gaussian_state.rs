@@ -4,7 +4,7 @@
 use crate::adam::AdamMoments;
 use crate::densify::{Geometry, RowPlan, TrainState};
 use crate::densify_plan::{DensifyPlanOutput, GpuDensifyPlan};
-use crate::gather_rows::GpuRowGather;
+use crate::gather_rows::{GatherSources, GpuRowGather};
 use crate::mcmc_relocate::McmcRelocateOutput;
 use crate::opacity_reset::GpuOpacityReset;
 use anyhow::{Context, Result};
@@ -133,38 +133,41 @@ impl GaussianState {
         plan: &DensifyPlanOutput,
     ) -> Result<()> {
         let ctx = self.ctx.clone();
-        trgs_render::toolkit::gpu::scoped(&ctx, "densifying", || {
-            let old = &self.scene;
-            let (scene, moments) = self.gather.apply_sources(
-                &ctx,
-                old,
-                &self.moments,
-                &plan.sources,
-                &[],
-                |rec, new| planner.record_children(&ctx, rec, plan, old, new),
-            )?;
-            self.scene = scene;
-            self.moments = moments;
-            Ok(())
+        self.rebuild("densifying", &plan.sources, &[], |rec, old, new| {
+            planner.record_children(&ctx, rec, plan, old, new)
         })
     }
 
     /// Relocate by a plan decided on the GPU (stage `mcmc_relocate`): the parameters and moments
     /// gathered by its sources, with its opacities and log scales.
     pub fn apply_mcmc_relocate(&mut self, plan: &McmcRelocateOutput) -> Result<()> {
+        let given = [
+            (Attribute::OpacityLogits, plan.opacity_logits.clone()),
+            (Attribute::LogScales, plan.log_scales.clone()),
+        ];
+        self.rebuild("relocating", &plan.sources, &given, |_, _, _| {})
+    }
+
+    /// Replace the parameters and moments by those `gather_rows` makes of `sources`, with the
+    /// `given` attributes, and `then`'s edits of the new scene (from the old) in the same
+    /// submission.
+    fn rebuild(
+        &mut self,
+        what: &'static str,
+        sources: &GatherSources,
+        given: &[(Attribute, wgpu::Buffer)],
+        then: impl FnOnce(&mut Recorder, &GpuScene, &GpuScene),
+    ) -> Result<()> {
         let ctx = self.ctx.clone();
-        trgs_render::toolkit::gpu::scoped(&ctx, "relocating", || {
-            let given = [
-                (Attribute::OpacityLogits, plan.opacity_logits.clone()),
-                (Attribute::LogScales, plan.log_scales.clone()),
-            ];
+        trgs_render::toolkit::gpu::scoped(&ctx, what, || {
+            let old = &self.scene;
             let (scene, moments) = self.gather.apply_sources(
                 &ctx,
-                &self.scene,
+                old,
                 &self.moments,
-                &plan.sources,
-                &given,
-                |_, _| {},
+                sources,
+                given,
+                |rec, new| then(rec, old, new),
             )?;
             self.scene = scene;
             self.moments = moments;

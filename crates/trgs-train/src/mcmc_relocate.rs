@@ -70,7 +70,7 @@ impl GpuMcmcRelocate {
         let n = scene.len();
         let rows = n + growth;
         let scopes = gpu::ErrorScopes::open(ctx, "deciding the relocation");
-        let words = |label: &str, len: u32| gpu::storage(ctx, label, u64::from(len.max(1)) * 4);
+        let words = |label: &str, len: u32| gpu::storage_words(ctx, label, len);
         let base = McmcRelocateParams {
             count: n,
             growth,
@@ -193,7 +193,7 @@ impl GpuMcmcRelocate {
         } else {
             let mut enc = ctx.device.create_command_encoder(&Default::default());
             let mut cut = |b: &wgpu::Buffer, words: u32, label: &str| {
-                let out = gpu::storage(ctx, label, u64::from(words.max(1)) * 4);
+                let out = gpu::storage_words(ctx, label, words);
                 enc.copy_buffer_to_buffer(b, 0, &out, 0, u64::from(words) * 4);
                 out
             };

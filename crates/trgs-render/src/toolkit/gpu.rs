@@ -47,6 +47,11 @@ pub fn storage(ctx: &GpuContext, label: &str, size: u64) -> wgpu::Buffer {
     })
 }
 
+/// A storage buffer of `words` 32-bit words, at least one (a binding cannot be empty).
+pub fn storage_words(ctx: &GpuContext, label: &str, words: u32) -> wgpu::Buffer {
+    storage(ctx, label, u64::from(words.max(1)) * 4)
+}
+
 /// A buffer of `size` bytes holding `bytes` and then `rest` in every byte after them, written
 /// while it is mapped at creation (one copy of the data on the host). When the buffer could not
 /// be made (a lost device, no memory left) there is no mapping to write: the buffer is returned
