@@ -109,6 +109,10 @@ pub struct Frame {
     pending_keys: Option<key_totals::PendingKeyTotals>,
     /// The most keys any render into this frame had (sizes lists from earlier frames).
     largest_keys: u64,
+    /// The keys expected of the next render, after its set changed size, and the render after
+    /// which that was said ([`Frame::expect_set_scaled`]): until a render of the new set reports
+    /// its totals.
+    expected_keys: Option<(u64, u64)>,
     /// Renders into this frame so far (which render a readback of key totals belongs to).
     renders: u64,
 }

@@ -124,7 +124,7 @@ impl Frame {
         let words: Vec<u32> = p.read.read(ctx, 4 * p.words)?;
         let totals = Totals::decode(&words);
         let settled = KeyTotals { keys: totals.keys(), capacity: p.capacity };
-        self.largest_keys = self.largest_keys.max(settled.keys);
+        self.observe_keys(settled.keys, p.render);
         if p.render == self.renders {
             assign(&mut self.views, &totals.view_keys);
             if let Some(b) = self.binning.as_mut() {
@@ -146,17 +146,40 @@ impl Frame {
 
     /// Records a render's totals, known now.
     pub(crate) fn record_key_totals(&mut self, totals: KeyTotals) {
-        self.largest_keys = self.largest_keys.max(totals.keys);
+        self.observe_keys(totals.keys, self.renders);
         self.key_totals = Some(totals);
     }
 
+    /// Render `render` had `keys` keys: the largest total grows, and an expectation said before
+    /// that render ([`Frame::expect_set_scaled`]) gives way to what it measured.
+    fn observe_keys(&mut self, keys: u64, render: u64) {
+        self.largest_keys = self.largest_keys.max(keys);
+        if self.expected_keys.is_some_and(|(_, after)| render > after) {
+            self.expected_keys = None;
+        }
+    }
+
+    /// The set this frame renders changed so that its keys may grow `ratio` times (a
+    /// densification or relocation, which estimates it): until a render of the new set reports
+    /// its totals, lists sized from earlier frames expect `ratio` times the largest total (when
+    /// over 1), so that the next render need not wait for its totals to size its list exactly.
+    /// A list that turns out too small is caught as any other is
+    /// ([`KeySizing::FromEarlierFrames`]).
+    pub fn expect_set_scaled(&mut self, ratio: f64) {
+        // Two changes before a render of the new set reports: the second scales the first's.
+        let base = self.largest_keys.max(self.expected_keys.map_or(0, |(k, _)| k));
+        if !(ratio > 1.0) || base == 0 {
+            return;
+        }
+        self.expected_keys = Some(((base as f64 * ratio).ceil() as u64, self.renders));
+    }
+
     /// The key list for a render that sizes it from earlier frames: the largest total this frame
-    /// has held with a quarter of headroom, at most `most`; None before any.
+    /// has held (or the total expected of a changed set) with a quarter of headroom, at most
+    /// `most`; None before any.
     pub(crate) fn key_capacity(&self, most: u64) -> Option<u32> {
-        (self.largest_keys > 0).then(|| {
-            let k = self.largest_keys;
-            u32::try_from((k + k / 4).min(most)).unwrap_or(u32::MAX)
-        })
+        let k = self.largest_keys.max(self.expected_keys.map_or(0, |(k, _)| k));
+        (k > 0).then(|| u32::try_from((k + k / 4).min(most)).unwrap_or(u32::MAX))
     }
 
     /// Leaves the totals of a render that sized its list from earlier frames to arrive later.

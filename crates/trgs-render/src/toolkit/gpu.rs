@@ -460,13 +460,24 @@ impl Recorder {
         count: usize,
     ) -> Result<Vec<T>, GpuError> {
         let bytes = count * std::mem::size_of::<T>();
+        self.submit_read(ctx, buffer, bytes)?.read(ctx, bytes)
+    }
+
+    /// Submit the recorded work with a copy of the first `bytes` bytes of `buffer` behind it,
+    /// without waiting: the readback to take later (the counters a trainer reads a step late).
+    pub fn submit_read(
+        &mut self,
+        ctx: &GpuContext,
+        buffer: &wgpu::Buffer,
+        bytes: usize,
+    ) -> Result<PendingRead, GpuError> {
         let size = (bytes as u64).div_ceil(4).max(1) * 4;
         let staging = staging(ctx, "trgs.readback.staging", size);
         if bytes > 0 {
             self.encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
         }
         let submission = self.submit(ctx)?;
-        PendingRead::after(staging, submission).read(ctx, bytes)
+        Ok(PendingRead::after(staging, submission))
     }
 
     /// Milliseconds per stage (in first-recorded order), when profiling.
