@@ -2,7 +2,8 @@
 // each Gaussian's fate and how many rows it makes in the new set, in this order: the survivor
 // (itself, keeping its Adam moments), its clone, or the two children that replace a split
 // parent. An exclusive scan of `rows` then gives each Gaussian its first output row. The report
-// (cloned, split, pruned) is summed per workgroup, then once per workgroup into `counts`.
+// (cloned, split, pruned, and the Gaussians drawn since the last densification) is summed per
+// workgroup, then once per workgroup into `counts`.
 #include "shared/common.wgsl"
 
 @group(0) @binding(0) var<storage, read> params: DensifyPlanParams;
@@ -13,12 +14,12 @@
 @group(0) @binding(4) var<storage, read> ranks: array<u32>;
 @group(0) @binding(5) var<storage, read_write> rows: array<u32>;
 @group(0) @binding(6) var<storage, read_write> decisions: array<u32>;
-// cloned, split, pruned (cleared before the pass).
+// cloned, split, pruned, (the rows, written by the scan), seen (cleared before the pass).
 @group(0) @binding(7) var<storage, read_write> counts: array<atomic<u32>>;
 
 #include "shared/densify_rules.wgsl"
 
-var<workgroup> group_counts: array<atomic<u32>, 3>;
+var<workgroup> group_counts: array<atomic<u32>, 4>;
 
 fn max_log_scale(i: u32) -> f32 {
     return max(max(log_scales[3u * i], log_scales[3u * i + 1u]), log_scales[3u * i + 2u]);
@@ -30,7 +31,7 @@ fn main(
     @builtin(num_workgroups) nwg: vec3<u32>,
     @builtin(local_invocation_index) lid: u32,
 ) {
-    if lid < 3u {
+    if lid < 4u {
         atomicStore(&group_counts[lid], 0u);
     }
     workgroupBarrier();
@@ -60,12 +61,18 @@ fn main(
         if pruned != 0u {
             atomicAdd(&group_counts[2], pruned);
         }
+        // Drawn in a view since the last densification (its mean had a gradient): what the
+        // frames' keys mostly come from.
+        if stats[i].x > 0.0 {
+            atomicAdd(&group_counts[3], 1u);
+        }
     }
     workgroupBarrier();
-    if lid < 3u {
+    if lid < 4u {
         let c = atomicLoad(&group_counts[lid]);
         if c != 0u {
-            atomicAdd(&counts[lid], c);
+            // counts[3] is the scan's row total.
+            atomicAdd(&counts[select(lid, 4u, lid == 3u)], c);
         }
     }
 }

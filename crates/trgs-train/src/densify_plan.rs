@@ -3,8 +3,11 @@
 //! statistics `densify_stats` gathered and the Gaussians in place, without reading either back.
 //! Four passes and two scans make the `gather_rows` sources of the new set: flag the candidates,
 //! rank them (a scan), decide each Gaussian's rows, place them (a scan), write the sources; after
-//! the gather, the split children take their means and scales. Only the four counters the
-//! rebuild is sized by (cloned, split, pruned, rows) cross to the CPU.
+//! the gather, the split children take their means and scales. Only five counters cross to the
+//! CPU: the report (cloned, split, pruned, and the Gaussians drawn since the last densification,
+//! which scale the next key list) and the rows the rebuild is sized by. A trainer reads them a
+//! step late ([`GpuDensifyPlan::record`], [`PendingDensifyPlan::settle`]): the GPU runs the next
+//! step meanwhile.
 use crate::densify::DensifyReport;
 use crate::gather_rows::GatherSources;
 use crate::kernels::TRAINING_KERNELS;
@@ -24,6 +27,43 @@ pub struct GpuDensifyPlan {
     scan: PrefixSum,
 }
 
+/// A plan recorded and submitted whose counters are on their way back: the set it was decided
+/// from must stay unchanged in size until it is settled (its values may change: the rows are
+/// gathered from them when the plan is applied).
+#[derive(Debug)]
+#[must_use = "a plan changes nothing until it is settled and applied"]
+pub struct PendingDensifyPlan {
+    read: gpu::PendingRead,
+    sources: wgpu::Buffer,
+    params: wgpu::Buffer,
+    count: u32,
+    decisions: wgpu::Buffer,
+    first_rows: wgpu::Buffer,
+}
+
+impl PendingDensifyPlan {
+    /// The plan, once its five counters have come back (waiting for the plan's own submission
+    /// only if they have not).
+    pub fn settle(self, ctx: &GpuContext) -> Result<DensifyPlanOutput, gpu::GpuError> {
+        let c: Vec<u32> = self.read.read(ctx, 20)?;
+        let (cloned, split, pruned, rows, seen) = (c[0], c[1], c[2], c[3], c[4]);
+        let report = DensifyReport {
+            cloned: cloned as usize,
+            split: split as usize,
+            pruned: pruned as usize,
+            seen: seen as usize,
+        };
+        Ok(DensifyPlanOutput {
+            sources: GatherSources::from_buffer(self.sources, rows),
+            report,
+            params: self.params,
+            count: self.count,
+            decisions: self.decisions,
+            first_rows: self.first_rows,
+        })
+    }
+}
+
 /// A plan decided on the GPU: the sources `gather_rows` copies the new set from, and what the
 /// children's pass reads.
 #[derive(Debug)]
@@ -34,6 +74,13 @@ pub struct DensifyPlanOutput {
     count: u32,
     decisions: wgpu::Buffer,
     first_rows: wgpu::Buffer,
+}
+
+impl DensifyPlanOutput {
+    /// The size of the set the plan was decided for.
+    pub fn count(&self) -> usize {
+        self.count as usize
+    }
 }
 
 impl GpuDensifyPlan {
@@ -55,7 +102,7 @@ impl GpuDensifyPlan {
         (n as u64) * 24 <= ctx.binding_limit() && n < (1 << 30)
     }
 
-    /// Decide on the GPU: records the passes, waits for them and reads the four counters.
+    /// Decide on the GPU: records the passes, waits for them and reads the five counters.
     pub fn plan(
         &self,
         ctx: &GpuContext,
@@ -63,6 +110,18 @@ impl GpuDensifyPlan {
         stats: &wgpu::Buffer,
         params: &DensifyPlanParams,
     ) -> Result<DensifyPlanOutput, gpu::GpuError> {
+        self.record(ctx, scene, stats, params)?.settle(ctx)
+    }
+
+    /// Record and submit the passes, with the five counters' readback behind them, without
+    /// waiting for either.
+    pub fn record(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        stats: &wgpu::Buffer,
+        params: &DensifyPlanParams,
+    ) -> Result<PendingDensifyPlan, gpu::GpuError> {
         let n = params.count;
         debug_assert_eq!(n, scene.len(), "a plan of another set");
         let scopes = gpu::ErrorScopes::open(ctx, "deciding the densification");
@@ -73,7 +132,7 @@ impl GpuDensifyPlan {
         let decisions = words("trgs.densify_plan.decisions", n);
         // At most two rows per Gaussian: a survivor and its clone, or two children.
         let sources = words("trgs.densify_plan.sources", 2 * n);
-        let counts = words("trgs.densify_plan.counts", 4);
+        let counts = words("trgs.densify_plan.counts", 5);
         let p = scene.parameters();
         let (opacity, log_scales) = (p[Attribute::OpacityLogits], p[Attribute::LogScales]);
         let groups = grid_1d(n.div_ceil(256));
@@ -113,22 +172,9 @@ impl GpuDensifyPlan {
             let bind = self.sources.bind(ctx, &entries);
             rec.dispatch("densify_plan", &self.sources, &bind, groups);
         }
-        let read = rec.submit_and_read::<u32>(ctx, &counts, 4);
-        let c = scopes.close_after(read)?;
-        let (cloned, split, pruned, rows) = (c[0], c[1], c[2], c[3]);
-        let report = DensifyReport {
-            cloned: cloned as usize,
-            split: split as usize,
-            pruned: pruned as usize,
-        };
-        Ok(DensifyPlanOutput {
-            sources: GatherSources::from_buffer(sources, rows),
-            report,
-            params: block,
-            count: n,
-            decisions,
-            first_rows,
-        })
+        let read = rec.submit_read(ctx, &counts, 20);
+        let read = scopes.close_after(read)?;
+        Ok(PendingDensifyPlan { read, sources, params: block, count: n, decisions, first_rows })
     }
 
     /// Record the children's pass: their means and scales in `new` (gathered by `plan`'s

@@ -182,7 +182,9 @@ impl GpuRowGather {
             AdamMoments { m, v, len: u64::from(sources.len()) * u64::from(width) }
         });
         then(&mut rec, &rebuilt);
-        let waited = rec.submit_and_wait(ctx);
-        scopes.close_after(waited.map(|()| (rebuilt, moments)))
+        // Not waited for: the next step queues behind it, and the old set's buffers live on
+        // (in wgpu) until the gather that reads them is done.
+        let submitted = rec.submit(ctx);
+        scopes.close_after(submitted.map(|_| (rebuilt, moments)))
     }
 }

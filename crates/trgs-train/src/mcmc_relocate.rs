@@ -5,7 +5,8 @@
 //! copies of live ones, then the set grows with copies of primary ones; a row drawn N - 1 times
 //! and its copies take Eq. 9's opacity and scale for N. The passes write the new set's opacities,
 //! log scales and `gather_rows` sources; three counters (the dead count and the two rounds'
-//! weight totals) are read back, which say how many rows the new set has.
+//! weight totals) are read back, which say how many rows the new set has. A trainer reads them
+//! a step late ([`GpuMcmcRelocate::record`], [`PendingMcmcRelocate::settle`]).
 use crate::densify::McmcReport;
 use crate::densify::mcmc::{RelocationLimits, relocation_table, weight_table};
 use crate::gather_rows::GatherSources;
@@ -28,6 +29,56 @@ pub struct GpuMcmcRelocate {
     share_table: wgpu::Buffer,
 }
 
+/// A relocation recorded and submitted whose counters are on their way back: the set it was
+/// decided from must stay unchanged in size until it is settled.
+#[derive(Debug)]
+#[must_use = "a relocation changes nothing until it is settled and applied"]
+pub struct PendingMcmcRelocate {
+    read: gpu::PendingRead,
+    count: u32,
+    growth: u32,
+    opacity_logits: wgpu::Buffer,
+    log_scales: wgpu::Buffer,
+    sources: wgpu::Buffer,
+}
+
+impl PendingMcmcRelocate {
+    /// The relocation, once its three counters have come back (waiting for its own submission
+    /// only if they have not).
+    pub fn settle(self, ctx: &GpuContext) -> Result<McmcRelocateOutput, gpu::GpuError> {
+        let c: Vec<u32> = self.read.read(ctx, 12)?;
+        let (dead_count, first_total, second_total) = (c[0], c[1], c[2]);
+        let report = McmcReport {
+            relocated: if first_total > 0 { dead_count as usize } else { 0 },
+            added: if second_total > 0 { self.growth as usize } else { 0 },
+        };
+        let len = self.count + report.added as u32;
+        let (opacity, log_scales) = (self.opacity_logits, self.log_scales);
+        // Without growth draws (no primary Gaussian) the working rows past `n` are unused.
+        let (opacity, log_scales) = if len == self.count + self.growth {
+            (opacity, log_scales)
+        } else {
+            let mut enc = ctx.device.create_command_encoder(&Default::default());
+            let mut cut = |b: &wgpu::Buffer, words: u32, label: &str| {
+                let out = gpu::storage_words(ctx, label, words);
+                enc.copy_buffer_to_buffer(b, 0, &out, 0, u64::from(words) * 4);
+                out
+            };
+            let o = cut(&opacity, len, "trgs.mcmc_relocate.opacity_logits");
+            let l = cut(&log_scales, 3 * len, "trgs.mcmc_relocate.log_scales");
+            ctx.queue.submit([enc.finish()]);
+            (o, l)
+        };
+        Ok(McmcRelocateOutput {
+            sources: GatherSources::from_buffer(self.sources, len),
+            opacity_logits: opacity,
+            log_scales,
+            report,
+            count: self.count,
+        })
+    }
+}
+
 /// A relocation decided on the GPU: the new set's sources and the attributes it gives whole.
 #[derive(Debug)]
 pub struct McmcRelocateOutput {
@@ -35,6 +86,15 @@ pub struct McmcRelocateOutput {
     pub opacity_logits: wgpu::Buffer,
     pub log_scales: wgpu::Buffer,
     pub report: McmcReport,
+    /// The size of the set it was decided for.
+    count: u32,
+}
+
+impl McmcRelocateOutput {
+    /// The size of the set the relocation was decided for.
+    pub fn count(&self) -> usize {
+        self.count as usize
+    }
 }
 
 impl GpuMcmcRelocate {
@@ -67,6 +127,19 @@ impl GpuMcmcRelocate {
         growth: u32,
         seeds: [u32; 2],
     ) -> Result<McmcRelocateOutput, gpu::GpuError> {
+        self.record(ctx, scene, limits, growth, seeds)?.settle(ctx)
+    }
+
+    /// Record and submit the passes, with the three counters' readback behind them, without
+    /// waiting for either.
+    pub fn record(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        limits: &RelocationLimits,
+        growth: u32,
+        seeds: [u32; 2],
+    ) -> Result<PendingMcmcRelocate, gpu::GpuError> {
         let n = scene.len();
         let rows = n + growth;
         let scopes = gpu::ErrorScopes::open(ctx, "deciding the relocation");
@@ -179,34 +252,15 @@ impl GpuMcmcRelocate {
                 rec.dispatch("mcmc_relocate", &self.append, &g, per_draw);
             }
         }
-        let read = rec.submit_and_read::<u32>(ctx, &counts, 3);
-        let c = scopes.close_after(read)?;
-        let (dead_count, first_total, second_total) = (c[0], c[1], c[2]);
-        let report = McmcReport {
-            relocated: if first_total > 0 { dead_count as usize } else { 0 },
-            added: if second_total > 0 { growth as usize } else { 0 },
-        };
-        let len = n + report.added as u32;
-        // Without growth draws (no primary Gaussian) the working rows past `n` are unused.
-        let (opacity, log_scales) = if len == rows {
-            (opacity, log_scales)
-        } else {
-            let mut enc = ctx.device.create_command_encoder(&Default::default());
-            let mut cut = |b: &wgpu::Buffer, words: u32, label: &str| {
-                let out = gpu::storage_words(ctx, label, words);
-                enc.copy_buffer_to_buffer(b, 0, &out, 0, u64::from(words) * 4);
-                out
-            };
-            let o = cut(&opacity, len, "trgs.mcmc_relocate.opacity_logits");
-            let l = cut(&log_scales, 3 * len, "trgs.mcmc_relocate.log_scales");
-            ctx.queue.submit([enc.finish()]);
-            (o, l)
-        };
-        Ok(McmcRelocateOutput {
-            sources: GatherSources::from_buffer(sources, len),
+        let read = rec.submit_read(ctx, &counts, 12);
+        let read = scopes.close_after(read)?;
+        Ok(PendingMcmcRelocate {
+            read,
+            count: n,
+            growth,
             opacity_logits: opacity,
             log_scales,
-            report,
+            sources,
         })
     }
 }

@@ -129,9 +129,25 @@ impl GpuPerturb {
         amplitude: f64,
         seed: u32,
     ) -> Result<usize, gpu::GpuError> {
+        match self.record(ctx, scene, camera_centres, amplitude, seed)? {
+            Some(read) => Ok(read.read::<u32>(ctx, 4)?[0] as usize),
+            None => Ok(0),
+        }
+    }
+
+    /// [`GpuPerturb::run`] recorded and submitted without waiting: the readback of the count
+    /// (a trainer reports it a step late), or None when nothing can be selected.
+    pub fn record(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        camera_centres: &[DVec3],
+        amplitude: f64,
+        seed: u32,
+    ) -> Result<Option<gpu::PendingRead>, gpu::GpuError> {
         let planes = perturb_planes(scene.planes());
         if planes.is_empty() || camera_centres.is_empty() || scene.is_empty() {
-            return Ok(0);
+            return Ok(None);
         }
         let scopes = gpu::ErrorScopes::open(ctx, "perturbing the opacities");
         let cameras: Vec<[f32; 4]> =
@@ -169,8 +185,8 @@ impl GpuPerturb {
             );
             rec.dispatch("perturb", &self.kernel, &bind, grid_1d(n.div_ceil(256)));
         }
-        let read = rec.submit_and_read::<u32>(ctx, &count, 1);
-        Ok(scopes.close_after(read)?[0] as usize)
+        let read = rec.submit_read(ctx, &count, 4);
+        Ok(Some(scopes.close_after(read)?))
     }
 }
 

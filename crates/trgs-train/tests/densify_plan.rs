@@ -19,13 +19,15 @@ fn ctx() -> GpuContext {
         .expect("adapter")
 }
 
-/// A set (`common::random_state`) with statistics on both sides of the gradient threshold.
+/// A set (`common::random_state`) with statistics on both sides of the gradient threshold; a
+/// quarter of it unseen (no gradient).
 fn case(n: usize, seed: u64) -> (TrainState, DensifyStats) {
     let (state, mut rng) = common::random_state(n, seed, (-8.0, 4.0));
     let mut stats = DensifyStats::new(n);
     for i in 0..n {
         stats.count[i] = rng.below(4) as u32;
-        stats.grad_sum[i] = f64::from(rng.range(0.0, 1e-3) as f32);
+        let sum = f64::from(rng.range(0.0, 1e-3) as f32);
+        stats.grad_sum[i] = if stats.count[i] > 0 { sum } else { 0.0 };
         stats.max_radius[i] = f64::from(rng.range(0.0, 30.0) as f32);
     }
     (state, stats)
@@ -47,8 +49,8 @@ fn check(
     let report = classic
         .densify_now(&mut gpu, &mut Rng::new(seed), extent, prune_large)
         .expect("densify on the GPU");
-    // Decided on the GPU: only the four counters (cloned, split, pruned, rows) come back.
-    assert_eq!(ctx.bytes_read() - read_before, 16, "bytes read back to densify");
+    // Decided on the GPU: only the five counters (cloned, split, pruned, rows, seen) come back.
+    assert_eq!(ctx.bytes_read() - read_before, 20, "bytes read back to densify");
     let geometry = Geometry::of(&state.gaussians);
     let (plan, twin_report) =
         plan_densify(&geometry, stats, settings, extent, prune_large, &mut Rng::new(seed));
@@ -125,7 +127,7 @@ fn a_set_pruned_to_nothing_and_an_empty_set() {
     let (mut state, stats) = case(300, 9);
     state.gaussians.opacity_logits.iter_mut().for_each(|o| *o = -20.0);
     let r = check(&ctx, &state, &stats, &settings, true);
-    assert_eq!(r, DensifyReport { cloned: 0, split: 0, pruned: 300 });
+    assert_eq!((r.cloned, r.split, r.pruned), (0, 0, 300));
     let (empty, stats) = case(0, 10);
     let r = check(&ctx, &empty, &stats, &settings, true);
     assert_eq!(r, DensifyReport::default());

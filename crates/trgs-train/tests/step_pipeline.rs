@@ -7,7 +7,7 @@ use trgs_core::fixtures::{SceneSpec, random_scene};
 use trgs_core::scene::{Camera, Gaussians, ReflectionPlane};
 use trgs_render::{DeviceOptions, GpuContext, Layer};
 use trgs_train::data::View;
-use trgs_train::densify::Densification;
+use trgs_train::densify::{ClassicSettings, Densification, DensifyEvent, McmcSettings};
 use trgs_train::settings::TrainSettings;
 use trgs_train::trainer::Trainer;
 
@@ -164,4 +164,105 @@ fn largest_difference(a: &Gaussians<f32>, b: &Gaussians<f32>) -> f32 {
         v
     };
     flat(a).iter().zip(flat(b)).map(|(x, y)| (x - y).abs()).fold(0.0, f32::max)
+}
+
+/// Densify after every third step: every Gaussian drawn clones (all are under the clone size),
+/// nothing is pruned, so that the frames' keys grow past the key list's headroom.
+fn classic_every_third_step() -> Densification {
+    let mut s = ClassicSettings::scaled(100);
+    (s.from, s.every, s.until) = (0, 3, 1000);
+    s.grad_threshold = 1e-9;
+    s.percent_dense = 1e3;
+    s.min_opacity = 0.0;
+    Densification::Classic(s)
+}
+
+/// Relocate after every third step, and grow by a half.
+fn mcmc_every_third_step() -> Densification {
+    let mut s = McmcSettings::scaled(100, 100_000);
+    (s.from, s.every, s.until) = (0, 3, 1000);
+    s.growth = 1.5;
+    s.min_opacity = 0.05;
+    Densification::Mcmc(s)
+}
+
+/// How many Gaussians `event` added.
+fn added_by(event: &DensifyEvent) -> usize {
+    match event {
+        DensifyEvent::Densified(r) => r.cloned + r.split - r.pruned,
+        DensifyEvent::Relocated(r) => r.added,
+        DensifyEvent::OpacityReset => 0,
+    }
+}
+
+/// A pipelined loop under `densification` (which changes the set after step 3 and step 6):
+/// the maintenance that decides waits for nothing, the next one applies what the steps taken
+/// whole applied at once, and the steps after train the new set without waiting or skipping.
+fn lands_a_step_later(densification: &Densification) {
+    let ctx = ctx();
+    let (mut pipelined, camera, gaussians, planes) = trainer(&ctx, 1);
+    let view = view_of(&pipelined, &camera);
+    let settings = pipelined.settings.clone();
+    let mut whole = Trainer::new(&ctx, &gaussians, &planes, settings, 1.0).expect("trainer");
+    pipelined.set_densification(densification);
+    whole.set_densification(densification);
+    let n = pipelined.scene().len() as usize;
+    // Steps taken whole apply step 3's change at once.
+    let events: Vec<_> = (0..3).map(|_| whole.train_step(&view).expect("step").densified).collect();
+    let [want] = events[2][..] else { panic!("step 3 did not change the set: {events:?}") };
+    assert!(added_by(&want) > 0, "{want:?}");
+
+    pipelined.train_step(&view).expect("step 1");
+    let second = pipelined.record_step(&view).expect("record");
+    assert!(pipelined.maintain().expect("maintain").0.is_empty());
+    let third = pipelined.record_step(&view).expect("record");
+    pipelined.finish_step(second).expect("finish");
+    // Step 3's maintenance decides on the GPU and waits for nothing: the set is unchanged
+    // while its counters come back.
+    let before = ctx.waits();
+    let (events, _) = pipelined.maintain().expect("maintain");
+    assert_eq!(ctx.waits(), before, "deciding waited");
+    assert!(events.is_empty() && !pipelined.is_settled());
+    assert_eq!(pipelined.scene().len() as usize, n);
+    // Step 4 trains the set as it was, recorded without a wait.
+    let fourth = pipelined.record_step(&view).expect("record");
+    let third = pipelined.finish_step(third).expect("finish");
+    assert!(!third.skipped && third.record_waits == 0);
+    // Its maintenance applies the change: the counters' wait, if they had not arrived, is the
+    // only one (step 4 stays queued behind them).
+    let before = ctx.waits();
+    let (events, _) = pipelined.maintain().expect("maintain");
+    assert!(ctx.waits() - before <= 1, "applying the change waited more than once");
+    // The same decision as the steps taken whole made (step 4's update comes after it).
+    assert_eq!(events, [want]);
+    assert_eq!(pipelined.scene().len() as usize, n + added_by(&want));
+    assert_eq!(pipelined.scene().len(), whole.scene().len());
+    assert!(pipelined.is_settled());
+    // The next steps train the new set without waiting: the key list expects the keys' growth
+    // instead of being sized exactly, and holds the new frame's keys.
+    let fifth = pipelined.record_step(&view).expect("record");
+    let fourth = pipelined.finish_step(fourth).expect("finish");
+    let sixth = pipelined.record_step(&view).expect("record");
+    let fifth = pipelined.finish_step(fifth).expect("finish");
+    assert!(pipelined.maintain().expect("maintain").0.is_empty());
+    let sixth = pipelined.finish_step(sixth).expect("finish");
+    for s in [&fourth, &fifth, &sixth] {
+        assert!(!s.skipped && s.loss.is_finite(), "step {} skipped", s.step);
+        assert_eq!(s.record_waits, 0, "step {} waited while recorded", s.step);
+    }
+    // Step 6's maintenance decided again; settling applies it at once.
+    let (events, _) = pipelined.settle().expect("settle");
+    assert_eq!(events.len(), 1, "{events:?}");
+    assert!(pipelined.is_settled());
+    pipelined.checkpoint(serde_json::Value::Null).expect("a settled trainer checkpoints");
+}
+
+#[test]
+fn a_densification_in_a_pipelined_loop_waits_for_nothing_and_lands_a_step_later() {
+    lands_a_step_later(&classic_every_third_step());
+}
+
+#[test]
+fn a_relocation_in_a_pipelined_loop_waits_for_nothing_and_lands_a_step_later() {
+    lands_a_step_later(&mcmc_every_third_step());
 }

@@ -89,7 +89,8 @@ pub enum DensifyEvent {
 /// One densification strategy, driven by the trainer. The hooks run in this order in a step:
 /// [`record_before_adam`](Self::record_before_adam) and
 /// [`record_after_adam`](Self::record_after_adam) into the step's Adam batch on the GPU, then
-/// [`maintain`](Self::maintain) once the step's update is done.
+/// [`settle`](Self::settle) (what the last maintenance left pending) and
+/// [`maintain`](Self::maintain) once the step's update is recorded.
 pub trait DensifyStrategy: std::fmt::Debug + Send + Sync {
     /// A short name for logs ("none", "classic", "mcmc").
     fn name(&self) -> &'static str;
@@ -100,7 +101,11 @@ pub trait DensifyStrategy: std::fmt::Debug + Send + Sync {
     /// Work recorded after Adam (statistics of the step, noise on the parameters).
     fn record_after_adam(&self, _step: &StepView<'_>, _rec: &mut Recorder) {}
 
-    /// Edit the set after step `step` (counted from 1) when the schedule says so.
+    /// Edit the set after step `step` (counted from 1) when the schedule says so. A change of
+    /// the set's size may be left pending, decided and submitted with its counters on their way
+    /// back, for [`settle`](Self::settle) to apply: the trainer settles it at the next step's
+    /// maintenance (the GPU runs that step meanwhile), or at once where it must (a step taken
+    /// whole, an edit of the set, a checkpoint).
     fn maintain(
         &mut self,
         step: u32,
@@ -109,12 +114,24 @@ pub trait DensifyStrategy: std::fmt::Debug + Send + Sync {
         extent: f64,
     ) -> Result<Vec<DensifyEvent>>;
 
+    /// Apply the change [`maintain`](Self::maintain) left pending, if any (waiting only for its
+    /// counters): what it did. The set must not have changed size since.
+    fn settle(&mut self, _gaussians: &mut GaussianState) -> Result<Vec<DensifyEvent>> {
+        Ok(Vec::new())
+    }
+
+    /// Whether a change is pending ([`settle`](Self::settle) would apply it).
+    fn pending(&self) -> bool {
+        false
+    }
+
     /// Whether step `step` ends with an opacity reset (the perturbation skips those steps).
     fn resets_opacity_at(&self, _step: u32) -> bool {
         false
     }
 
-    /// The set was replaced by one of `n` Gaussians: per-Gaussian state starts over.
+    /// The set was replaced by one of `n` Gaussians: per-Gaussian state starts over (and a
+    /// pending change, decided for the old set, is dropped).
     fn restart(&mut self, _n: usize) {}
 
     /// The most Gaussians the strategy allows, if it has a bound (MCMC's `--cap`): Gaussians

@@ -19,9 +19,11 @@ impl TrainingRun {
     ///
     /// Steps are pipelined: a step is recorded, then the previous one is finished (its loss and
     /// plane gradients read back) and reported, then the new one's maintenance runs, so that the
-    /// GPU has the new step queued while the CPU reads the previous one. A step that evaluates,
-    /// checkpoints or ends the run is taken whole, after the one in flight is finished (as is
-    /// the planes' initialisation).
+    /// GPU has the new step queued while the CPU reads the previous one. A densification the
+    /// maintenance decides is applied at the next step's maintenance, when its counters are
+    /// back ([`crate::trainer::Trainer::maintain`]). A step that evaluates, checkpoints or ends
+    /// the run is taken whole, after the one in flight is finished, and applies what its
+    /// maintenance decides at once (as the planes' initialisation does first).
     pub(super) fn advance(&mut self) -> Result<()> {
         let iterations = self.config().iterations;
         self.draw_epoch_if_done();
@@ -33,6 +35,8 @@ impl TrainingRun {
             self.finish_in_flight()?;
             // Part of training: it counts in the time that PSNR is reported against.
             let ti = Instant::now();
+            // The planes start from the set as it is, with any densification still pending.
+            self.trainer.settle()?;
             self.init_planes()?;
             self.state.train_seconds += ti.elapsed().as_secs_f64();
         }

@@ -44,18 +44,21 @@ pub struct StepStats {
     /// after the next was recorded can be skipped: [`Trainer::train_step`] takes it again.
     pub skipped: bool,
     /// How many times recording the step waited for the GPU ([`GpuContext::waits`]): none,
-    /// unless its key list was sized exactly (the first step, the one after a skipped step or a
-    /// change of the set), phases are timed, or the adapter is a CPU one (which waits at the end
-    /// of each phase: `Capabilities::records_while_busy`).
+    /// unless its key list was sized exactly (the first step, the one after a skipped step or
+    /// an edit of the set from outside the maintenance), phases are timed, or the adapter is a
+    /// CPU one (which waits at the end of each phase: `Capabilities::records_while_busy`).
     pub record_waits: u64,
     /// Where the step's wall-clock time went.
     pub times: StepTimes,
     /// With [`Trainer::profile`]: GPU milliseconds of every render and backward stage, from
     /// timestamp queries (empty when off or when the adapter has none).
     pub gpu_stages: Vec<(&'static str, f64)>,
-    /// What the densification strategy did to the set after the step (usually nothing).
+    /// What the densification strategy did to the set after the step (usually nothing): in a
+    /// pipelined loop, what was applied then ([`Trainer::maintain`]: a densification decided
+    /// after the step before).
     pub densified: Vec<DensifyEvent>,
-    /// Gaussians whose opacity the perturbation changed after this step (0 on most steps).
+    /// Gaussians whose opacity the perturbation changed after this step (0 on most steps; in
+    /// a pipelined loop, reported a step late as the densification is).
     pub perturbed: usize,
 }
 
@@ -89,14 +92,16 @@ pub struct Trainer {
     pub time_phases: bool,
     /// The word that lets a step's updates change the model ([`crate::step_guard`]).
     guard: crate::step_guard::StepGuard,
-    /// Size the next frame's key list exactly (after a frame outgrew its list, or the set
-    /// changed).
+    /// Size the next frame's key list exactly (after a frame outgrew its list, or an edit of
+    /// the set from outside the maintenance; the maintenance's changes scale the list instead).
     exact_keys_next: bool,
     /// Centres of the training cameras (the opacity perturbation selects what they see through
     /// a plane).
     camera_centres: Vec<glam::DVec3>,
     /// The opacity perturbation's kernel (stage `perturb`).
     perturb: crate::perturb::GpuPerturb,
+    /// The count of a perturbation on its way back (reported when the maintenance settles).
+    perturbed_later: Option<trgs_render::toolkit::gpu::PendingRead>,
 }
 
 impl Trainer {
@@ -142,6 +147,7 @@ impl Trainer {
             exact_keys_next: false,
             camera_centres: Vec::new(),
             perturb: crate::perturb::GpuPerturb::new(ctx),
+            perturbed_later: None,
         }
     }
 
@@ -168,8 +174,13 @@ impl Trainer {
 
     /// Everything needed to continue this run later, with `extra` for the caller's own state.
     /// Finish a step in flight first ([`Trainer::finish_step`]): its plane gradients are not
-    /// applied before.
+    /// applied before; and settle the maintenance ([`Trainer::settle`]): a pending change of the
+    /// set is refused here.
     pub fn checkpoint(&self, extra: serde_json::Value) -> Result<Checkpoint> {
+        anyhow::ensure!(
+            !self.densification.pending(),
+            "a change of the set is pending: settle the maintenance before a checkpoint"
+        );
         Ok(Checkpoint {
             step: self.step,
             state: self.read_state()?,
@@ -251,6 +262,7 @@ impl Trainer {
     pub fn set_state(&mut self, state: &TrainState) -> Result<()> {
         let ctx = self.ctx.clone();
         trgs_render::toolkit::gpu::scoped(&ctx, "uploading the training state", || {
+            self.settle_scoped()?;
             self.gaussians.replace(state)?;
             self.densification.restart(state.gaussians.len());
             self.exact_keys_next = true;
@@ -270,6 +282,7 @@ impl Trainer {
         &mut self,
         edit: impl FnOnce(&mut GaussianState, &mut Rng, f64) -> Result<R>,
     ) -> Result<R> {
+        self.settle_scoped()?;
         let out = edit(&mut self.gaussians, &mut self.rng, self.extent)?;
         self.densification.restart(self.gaussians.len());
         self.exact_keys_next = true;

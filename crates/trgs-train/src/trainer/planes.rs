@@ -8,6 +8,7 @@ use crate::settings::Stage;
 use anyhow::{Context, Result};
 use trgs_core::reference::PlaneGrad;
 use trgs_core::scene::{Attribute, Gaussians, Population, ReflectionPlane, attribute_widths};
+use trgs_render::toolkit::gpu::PendingRead;
 
 impl Trainer {
     /// Add reflection planes, the bounds on their offsets (`limits[i]` for `planes[i]`; free where
@@ -23,6 +24,8 @@ impl Trainer {
         limits: &[Option<OffsetLimit>],
         glass: &Gaussians<f32>,
     ) -> Result<usize> {
+        // A change of the set still pending goes in first (it was decided for the set as it is).
+        self.settle_scoped()?;
         let mut state = self.read_state()?;
         let n_old = state.gaussians.len();
         let g = &mut state.gaussians;
@@ -93,23 +96,24 @@ impl Trainer {
         Ok(())
     }
 
-    /// Opacity perturbation after step `self.step`, when its schedule says so; returns how many
-    /// Gaussians it perturbed.
-    pub(super) fn perturb_step(&mut self) -> Result<usize> {
+    /// Opacity perturbation after step `self.step`, when its schedule says so; returns the
+    /// readback of how many Gaussians it perturbed.
+    pub(super) fn perturb_step(&mut self) -> Result<Option<PendingRead>> {
         let t = self.step;
-        let Some(p) = self.settings.perturb else { return Ok(0) };
+        let Some(p) = self.settings.perturb else { return Ok(None) };
         if self.planes().is_empty()
             || self.settings.stage(t) != Stage::Joint
             || t >= p.until
             || !t.is_multiple_of(p.every)
             || self.densification.resets_opacity_at(t)
         {
-            return Ok(0);
+            return Ok(None);
         }
-        // Only the opacity buffer changes: the moments and densification statistics stay.
+        // Only the opacity buffer changes: the moments and densification statistics stay. The
+        // count is read when the maintenance settles, not to wait for it now.
         let seed = self.rng.next_u64() as u32;
         let (ctx, scene) = (&self.ctx, self.gaussians.scene());
-        Ok(self.perturb.run(ctx, scene, &self.camera_centres, p.amplitude, seed)?)
+        Ok(self.perturb.record(ctx, scene, &self.camera_centres, p.amplitude, seed)?)
     }
 }
 

@@ -83,7 +83,8 @@ impl Trainer {
             };
             before_maintenance(self)?;
             let clock = PhaseClock::start(self.waits_between_phases());
-            (stats.densified, stats.perturbed) = self.maintain_scoped()?;
+            // Taken whole: what the maintenance decides is applied now.
+            (stats.densified, stats.perturbed) = self.maintain_scoped(false)?;
             stats.times.densify = clock.elapsed(&self.ctx)?;
             Ok(stats)
         })
@@ -114,11 +115,29 @@ impl Trainer {
     }
 
     /// The densification strategy's maintenance and the opacity perturbation after step
-    /// `self.step`, when their schedules run them: what the strategy did, and how many
-    /// Gaussians were perturbed. A change of the set sizes the next frame's key list exactly.
+    /// `self.step`, when their schedules run them, for a pipelined loop: it waits for nothing.
+    /// A densification or relocation decided now on the GPU is applied at the next call, when
+    /// its counters have come back (the GPU runs the next step meanwhile: that step trains the
+    /// set as it was), and the perturbation's count is reported then too. Returns what was
+    /// applied (the strategy's events) and how many Gaussians were perturbed, as they come
+    /// back. A change of the set scales the next frame's key list by the set's growth
+    /// ([`trgs_render::Frame::expect_set_scaled`]) rather than sizing it exactly, which would
+    /// wait. [`Trainer::settle`] applies what is pending at once.
     pub fn maintain(&mut self) -> Result<(Vec<DensifyEvent>, usize)> {
         let ctx = self.ctx.clone();
-        gpu::scoped(&ctx, "densifying", || self.maintain_scoped())
+        gpu::scoped(&ctx, "densifying", || self.maintain_scoped(true))
+    }
+
+    /// Apply what the last [`Trainer::maintain`] left pending (waiting only for its counters):
+    /// what it did, and how many Gaussians the perturbation changed.
+    pub fn settle(&mut self) -> Result<(Vec<DensifyEvent>, usize)> {
+        let ctx = self.ctx.clone();
+        gpu::scoped(&ctx, "densifying", || self.settle_scoped())
+    }
+
+    /// Whether a change of the set decided by [`Trainer::maintain`] waits to be applied.
+    pub fn is_settled(&self) -> bool {
+        !self.densification.pending() && self.perturbed_later.is_none()
     }
 
     /// Whether each phase of a step waits for the GPU before its lap is taken: to time it, or
@@ -304,14 +323,43 @@ impl Trainer {
         })
     }
 
-    fn maintain_scoped(&mut self) -> Result<(Vec<DensifyEvent>, usize)> {
-        let t = self.step;
-        let densified =
+    fn maintain_scoped(&mut self, defer: bool) -> Result<(Vec<DensifyEvent>, usize)> {
+        let (mut events, mut perturbed) = self.settle_scoped()?;
+        let (t, n) = (self.step, self.gaussians.len());
+        let done =
             self.densification.maintain(t, &mut self.gaussians, &mut self.rng, self.extent)?;
-        let perturbed = self.perturb_step()?;
-        if !densified.is_empty() {
-            self.exact_keys_next = true;
+        self.after_change(&done, n);
+        events.extend(done);
+        self.perturbed_later = self.perturb_step()?;
+        if !defer {
+            let (done, count) = self.settle_scoped()?;
+            events.extend(done);
+            perturbed += count;
         }
-        Ok((densified, perturbed))
+        Ok((events, perturbed))
+    }
+
+    pub(super) fn settle_scoped(&mut self) -> Result<(Vec<DensifyEvent>, usize)> {
+        let n = self.gaussians.len();
+        let events = self.densification.settle(&mut self.gaussians)?;
+        self.after_change(&events, n);
+        let perturbed = match self.perturbed_later.take() {
+            Some(read) => read.read::<u32>(&self.ctx, 4)?[0] as usize,
+            None => 0,
+        };
+        Ok((events, perturbed))
+    }
+
+    /// After `events` changed a set of `n` Gaussians: the next frame's key list expects their
+    /// growth (an opacity reset changes no Gaussian's footprint: nothing then).
+    fn after_change(&mut self, events: &[DensifyEvent], n: usize) {
+        for e in events {
+            let growth = match e {
+                DensifyEvent::Densified(r) => r.key_growth(),
+                DensifyEvent::Relocated(r) => r.key_growth(n),
+                DensifyEvent::OpacityReset => continue,
+            };
+            self.frame.expect_set_scaled(growth);
+        }
     }
 }

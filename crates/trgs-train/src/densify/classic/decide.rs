@@ -144,6 +144,8 @@ pub fn plan_densify(
         report.cloned += usize::from(fate.clone);
         report.split += usize::from(fate.split);
         report.pruned += fate.pruned;
+        // The sum as the GPU holds it (f32).
+        report.seen += usize::from(stats.grad_sum[i] as f32 > 0.0);
         // The survivor keeps its moments; the clone restarts them.
         for (made, keep) in [(fate.survivor, true), (fate.clone, false)] {
             if made {

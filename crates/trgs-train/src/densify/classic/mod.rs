@@ -13,11 +13,11 @@ pub(crate) use decide::plan_seed;
 pub use decide::{densify_and_prune, plan_densify, plan_params};
 
 use super::{DensifyEvent, DensifyStrategy, StepView};
-use crate::densify_plan::GpuDensifyPlan;
+use crate::densify_plan::{GpuDensifyPlan, PendingDensifyPlan};
 use crate::densify_stats::GpuDensifyStats;
 use crate::gaussian_state::GaussianState;
 use crate::settings::{Stage, scale_len};
-use anyhow::Result;
+use anyhow::{Context, Result};
 use trgs_core::rng::Rng;
 use trgs_render::GpuContext;
 use trgs_render::toolkit::FrameStages;
@@ -132,6 +132,19 @@ pub struct DensifyReport {
     pub cloned: usize,
     pub split: usize,
     pub pruned: usize,
+    /// Gaussians drawn in a view since the last densification (their means had a gradient):
+    /// those the frames' keys mostly come from, and the only ones that can densify.
+    pub seen: usize,
+}
+
+impl DensifyReport {
+    /// How many times the keys of a frame of the new set may grow: as many more as Gaussians
+    /// cloned or split per Gaussian drawn. Those that densify are among the drawn, and often
+    /// the larger of them, so the share of the Gaussians in view (most of which are hidden and
+    /// make fewer keys) would undershoot; the undrawn ones' keys make this an overestimate.
+    pub fn key_growth(&self) -> f64 {
+        1.0 + (self.cloned + self.split) as f64 / self.seen.max(1) as f64
+    }
 }
 
 /// Classic densification as a [`DensifyStrategy`]: statistics gathered on the GPU every step,
@@ -144,6 +157,8 @@ pub struct ClassicDensification {
     planner: GpuDensifyPlan,
     /// Decide on the GPU where the set fits (see [`ClassicDensification::decide_on_cpu`]).
     on_gpu: bool,
+    /// A plan decided on the GPU whose counters are on their way back ([`DensifyStrategy::settle`]).
+    pending: Option<PendingDensifyPlan>,
 }
 
 impl ClassicDensification {
@@ -159,7 +174,7 @@ impl ClassicDensification {
             None => GpuDensifyStats::new(ctx, n),
         };
         let planner = GpuDensifyPlan::new(ctx);
-        Self { ctx: ctx.clone(), settings, stats, planner, on_gpu: true }
+        Self { ctx: ctx.clone(), settings, stats, planner, on_gpu: true, pending: None }
     }
 
     pub fn settings(&self) -> &ClassicSettings {
@@ -177,24 +192,49 @@ impl ClassicDensification {
         extent: f64,
         prune_large: bool,
     ) -> Result<DensifyReport> {
+        if let Some(report) = self.densify_or_plan(gaussians, rng, extent, prune_large)? {
+            return Ok(report);
+        }
+        self.settle_plan(gaussians)?.context("a densification was planned")
+    }
+
+    /// [`ClassicDensification::densify_now`], but a plan decided on the GPU is left pending
+    /// (None), for [`ClassicDensification::settle_plan`] to apply once its counters are back.
+    fn densify_or_plan(
+        &mut self,
+        gaussians: &mut GaussianState,
+        rng: &mut Rng,
+        extent: f64,
+        prune_large: bool,
+    ) -> Result<Option<DensifyReport>> {
+        anyhow::ensure!(self.pending.is_none(), "a densification is already pending");
         let n = gaussians.len();
-        let (report, rows) = if self.on_gpu && GpuDensifyPlan::fits(&self.ctx, n) {
+        if self.on_gpu && GpuDensifyPlan::fits(&self.ctx, n) {
             let seed = plan_seed(rng);
             let params = plan_params(&self.settings, extent, prune_large, n, seed);
-            let plan =
-                self.planner.plan(&self.ctx, gaussians.scene(), self.stats.buffer(), &params)?;
-            gaussians.apply_densify_plan(&self.planner, &plan)?;
-            (plan.report, plan.sources.len() as usize)
-        } else {
-            let stats = self.stats.read(&self.ctx)?;
-            let geometry = gaussians.geometry()?;
-            let (plan, report) =
-                plan_densify(&geometry, &stats, &self.settings, extent, prune_large, rng);
-            gaussians.apply_plan(&plan)?;
-            (report, plan.sources.len())
-        };
-        self.stats.reset(&self.ctx, rows);
-        Ok(report)
+            let scene = gaussians.scene();
+            self.pending =
+                Some(self.planner.record(&self.ctx, scene, self.stats.buffer(), &params)?);
+            return Ok(None);
+        }
+        let stats = self.stats.read(&self.ctx)?;
+        let geometry = gaussians.geometry()?;
+        let (plan, report) =
+            plan_densify(&geometry, &stats, &self.settings, extent, prune_large, rng);
+        gaussians.apply_plan(&plan)?;
+        self.stats.reset(&self.ctx, plan.sources.len());
+        Ok(Some(report))
+    }
+
+    /// Apply the pending plan, if any: the new set gathered on the GPU, the statistics started
+    /// over (those of the steps since it was decided go with the old set).
+    fn settle_plan(&mut self, gaussians: &mut GaussianState) -> Result<Option<DensifyReport>> {
+        let Some(pending) = self.pending.take() else { return Ok(None) };
+        let plan = pending.settle(&self.ctx)?;
+        anyhow::ensure!(plan.count() == gaussians.len(), "a densification plan of another set");
+        gaussians.apply_densify_plan(&self.planner, &plan)?;
+        self.stats.reset(&self.ctx, plan.sources.len() as usize);
+        Ok(Some(plan.report))
     }
 
     /// Replace the statistics gathered so far (a checkpoint's; the benchmark's).
@@ -236,8 +276,10 @@ impl DensifyStrategy for ClassicDensification {
         let mut events = Vec::new();
         if step > s.from && step < s.until && step.is_multiple_of(s.every) {
             let prune_large = step > s.opacity_reset_every;
-            let report = self.densify_now(gaussians, rng, extent, prune_large)?;
-            events.push(DensifyEvent::Densified(report));
+            // Decided on the GPU, the plan is applied by `settle` (its counters a step late).
+            if let Some(report) = self.densify_or_plan(gaussians, rng, extent, prune_large)? {
+                events.push(DensifyEvent::Densified(report));
+            }
         }
         if self.settings.resets_opacity_at(step) {
             // In place: only the opacities and their moments change, so the statistics
@@ -248,11 +290,20 @@ impl DensifyStrategy for ClassicDensification {
         Ok(events)
     }
 
+    fn settle(&mut self, gaussians: &mut GaussianState) -> Result<Vec<DensifyEvent>> {
+        Ok(self.settle_plan(gaussians)?.map(DensifyEvent::Densified).into_iter().collect())
+    }
+
+    fn pending(&self) -> bool {
+        self.pending.is_some()
+    }
+
     fn resets_opacity_at(&self, step: u32) -> bool {
         self.settings.resets_opacity_at(step)
     }
 
     fn restart(&mut self, n: usize) {
+        self.pending = None;
         self.stats.reset(&self.ctx, n);
     }
 
@@ -341,7 +392,7 @@ mod tests {
         stats.count = vec![1; 4];
         let settings = ClassicSettings::scaled(30_000);
         let (out, report) = densify_and_prune(&s, &stats, &settings, 1.0, false, &mut Rng::new(1));
-        assert_eq!(report, DensifyReport { cloned: 1, split: 1, pruned: 1 });
+        assert_eq!(report, DensifyReport { cloned: 1, split: 1, pruned: 1, seen: 4 });
         // In index order: 0 and its clone, the two children of 1, then 2 (3 is pruned, so not
         // cloned). Survivors keep their moments; the clone and the children restart.
         assert_eq!(out.gaussians.len(), 5);
@@ -374,7 +425,7 @@ mod tests {
         let extent = 2.0;
         let (out, report) =
             densify_and_prune(&s, &stats, &settings, extent, true, &mut Rng::new(1));
-        assert_eq!(report, DensifyReport { cloned: 0, split: 2, pruned: 3 });
+        assert_eq!(report, DensifyReport { cloned: 0, split: 2, pruned: 3, seen: 3 });
         assert_eq!(out.gaussians.len(), 3 + 2 - 3);
         for child in &out.gaussians.log_scales {
             assert!((f64::from(child[0]) - (0.1f64 / 1.6).ln()).abs() < 1e-6);
@@ -382,7 +433,7 @@ mod tests {
         // Without the size prune (before the first reset) all of it stays.
         let (out, report) =
             densify_and_prune(&s, &stats, &settings, extent, false, &mut Rng::new(1));
-        assert_eq!(report, DensifyReport { cloned: 1, split: 2, pruned: 0 });
+        assert_eq!(report, DensifyReport { cloned: 1, split: 2, pruned: 0, seen: 3 });
         assert_eq!(out.gaussians.len(), 6);
     }
 

@@ -27,9 +27,9 @@ use super::{DensifyEvent, DensifyStrategy, StepView};
 use crate::gaussian_state::GaussianState;
 use crate::kernels::TRAINING_KERNELS;
 use crate::layout::McmcParams;
-use crate::mcmc_relocate::GpuMcmcRelocate;
+use crate::mcmc_relocate::{GpuMcmcRelocate, PendingMcmcRelocate};
 use crate::settings::scale_len;
-use anyhow::Result;
+use anyhow::{Context, Result};
 use trgs_core::reference::AdamRate;
 use trgs_core::rng::Rng;
 use trgs_core::scene::Attribute;
@@ -66,8 +66,8 @@ pub struct McmcSettings {
 impl McmcSettings {
     /// The paper's settings with the count capped at `cap`. The relocation interval scales with
     /// the run like every other length (at least 5 steps, which bounds the cost of the
-    /// relocations, each a wait for its counters and a rebuild, in very short runs): growing 5% per relocation, a run then reaches its cap at
-    /// the same fraction of its length as the paper's run does. A fixed floor of 20 steps made a
+    /// relocations, each a rebuild of the set, in very short runs): growing 5% per relocation,
+    /// a run then reaches its cap at the same fraction of its length as the paper's run does. A fixed floor of 20 steps made a
     /// 2000-step run reach its cap at 64% of the run, where classic densification has its count
     /// at 50%, and MCMC trained with about half as many Gaussians until then.
     pub fn scaled(iterations: u32, cap: usize) -> Self {
@@ -97,6 +97,15 @@ pub struct McmcReport {
     pub added: usize,
 }
 
+impl McmcReport {
+    /// How many times the keys of a frame may grow after this step on a set of `n`: every
+    /// relocated or added Gaussian copies a live one, drawn by opacity, so as many more as
+    /// those per Gaussian of the set (most of which MCMC keeps live).
+    pub fn key_growth(&self, n: usize) -> f64 {
+        1.0 + (self.relocated + self.added) as f64 / n.max(1) as f64
+    }
+}
+
 /// MCMC densification as a [`DensifyStrategy`].
 #[derive(Debug)]
 pub struct McmcDensification {
@@ -106,6 +115,9 @@ pub struct McmcDensification {
     relocation: GpuMcmcRelocate,
     /// Decide on the GPU where the set fits (see [`McmcDensification::decide_on_cpu`]).
     on_gpu: bool,
+    /// A relocation decided on the GPU whose counters are on their way back
+    /// ([`DensifyStrategy::settle`]).
+    pending: Option<PendingMcmcRelocate>,
 }
 
 impl McmcDensification {
@@ -116,6 +128,7 @@ impl McmcDensification {
             kernels: McmcKernels::new(ctx),
             relocation: GpuMcmcRelocate::new(ctx),
             on_gpu: true,
+            pending: None,
         }
     }
 
@@ -137,18 +150,41 @@ impl McmcDensification {
         gaussians: &mut GaussianState,
         rng: &mut Rng,
     ) -> Result<McmcReport> {
+        if let Some(report) = self.relocate_or_plan(gaussians, rng)? {
+            return Ok(report);
+        }
+        self.settle_relocation(gaussians)?.context("a relocation was planned")
+    }
+
+    /// [`McmcDensification::relocate_now`], but a relocation decided on the GPU is left pending
+    /// (None), for [`McmcDensification::settle_relocation`] to apply once its counters are back.
+    fn relocate_or_plan(
+        &mut self,
+        gaussians: &mut GaussianState,
+        rng: &mut Rng,
+    ) -> Result<Option<McmcReport>> {
+        anyhow::ensure!(self.pending.is_none(), "a relocation is already pending");
         let (n, growth) = (gaussians.len(), growth_rows(&self.settings, gaussians.len()));
         if !(self.on_gpu && GpuMcmcRelocate::fits(&self.ctx, n, growth)) {
             let (plan, report) = plan_relocation(&gaussians.geometry()?, &self.settings, rng);
             gaussians.apply_plan(&plan)?;
-            return Ok(report);
+            return Ok(Some(report));
         }
         let limits = RelocationLimits::new(self.settings.min_opacity);
         let seeds = relocation_seeds(rng);
         let scene = gaussians.scene();
-        let plan = self.relocation.plan(&self.ctx, scene, &limits, growth as u32, seeds)?;
+        self.pending =
+            Some(self.relocation.record(&self.ctx, scene, &limits, growth as u32, seeds)?);
+        Ok(None)
+    }
+
+    /// Apply the pending relocation, if any.
+    fn settle_relocation(&mut self, gaussians: &mut GaussianState) -> Result<Option<McmcReport>> {
+        let Some(pending) = self.pending.take() else { return Ok(None) };
+        let plan = pending.settle(&self.ctx)?;
+        anyhow::ensure!(plan.count() == gaussians.len(), "a relocation of another set");
         gaussians.apply_mcmc_relocate(&plan)?;
-        Ok(plan.report)
+        Ok(Some(plan.report))
     }
 }
 
@@ -184,7 +220,22 @@ impl DensifyStrategy for McmcDensification {
         if !self.settings.relocates_at(step) {
             return Ok(Vec::new());
         }
-        Ok(vec![DensifyEvent::Relocated(self.relocate_now(gaussians, rng)?)])
+        // Decided on the GPU, the relocation is applied by `settle` (its counters a step late).
+        let done = self.relocate_or_plan(gaussians, rng)?;
+        Ok(done.map(DensifyEvent::Relocated).into_iter().collect())
+    }
+
+    fn settle(&mut self, gaussians: &mut GaussianState) -> Result<Vec<DensifyEvent>> {
+        let done = self.settle_relocation(gaussians)?;
+        Ok(done.map(DensifyEvent::Relocated).into_iter().collect())
+    }
+
+    fn pending(&self) -> bool {
+        self.pending.is_some()
+    }
+
+    fn restart(&mut self, _n: usize) {
+        self.pending = None;
     }
 }
 
