@@ -102,19 +102,8 @@ impl GpuDensifyPlan {
         (n as u64) * 24 <= ctx.binding_limit() && n < (1 << 30)
     }
 
-    /// Decide on the GPU: records the passes, waits for them and reads the five counters.
-    pub fn plan(
-        &self,
-        ctx: &GpuContext,
-        scene: &GpuScene,
-        stats: &wgpu::Buffer,
-        params: &DensifyPlanParams,
-    ) -> Result<DensifyPlanOutput, gpu::GpuError> {
-        self.record(ctx, scene, stats, params)?.settle(ctx)
-    }
-
-    /// Record and submit the passes, with the five counters' readback behind them, without
-    /// waiting for either.
+    /// Decide on the GPU: record and submit the passes, with the five counters' readback
+    /// behind them, without waiting for either ([`PendingDensifyPlan::settle`] reads them).
     pub fn record(
         &self,
         ctx: &GpuContext,

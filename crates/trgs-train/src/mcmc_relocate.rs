@@ -118,20 +118,8 @@ impl GpuMcmcRelocate {
         ((n + growth) as u64) * 12 <= ctx.binding_limit() && n + growth < (1 << 30)
     }
 
-    /// Decide on the GPU: records the passes, waits for them and reads three counters.
-    pub fn plan(
-        &self,
-        ctx: &GpuContext,
-        scene: &GpuScene,
-        limits: &RelocationLimits,
-        growth: u32,
-        seeds: [u32; 2],
-    ) -> Result<McmcRelocateOutput, gpu::GpuError> {
-        self.record(ctx, scene, limits, growth, seeds)?.settle(ctx)
-    }
-
-    /// Record and submit the passes, with the three counters' readback behind them, without
-    /// waiting for either.
+    /// Decide on the GPU: record and submit the passes, with the three counters' readback
+    /// behind them, without waiting for either ([`PendingMcmcRelocate::settle`] reads them).
     pub fn record(
         &self,
         ctx: &GpuContext,

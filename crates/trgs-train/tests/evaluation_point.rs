@@ -25,7 +25,7 @@ fn hook_runs_after_the_update_and_before_the_opacity_reset() {
     // An opacity reset at step 3 and no densification before the end.
     let mut densify = ClassicSettings::scaled(100);
     (densify.from, densify.until, densify.every, densify.opacity_reset_every) = (50, 60, 50, 3);
-    trainer.set_densification(&Densification::Classic(densify));
+    trainer.set_densification(&Densification::Classic(densify)).expect("densification");
     let cap = (0.01f32 / 0.99).ln();
     let max_logit = |t: &Trainer| {
         t.gaussians().expect("readback").opacity_logits.iter().copied().fold(f32::MIN, f32::max)

@@ -144,7 +144,7 @@ fn planes_added_under_mcmc_stay_within_the_cap() {
     added.opacity_logits.iter_mut().for_each(|o| *o = -20.0);
     let mut trainer =
         Trainer::new(&ctx, &old, &[], TrainSettings::scaled(100), 1.0).expect("trainer");
-    trainer.set_densification(&Densification::Mcmc(McmcSettings::scaled(100, 320)));
+    trainer.set_densification(&Densification::Mcmc(McmcSettings::scaled(100, 320))).expect("mcmc");
     let dropped = trainer.add_planes(&fixture.planes, &[None], &added).expect("add planes");
     assert_eq!(dropped, 20);
     let after = trainer.gaussians().expect("readback");

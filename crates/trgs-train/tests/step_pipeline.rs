@@ -204,8 +204,8 @@ fn lands_a_step_later(densification: &Densification) {
     let view = view_of(&pipelined, &camera);
     let settings = pipelined.settings.clone();
     let mut whole = Trainer::new(&ctx, &gaussians, &planes, settings, 1.0).expect("trainer");
-    pipelined.set_densification(densification);
-    whole.set_densification(densification);
+    pipelined.set_densification(densification).expect("densification");
+    whole.set_densification(densification).expect("densification");
     let n = pipelined.scene().len() as usize;
     // Steps taken whole apply step 3's change at once.
     let events: Vec<_> = (0..3).map(|_| whole.train_step(&view).expect("step").densified).collect();

@@ -42,7 +42,7 @@ fn small_scene_trains_and_finds_its_plane() {
     densify.every = 20;
     densify.from = 20;
     densify.until = 100;
-    trainer.set_densification(&Densification::Classic(densify));
+    trainer.set_densification(&Densification::Classic(densify)).expect("densification");
     let before = test_psnr(&trainer, &data);
     let mut rng = trgs_core::rng::Rng::new(1);
     let mut limits = Vec::new();

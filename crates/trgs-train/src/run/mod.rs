@@ -262,7 +262,7 @@ impl TrainingRun {
                 let shape = densification.initial_shape();
                 let gaussians = gaussians_from_points(&seeds, config.sh_degree, shape);
                 let mut trainer = Trainer::new(&ctx, &gaussians, &[], settings, data.extent)?;
-                trainer.set_densification(&densification);
+                trainer.set_densification(&densification)?;
                 // A previous run's checkpoint in this folder would be what `--resume` continues
                 // if this run stopped before its own first one.
                 let old = out.join(CHECKPOINT_FILE);

@@ -192,15 +192,21 @@ impl Trainer {
         })
     }
 
-    /// Densify with `densification` from now on (replacing the strategy in use).
-    pub fn set_densification(&mut self, densification: &Densification) {
+    /// Densify with `densification` from now on (replacing the strategy in use, once a change
+    /// it left pending is applied).
+    pub fn set_densification(&mut self, densification: &Densification) -> Result<()> {
+        self.settle()?;
         self.densification = densification.strategy(&self.ctx, self.gaussians.len(), None);
+        Ok(())
     }
 
     /// Densify with `strategy` from now on: a strategy of the app's own (the built-in ones come
-    /// from [`Trainer::set_densification`]).
-    pub fn set_strategy(&mut self, strategy: Box<dyn DensifyStrategy>) {
+    /// from [`Trainer::set_densification`]), once a change the one in use left pending is
+    /// applied.
+    pub fn set_strategy(&mut self, strategy: Box<dyn DensifyStrategy>) -> Result<()> {
+        self.settle()?;
         self.densification = strategy;
+        Ok(())
     }
 
     /// The strategy in use.

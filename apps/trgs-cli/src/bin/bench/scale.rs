@@ -54,7 +54,7 @@ pub fn bench_scale(
         opacity_reset_every: u32::MAX,
         max_gaussians: 2 * gaussians,
         ..ClassicSettings::scaled(30_000)
-    }));
+    }))?;
     trainer.train_step(&view)?;
     let mut totals = Vec::new();
     for _ in 0..steps {
