@@ -6,7 +6,10 @@
 // read cross to the CPU. One thread per output row; words are copied as bits (f32 and u32 alike).
 // A buffer larger than one binding is gathered in (output range, source range) pairs: each
 // dispatch copies the rows whose source lies in its bound source range, and writes the zero rows
-// only in the dispatch of the first source range.
+// only in the dispatch of the first source range. With `given_rows`, a second pass over a
+// gathered buffer writes only the rows marked GATHER_ZERO (those the plan makes anew), each
+// from the same row of the plan's given values: the kept rows stay copies of their sources as
+// they are when the plan is applied, which may be a step after it was decided.
 #include "shared/common.wgsl"
 
 @group(0) @binding(0) var<storage, read> params: GatherParams;
@@ -21,8 +24,12 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         return;
     }
     let source = sources[row];
+    let anew = (source & GATHER_ZERO) != 0u;
     let out = row * params.width;
-    if params.honour_zero != 0u && (source & GATHER_ZERO) != 0u {
+    if params.given_rows != 0u && !anew {
+        return;
+    }
+    if params.honour_zero != 0u && anew {
         if params.first_source == 0u {
             for (var k = 0u; k < params.width; k++) {
                 dst[out + k] = 0u;
@@ -30,7 +37,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         }
         return;
     }
-    let s = source & ~GATHER_ZERO;
+    let s = select(source & ~GATHER_ZERO, params.first_row + row, params.given_rows != 0u);
     if s < params.first_source || s - params.first_source >= params.source_rows {
         return;
     }

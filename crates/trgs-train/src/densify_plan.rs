@@ -17,6 +17,9 @@ use trgs_render::toolkit::PrefixSum;
 use trgs_render::toolkit::gpu::{self, BufferPool, Kernel, Recorder, grid_1d};
 use trgs_render::{GpuContext, GpuScene};
 
+/// The words read back: cloned, split, pruned, rows, seen.
+const COUNTERS: usize = 5;
+
 /// The stage's kernels, built once per run.
 #[derive(Debug)]
 pub struct GpuDensifyPlan {
@@ -45,7 +48,7 @@ impl PendingDensifyPlan {
     /// The plan, once its five counters have come back (waiting for the plan's own submission
     /// only if they have not).
     pub fn settle(self, ctx: &GpuContext) -> Result<DensifyPlanOutput, gpu::GpuError> {
-        let c: Vec<u32> = self.read.read(ctx, 20)?;
+        let c: Vec<u32> = self.read.read(ctx, 4 * COUNTERS)?;
         let (cloned, split, pruned, rows, seen) = (c[0], c[1], c[2], c[3], c[4]);
         let report = DensifyReport {
             cloned: cloned as usize,
@@ -121,7 +124,7 @@ impl GpuDensifyPlan {
         let decisions = words("trgs.densify_plan.decisions", n);
         // At most two rows per Gaussian: a survivor and its clone, or two children.
         let sources = words("trgs.densify_plan.sources", 2 * n);
-        let counts = words("trgs.densify_plan.counts", 5);
+        let counts = words("trgs.densify_plan.counts", COUNTERS as u32);
         let p = scene.parameters();
         let (opacity, log_scales) = (p[Attribute::OpacityLogits], p[Attribute::LogScales]);
         let groups = grid_1d(n.div_ceil(256));
@@ -161,7 +164,7 @@ impl GpuDensifyPlan {
             let bind = self.sources.bind(ctx, &entries);
             rec.dispatch("densify_plan", &self.sources, &bind, groups);
         }
-        let read = rec.submit_read(ctx, &counts, 20);
+        let read = rec.submit_read(ctx, &counts, 4 * COUNTERS);
         let read = scopes.close_after(read)?;
         Ok(PendingDensifyPlan { read, sources, params: block, count: n, decisions, first_rows })
     }

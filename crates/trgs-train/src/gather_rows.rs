@@ -19,6 +19,18 @@ pub struct GpuRowGather {
     binding_words: u64,
 }
 
+/// What a gather pass writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum GatherMode {
+    /// Every row, a copy of its source (parameters).
+    Copy,
+    /// Every row; those made anew (GATHER_ZERO) are zero (Adam moments that restart).
+    ZeroAnew,
+    /// Only the rows made anew, each from the same row of the source buffer: a plan's given
+    /// values, over a buffer gathered before.
+    GivenAnew,
+}
+
 /// A plan's output rows as GPU source indices (GATHER_ZERO marks rows whose moments restart).
 #[derive(Debug)]
 pub struct GatherSources {
@@ -80,10 +92,9 @@ impl GpuRowGather {
     }
 
     /// Record the gather of `src` (`src_rows` rows of `width` words) into a new buffer of
-    /// `sources.len()` rows. With `honour_zero` the rows marked GATHER_ZERO are zero (moments);
-    /// without, every row is copied (parameters).
+    /// `sources.len()` rows, by `mode` (zero rows only with [`GatherMode::ZeroAnew`]).
     #[allow(clippy::too_many_arguments)]
-    pub fn record(
+    fn record(
         &self,
         ctx: &GpuContext,
         rec: &mut Recorder,
@@ -92,10 +103,27 @@ impl GpuRowGather {
         src_rows: u32,
         width: u32,
         sources: &GatherSources,
-        honour_zero: bool,
+        mode: GatherMode,
     ) -> wgpu::Buffer {
+        let dst = gpu::storage(ctx, label, u64::from(sources.len) * u64::from(width) * 4);
+        self.record_into(ctx, rec, &dst, src, src_rows, width, sources, mode);
+        dst
+    }
+
+    /// Record a gather pass of `src` into `dst` (`sources.len()` rows of `width` words).
+    #[allow(clippy::too_many_arguments)]
+    fn record_into(
+        &self,
+        ctx: &GpuContext,
+        rec: &mut Recorder,
+        dst: &wgpu::Buffer,
+        src: &wgpu::Buffer,
+        src_rows: u32,
+        width: u32,
+        sources: &GatherSources,
+        mode: GatherMode,
+    ) {
         let (n, w) = (sources.len, u64::from(width));
-        let dst = gpu::storage(ctx, label, u64::from(n) * w * 4);
         let per_range = self.rows_per_range(width);
         let starts = |rows: u32| (0..rows.div_ceil(per_range)).map(move |r| r * per_range);
         for first in starts(n) {
@@ -107,7 +135,9 @@ impl GpuRowGather {
                     width,
                     first_source,
                     source_rows,
-                    honour_zero: u32::from(honour_zero),
+                    honour_zero: u32::from(mode == GatherMode::ZeroAnew),
+                    given_rows: u32::from(mode == GatherMode::GivenAnew),
+                    first_row: first,
                     ..Default::default()
                 };
                 let block = gpu::params(ctx, "trgs.gather_rows.params", &params);
@@ -120,14 +150,13 @@ impl GpuRowGather {
                         block.as_entire_binding(),
                         range(&sources.buffer, f * 4, u64::from(count) * 4),
                         range(src, s * w * 4, src_words * 4),
-                        range(&dst, f * w * 4, u64::from(count) * w * 4),
+                        range(dst, f * w * 4, u64::from(count) * w * 4),
                     ],
                 );
                 let groups = count.div_ceil(256);
                 rec.dispatch("gather_rows", &self.kernel, &bind, grid_1d(groups));
             }
         }
-        dst
     }
 
     /// The scene and moments that `plan` makes of `scene` and `moments`, gathered on the GPU;
@@ -150,9 +179,11 @@ impl GpuRowGather {
         self.apply_sources(ctx, scene, moments, &sources, &given, |_, _| {})
     }
 
-    /// The scene and moments gathered by `sources`, with the attributes in `given` taken as
-    /// given (buffers of the new set's size); `then` records what edits the new scene before
-    /// the one submission (the split children's means and scales of `densify_plan`).
+    /// The scene and moments gathered by `sources`, with the attributes in `given` (buffers of
+    /// the new set's size) giving the rows made anew (GATHER_ZERO) their values: a kept row is
+    /// its source as it is now, which may have trained a step since the plan was decided (see
+    /// [`RowPlan::apply`]); `then` records what edits the new scene before the one submission
+    /// (the split children's means and scales of `densify_plan`).
     pub fn apply_sources(
         &self,
         ctx: &GpuContext,
@@ -166,17 +197,21 @@ impl GpuRowGather {
         let n_src = scene.len();
         let mut rec = Recorder::new(ctx, "trgs.gather_rows", false);
         let rebuilt = scene.rebuilt(sources.len(), |buffer, width, label| {
-            match given.iter().find(|(a, _)| label == format!("trgs.scene.{}", a.name())) {
-                Some((_, buffer)) => buffer.clone(),
-                None => self.record(ctx, &mut rec, label, buffer, n_src, width, sources, false),
+            let copy = GatherMode::Copy;
+            let dst = self.record(ctx, &mut rec, label, buffer, n_src, width, sources, copy);
+            let given = given.iter().find(|(a, _)| label == format!("trgs.scene.{}", a.name()));
+            if let Some((_, values)) = given {
+                let (rows, mode) = (sources.len, GatherMode::GivenAnew);
+                self.record_into(ctx, &mut rec, &dst, values, rows, width, sources, mode);
             }
+            dst
         });
         let widths = scene.attribute_widths();
         let moments = PerAttribute::from_fn(|a| {
             let (mo, width) = (&moments[a], widths[a]);
             let mut gather = |b: &wgpu::Buffer, which: &str| {
                 let label = format!("trgs.adam.{}.{which}", a.name());
-                self.record(ctx, &mut rec, &label, b, n_src, width, sources, true)
+                self.record(ctx, &mut rec, &label, b, n_src, width, sources, GatherMode::ZeroAnew)
             };
             let (m, v) = (gather(&mo.m, "m"), gather(&mo.v, "v"));
             AdamMoments { m, v, len: u64::from(sources.len()) * u64::from(width) }

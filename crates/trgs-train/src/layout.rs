@@ -97,9 +97,12 @@ gpu_struct! {
         pub source_rows: u32,
         /// 1: a source with the GATHER_ZERO bit makes a zero row (Adam moments that restart).
         pub honour_zero: u32,
+        /// 1: only the rows whose source has the GATHER_ZERO bit are written, each from the same
+        /// row of the source buffer (a plan's given values for the rows it makes anew).
+        pub given_rows: u32,
+        /// The index of the first output row in the whole set (with `given_rows`).
+        pub first_row: u32,
         pub pad0: u32,
-        pub pad1: u32,
-        pub pad2: u32,
     }
 }
 

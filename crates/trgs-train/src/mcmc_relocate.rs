@@ -17,6 +17,9 @@ use trgs_render::toolkit::PrefixSum;
 use trgs_render::toolkit::gpu::{self, BufferPool, Kernel, Recorder, grid_1d};
 use trgs_render::{GpuContext, GpuScene};
 
+/// The words read back: the dead count and the two rounds' weight totals.
+const COUNTERS: usize = 3;
+
 /// The stage's kernels and its Eq. 9 table, built once per run.
 #[derive(Debug)]
 pub struct GpuMcmcRelocate {
@@ -46,7 +49,11 @@ impl PendingMcmcRelocate {
     /// The relocation, once its three counters have come back (waiting for its own submission
     /// only if they have not).
     pub fn settle(self, ctx: &GpuContext) -> Result<McmcRelocateOutput, gpu::GpuError> {
-        let c: Vec<u32> = self.read.read(ctx, 12)?;
+        gpu::scoped(ctx, "relocating", || self.settle_scoped(ctx))
+    }
+
+    fn settle_scoped(self, ctx: &GpuContext) -> Result<McmcRelocateOutput, gpu::GpuError> {
+        let c: Vec<u32> = self.read.read(ctx, 4 * COUNTERS)?;
         let (dead_count, first_total, second_total) = (c[0], c[1], c[2]);
         let report = McmcReport {
             relocated: if first_total > 0 { dead_count as usize } else { 0 },
@@ -154,7 +161,7 @@ impl GpuMcmcRelocate {
         let log_scales = words("trgs.mcmc_relocate.log_scales", 3 * rows);
         let sources = words("trgs.mcmc_relocate.sources", rows);
         let growth_count = gpu::storage_init(ctx, "trgs.mcmc_relocate.growth", &[growth]);
-        let counts = words("trgs.mcmc_relocate.counts", 3);
+        let counts = words("trgs.mcmc_relocate.counts", COUNTERS as u32);
         let p = scene.parameters();
         let (old_opacity, old_log_scales) = (p[Attribute::OpacityLogits], p[Attribute::LogScales]);
         let populations = scene.populations();
@@ -240,7 +247,7 @@ impl GpuMcmcRelocate {
                 rec.dispatch("mcmc_relocate", &self.append, &g, per_draw);
             }
         }
-        let read = rec.submit_read(ctx, &counts, 12);
+        let read = rec.submit_read(ctx, &counts, 4 * COUNTERS);
         let read = scopes.close_after(read)?;
         Ok(PendingMcmcRelocate {
             read,

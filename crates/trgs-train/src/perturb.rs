@@ -106,6 +106,11 @@ pub fn perturb_planes(planes: &[ReflectionPlane]) -> Vec<PerturbPlane> {
         .collect()
 }
 
+/// How many Gaussians a perturbation changed, from the readback [`GpuPerturb::record`] returns.
+pub fn read_count(ctx: &GpuContext, read: gpu::PendingRead) -> Result<usize, gpu::GpuError> {
+    Ok(read.read::<u32>(ctx, 4)?[0] as usize)
+}
+
 /// Stage `perturb` on the GPU: the selection of [`seen_through_planes`] and the noise of
 /// [`perturb_opacities`] in place, without reading the Gaussians back.
 #[derive(Debug)]
@@ -130,7 +135,7 @@ impl GpuPerturb {
         seed: u32,
     ) -> Result<usize, gpu::GpuError> {
         match self.record(ctx, scene, camera_centres, amplitude, seed)? {
-            Some(read) => Ok(read.read::<u32>(ctx, 4)?[0] as usize),
+            Some(read) => read_count(ctx, read),
             None => Ok(0),
         }
     }

@@ -92,3 +92,41 @@ fn nothing_to_draw_from() {
     let r = check(&ctx, &case(0, 8), &settings(1000));
     assert_eq!(r, McmcReport::default());
 }
+
+#[test]
+fn a_relocation_applied_a_step_late_keeps_the_step_on_the_rows_it_keeps() {
+    use trgs_train::densify::DensifyStrategy;
+    use trgs_train::densify::classic::opacity_reset_cap;
+    let ctx = ctx();
+    let state = case(3000, 12);
+    let settings = settings(4000);
+    let step = (1..).find(|&t| settings.relocates_at(t)).expect("a relocation step");
+    let mut gpu = GaussianState::from_state(&ctx, &state, &[]).expect("upload");
+    let mut mcmc = McmcDensification::new(&ctx, settings.clone());
+    // Decided now, applied later (as a pipelined loop does after the next step).
+    let events = mcmc.maintain(step, &mut gpu, &mut Rng::new(41), 1.0).expect("decide");
+    assert!(events.is_empty() && mcmc.pending());
+    // Meanwhile the set changes in place: every opacity capped (standing for a step's update).
+    gpu.opacity_reset(opacity_reset_cap()).expect("reset");
+    let meanwhile = gpu.read().expect("readback");
+    let events = mcmc.settle(&mut gpu).expect("apply");
+    assert_eq!(events.len(), 1, "{events:?}");
+    // The twin: decided from the set as it was, applied to the set as it is.
+    let (plan, _) = plan_relocation(&Geometry::of(&state.gaussians), &settings, &mut Rng::new(41));
+    let want = plan.apply(&meanwhile);
+    let got = gpu.read().expect("readback");
+    assert!(got.gaussians == want.gaussians, "the Gaussians differ");
+    for a in Attribute::ALL {
+        assert!(got.m[a] == want.m[a] && got.v[a] == want.v[a], "the moments of {a:?}");
+    }
+    // Kept rows kept the cap, which the plan's own values (from before it) do not have.
+    let given = plan.opacity_logits.as_ref().expect("relocation gives opacities");
+    let kept_changed = plan
+        .sources
+        .iter()
+        .zip(given)
+        .zip(&got.gaussians.opacity_logits)
+        .filter(|&((&(_, keep), &planned), &now)| keep && planned != now)
+        .count();
+    assert!(kept_changed > 100, "only {kept_changed} kept rows changed meanwhile");
+}

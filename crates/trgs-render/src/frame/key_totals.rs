@@ -12,7 +12,8 @@ pub enum KeySizing {
     /// waiting for the GPU there.
     #[default]
     Exact,
-    /// From the largest total this frame has held, with a quarter of headroom, without waiting:
+    /// From the largest total this frame has held (times the growth expected of a changed set,
+    /// [`Frame::expect_set_scaled`]), with a quarter of headroom, without waiting:
     /// the totals are read back after the frame ([`Frame::settle_keys`]), which then says
     /// whether the list held every key. A frame that did not is wrong: render it again (the
     /// next render is sized from its totals), or, not to wait for the totals, gate what learns

@@ -105,7 +105,7 @@ pub trait DensifyStrategy: std::fmt::Debug + Send + Sync {
     /// the set's size may be left pending, decided and submitted with its counters on their way
     /// back, for [`settle`](Self::settle) to apply: the trainer settles it at the next step's
     /// maintenance (the GPU runs that step meanwhile), or at once where it must (a step taken
-    /// whole, an edit of the set, a checkpoint).
+    /// whole, an edit of the set; a checkpoint refuses a pending change).
     fn maintain(
         &mut self,
         step: u32,

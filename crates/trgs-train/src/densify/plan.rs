@@ -73,9 +73,10 @@ impl Geometry {
 
 /// A rebuild of the Gaussian set: output row j is a copy of input row `sources[j].0`, with its
 /// Adam moments when `sources[j].1` and zero moments otherwise; the attributes given here are
-/// replaced whole (e.g. the split children's means and scales). The twins of the deciding stages
-/// make one from a [`Geometry`]; it runs on the GPU (`gather_rows`), or on the CPU with
-/// [`RowPlan::apply`], its twin.
+/// the values of the rows with zero moments, the rows the plan makes anew (e.g. the split
+/// children's means and scales; a kept row's given value is its source's). The twins of the
+/// deciding stages make one from a [`Geometry`]; it runs on the GPU (`gather_rows`), or on the
+/// CPU with [`RowPlan::apply`], its twin.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct RowPlan {
     pub sources: Vec<(usize, bool)>,
@@ -85,23 +86,28 @@ pub struct RowPlan {
 }
 
 impl RowPlan {
-    /// The state this plan makes of `state`, on the CPU.
+    /// The state this plan makes of `state`, on the CPU. The attributes the plan gives are the
+    /// values of the rows it makes anew (those whose moments restart); a kept row is its source
+    /// as it is in `state`, so that a plan applied a step after it was decided keeps that
+    /// step's update of the rows it does not change.
     pub fn apply(&self, state: &TrainState) -> TrainState {
+        fn anew<T: Copy>(rows: &mut [T], given: Option<&Vec<T>>, sources: &[(usize, bool)]) {
+            let Some(given) = given else { return };
+            for ((row, &value), &(_, keep)) in rows.iter_mut().zip(given).zip(sources) {
+                if !keep {
+                    *row = value;
+                }
+            }
+        }
         let mut out = gather(state, &self.sources);
         let g = &mut out.gaussians;
-        if let Some(v) = &self.means {
-            g.means.clone_from(v);
-        }
-        if let Some(v) = &self.log_scales {
-            g.log_scales.clone_from(v);
-        }
-        if let Some(v) = &self.opacity_logits {
-            g.opacity_logits.clone_from(v);
-        }
+        anew(&mut g.means, self.means.as_ref(), &self.sources);
+        anew(&mut g.log_scales, self.log_scales.as_ref(), &self.sources);
+        anew(&mut g.opacity_logits, self.opacity_logits.as_ref(), &self.sources);
         out
     }
 
-    /// The attributes given whole, as GPU words.
+    /// The attributes the plan gives (whole, read for the rows made anew), as GPU words.
     pub fn given_words(&self) -> Vec<(Attribute, Vec<u32>)> {
         let words = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<u32>>();
         let mut out = Vec::new();

@@ -32,11 +32,16 @@ impl TrainingRun {
         };
         let t = &self.trainer;
         if t.step == t.settings.stage1 && !self.data.materials.is_empty() && t.planes().is_empty() {
+            // The planes start from the set with any densification still pending applied,
+            // reported with the step in flight (whose maintenance decided it).
+            let settled = self.trainer.settle()?;
+            if let Some(f) = self.in_flight.as_mut() {
+                f.maintained.0.extend(settled.0);
+                f.maintained.1 += settled.1;
+            }
             self.finish_in_flight()?;
             // Part of training: it counts in the time that PSNR is reported against.
             let ti = Instant::now();
-            // The planes start from the set as it is, with any densification still pending.
-            self.trainer.settle()?;
             self.init_planes()?;
             self.state.train_seconds += ti.elapsed().as_secs_f64();
         }

@@ -101,7 +101,7 @@ pub struct Trainer {
     /// The opacity perturbation's kernel (stage `perturb`).
     perturb: crate::perturb::GpuPerturb,
     /// The count of a perturbation on its way back (reported when the maintenance settles).
-    perturbed_later: Option<trgs_render::toolkit::gpu::PendingRead>,
+    pending_perturbed: Option<trgs_render::toolkit::gpu::PendingRead>,
 }
 
 impl Trainer {
@@ -147,7 +147,7 @@ impl Trainer {
             exact_keys_next: false,
             camera_centres: Vec::new(),
             perturb: crate::perturb::GpuPerturb::new(ctx),
-            perturbed_later: None,
+            pending_perturbed: None,
         }
     }
 
@@ -258,17 +258,19 @@ impl Trainer {
             .with_context(|| format!("uploading view {}", view.camera.name))
     }
 
-    /// The parameters and Adam moments, read back.
+    /// The parameters and Adam moments, read back (without a change of the set still pending,
+    /// [`Trainer::settle`]).
     pub fn read_state(&self) -> Result<TrainState> {
         self.gaussians.read()
     }
 
     /// Replace the parameters and moments (after an edit such as densification); the strategy's
-    /// per-Gaussian statistics start over.
+    /// per-Gaussian statistics start over, and a change of the set its maintenance left pending
+    /// is dropped (it was decided for the set replaced: settle first to keep it).
     pub fn set_state(&mut self, state: &TrainState) -> Result<()> {
         let ctx = self.ctx.clone();
         trgs_render::toolkit::gpu::scoped(&ctx, "uploading the training state", || {
-            self.settle_scoped()?;
+            // A change still pending was decided for the set replaced here: `restart` drops it.
             self.gaussians.replace(state)?;
             self.densification.restart(state.gaussians.len());
             self.exact_keys_next = true;
@@ -283,12 +285,14 @@ impl Trainer {
 
     /// Edit the set with its shared operations, the trainer's random state and the scene extent
     /// (what a strategy's maintenance gets), outside the schedule: tests and benchmarks run a
-    /// strategy's steps this way. The strategy in use starts its statistics over.
+    /// strategy's steps this way. A change the maintenance left pending is applied first; the
+    /// strategy in use starts its statistics over.
     pub fn edit_gaussians<R>(
         &mut self,
         edit: impl FnOnce(&mut GaussianState, &mut Rng, f64) -> Result<R>,
     ) -> Result<R> {
-        self.settle_scoped()?;
+        // The edit sees the set with any change still pending applied (its report is dropped).
+        self.settle()?;
         let out = edit(&mut self.gaussians, &mut self.rng, self.extent)?;
         self.densification.restart(self.gaussians.len());
         self.exact_keys_next = true;

@@ -24,8 +24,9 @@ impl Trainer {
         limits: &[Option<OffsetLimit>],
         glass: &Gaussians<f32>,
     ) -> Result<usize> {
-        // A change of the set still pending goes in first (it was decided for the set as it is).
-        self.settle_scoped()?;
+        // A change of the set still pending goes in first (it was decided for the set as it is;
+        // a run reports it before calling this).
+        self.settle()?;
         let mut state = self.read_state()?;
         let n_old = state.gaussians.len();
         let g = &mut state.gaussians;

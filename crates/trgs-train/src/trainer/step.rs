@@ -93,8 +93,9 @@ impl Trainer {
     /// Record and submit step `self.step + 1` on `view` (render, losses, guard, backward, Adam on
     /// the Gaussians), advancing `step`, without waiting for the GPU (unless profiling or timing
     /// phases, on a CPU adapter (`Capabilities::records_while_busy`), or when the frame is sized
-    /// exactly: the first step, and the step after one that outgrew its key list or changed the
-    /// set). Call [`Trainer::maintain`] before the next step is recorded, and
+    /// exactly: the first step, the step after one that outgrew its key list, and the step after
+    /// an edit of the set from outside the maintenance). Call [`Trainer::maintain`] before the
+    /// next step is recorded, and
     /// [`Trainer::finish_step`] with what this returns before the step after next is (a
     /// pipelined loop finishes it after recording the next one).
     ///
@@ -135,9 +136,10 @@ impl Trainer {
         gpu::scoped(&ctx, "densifying", || self.settle_scoped())
     }
 
-    /// Whether a change of the set decided by [`Trainer::maintain`] waits to be applied.
+    /// Whether nothing [`Trainer::maintain`] decided waits: neither a change of the set nor
+    /// the perturbation's count.
     pub fn is_settled(&self) -> bool {
-        !self.densification.pending() && self.perturbed_later.is_none()
+        !self.densification.pending() && self.pending_perturbed.is_none()
     }
 
     /// Whether each phase of a step waits for the GPU before its lap is taken: to time it, or
@@ -323,6 +325,9 @@ impl Trainer {
         })
     }
 
+    /// The maintenance after step `self.step`; with `defer`, a change of the set decided now is
+    /// left pending, else applied before the perturbation (which then sees the new set, as it
+    /// would have without the deferral).
     fn maintain_scoped(&mut self, defer: bool) -> Result<(Vec<DensifyEvent>, usize)> {
         let (mut events, mut perturbed) = self.settle_scoped()?;
         let (t, n) = (self.step, self.gaussians.len());
@@ -330,24 +335,36 @@ impl Trainer {
             self.densification.maintain(t, &mut self.gaussians, &mut self.rng, self.extent)?;
         self.after_change(&done, n);
         events.extend(done);
-        self.perturbed_later = self.perturb_step()?;
         if !defer {
-            let (done, count) = self.settle_scoped()?;
-            events.extend(done);
-            perturbed += count;
+            events.extend(self.settle_set()?);
+        }
+        self.pending_perturbed = self.perturb_step()?;
+        if !defer {
+            perturbed += self.take_perturbed()?;
         }
         Ok((events, perturbed))
     }
 
+    /// Apply the change of the set and read the perturbation's count left pending.
     pub(super) fn settle_scoped(&mut self) -> Result<(Vec<DensifyEvent>, usize)> {
+        let events = self.settle_set()?;
+        Ok((events, self.take_perturbed()?))
+    }
+
+    /// Apply the change of the set the strategy left pending, if any.
+    fn settle_set(&mut self) -> Result<Vec<DensifyEvent>> {
         let n = self.gaussians.len();
         let events = self.densification.settle(&mut self.gaussians)?;
         self.after_change(&events, n);
-        let perturbed = match self.perturbed_later.take() {
-            Some(read) => read.read::<u32>(&self.ctx, 4)?[0] as usize,
-            None => 0,
-        };
-        Ok((events, perturbed))
+        Ok(events)
+    }
+
+    /// The count of the perturbation left pending (0 when none).
+    fn take_perturbed(&mut self) -> Result<usize> {
+        match self.pending_perturbed.take() {
+            Some(read) => Ok(crate::perturb::read_count(&self.ctx, read)?),
+            None => Ok(0),
+        }
     }
 
     /// After `events` changed a set of `n` Gaussians: the next frame's key list expects their

@@ -192,15 +192,15 @@ impl ClassicDensification {
         extent: f64,
         prune_large: bool,
     ) -> Result<DensifyReport> {
-        if let Some(report) = self.densify_or_plan(gaussians, rng, extent, prune_large)? {
+        if let Some(report) = self.densify_or_defer(gaussians, rng, extent, prune_large)? {
             return Ok(report);
         }
-        self.settle_plan(gaussians)?.context("a densification was planned")
+        self.settle_densify(gaussians)?.context("a densification was planned")
     }
 
     /// [`ClassicDensification::densify_now`], but a plan decided on the GPU is left pending
-    /// (None), for [`ClassicDensification::settle_plan`] to apply once its counters are back.
-    fn densify_or_plan(
+    /// (None), for [`ClassicDensification::settle_densify`] to apply once its counters are back.
+    fn densify_or_defer(
         &mut self,
         gaussians: &mut GaussianState,
         rng: &mut Rng,
@@ -228,7 +228,7 @@ impl ClassicDensification {
 
     /// Apply the pending plan, if any: the new set gathered on the GPU, the statistics started
     /// over (those of the steps since it was decided go with the old set).
-    fn settle_plan(&mut self, gaussians: &mut GaussianState) -> Result<Option<DensifyReport>> {
+    fn settle_densify(&mut self, gaussians: &mut GaussianState) -> Result<Option<DensifyReport>> {
         let Some(pending) = self.pending.take() else { return Ok(None) };
         let plan = pending.settle(&self.ctx)?;
         anyhow::ensure!(plan.count() == gaussians.len(), "a densification plan of another set");
@@ -277,7 +277,7 @@ impl DensifyStrategy for ClassicDensification {
         if step > s.from && step < s.until && step.is_multiple_of(s.every) {
             let prune_large = step > s.opacity_reset_every;
             // Decided on the GPU, the plan is applied by `settle` (its counters a step late).
-            if let Some(report) = self.densify_or_plan(gaussians, rng, extent, prune_large)? {
+            if let Some(report) = self.densify_or_defer(gaussians, rng, extent, prune_large)? {
                 events.push(DensifyEvent::Densified(report));
             }
         }
@@ -291,7 +291,7 @@ impl DensifyStrategy for ClassicDensification {
     }
 
     fn settle(&mut self, gaussians: &mut GaussianState) -> Result<Vec<DensifyEvent>> {
-        Ok(self.settle_plan(gaussians)?.map(DensifyEvent::Densified).into_iter().collect())
+        Ok(self.settle_densify(gaussians)?.map(DensifyEvent::Densified).into_iter().collect())
     }
 
     fn pending(&self) -> bool {

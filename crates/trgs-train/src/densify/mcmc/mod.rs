@@ -36,8 +36,8 @@ use trgs_core::scene::Attribute;
 use trgs_render::toolkit::gpu::{self, Kernel, Recorder, grid_1d, range};
 use trgs_render::{GpuContext, GpuScene, SceneGradBuffers};
 
-/// The shortest relocation interval in steps (each relocation waits for its counters and
-/// rebuilds every buffer: several steps' time, `bench --densify`).
+/// The shortest relocation interval in steps (each relocation rebuilds every buffer: several
+/// steps' time, `bench --densify`).
 pub const MIN_RELOCATION_INTERVAL: u32 = 5;
 
 /// 3DGS-MCMC's opacity learning rate (its `arguments/__init__.py`), twice 3DGS's 0.025: its
@@ -150,15 +150,15 @@ impl McmcDensification {
         gaussians: &mut GaussianState,
         rng: &mut Rng,
     ) -> Result<McmcReport> {
-        if let Some(report) = self.relocate_or_plan(gaussians, rng)? {
+        if let Some(report) = self.relocate_or_defer(gaussians, rng)? {
             return Ok(report);
         }
-        self.settle_relocation(gaussians)?.context("a relocation was planned")
+        self.settle_relocate(gaussians)?.context("a relocation was planned")
     }
 
     /// [`McmcDensification::relocate_now`], but a relocation decided on the GPU is left pending
-    /// (None), for [`McmcDensification::settle_relocation`] to apply once its counters are back.
-    fn relocate_or_plan(
+    /// (None), for [`McmcDensification::settle_relocate`] to apply once its counters are back.
+    fn relocate_or_defer(
         &mut self,
         gaussians: &mut GaussianState,
         rng: &mut Rng,
@@ -179,7 +179,7 @@ impl McmcDensification {
     }
 
     /// Apply the pending relocation, if any.
-    fn settle_relocation(&mut self, gaussians: &mut GaussianState) -> Result<Option<McmcReport>> {
+    fn settle_relocate(&mut self, gaussians: &mut GaussianState) -> Result<Option<McmcReport>> {
         let Some(pending) = self.pending.take() else { return Ok(None) };
         let plan = pending.settle(&self.ctx)?;
         anyhow::ensure!(plan.count() == gaussians.len(), "a relocation of another set");
@@ -221,12 +221,12 @@ impl DensifyStrategy for McmcDensification {
             return Ok(Vec::new());
         }
         // Decided on the GPU, the relocation is applied by `settle` (its counters a step late).
-        let done = self.relocate_or_plan(gaussians, rng)?;
+        let done = self.relocate_or_defer(gaussians, rng)?;
         Ok(done.map(DensifyEvent::Relocated).into_iter().collect())
     }
 
     fn settle(&mut self, gaussians: &mut GaussianState) -> Result<Vec<DensifyEvent>> {
-        let done = self.settle_relocation(gaussians)?;
+        let done = self.settle_relocate(gaussians)?;
         Ok(done.map(DensifyEvent::Relocated).into_iter().collect())
     }
 
