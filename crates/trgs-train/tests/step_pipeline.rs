@@ -31,7 +31,16 @@ fn trainer(
     ctx: &GpuContext,
     planes: usize,
 ) -> (Trainer, Camera, Gaussians<f32>, Vec<ReflectionPlane>) {
-    let scene = random_scene(&SceneSpec { planes, gaussians: 3000, ..SceneSpec::default() });
+    trainer_of(ctx, planes, 3000)
+}
+
+/// A trainer of a random scene of `gaussians` Gaussians and `planes` planes, and its camera.
+fn trainer_of(
+    ctx: &GpuContext,
+    planes: usize,
+    gaussians: usize,
+) -> (Trainer, Camera, Gaussians<f32>, Vec<ReflectionPlane>) {
+    let scene = random_scene(&SceneSpec { planes, gaussians, ..SceneSpec::default() });
     let gaussians = scene.gaussians.cast::<f32>();
     let settings = TrainSettings::scaled(100);
     let t = Trainer::new(ctx, &gaussians, &scene.planes, settings, 1.0).expect("trainer");
@@ -200,7 +209,8 @@ fn added_by(event: &DensifyEvent) -> usize {
 /// whole applied at once, and the steps after train the new set without waiting or skipping.
 fn lands_a_step_later(densification: &Densification) {
     let ctx = ctx();
-    let (mut pipelined, camera, gaussians, planes) = trainer(&ctx, 1);
+    // Few Gaussians, so that most are drawn and densifying them adds many keys.
+    let (mut pipelined, camera, gaussians, planes) = trainer_of(&ctx, 1, 600);
     let view = view_of(&pipelined, &camera);
     let settings = pipelined.settings.clone();
     let mut whole = Trainer::new(&ctx, &gaussians, &planes, settings, 1.0).expect("trainer");
@@ -212,11 +222,11 @@ fn lands_a_step_later(densification: &Densification) {
     let [want] = events[2][..] else { panic!("step 3 did not change the set: {events:?}") };
     assert!(added_by(&want) > 0, "{want:?}");
 
-    pipelined.train_step(&view).expect("step 1");
+    let first = pipelined.train_step(&view).expect("step 1");
     let second = pipelined.record_step(&view).expect("record");
     assert!(pipelined.maintain().expect("maintain").0.is_empty());
     let third = pipelined.record_step(&view).expect("record");
-    pipelined.finish_step(second).expect("finish");
+    let second = pipelined.finish_step(second).expect("finish");
     // Step 3's maintenance decides on the GPU and waits for nothing: the set is unchanged
     // while its counters come back.
     let before = ctx.waits();
@@ -250,6 +260,12 @@ fn lands_a_step_later(densification: &Densification) {
         assert!(!s.skipped && s.loss.is_finite(), "step {} skipped", s.step);
         assert_eq!(s.record_waits, 0, "step {} waited while recorded", s.step);
     }
+    // The case needs the headroom: the new set's frames have more keys than a list sized from
+    // the old set's frames alone (a quarter over the most they had) holds.
+    let most_before = [&first, &second, &third, &fourth].map(|s| s.keys).into_iter().max();
+    let most_after = [&fifth, &sixth].map(|s| s.keys).into_iter().max();
+    let (before, after) = (most_before.unwrap_or(0), most_after.unwrap_or(0));
+    assert!(after > before + before / 4, "keys {before} -> {after}: within the plain headroom");
     // Step 6's maintenance decided again; settling applies it at once.
     let (events, _) = pipelined.settle().expect("settle");
     assert_eq!(events.len(), 1, "{events:?}");
