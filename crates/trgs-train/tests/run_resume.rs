@@ -2,6 +2,7 @@
 //! with [`TrainingRun::resume`]: it goes on from the checkpoint's step with the settings it
 //! started with and the plane that stage 1 initialised, finishes at its planned step count, and
 //! logs every step once; resuming the finished run writes its results again without training.
+//! And a run reports every densification it applies, those it pipelines a step late included.
 use std::path::Path;
 use trgs_core::scratch::ScratchDir;
 use trgs_core::synthetic::{SyntheticConfig, generate, write_dataset};
@@ -94,4 +95,43 @@ fn a_stopped_run_resumes_through_the_library() {
     assert!(!trained, "a finished run takes no more steps");
     assert_eq!(summary.steps, 40);
     assert!(again.is_done());
+}
+
+/// Densification decided after steps the run pipelines lands at the next step's maintenance,
+/// and is reported with the step after which it was applied; one decided just before the
+/// planes start is applied then, and reported with the step that decided it.
+#[test]
+fn a_run_reports_every_densification_it_applies() {
+    use trgs_train::densify::{ClassicSettings, Densification, DensifyEvent};
+    let dir = ScratchDir::new("run-densify");
+    let data = dir.join("data");
+    write_dataset(&generate(&SyntheticConfig::small()), &data).expect("dataset");
+    let config = RunConfig {
+        data: Some(data),
+        out: dir.join("run"),
+        iterations: 40,
+        checkpoint_every: Some(100),
+        eval_every: Some(20),
+        sh_degree: 1,
+        ..RunConfig::default()
+    };
+    let mut run = TrainingRun::new(config).expect("a new run");
+    // Every 4 steps: at step 4, where stage 1 ends and the planes start, then at 8, 12 and 16
+    // (pipelined: applied a step later) and 20 (an evaluation, taken whole: applied at once).
+    let mut s = ClassicSettings::scaled(40);
+    (s.from, s.every, s.until, s.opacity_reset_every) = (0, 4, 1000, 1000);
+    run.trainer_mut().set_densification(&Densification::Classic(s)).expect("densification");
+    let mut reported = Vec::new();
+    loop {
+        let event = run.next_event().expect("the run goes on").expect("a step");
+        let RunEvent::Step(e) = event else { continue };
+        let densified =
+            e.stats.densified.iter().filter(|d| matches!(d, DensifyEvent::Densified(_)));
+        reported.extend(densified.map(|_| e.step));
+        if e.step == 20 {
+            break;
+        }
+    }
+    assert_eq!(reported, [4, 9, 13, 17, 20]);
+    assert!(run.trainer().is_settled());
 }

@@ -371,6 +371,13 @@ impl TrainingRun {
         &self.trainer
     }
 
+    /// The trainer, to adjust between steps (a densification strategy of the app's own,
+    /// [`Trainer::set_strategy`]; its profiling). A checkpoint keeps what the run's
+    /// configuration says, not such changes.
+    pub fn trainer_mut(&mut self) -> &mut Trainer {
+        &mut self.trainer
+    }
+
     /// The dataset at the training resolution.
     pub fn data(&self) -> &TrainingData {
         &self.data
