@@ -1,6 +1,7 @@
-// Stage `mcmc_relocate`, the shares of either round (twin: trgs_train::densify::mcmc::relocate::apply_shares), one thread
-// per Gaussian: a row drawn N - 1 times takes Eq. 9's opacity and scale for N (from the table by
-// its opacity bin, clamped) and restarts its Adam moments; its copies take the same values.
+// Stage `mcmc_relocate`, the shares of either round (twin:
+// trgs_train::densify::mcmc::relocate::apply_shares), one thread per Gaussian: a row drawn
+// N - 1 times takes Eq. 9's opacity and scale for N (from the table by its opacity bin, clamped)
+// and restarts its Adam moments; its copies take the same values.
 #include "shared/common.wgsl"
 #include "shared/relocation.wgsl"
 

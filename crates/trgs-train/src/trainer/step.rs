@@ -121,9 +121,9 @@ impl Trainer {
     /// its counters have come back (the GPU runs the next step meanwhile: that step trains the
     /// set as it was), and the perturbation's count is reported then too. Returns what was
     /// applied (the strategy's events) and how many Gaussians were perturbed, as they come
-    /// back. A change of the set scales the next frame's key list by the set's growth
-    /// ([`trgs_render::Frame::expect_set_scaled`]) rather than sizing it exactly, which would
-    /// wait. [`Trainer::settle`] applies what is pending at once.
+    /// back. After a change of the set, the next frames' key lists expect the keys' growth the
+    /// change reports ([`trgs_render::Frame::expect_set_scaled`]) rather than being sized
+    /// exactly, which would wait. [`Trainer::settle`] applies what is pending at once.
     pub fn maintain(&mut self) -> Result<(Vec<DensifyEvent>, usize)> {
         let ctx = self.ctx.clone();
         gpu::scoped(&ctx, "densifying", || self.maintain_scoped(true))

@@ -157,7 +157,8 @@ pub struct ClassicDensification {
     planner: GpuDensifyPlan,
     /// Decide on the GPU where the set fits (see [`ClassicDensification::decide_on_cpu`]).
     on_gpu: bool,
-    /// A plan decided on the GPU whose counters are on their way back ([`DensifyStrategy::settle`]).
+    /// A plan decided on the GPU whose counters are on their way back
+    /// ([`DensifyStrategy::settle`]).
     pending: Option<PendingDensifyPlan>,
 }
 

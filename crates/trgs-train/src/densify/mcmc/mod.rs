@@ -67,9 +67,10 @@ impl McmcSettings {
     /// The paper's settings with the count capped at `cap`. The relocation interval scales with
     /// the run like every other length (at least 5 steps, which bounds the cost of the
     /// relocations, each a rebuild of the set, in very short runs): growing 5% per relocation,
-    /// a run then reaches its cap at the same fraction of its length as the paper's run does. A fixed floor of 20 steps made a
-    /// 2000-step run reach its cap at 64% of the run, where classic densification has its count
-    /// at 50%, and MCMC trained with about half as many Gaussians until then.
+    /// a run then reaches its cap at the same fraction of its length as the paper's run does. A
+    /// fixed floor of 20 steps made a 2000-step run reach its cap at 64% of the run, where
+    /// classic densification has its count at 50%, and MCMC trained with about half as many
+    /// Gaussians until then.
     pub fn scaled(iterations: u32, cap: usize) -> Self {
         Self {
             from: scale_len(500, iterations),
