@@ -60,10 +60,12 @@ crate::kernel_registry! {
 
 crate::kernel_registry! {
     /// Kernels of benchmarks and tests, apart from rendering and training: the trivial tiled
-    /// splat loop that `bench` measures `rasterize` against, and the check of the workgroup
-    /// spread of dispatches whose counts are known on the GPU only.
+    /// splat loop that `bench` measures `rasterize` against, the check of the workgroup spread
+    /// of dispatches whose counts are known on the GPU only, and the check of the random draws'
+    /// integer arithmetic.
     pub const BENCH_KERNELS: BenchKernelSpecs => BenchKernels, prelude: crate::layout::prelude, {
         splat_loop: "bench/splat_loop.wgsl" => no_defines,
         spread_block_check: "bench/spread_block_check.wgsl" => no_defines,
+        draw_below_check: "bench/draw_below_check.wgsl" => no_defines,
     }
 }

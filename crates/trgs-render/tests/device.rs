@@ -151,3 +151,51 @@ fn spread_block_in_wgsl_matches_its_twin_on_every_grid_shape() {
         assert!(got == want, "{groups:?}: the WGSL and its twin take different blocks");
     }
 }
+
+#[test]
+fn draw_below_in_wgsl_matches_its_twin_bit_for_bit() {
+    // MCMC relocation draws Gaussians by these integers; WGSL builds their 64-bit product from
+    // 16-bit halves. Totals at the edges of the halves and of u32, and random ones.
+    use trgs_core::reference::{draw_below, pcg_hash};
+    use trgs_render::toolkit::gpu::{self, Recorder, grid_1d};
+    let ctx = GpuContext::new().expect("adapter");
+    let kernel = trgs_render::toolkit::BENCH_KERNELS.draw_below_check.build(&ctx);
+    let edges = [1, 2, 3, 0xffff, 0x1_0000, 0x1_0001, 0x7fff_ffff, 0x8000_0000, u32::MAX - 1];
+    let n = 4096u32;
+    let totals: Vec<u32> = (0..n)
+        .map(|j| edges.get(j as usize).copied().unwrap_or(pcg_hash(j.wrapping_mul(31)) | 1))
+        .chain([u32::MAX])
+        .collect();
+    let seeds: Vec<u32> = (0..=n).map(|j| pcg_hash(j ^ 0x5eed)).collect();
+    let count = totals.len();
+    let draws = gpu::storage(&ctx, "test.draws", count as u64 * 4);
+    let seeds_buf = gpu::storage_init(&ctx, "test.seeds", &seeds);
+    let totals_buf = gpu::storage_init(&ctx, "test.totals", &totals);
+    let bind = kernel.bind(
+        &ctx,
+        &[
+            seeds_buf.as_entire_binding(),
+            totals_buf.as_entire_binding(),
+            gpu::range(&draws, 0, count as u64 * 4),
+        ],
+    );
+    let mut rec = Recorder::new(&ctx, "test.draw_below", false);
+    rec.dispatch("draw_below_check", &kernel, &bind, grid_1d((count as u32).div_ceil(64)));
+    rec.submit_and_wait(&ctx).expect("GPU work");
+    let got: Vec<u32> = gpu::read_buffer(&ctx, &draws, 0, count).expect("readback");
+    let want: Vec<u32> = (0..count).map(|j| draw_below(seeds[j], j as u32, totals[j])).collect();
+    for j in 0..count {
+        assert_eq!(got[j], want[j], "draw {j}: seed {:#x}, total {:#x}", seeds[j], totals[j]);
+        assert!(got[j] < totals[j], "draw {j} is not below its total");
+    }
+    // The cases reach the partial products' carry: the high words of a and b times the total
+    // alone are wrong for most of them.
+    let no_carry = (0..count)
+        .filter(|&j| {
+            let (a, b) = (pcg_hash(j as u32 ^ pcg_hash(seeds[j])), totals[j]);
+            let (a0, a1, b0, b1) = (a & 0xffff, a >> 16, b & 0xffff, b >> 16);
+            a1 * b1 + ((a1 * b0) >> 16) + ((a0 * b1) >> 16) != want[j]
+        })
+        .count();
+    assert!(no_carry > count / 4, "{no_carry} of {count} draws need the carry");
+}

@@ -34,6 +34,13 @@ pub fn pcg_hash(v: u32) -> u32 {
     (word >> 22) ^ word
 }
 
+/// Draw `j`'s uniform integer below `total` (> 0) at `seed`: the high word of a 32-bit hash
+/// times `total` (as WGSL's `draw_below`, which builds the 64-bit product from 16-bit halves).
+pub fn draw_below(seed: u32, j: u32, total: u32) -> u32 {
+    let r = pcg_hash(j ^ pcg_hash(seed));
+    ((u64::from(r) * u64::from(total)) >> 32) as u32
+}
+
 /// The standard normal number of component `c` of Gaussian `i` at `seed` (Box-Muller on two
 /// 24-bit uniforms, which f32 holds exactly).
 pub fn noise_normal(seed: u32, i: u32, c: u32) -> f64 {

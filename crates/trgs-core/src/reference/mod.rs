@@ -46,7 +46,7 @@ pub use emit_keys::emit_keys;
 pub use footprint::{TileRect, footprint};
 pub use frame::{Frame, FrameGrads, PlaneLayerGrads, PlaneLayers};
 pub use mcmc::{
-    MAX_REGULARISED_LOG_SCALE, NOISE_GATE_STEEPNESS, NOISE_GATE_THRESHOLD, mcmc_noise,
+    MAX_REGULARISED_LOG_SCALE, NOISE_GATE_STEEPNESS, NOISE_GATE_THRESHOLD, draw_below, mcmc_noise,
     mcmc_regularise, noise_normal, noise_offset, pcg_hash,
 };
 pub use photometric_loss::{

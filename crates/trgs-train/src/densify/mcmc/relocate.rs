@@ -3,7 +3,7 @@
 //! the opacity and scale of the Gaussians that share one; [`plan_relocation`] makes the plan.
 use super::McmcSettings;
 use crate::densify::{Geometry, McmcReport, RowPlan, TrainState, sigmoid};
-use trgs_core::reference::pcg_hash;
+use trgs_core::reference::draw_below;
 use trgs_core::rng::Rng;
 use trgs_core::scene::Population;
 
@@ -115,8 +115,7 @@ pub fn weight_table(n: usize) -> Vec<u32> {
 /// with sum `total` (> 0): the last index whose cumulative weight is at most a uniform integer
 /// below `total`, which has a non-zero weight. Integer arithmetic: the GPU draws the same.
 pub fn draw(seed: u32, j: u32, cumulative: &[u32], total: u32) -> usize {
-    let r = pcg_hash(j ^ pcg_hash(seed));
-    let u = ((u64::from(r) * u64::from(total)) >> 32) as u32;
+    let u = draw_below(seed, j, total);
     cumulative.partition_point(|&c| c <= u) - 1
 }
 
