@@ -5,7 +5,9 @@
 #   scripts/gpu-check.sh pack BUNDLE            # here: build in release, write BUNDLE (.tar.xz)
 #   scripts/gpu-check.sh run BUNDLE OUT [LOOPS] # there, from the repository root: unpack, then
 #                                               # run every test binary (LOOPS times, default 1),
-#                                               # `bench`, and log everything under OUT
+#                                               # `bench`, the GPU's busy share of a step at 1M
+#                                               # Gaussians and 1600x1200 (`bench --scale`), and
+#                                               # log everything under OUT
 #   scripts/gpu-check.sh hunt BUNDLE OUT SECONDS TEST...
 #                                               # there: run the named test binaries in turn for
 #                                               # SECONDS; a run still going after HUNT_AFTER
@@ -23,7 +25,7 @@ set -uo pipefail
 cd "$(dirname "$0")/.."
 
 usage() {
-    sed -n '2,21p' "$0" >&2
+    sed -n '2,23p' "$0" >&2
     exit 2
 }
 
@@ -91,6 +93,9 @@ run() {
     done
     ./target/release/bench --write "$out/bench.md" >"$out/bench.log" 2>&1 ||
         echo "bench rc=$?" | tee -a "$out/summary.txt"
+    # The steady-state step at 1M Gaussians and 1600x1200, and the share of it the GPU is busy.
+    ./target/release/bench --scale --scale-sizes 1600x1200 --scale-gaussians 1000000 --reps 20 \
+        >"$out/busy.log" 2>&1 || echo "bench --scale rc=$?" | tee -a "$out/summary.txt"
     echo "$(wc -l <"$out/summary.txt") failed runs; logs in $out"
 }
 

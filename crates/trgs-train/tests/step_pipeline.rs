@@ -2,7 +2,8 @@
 //! later: recording makes no wait at all ([`GpuContext::waits`]), a pipelined loop trains as
 //! steps taken one at a time do, and a frame that outgrows its key list (sized from earlier
 //! steps' frames, found only a step later) changes nothing, on the GPU, before the trainer knows;
-//! a step taken alone then takes it again, exactly, as a trainer with an exact list would.
+//! a step taken alone then takes it again, exactly, as a trainer with an exact list would. A
+//! profiled step times every phase's passes.
 use trgs_core::fixtures::{SceneSpec, random_scene};
 use trgs_core::scene::{Camera, Gaussians, ReflectionPlane};
 use trgs_render::{DeviceOptions, GpuContext, Layer};
@@ -281,4 +282,29 @@ fn a_densification_in_a_pipelined_loop_waits_for_nothing_and_lands_a_step_later(
 #[test]
 fn a_relocation_in_a_pipelined_loop_waits_for_nothing_and_lands_a_step_later() {
     lands_a_step_later(&mcmc_every_third_step());
+}
+
+#[test]
+fn a_profiled_step_times_the_stages_of_every_phase() {
+    // What `bench` divides by the wall clock of a pipelined step (the GPU's busy share): every
+    // phase's passes must be in it, the Adam phase's too.
+    let ctx = ctx();
+    let (mut trainer, camera, _, _) = trainer(&ctx, 1);
+    trainer.set_densification(&classic_every_third_step()).expect("densification");
+    let view = view_of(&trainer, &camera);
+    trainer.profile = true;
+    let stats = trainer.train_step(&view).expect("step");
+    if !ctx.capabilities.timestamps {
+        assert!(stats.gpu_stages.is_empty(), "timed without timestamps");
+        return;
+    }
+    let names: Vec<&str> = stats.gpu_stages.iter().map(|s| s.0).collect();
+    for phase_stage in ["project", "rasterize_reflection", "photometric_loss", "step_guard"]
+        .into_iter()
+        .chain(["rasterize_bwd", "project_bwd", "densify_stats", "adam"])
+    {
+        assert!(names.contains(&phase_stage), "{phase_stage} is not timed: {names:?}");
+    }
+    assert!(stats.gpu_stages.iter().all(|s| s.1.is_finite() && s.1 >= 0.0));
+    assert!(stats.gpu_stages.iter().map(|s| s.1).sum::<f64>() > 0.0);
 }

@@ -50,8 +50,9 @@ pub struct StepStats {
     pub record_waits: u64,
     /// Where the step's wall-clock time went.
     pub times: StepTimes,
-    /// With [`Trainer::profile`]: GPU milliseconds of every render and backward stage, from
-    /// timestamp queries (empty when off or when the adapter has none).
+    /// With [`Trainer::profile`]: GPU milliseconds of every stage of the step (render, losses,
+    /// backward, the densification statistics and Adam), from timestamp queries (empty when off
+    /// or when the adapter has none). The maintenance after the step is not included.
     pub gpu_stages: Vec<(&'static str, f64)>,
     /// What the densification strategy did to the set after the step (usually nothing): in a
     /// pipelined loop, what was applied then ([`Trainer::maintain`]: a densification decided

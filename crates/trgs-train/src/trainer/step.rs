@@ -224,13 +224,6 @@ impl Trainer {
         };
         let mut g = self.renderer.backward(scene, &mut self.frame, layer_grads, &backward)?;
         times.backward = clock.lap(ctx)?;
-        let gpu_stages: Vec<_> =
-            [self.frame.stage_times(), Some(&loss_stages[..]), g.stage_times()]
-                .into_iter()
-                .flatten()
-                .flatten()
-                .copied()
-                .collect();
         self.step += 1;
         let t = self.step;
         let rates = self.settings.rates.attribute_rates(
@@ -251,7 +244,7 @@ impl Trainer {
             seed: self.settings.seed,
             guard,
         };
-        let mut rec = Recorder::new(ctx, "trgs.train.adam", false);
+        let mut rec = Recorder::new(ctx, "trgs.train.adam", self.profile);
         self.densification.record_before_adam(&step_view, &mut rec);
         let moments = self.gaussians.moments();
         for a in Attribute::ALL {
@@ -260,7 +253,19 @@ impl Trainer {
         }
         self.densification.record_after_adam(&step_view, &mut rec);
         rec.submit(ctx)?;
+        let adam_stages = rec.stage_times().unwrap_or_default();
         times.adam = clock.lap(ctx)?;
+        let gpu_stages: Vec<_> = [
+            self.frame.stage_times(),
+            Some(&loss_stages[..]),
+            g.stage_times(),
+            Some(&adam_stages[..]),
+        ]
+        .into_iter()
+        .flatten()
+        .flatten()
+        .copied()
+        .collect();
         Ok(StepInFlight {
             step: t,
             view: view.camera.name.clone(),

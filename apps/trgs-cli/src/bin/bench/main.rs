@@ -474,10 +474,12 @@ fn main() -> Result<()> {
         for planes in 0..=1 {
             let t = bench_train_step(&ctx, planes, args.reps.max(1))?;
             println!(
-                "training step, 256x192 {} Gaussians {planes} planes: {:.1} ms, pipelined {:.1} ms ({})",
+                "training step, 256x192 {} Gaussians {planes} planes: {:.1} ms, pipelined {:.1} ms, GPU {:.1} ms ({} busy; {})",
                 t.gaussians,
                 t.step_ms,
                 t.pipelined_ms,
+                t.gpu_ms,
+                report::busy_percent(t.gpu_ms, t.pipelined_ms),
                 t.phases
                     .iter()
                     .map(|(n, ms)| format!("{n} {ms:.1}"))
@@ -518,18 +520,21 @@ fn main() -> Result<()> {
 fn run_scale(ctx: &GpuContext, args: &Args) -> Result<()> {
     use trgs_train::memory::human_bytes;
     let mut lines = vec![
-        "| image | Gaussians | keys | step ms | densify step ms | densified to | parameters | moments | frame | losses | GPU total |".to_string(),
-        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|".to_string(),
+        "| image | Gaussians | keys | step ms | pipelined ms | GPU ms | GPU busy | densify step ms | densified to | parameters | moments | frame | losses | GPU total |".to_string(),
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|".to_string(),
     ];
     for &(width, height) in &args.scale_sizes {
         for &gaussians in &args.scale_gaussians {
             let r = scale::bench_scale(ctx, width, height, gaussians, args.reps.max(1))?;
             let m = &r.memory;
             let line = format!(
-                "| {width}x{height} | {} | {} | {:.0} | {:.0} | {} | {} | {} | {} | {} | {} |",
+                "| {width}x{height} | {} | {} | {:.0} | {:.0} | {:.0} | {} | {:.0} | {} | {} | {} | {} | {} | {} |",
                 r.gaussians,
                 r.keys,
                 r.step_ms,
+                r.pipelined_ms,
+                r.gpu_ms,
+                report::busy_percent(r.gpu_ms, r.pipelined_ms),
                 r.densify_step_ms,
                 r.densified_to,
                 human_bytes(m.parameters),

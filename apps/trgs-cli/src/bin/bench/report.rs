@@ -257,24 +257,40 @@ fn train_step_section(s: &mut String, steps: &[TrainStepRow]) {
          paper on, SH degree 3, no densification), target: the scene's own render darkened by 10%. \
          Step ms: median wall clock of a step taken alone (`train_step`, which waits for its \
          results); pipelined ms: wall clock per step of a loop that finishes each step after \
-         recording the next (as `train` runs), over {0} steps. Phase ms: medians over {0} steps \
-         with the GPU idle at the end of each phase (`Trainer::time_phases`). GPU ms: medians of \
-         the timestamp-query time of each stage, summed over the views of a step.\n",
+         recording the next (as `train` runs), over {0} steps. GPU ms: median over {0} profiled \
+         steps of every pass's timestamp-query time summed; GPU busy: GPU ms over pipelined ms. \
+         Phase ms: medians over {0} steps with the GPU idle at the end of each phase \
+         (`Trainer::time_phases`). Stage table: medians of the timestamp-query time of each \
+         stage, summed over the views of a step.\n",
         steps[0].steps
     );
     let names: Vec<&str> = steps[0].phases.iter().map(|p| p.0).collect();
-    let _ = writeln!(s, "| planes | step ms | pipelined ms | {} |", names.join(" ms | ") + " ms");
-    let _ = writeln!(s, "|---:|---:|---:|{}", "---:|".repeat(names.len()));
+    let _ = writeln!(
+        s,
+        "| planes | step ms | pipelined ms | GPU ms | GPU busy | {} |",
+        names.join(" ms | ") + " ms"
+    );
+    let _ = writeln!(s, "|---:|---:|---:|---:|---:|{}", "---:|".repeat(names.len()));
     for t in steps {
         let cells: Vec<String> = t.phases.iter().map(|p| format!("{:.1}", p.1)).collect();
-        let (step, pipelined) = (t.step_ms, t.pipelined_ms);
-        let _ =
-            writeln!(s, "| {} | {step:.1} | {pipelined:.1} | {} |", t.planes, cells.join(" | "));
+        let (step, pipelined, gpu) = (t.step_ms, t.pipelined_ms, t.gpu_ms);
+        let busy = busy_percent(gpu, pipelined);
+        let _ = writeln!(
+            s,
+            "| {} | {step:.1} | {pipelined:.1} | {gpu:.1} | {busy} | {} |",
+            t.planes,
+            cells.join(" | ")
+        );
     }
     let _ = writeln!(s, "\n#### Training-step GPU stages (ms, median)\n");
     let rows: Vec<(String, &[(&str, f64)])> =
         steps.iter().map(|t| (t.planes.to_string(), &t.stages[..])).collect();
     stage_table(s, "planes", "---:", &rows);
+}
+
+/// The share of a pipelined step's wall clock the GPU spent in passes, as "93%".
+pub fn busy_percent(gpu_ms: f64, wall_ms: f64) -> String {
+    format!("{:.0}%", 100.0 * gpu_ms / wall_ms)
 }
 
 /// A table of GPU ms per stage: one row per (key cells, stages), one column per stage name in

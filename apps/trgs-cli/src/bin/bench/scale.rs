@@ -3,6 +3,7 @@
 //! on, with the step's time, the time of a step that densifies, and the GPU memory the trainer
 //! holds.
 use crate::median;
+use crate::train_step::{pipelined_step_ms, profiled_steps};
 use anyhow::Result;
 use std::time::Instant;
 use trgs_core::fixtures::{RoomDensity, RoomSpec, room_scene};
@@ -15,6 +16,12 @@ pub struct ScaleRow {
     pub gaussians: usize,
     /// Median whole step (render, losses, backward, Adam, densification statistics), wall clock.
     pub step_ms: f64,
+    /// Wall clock per step of a pipelined loop, as `train` runs (each step read back after the
+    /// next is recorded).
+    pub pipelined_ms: f64,
+    /// Median GPU time of a profiled step: every pass's timestamp-query time summed. Over
+    /// `pipelined_ms`, the share of the wall clock the GPU is busy.
+    pub gpu_ms: f64,
     /// The step that densified (its statistics, decisions and the rebuild of every buffer).
     pub densify_step_ms: f64,
     /// Gaussians after that densification.
@@ -25,8 +32,9 @@ pub struct ScaleRow {
     pub keys: u64,
 }
 
-/// `steps` timed steps (after one untimed) of the joint stage with every loss, then one step that
-/// densifies. The target is the scene's own render darkened by 10%.
+/// `steps` timed steps (after one untimed) of the joint stage with every loss, a pipelined loop
+/// of `steps` steps, `steps` profiled steps, then one step that densifies. The target is the
+/// scene's own render darkened by 10%.
 pub fn bench_scale(
     ctx: &GpuContext,
     width: u32,
@@ -45,8 +53,8 @@ pub fn bench_scale(
     };
     let scene = room_scene(&spec);
     let (mut trainer, view) = crate::train_step::joint_stage_trainer(ctx, &scene)?;
-    // Statistics every step, the decisions on the step after the timed ones.
-    let densify_at = steps as u32 + 2;
+    // Statistics every step, the decisions on the step after the measured ones.
+    let densify_at = 3 * steps as u32 + 2;
     trainer.set_densification(&Densification::Classic(ClassicSettings {
         from: 0,
         until: u32::MAX,
@@ -60,6 +68,8 @@ pub fn bench_scale(
     for _ in 0..steps {
         totals.push(trainer.train_step(&view)?.times.total());
     }
+    let pipelined_ms = pipelined_step_ms(&mut trainer, &view, steps)?;
+    let gpu_ms = profiled_steps(&mut trainer, &view, steps)?.gpu_ms;
     let memory = trainer.gpu_memory();
     let keys = trainer.render(&scene.camera)?.key_count();
     let t = Instant::now();
@@ -69,6 +79,8 @@ pub fn bench_scale(
     Ok(ScaleRow {
         gaussians: scene.gaussians.len(),
         step_ms: median(totals),
+        pipelined_ms,
+        gpu_ms,
         densify_step_ms,
         densified_to: trainer.scene().len() as usize,
         memory,

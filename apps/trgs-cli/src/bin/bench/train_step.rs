@@ -24,6 +24,8 @@ pub struct TrainStepRow {
     pub phases: Vec<(&'static str, f64)>,
     /// Median GPU ms of each stage (timestamp queries) of a profiled step.
     pub stages: Vec<(&'static str, f64)>,
+    /// Median GPU ms of a profiled step, every pass's time summed.
+    pub gpu_ms: f64,
 }
 
 /// `steps` timed training steps (after half a second of warm-up) of the joint stage, with the paper's losses
@@ -39,19 +41,9 @@ pub fn bench_train_step(ctx: &GpuContext, planes: usize, steps: usize) -> Result
         trainer.train_step(&view)?;
         totals.push(t.elapsed().as_secs_f64() * 1e3);
     }
-    let mut pipelined = Vec::new();
-    for _ in 0..3 {
-        let t = std::time::Instant::now();
-        let mut in_flight = trainer.record_step(&view)?;
-        for _ in 1..steps {
-            let next = trainer.record_step(&view)?;
-            trainer.maintain()?;
-            trainer.finish_step(std::mem::replace(&mut in_flight, next))?;
-        }
-        trainer.maintain()?;
-        trainer.finish_step(in_flight)?;
-        pipelined.push(t.elapsed().as_secs_f64() * 1e3 / steps as f64);
-    }
+    let pipelined = (0..3)
+        .map(|_| pipelined_step_ms(&mut trainer, &view, steps))
+        .collect::<Result<Vec<_>>>()?;
     trainer.time_phases = true;
     let mut phases = vec![Vec::new(); trgs_train::trainer::StepTimes::default().phases().len()];
     for _ in 0..steps {
@@ -61,24 +53,7 @@ pub fn bench_train_step(ctx: &GpuContext, planes: usize, steps: usize) -> Result
         }
     }
     trainer.time_phases = false;
-    trainer.profile = true;
-    let mut samples: Vec<(&'static str, Vec<f64>)> = Vec::new();
-    for _ in 0..steps {
-        // A stage runs once per view (the camera's and each mirrored one): sum per step.
-        let mut step: Vec<(&'static str, f64)> = Vec::new();
-        for (name, ms) in trainer.train_step(&view)?.gpu_stages {
-            match step.iter_mut().find(|s| s.0 == name) {
-                Some(s) => s.1 += ms,
-                None => step.push((name, ms)),
-            }
-        }
-        for (name, ms) in step {
-            match samples.iter_mut().find(|s| s.0 == name) {
-                Some(s) => s.1.push(ms),
-                None => samples.push((name, vec![ms])),
-            }
-        }
-    }
+    let profiled = profiled_steps(&mut trainer, &view, steps)?;
     let names = trgs_train::trainer::StepTimes::default().phases().map(|(n, _)| n);
     Ok(TrainStepRow {
         planes,
@@ -87,7 +62,62 @@ pub fn bench_train_step(ctx: &GpuContext, planes: usize, steps: usize) -> Result
         step_ms: median(totals),
         pipelined_ms: median(pipelined),
         phases: names.into_iter().zip(phases.into_iter().map(median)).collect(),
+        gpu_ms: profiled.gpu_ms,
+        stages: profiled.stages,
+    })
+}
+
+/// Wall clock per step of `steps` steps of a pipelined loop, as `train` runs: each step is
+/// finished (read back) after the next is recorded, so that the GPU need not wait for the CPU.
+pub fn pipelined_step_ms(trainer: &mut Trainer, view: &View, steps: usize) -> Result<f64> {
+    let t = std::time::Instant::now();
+    let mut in_flight = trainer.record_step(view)?;
+    for _ in 1..steps {
+        let next = trainer.record_step(view)?;
+        trainer.maintain()?;
+        trainer.finish_step(std::mem::replace(&mut in_flight, next))?;
+    }
+    trainer.maintain()?;
+    trainer.finish_step(in_flight)?;
+    Ok(t.elapsed().as_secs_f64() * 1e3 / steps as f64)
+}
+
+/// GPU time of profiled steps (timestamp queries around every pass).
+pub struct ProfiledSteps {
+    /// Median over the steps of each stage's time, summed over the step's views.
+    pub stages: Vec<(&'static str, f64)>,
+    /// Median over the steps of the step's total: every pass's time summed.
+    pub gpu_ms: f64,
+}
+
+/// `steps` profiled steps. Profiling waits for each submission to read its timestamps back, so
+/// these steps are not pipelined; the GPU work they time is the same as a pipelined step's.
+pub fn profiled_steps(trainer: &mut Trainer, view: &View, steps: usize) -> Result<ProfiledSteps> {
+    trainer.profile = true;
+    let mut samples: Vec<(&'static str, Vec<f64>)> = Vec::new();
+    let mut totals = Vec::new();
+    for _ in 0..steps {
+        // A stage runs once per view (the camera's and each mirrored one): sum per step.
+        let mut step: Vec<(&'static str, f64)> = Vec::new();
+        let stages = trainer.train_step(view);
+        for (name, ms) in stages?.gpu_stages {
+            match step.iter_mut().find(|s| s.0 == name) {
+                Some(s) => s.1 += ms,
+                None => step.push((name, ms)),
+            }
+        }
+        totals.push(step.iter().map(|s| s.1).sum());
+        for (name, ms) in step {
+            match samples.iter_mut().find(|s| s.0 == name) {
+                Some(s) => s.1.push(ms),
+                None => samples.push((name, vec![ms])),
+            }
+        }
+    }
+    trainer.profile = false;
+    Ok(ProfiledSteps {
         stages: samples.into_iter().map(|(n, v)| (n, median(v))).collect(),
+        gpu_ms: median(totals),
     })
 }
 
