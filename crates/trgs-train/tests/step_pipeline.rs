@@ -308,3 +308,35 @@ fn a_profiled_step_times_the_stages_of_every_phase() {
     assert!(stats.gpu_stages.iter().all(|s| s.1.is_finite() && s.1 >= 0.0));
     assert!(stats.gpu_stages.iter().map(|s| s.1).sum::<f64>() > 0.0);
 }
+
+#[test]
+fn a_change_an_edit_applies_on_its_way_is_reported_once_by_the_next_settle() {
+    // An edit from outside the maintenance (a new strategy, an edit of the set) applies the
+    // change the maintenance left pending first; the next report must still carry it.
+    type Edit = fn(&mut Trainer);
+    let edits: [(&str, Edit); 2] = [
+        ("set_densification", |t| t.set_densification(&Densification::None).expect("set")),
+        ("edit_gaussians", |t| t.edit_gaussians(|_, _, _| Ok(())).expect("edit")),
+    ];
+    let ctx = ctx();
+    for (name, edit) in edits {
+        let (mut trainer, camera, _, _) = trainer_of(&ctx, 1, 600);
+        let view = view_of(&trainer, &camera);
+        trainer.set_densification(&classic_every_third_step()).expect("densification");
+        for _ in 0..2 {
+            trainer.train_step(&view).expect("step");
+        }
+        let third = trainer.record_step(&view).expect("record");
+        trainer.finish_step(third).expect("finish");
+        let n = trainer.scene().len() as usize;
+        assert!(trainer.maintain().expect("maintain").0.is_empty(), "{name}: applied at once");
+        assert!(!trainer.is_settled());
+        edit(&mut trainer);
+        assert!(trainer.is_settled(), "{name}: the edit left the change pending");
+        let (events, _) = trainer.settle().expect("settle");
+        let [event] = events[..] else { panic!("{name}: reported {events:?}") };
+        assert!(added_by(&event) > 0, "{name}: {event:?}");
+        assert_eq!(trainer.scene().len() as usize, n + added_by(&event), "{name}");
+        assert!(trainer.settle().expect("settle").0.is_empty(), "{name}: reported twice");
+    }
+}

@@ -103,6 +103,10 @@ pub struct Trainer {
     perturb: crate::perturb::GpuPerturb,
     /// The count of a perturbation on its way back (reported when the maintenance settles).
     pending_perturbed: Option<trgs_render::toolkit::gpu::PendingRead>,
+    /// What an edit from outside the maintenance applied on its way (a change the maintenance
+    /// had left pending, and the perturbation's count): reported by the next
+    /// [`Trainer::maintain`] or [`Trainer::settle`], so that every change is reported once.
+    unreported: (Vec<DensifyEvent>, usize),
 }
 
 impl Trainer {
@@ -149,6 +153,7 @@ impl Trainer {
             camera_centres: Vec::new(),
             perturb: crate::perturb::GpuPerturb::new(ctx),
             pending_perturbed: None,
+            unreported: (Vec::new(), 0),
         }
     }
 
@@ -194,18 +199,19 @@ impl Trainer {
     }
 
     /// Densify with `densification` from now on (replacing the strategy in use, once a change
-    /// it left pending is applied).
+    /// it left pending is applied: the next [`Trainer::maintain`] or [`Trainer::settle`]
+    /// reports it).
     pub fn set_densification(&mut self, densification: &Densification) -> Result<()> {
-        self.settle()?;
+        self.settle_unreported()?;
         self.densification = densification.strategy(&self.ctx, self.gaussians.len(), None);
         Ok(())
     }
 
     /// Densify with `strategy` from now on: a strategy of the app's own (the built-in ones come
     /// from [`Trainer::set_densification`]), once a change the one in use left pending is
-    /// applied.
+    /// applied (reported as by [`Trainer::set_densification`]).
     pub fn set_strategy(&mut self, strategy: Box<dyn DensifyStrategy>) -> Result<()> {
-        self.settle()?;
+        self.settle_unreported()?;
         self.densification = strategy;
         Ok(())
     }
@@ -286,14 +292,15 @@ impl Trainer {
 
     /// Edit the set with its shared operations, the trainer's random state and the scene extent
     /// (what a strategy's maintenance gets), outside the schedule: tests and benchmarks run a
-    /// strategy's steps this way. A change the maintenance left pending is applied first; the
-    /// strategy in use starts its statistics over.
+    /// strategy's steps this way. A change the maintenance left pending is applied first (the
+    /// next [`Trainer::maintain`] or [`Trainer::settle`] reports it); the strategy in use starts
+    /// its statistics over.
     pub fn edit_gaussians<R>(
         &mut self,
         edit: impl FnOnce(&mut GaussianState, &mut Rng, f64) -> Result<R>,
     ) -> Result<R> {
-        // The edit sees the set with any change still pending applied (its report is dropped).
-        self.settle()?;
+        // The edit sees the set with any change still pending applied.
+        self.settle_unreported()?;
         let out = edit(&mut self.gaussians, &mut self.rng, self.extent)?;
         self.densification.restart(self.gaussians.len());
         self.exact_keys_next = true;

@@ -25,8 +25,8 @@ impl Trainer {
         glass: &Gaussians<f32>,
     ) -> Result<usize> {
         // A change of the set still pending goes in first (it was decided for the set as it is;
-        // a run reports it before calling this).
-        self.settle()?;
+        // a run settles it before calling this, the next maintenance reports it otherwise).
+        self.settle_unreported()?;
         let mut state = self.read_state()?;
         let n_old = state.gaussians.len();
         let g = &mut state.gaussians;

@@ -130,10 +130,21 @@ impl Trainer {
     }
 
     /// Apply what the last [`Trainer::maintain`] left pending (waiting only for its counters):
-    /// what it did, and how many Gaussians the perturbation changed.
+    /// what it did, and how many Gaussians the perturbation changed (with what an edit of the
+    /// set applied since the last report, [`Trainer::edit_gaussians`]).
     pub fn settle(&mut self) -> Result<(Vec<DensifyEvent>, usize)> {
         let ctx = self.ctx.clone();
         gpu::scoped(&ctx, "densifying", || self.settle_scoped())
+    }
+
+    /// [`Trainer::settle`] on the way of an edit from outside the maintenance: what it applies
+    /// waits for the next report.
+    pub(super) fn settle_unreported(&mut self) -> Result<()> {
+        let (events, perturbed) = self.settle()?;
+        // `settle` took what was waiting already: it goes back with the new.
+        self.unreported.0.extend(events);
+        self.unreported.1 += perturbed;
+        Ok(())
     }
 
     /// Whether nothing [`Trainer::maintain`] decided waits: neither a change of the set nor
@@ -350,10 +361,13 @@ impl Trainer {
         Ok((events, perturbed))
     }
 
-    /// Apply the change of the set and read the perturbation's count left pending.
+    /// Apply the change of the set and read the perturbation's count left pending: what they
+    /// did, after what an edit applied since the last report.
     pub(super) fn settle_scoped(&mut self) -> Result<(Vec<DensifyEvent>, usize)> {
-        let events = self.settle_set()?;
-        Ok((events, self.take_perturbed()?))
+        let (mut events, mut perturbed) = std::mem::take(&mut self.unreported);
+        events.extend(self.settle_set()?);
+        perturbed += self.take_perturbed()?;
+        Ok((events, perturbed))
     }
 
     /// Apply the change of the set the strategy left pending, if any.
