@@ -149,7 +149,8 @@ fn train(start: Start, feed: Option<&LiveFeed>) -> Result<()> {
                         &bar,
                         format!(
                             "step {}: its frame outgrew the key list sized from earlier steps, so \
-                             it changed nothing; the next frame is sized exactly",
+                             it changed nothing; the first step recorded after it is known (the \
+                             one after next) is sized exactly",
                             s.step
                         ),
                     );

@@ -40,8 +40,10 @@ pub struct StepStats {
     /// what the sort orders and the rasterize passes walk, paged past one binding.
     pub keys: u64,
     /// The step's frame outgrew its key list (sized from earlier frames): its updates changed
-    /// nothing (the step's guard), and the next frame is sized exactly. Only a step finished
-    /// after the next was recorded can be skipped: [`Trainer::train_step`] takes it again.
+    /// nothing (the step's guard), and the next frame recorded is sized exactly (in a
+    /// pipelined loop the step after next: the next one was recorded before this was known,
+    /// and may be skipped too). Only a step finished after the next was recorded can be
+    /// skipped: [`Trainer::train_step`] takes it again.
     pub skipped: bool,
     /// How many times recording the step waited for the GPU ([`GpuContext::waits`]): none,
     /// unless its key list was sized exactly (the first step, the one after a skipped step or
