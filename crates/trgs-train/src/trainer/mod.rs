@@ -46,8 +46,9 @@ pub struct StepStats {
     /// skipped: [`Trainer::train_step`] takes it again.
     pub skipped: bool,
     /// How many times recording the step waited for the GPU ([`GpuContext::waits`]): none,
-    /// unless its key list was sized exactly (the first step, the one after a skipped step or
-    /// an edit of the set from outside the maintenance), phases are timed, or the adapter is a
+    /// unless its key list was sized exactly (the first step, the first recorded after a skipped
+    /// step was known, the one after an edit of the set from outside the maintenance), phases
+    /// are timed, or the adapter is a
     /// CPU one (which waits at the end of each phase: `Capabilities::records_while_busy`).
     pub record_waits: u64,
     /// Where the step's wall-clock time went.
@@ -58,7 +59,7 @@ pub struct StepStats {
     pub gpu_stages: Vec<(&'static str, f64)>,
     /// What the densification strategy did to the set after the step (usually nothing): in a
     /// pipelined loop, what was applied then ([`Trainer::maintain`]: a densification decided
-    /// after the step before).
+    /// after the step before), after what an edit applied since the last report.
     pub densified: Vec<DensifyEvent>,
     /// Gaussians whose opacity the perturbation changed after this step (0 on most steps; in
     /// a pipelined loop, reported a step late as the densification is).

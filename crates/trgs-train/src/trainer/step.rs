@@ -93,11 +93,11 @@ impl Trainer {
     /// Record and submit step `self.step + 1` on `view` (render, losses, guard, backward, Adam on
     /// the Gaussians), advancing `step`, without waiting for the GPU (unless profiling or timing
     /// phases, on a CPU adapter (`Capabilities::records_while_busy`), or when the frame is sized
-    /// exactly: the first step, the step after one that outgrew its key list, and the step after
-    /// an edit of the set from outside the maintenance). Call [`Trainer::maintain`] before the
-    /// next step is recorded, and
-    /// [`Trainer::finish_step`] with what this returns before the step after next is (a
-    /// pipelined loop finishes it after recording the next one).
+    /// exactly: the first step, the first recorded after a step that outgrew its key list is
+    /// known, and the step after an edit of the set from outside the maintenance). Call
+    /// [`Trainer::maintain`] before the next step is recorded, and [`Trainer::finish_step`]
+    /// with what this returns before the step after next is (a pipelined loop finishes it after
+    /// recording the next one).
     ///
     /// The step's updates are guarded on the GPU (`step_guard`): if its frame dropped keys or its
     /// loss is not finite, they change nothing, and finishing it says which.
@@ -140,15 +140,13 @@ impl Trainer {
     /// [`Trainer::settle`] on the way of an edit from outside the maintenance: what it applies
     /// waits for the next report.
     pub(super) fn settle_unreported(&mut self) -> Result<()> {
-        let (events, perturbed) = self.settle()?;
-        // `settle` took what was waiting already: it goes back with the new.
-        self.unreported.0.extend(events);
-        self.unreported.1 += perturbed;
-        Ok(())
+        let ctx = self.ctx.clone();
+        gpu::scoped(&ctx, "densifying", || self.settle_into_unreported())
     }
 
     /// Whether nothing [`Trainer::maintain`] decided waits: neither a change of the set nor
-    /// the perturbation's count.
+    /// the perturbation's count. What an edit applied on its way may still wait to be
+    /// reported: [`Trainer::settle`] returns it either way.
     pub fn is_settled(&self) -> bool {
         !self.densification.pending() && self.pending_perturbed.is_none()
     }
@@ -345,29 +343,39 @@ impl Trainer {
     /// left pending, else applied before the perturbation (which then sees the new set, as it
     /// would have without the deferral).
     fn maintain_scoped(&mut self, defer: bool) -> Result<(Vec<DensifyEvent>, usize)> {
-        let (mut events, mut perturbed) = self.settle_scoped()?;
+        // What is applied goes to `unreported` as it is, so that an error on the way loses
+        // none of it: the next report still says what changed the set.
+        self.settle_into_unreported()?;
         let (t, n) = (self.step, self.gaussians.len());
         let done =
             self.densification.maintain(t, &mut self.gaussians, &mut self.rng, self.extent)?;
         self.after_change(&done, n);
-        events.extend(done);
+        self.unreported.0.extend(done);
         if !defer {
-            events.extend(self.settle_set()?);
+            let events = self.settle_set()?;
+            self.unreported.0.extend(events);
         }
         self.pending_perturbed = self.perturb_step()?;
         if !defer {
-            perturbed += self.take_perturbed()?;
+            self.unreported.1 += self.take_perturbed()?;
         }
-        Ok((events, perturbed))
+        Ok(std::mem::take(&mut self.unreported))
     }
 
     /// Apply the change of the set and read the perturbation's count left pending: what they
     /// did, after what an edit applied since the last report.
     pub(super) fn settle_scoped(&mut self) -> Result<(Vec<DensifyEvent>, usize)> {
-        let (mut events, mut perturbed) = std::mem::take(&mut self.unreported);
-        events.extend(self.settle_set()?);
-        perturbed += self.take_perturbed()?;
-        Ok((events, perturbed))
+        self.settle_into_unreported()?;
+        Ok(std::mem::take(&mut self.unreported))
+    }
+
+    /// Apply the change of the set and read the perturbation's count left pending, into
+    /// `unreported`.
+    fn settle_into_unreported(&mut self) -> Result<()> {
+        let events = self.settle_set()?;
+        self.unreported.0.extend(events);
+        self.unreported.1 += self.take_perturbed()?;
+        Ok(())
     }
 
     /// Apply the change of the set the strategy left pending, if any.

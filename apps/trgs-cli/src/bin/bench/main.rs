@@ -474,11 +474,11 @@ fn main() -> Result<()> {
         for planes in 0..=1 {
             let t = bench_train_step(&ctx, planes, args.reps.max(1))?;
             println!(
-                "training step, 256x192 {} Gaussians {planes} planes: {:.1} ms, pipelined {:.1} ms, GPU {:.1} ms ({} busy; {})",
+                "training step, 256x192 {} Gaussians {planes} planes: {:.1} ms, pipelined {:.1} ms, GPU {} ms ({} busy; {})",
                 t.gaussians,
                 t.step_ms,
                 t.pipelined_ms,
-                t.gpu_ms,
+                report::gpu_ms_cell(t.gpu_ms, 1),
                 report::busy_percent(t.gpu_ms, t.pipelined_ms),
                 t.phases
                     .iter()
@@ -528,12 +528,12 @@ fn run_scale(ctx: &GpuContext, args: &Args) -> Result<()> {
             let r = scale::bench_scale(ctx, width, height, gaussians, args.reps.max(1))?;
             let m = &r.memory;
             let line = format!(
-                "| {width}x{height} | {} | {} | {:.0} | {:.0} | {:.0} | {} | {:.0} | {} | {} | {} | {} | {} | {} |",
+                "| {width}x{height} | {} | {} | {:.0} | {:.0} | {} | {} | {:.0} | {} | {} | {} | {} | {} | {} |",
                 r.gaussians,
                 r.keys,
                 r.step_ms,
                 r.pipelined_ms,
-                r.gpu_ms,
+                report::gpu_ms_cell(r.gpu_ms, 0),
                 report::busy_percent(r.gpu_ms, r.pipelined_ms),
                 r.densify_step_ms,
                 r.densified_to,

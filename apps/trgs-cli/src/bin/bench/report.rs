@@ -273,11 +273,11 @@ fn train_step_section(s: &mut String, steps: &[TrainStepRow]) {
     let _ = writeln!(s, "|---:|---:|---:|---:|---:|{}", "---:|".repeat(names.len()));
     for t in steps {
         let cells: Vec<String> = t.phases.iter().map(|p| format!("{:.1}", p.1)).collect();
-        let (step, pipelined, gpu) = (t.step_ms, t.pipelined_ms, t.gpu_ms);
-        let busy = busy_percent(gpu, pipelined);
+        let (step, pipelined) = (t.step_ms, t.pipelined_ms);
+        let (gpu, busy) = (gpu_ms_cell(t.gpu_ms, 1), busy_percent(t.gpu_ms, pipelined));
         let _ = writeln!(
             s,
-            "| {} | {step:.1} | {pipelined:.1} | {gpu:.1} | {busy} | {} |",
+            "| {} | {step:.1} | {pipelined:.1} | {gpu} | {busy} | {} |",
             t.planes,
             cells.join(" | ")
         );
@@ -288,9 +288,15 @@ fn train_step_section(s: &mut String, steps: &[TrainStepRow]) {
     stage_table(s, "planes", "---:", &rows);
 }
 
-/// The share of a pipelined step's wall clock the GPU spent in passes, as "93%".
-pub fn busy_percent(gpu_ms: f64, wall_ms: f64) -> String {
-    format!("{:.0}%", 100.0 * gpu_ms / wall_ms)
+/// GPU ms of a step, or "-" without timestamps.
+pub fn gpu_ms_cell(gpu_ms: Option<f64>, decimals: usize) -> String {
+    gpu_ms.map_or("-".to_string(), |ms| format!("{ms:.decimals$}"))
+}
+
+/// The share of a pipelined step's wall clock the GPU spent in passes, as "93%" ("-" without
+/// timestamps).
+pub fn busy_percent(gpu_ms: Option<f64>, wall_ms: f64) -> String {
+    gpu_ms.map_or("-".to_string(), |ms| format!("{:.0}%", 100.0 * ms / wall_ms))
 }
 
 /// A table of GPU ms per stage: one row per (key cells, stages), one column per stage name in

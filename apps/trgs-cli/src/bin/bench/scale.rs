@@ -19,9 +19,9 @@ pub struct ScaleRow {
     /// Wall clock per step of a pipelined loop, as `train` runs (each step read back after the
     /// next is recorded).
     pub pipelined_ms: f64,
-    /// Median GPU time of a profiled step: every pass's timestamp-query time summed. Over
-    /// `pipelined_ms`, the share of the wall clock the GPU is busy.
-    pub gpu_ms: f64,
+    /// Median GPU time of a profiled step: every pass's timestamp-query time summed (None
+    /// without timestamps). Over `pipelined_ms`, the share of the wall clock the GPU is busy.
+    pub gpu_ms: Option<f64>,
     /// The step that densified (its statistics, decisions and the rebuild of every buffer).
     pub densify_step_ms: f64,
     /// Gaussians after that densification.
@@ -33,8 +33,8 @@ pub struct ScaleRow {
 }
 
 /// `steps` timed steps (after one untimed) of the joint stage with every loss, a pipelined loop
-/// of `steps` steps, `steps` profiled steps, then one step that densifies. The target is the
-/// scene's own render darkened by 10%.
+/// of `steps` steps (one more recorded before its clock starts), `steps` profiled steps, then
+/// one step that densifies. The target is the scene's own render darkened by 10%.
 pub fn bench_scale(
     ctx: &GpuContext,
     width: u32,
@@ -54,7 +54,7 @@ pub fn bench_scale(
     let scene = room_scene(&spec);
     let (mut trainer, view) = crate::train_step::joint_stage_trainer(ctx, &scene)?;
     // Statistics every step, the decisions on the step after the measured ones.
-    let densify_at = 3 * steps as u32 + 2;
+    let densify_at = 3 * steps as u32 + 3;
     trainer.set_densification(&Densification::Classic(ClassicSettings {
         from: 0,
         until: u32::MAX,

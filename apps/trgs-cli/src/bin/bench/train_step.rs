@@ -24,8 +24,8 @@ pub struct TrainStepRow {
     pub phases: Vec<(&'static str, f64)>,
     /// Median GPU ms of each stage (timestamp queries) of a profiled step.
     pub stages: Vec<(&'static str, f64)>,
-    /// Median GPU ms of a profiled step, every pass's time summed.
-    pub gpu_ms: f64,
+    /// Median GPU ms of a profiled step, every pass's time summed (None without timestamps).
+    pub gpu_ms: Option<f64>,
 }
 
 /// `steps` timed training steps (after half a second of warm-up) of the joint stage, with the paper's losses
@@ -67,60 +67,6 @@ pub fn bench_train_step(ctx: &GpuContext, planes: usize, steps: usize) -> Result
     })
 }
 
-/// Wall clock per step of `steps` steps of a pipelined loop, as `train` runs: each step is
-/// finished (read back) after the next is recorded, so that the GPU need not wait for the CPU.
-pub fn pipelined_step_ms(trainer: &mut Trainer, view: &View, steps: usize) -> Result<f64> {
-    let t = std::time::Instant::now();
-    let mut in_flight = trainer.record_step(view)?;
-    for _ in 1..steps {
-        let next = trainer.record_step(view)?;
-        trainer.maintain()?;
-        trainer.finish_step(std::mem::replace(&mut in_flight, next))?;
-    }
-    trainer.maintain()?;
-    trainer.finish_step(in_flight)?;
-    Ok(t.elapsed().as_secs_f64() * 1e3 / steps as f64)
-}
-
-/// GPU time of profiled steps (timestamp queries around every pass).
-pub struct ProfiledSteps {
-    /// Median over the steps of each stage's time, summed over the step's views.
-    pub stages: Vec<(&'static str, f64)>,
-    /// Median over the steps of the step's total: every pass's time summed.
-    pub gpu_ms: f64,
-}
-
-/// `steps` profiled steps. Profiling waits for each submission to read its timestamps back, so
-/// these steps are not pipelined; the GPU work they time is the same as a pipelined step's.
-pub fn profiled_steps(trainer: &mut Trainer, view: &View, steps: usize) -> Result<ProfiledSteps> {
-    trainer.profile = true;
-    let mut samples: Vec<(&'static str, Vec<f64>)> = Vec::new();
-    let mut totals = Vec::new();
-    for _ in 0..steps {
-        // A stage runs once per view (the camera's and each mirrored one): sum per step.
-        let mut step: Vec<(&'static str, f64)> = Vec::new();
-        let stages = trainer.train_step(view);
-        for (name, ms) in stages?.gpu_stages {
-            match step.iter_mut().find(|s| s.0 == name) {
-                Some(s) => s.1 += ms,
-                None => step.push((name, ms)),
-            }
-        }
-        totals.push(step.iter().map(|s| s.1).sum());
-        for (name, ms) in step {
-            match samples.iter_mut().find(|s| s.0 == name) {
-                Some(s) => s.1.push(ms),
-                None => samples.push((name, vec![ms])),
-            }
-        }
-    }
-    trainer.profile = false;
-    Ok(ProfiledSteps {
-        stages: samples.into_iter().map(|(n, v)| (n, median(v))).collect(),
-        gpu_ms: median(totals),
-    })
-}
-
 /// A trainer of `scene` in the joint stage from its first step (every loss and pass of the model
 /// on, no perturbation) and the view it trains on: the scene's own render darkened by 10%, so
 /// that every parameter gets a gradient.
@@ -134,4 +80,63 @@ pub fn joint_stage_trainer(ctx: &GpuContext, scene: &Scene) -> Result<(Trainer, 
     let mut image = trainer.render(&scene.camera)?.read_layer(ctx, Layer::Color)?;
     image.data.iter_mut().for_each(|v| *v *= 0.9);
     Ok((trainer, View::new(scene.camera.clone(), image.quantised())))
+}
+
+/// Wall clock per step of `steps` steps of a pipelined loop, as `train` runs: each step is
+/// finished (read back) after the next is recorded, so that the GPU need not wait for the CPU.
+/// The clock starts once the first step is recorded (not while the GPU idles before it).
+pub fn pipelined_step_ms(trainer: &mut Trainer, view: &View, steps: usize) -> Result<f64> {
+    let mut in_flight = trainer.record_step(view)?;
+    let t = std::time::Instant::now();
+    for _ in 0..steps {
+        let next = trainer.record_step(view)?;
+        trainer.maintain()?;
+        trainer.finish_step(std::mem::replace(&mut in_flight, next))?;
+    }
+    let ms = t.elapsed().as_secs_f64() * 1e3 / steps as f64;
+    trainer.maintain()?;
+    trainer.finish_step(in_flight)?;
+    Ok(ms)
+}
+
+/// GPU time of profiled steps (timestamp queries around every pass).
+pub struct ProfiledSteps {
+    /// Median over the steps of each stage's time, summed over the step's views.
+    pub stages: Vec<(&'static str, f64)>,
+    /// Median over the steps of the step's total, every pass's time summed; None when the
+    /// adapter has no timestamp queries.
+    pub gpu_ms: Option<f64>,
+}
+
+/// `steps` profiled steps. Profiling waits for each submission to read its timestamps back, so
+/// these steps are not pipelined; the GPU work they time is the same as a pipelined step's.
+pub fn profiled_steps(trainer: &mut Trainer, view: &View, steps: usize) -> Result<ProfiledSteps> {
+    trainer.profile = true;
+    let stats = (0..steps).map(|_| trainer.train_step(view)).collect::<Result<Vec<_>>>();
+    trainer.profile = false;
+    let mut samples: Vec<(&'static str, Vec<f64>)> = Vec::new();
+    let mut totals = Vec::new();
+    for s in stats? {
+        // A stage runs once per view (the camera's and each mirrored one): sum per step.
+        let mut step: Vec<(&'static str, f64)> = Vec::new();
+        for (name, ms) in s.gpu_stages {
+            match step.iter_mut().find(|s| s.0 == name) {
+                Some(s) => s.1 += ms,
+                None => step.push((name, ms)),
+            }
+        }
+        if !step.is_empty() {
+            totals.push(step.iter().map(|s| s.1).sum());
+        }
+        for (name, ms) in step {
+            match samples.iter_mut().find(|s| s.0 == name) {
+                Some(s) => s.1.push(ms),
+                None => samples.push((name, vec![ms])),
+            }
+        }
+    }
+    Ok(ProfiledSteps {
+        stages: samples.into_iter().map(|(n, v)| (n, median(v))).collect(),
+        gpu_ms: (!totals.is_empty()).then(|| median(totals)),
+    })
 }
