@@ -160,6 +160,9 @@ impl ViewerApp {
                     ),
                     false,
                 ));
+                // A new frame: the last model's buffers go, and its key totals do not size the
+                // new model's lists.
+                self.frame = Frame::default();
                 self.shown = Some(Shown {
                     scene,
                     planes: model.planes,
