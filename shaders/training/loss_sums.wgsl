@@ -1,7 +1,8 @@
 // Stage `loss_sums`: the losses' per-pixel statistics summed over strips of LOSS_STRIP pixels,
 // one thread a strip, so that a step reads back 32 bytes per strip (32 KB at 256x256). Slot 0 of
 // a strip holds the photometric sums (|x - y|, SSIM, (x - y)^2), slot 1 the regularisers'
-// (H V, |g^t . g^r|, |M - M_a|).
+// (H V, |g^t . g^r|, |M - M_a|), zero when `regularisers` did not run (its statistics then hold
+// nothing of this frame: a fresh buffer's contents, or an earlier frame's).
 #include "shared/common.wgsl"
 
 @group(0) @binding(0) var<storage, read> params: LossParams;
@@ -20,7 +21,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     var regularisers = vec4<f32>(0.0);
     for (var p = first; p < min(first + LOSS_STRIP, pixels); p++) {
         photometric += stats[2u * p];
-        regularisers += stats[2u * p + 1u];
+        if params.regularisers != 0u {
+            regularisers += stats[2u * p + 1u];
+        }
     }
     partials[2u * strip] = photometric;
     partials[2u * strip + 1u] = regularisers;

@@ -54,6 +54,9 @@ gpu_struct! {
         /// The colour channel `photometric_loss`'s passes work on (they run once per channel,
         /// so that their scratch buffers hold one channel: SSIM is a mean of per-channel maps).
         pub channel: u32,
+        /// 1 when `regularisers` ran and wrote its statistics, which `loss_sums` then sums;
+        /// 0 leaves their sums zero (the statistics then hold nothing of this frame).
+        pub regularisers: u32,
     }
 }
 

@@ -337,6 +337,7 @@ impl LossKernels {
             weight_conflict: weights.conflict as f32,
             weight_mask: if target.has_annotation() { weights.mask as f32 } else { 0.0 },
             channel: 0,
+            regularisers: u32::from(settings.regularisers.is_some()),
         };
         let block = gpu::params(ctx, "trgs.photometric_loss.params", &params);
         let (rendered, image) = (layers.color, &target.image);

@@ -6,6 +6,7 @@
 use trgs_core::Image;
 use trgs_core::reference::{
     DSSIM_LAMBDA, RegulariserInputs, RegulariserWeights, photometric_loss_covered, regularisers,
+    step_guard,
 };
 use trgs_core::rng::Rng;
 use trgs_render::toolkit::gpu::{self, Recorder};
@@ -172,6 +173,15 @@ fn check(
         kernels.record(ctx, &mut rec, &inputs, &target, &grads, &settings).expect("same size");
     rec.submit_and_wait(ctx).expect("GPU work");
     let values = pending.read(ctx).expect("readback");
+    // What `step_guard` checks: every strip sum finite, and without the regularisers their
+    // slot zero (not what an earlier frame or a fresh buffer held).
+    let sums: Vec<[f32; 4]> =
+        gpu::read_buffer(ctx, pending.partials(), 0, pending.partial_vec4s() as usize)
+            .expect("readback");
+    assert_eq!(step_guard(0, &sums), 0, "{tag}: a strip sum is not finite");
+    if !planes {
+        assert!(sums.iter().skip(1).step_by(2).all(|s| *s == [0.0; 4]), "{tag}: regularisers");
+    }
     let read = |b: &wgpu::Buffer| -> Vec<[f32; 4]> {
         gpu::read_buffer(ctx, b, 0, pixels as usize).expect("readback")
     };
@@ -270,6 +280,21 @@ fn gpu_losses_match_twins() {
         check(&ctx, &mut kernels, &l, false, false, false);
         check(&ctx, &mut kernels, &l, true, true, true);
     }
+}
+
+#[test]
+fn a_loss_without_regularisers_sums_none_in_a_fresh_buffer() {
+    // The regularisers' statistics are not written without planes: the strip sums must not
+    // read them (poison-filled here, as a fresh buffer may hold anything), or the step's guard
+    // takes the loss for not finite.
+    let ctx = GpuContext::with_options(&DeviceOptions {
+        poison_fresh_buffers: true,
+        ..Default::default()
+    })
+    .expect("adapter");
+    let mut kernels = LossKernels::new(&ctx);
+    let l = layers(37, 29, &mut Rng::new(8));
+    check(&ctx, &mut kernels, &l, false, false, false);
 }
 
 #[test]
