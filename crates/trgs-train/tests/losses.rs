@@ -262,13 +262,15 @@ fn check(
     }
 }
 
+/// A context whose fresh buffers are poison-filled, so that a sum of memory no pass wrote shows.
+fn poisoned_context() -> GpuContext {
+    GpuContext::with_options(&DeviceOptions { poison_fresh_buffers: true, ..Default::default() })
+        .expect("adapter")
+}
+
 #[test]
 fn gpu_losses_match_twins() {
-    let ctx = GpuContext::with_options(&DeviceOptions {
-        poison_fresh_buffers: true,
-        ..Default::default()
-    })
-    .expect("adapter");
+    let ctx = poisoned_context();
     let mut kernels = LossKernels::new(&ctx);
     let mut rng = Rng::new(5);
     // 150x61 has 143 strips of LOSS_STRIP pixels: `loss_sums` runs more than one workgroup of
@@ -287,11 +289,7 @@ fn a_loss_without_regularisers_sums_none_in_a_fresh_buffer() {
     // The regularisers' statistics are not written without planes: the strip sums must not
     // read them (poison-filled here, as a fresh buffer may hold anything), or the step's guard
     // takes the loss for not finite.
-    let ctx = GpuContext::with_options(&DeviceOptions {
-        poison_fresh_buffers: true,
-        ..Default::default()
-    })
-    .expect("adapter");
+    let ctx = poisoned_context();
     let mut kernels = LossKernels::new(&ctx);
     let l = layers(37, 29, &mut Rng::new(8));
     check(&ctx, &mut kernels, &l, false, false, false);
