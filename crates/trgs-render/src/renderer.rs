@@ -190,6 +190,33 @@ impl Renderer {
         })
     }
 
+    /// Render into `frame` and `finish` it (a pass that waits for the GPU: a display, or a plain
+    /// wait), with one wait a frame: the key list is sized from earlier frames
+    /// ([`KeySizing::FromEarlierFrames`], whatever `options` says), so the render does not wait
+    /// halfway for its key totals, which `finish`'s wait brings back. A frame that outgrew its
+    /// list dropped keys: it is rendered again, sized exactly, and finished again. How a viewer
+    /// draws and how `render_fps` times a render.
+    pub fn render_finished<E: From<RenderError>>(
+        &self,
+        scene: &GpuScene,
+        camera: &Camera,
+        options: &RenderOptions,
+        frame: &mut Frame,
+        mut finish: impl FnMut(&Frame) -> Result<(), E>,
+    ) -> Result<(), E> {
+        let sized = RenderOptions { key_sizing: KeySizing::FromEarlierFrames, ..options.clone() };
+        self.render_into(scene, camera, &sized, frame)?;
+        finish(frame)?;
+        // Known without another wait: `finish` waited for the frame.
+        let totals = frame.settle_keys(&self.ctx).map_err(RenderError::from)?;
+        if totals.is_none_or(|k| k.held()) {
+            return Ok(());
+        }
+        let exact = RenderOptions { key_sizing: KeySizing::Exact, ..options.clone() };
+        self.render_into(scene, camera, &exact, frame)?;
+        finish(frame)
+    }
+
     fn render_scoped(
         &self,
         scene: &GpuScene,

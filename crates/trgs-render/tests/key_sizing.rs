@@ -8,7 +8,7 @@ use trgs_core::scene::Gaussians;
 use trgs_render::toolkit::FrameStages as _;
 use trgs_render::toolkit::gpu::read_buffer;
 use trgs_render::{
-    Frame, GpuContext, GpuScene, KeySizing, KeyTotals, Layer, RenderOptions, Renderer,
+    Frame, GpuContext, GpuScene, KeySizing, KeyTotals, Layer, RenderError, RenderOptions, Renderer,
 };
 
 mod common;
@@ -141,4 +141,45 @@ fn a_frame_that_outgrows_its_list_says_so_and_sizes_the_next() {
     let next = frame.settle_keys(&ctx).expect("totals").expect("rendered");
     assert_eq!(next, KeyTotals { keys, capacity: keys + keys / 4 });
     assert_eq!(layers(&ctx, &frame), want, "the frame rendered again");
+}
+
+#[test]
+fn a_finished_render_that_outgrew_its_list_is_rendered_again_exactly() {
+    // `render_finished`, how the viewer draws and `render_fps` times: one wait a frame (the
+    // finishing pass's), and a frame that outgrew its list rendered again before it is used.
+    let ctx = ctx();
+    let renderer = Renderer::new(&ctx);
+    let big = random_scene(&spec(133, 4000, 1, 30.0));
+    // The same camera over a fifth of the Gaussians: a list sized from its frame cannot hold
+    // the whole scene's keys.
+    let mut small = big.clone();
+    let n = big.gaussians.len() / 5;
+    small.gaussians = big.gaussians.subset(|i| i < n);
+    let (big_gpu, small_gpu) = (upload(&ctx, &big), upload(&ctx, &small));
+    let (want, _) = exact(&renderer, &big_gpu, &big);
+    // `options` asks for exact lists: `render_finished` sizes from earlier frames regardless.
+    let o = options(KeySizing::Exact);
+    let mut frame = Frame::default();
+    let mut finished = Vec::new();
+    let mut times_finished = Vec::new();
+    for (scene, camera) in [(&small_gpu, &small.camera), (&big_gpu, &big.camera)] {
+        finished.clear();
+        let finish = |f: &Frame| -> Result<(), RenderError> {
+            finished.push(layers(&ctx, f));
+            Ok(())
+        };
+        renderer.render_finished(scene, camera, &o, &mut frame, finish).expect("render");
+        times_finished.push(finished.len());
+    }
+    // The first render into the frame is exact and finished once; the second outgrows its
+    // list, is finished, then rendered again: what was finished last is the exact frame.
+    assert_eq!(times_finished, [1, 2], "times each render was finished");
+    assert!(finished[1] == want, "the frame rendered again is not the exact frame");
+    // Once more, the list now holds the frame: one wait, the finishing pass's.
+    let waits = ctx.waits();
+    let wait = |_: &Frame| -> Result<(), RenderError> {
+        Ok(trgs_render::toolkit::gpu::wait_for_gpu(&ctx, "the finishing pass")?)
+    };
+    renderer.render_finished(&big_gpu, &big.camera, &o, &mut frame, wait).expect("render");
+    assert_eq!(ctx.waits() - waits, 1, "a render in steady state waits once");
 }

@@ -8,7 +8,7 @@ use std::time::Instant;
 use trgs_core::io::{read_planes_json, read_rgb8_image};
 use trgs_core::metrics::{psnr, ssim};
 use trgs_core::scene::ReflectionPlane;
-use trgs_render::{Frame, GpuContext, GpuScene, KeySizing, Layer, RenderOptions, Renderer};
+use trgs_render::{Frame, GpuContext, GpuScene, Layer, RenderError, RenderOptions, Renderer};
 
 /// A model as evaluation sees it: scene, renderer and options.
 #[derive(Debug)]
@@ -77,29 +77,25 @@ pub fn evaluate(
 /// Frames per second of full renders (every layer, as the renderer produces them) of the
 /// evaluation views, each waited for: the render's own time, as a viewer pays it, without reading
 /// the image back. The renders go into one frame whose key list is sized from earlier frames
-/// (a viewer's steady state) rather than read back halfway through each; a render whose list
-/// turns out too small is rendered again, sized exactly, and both count. After one warm-up
-/// render (pipelines, buffers).
+/// (a viewer's steady state, [`Renderer::render_finished`]) rather than read back halfway
+/// through each; a render whose list turns out too small is rendered again, and both count.
+/// After one warm-up render (pipelines, buffers).
 pub fn render_fps(model: &Renderable, data: &TrainingData) -> Result<f64> {
     let views = data.eval_views();
     let Some(first) = views.first() else { return Ok(0.0) };
     let mut frame = Frame::default();
-    let mut render = |view: &View, key_sizing: KeySizing| -> Result<bool> {
-        let options = RenderOptions { key_sizing, ..model.options.clone() };
-        model
-            .renderer
-            .render_into(model.scene, &view.camera, &options, &mut frame)
-            .with_context(|| format!("rendering view {}", view.camera.name))?;
-        trgs_render::toolkit::gpu::wait_for_gpu(model.ctx, "a timed render")?;
-        // Known now without another wait: the frame has finished.
-        Ok(frame.settle_keys(model.ctx)?.is_none_or(|k| k.held()))
+    let mut render = |view: &View| -> Result<()> {
+        let wait = |_: &Frame| -> Result<(), RenderError> {
+            Ok(trgs_render::toolkit::gpu::wait_for_gpu(model.ctx, "a timed render")?)
+        };
+        (model.renderer)
+            .render_finished(model.scene, &view.camera, &model.options, &mut frame, wait)
+            .with_context(|| format!("rendering view {}", view.camera.name))
     };
-    render(first, KeySizing::FromEarlierFrames)?;
+    render(first)?;
     let t = Instant::now();
     for v in views {
-        if !render(v, KeySizing::FromEarlierFrames)? {
-            render(v, KeySizing::Exact)?;
-        }
+        render(v)?;
     }
     Ok(views.len() as f64 / t.elapsed().as_secs_f64())
 }

@@ -19,9 +19,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 use trgs_core::reference::ReflectionModel;
 use trgs_core::scene::{Camera, ReflectionPlane};
-use trgs_render::{
-    DisplayTarget, Frame, GpuContext, GpuScene, KeySizing, Layer, RenderOptions, Renderer,
-};
+use trgs_render::{DisplayTarget, Frame, GpuContext, GpuScene, Layer, RenderOptions, Renderer};
 
 /// The layers the selector offers, with their labels.
 const LAYERS: [(Layer, &str); 8] = [
@@ -436,9 +434,6 @@ impl ViewerApp {
             let options = RenderOptions {
                 enabled_planes: s.enabled.clone(),
                 reflection: s.reflection,
-                // No wait halfway through the frame for its key totals: the list is sized from
-                // earlier frames, and a frame that outgrew it is drawn again exactly (`draw`).
-                key_sizing: KeySizing::FromEarlierFrames,
                 ..Default::default()
             };
             let range = if self.layer == Layer::Depth {
@@ -448,10 +443,12 @@ impl ViewerApp {
             };
             let t = Instant::now();
             let (renderer, layer) = (&self.renderer, self.layer);
-            let drawn =
-                draw(&self.ctx, renderer, &mut self.frame, &s.scene, &camera, &options, |f| {
-                    renderer.display(f, layer, range, target).map_err(|e| e.to_string())
-                });
+            let show = |f: &Frame| -> anyhow::Result<()> {
+                Ok(renderer.display(f, layer, range, target)?)
+            };
+            let drawn = renderer
+                .render_finished(&s.scene, &camera, &options, &mut self.frame, show)
+                .map_err(|e| format!("{e:#}"));
             match drawn {
                 Ok(()) => {
                     let ms = t.elapsed().as_secs_f64() * 1e3;
@@ -584,80 +581,5 @@ impl eframe::App for ViewerApp {
         if let Some(feed) = &self.live {
             feed.close();
         }
-    }
-}
-
-/// Render `camera` into `frame` and show it (`show`: the display pass, which waits for the GPU),
-/// with one wait a frame. The key list is sized from earlier frames (`options`); a frame that
-/// outgrew it dropped keys, so it is rendered again, sized exactly, and shown again, before egui
-/// paints the target.
-fn draw(
-    ctx: &GpuContext,
-    renderer: &Renderer,
-    frame: &mut Frame,
-    scene: &GpuScene,
-    camera: &Camera,
-    options: &RenderOptions,
-    mut show: impl FnMut(&Frame) -> Result<(), String>,
-) -> Result<(), String> {
-    renderer.render_into(scene, camera, options, frame).map_err(|e| e.to_string())?;
-    show(frame)?;
-    // Known without another wait: the display waited for the frame.
-    let totals = frame.settle_keys(ctx).map_err(|e| e.to_string())?;
-    if totals.is_none_or(|k| k.held()) {
-        return Ok(());
-    }
-    let exact = RenderOptions { key_sizing: KeySizing::Exact, ..options.clone() };
-    renderer.render_into(scene, camera, &exact, frame).map_err(|e| e.to_string())?;
-    show(frame)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use trgs_core::fixtures::{SceneSpec, random_scene};
-
-    #[test]
-    fn a_frame_that_outgrows_its_key_list_is_drawn_again_exactly_before_it_is_shown() {
-        let ctx = GpuContext::new().expect("adapter");
-        let renderer = Renderer::new(&ctx);
-        let spec = SceneSpec { seed: 5, gaussians: 4000, planes: 1, ..SceneSpec::default() };
-        let big = random_scene(&spec);
-        // The same camera over a fifth of the Gaussians: far fewer keys, so that a list sized
-        // from its frame cannot hold the whole scene's.
-        let mut small = big.clone();
-        let n = big.gaussians.len() / 5;
-        small.gaussians = big.gaussians.subset(|i| i < n);
-        let upload = |s: &trgs_core::fixtures::Scene| {
-            GpuScene::upload(&ctx, &s.gaussians.cast(), &s.planes).expect("scene")
-        };
-        let (big_gpu, small_gpu) = (upload(&big), upload(&small));
-        let exact = RenderOptions::default();
-        let want = renderer.render(&big_gpu, &big.camera, &exact).expect("render");
-        let want = want.read_layer(&ctx, Layer::Color).expect("readback");
-        let options = RenderOptions { key_sizing: KeySizing::FromEarlierFrames, ..exact };
-        let mut frame = Frame::default();
-        let mut shown = Vec::new();
-        let mut draws = Vec::new();
-        for (scene, camera) in [(&small_gpu, &small.camera), (&big_gpu, &big.camera)] {
-            shown.clear();
-            draw(&ctx, &renderer, &mut frame, scene, camera, &options, |f| {
-                shown.push(f.read_layer(&ctx, Layer::Color).map_err(|e| e.to_string())?);
-                Ok(())
-            })
-            .expect("draw");
-            draws.push(shown.len());
-        }
-        // The first frame is sized exactly (nothing earlier) and shown once; the second
-        // outgrows its list, is shown, then drawn again: what was shown last is the exact frame.
-        assert_eq!(draws, [1, 2], "times each frame was shown");
-        assert!(shown[1].data == want.data, "the frame drawn again is not the exact frame");
-        // Drawn once more, the list now holds the frame: one wait, the display's.
-        let waits = ctx.waits();
-        draw(&ctx, &renderer, &mut frame, &big_gpu, &big.camera, &options, |_| {
-            trgs_render::toolkit::gpu::wait_for_gpu(&ctx, "a display").map_err(|e| e.to_string())
-        })
-        .expect("draw");
-        assert_eq!(ctx.waits() - waits, 1, "a frame in steady state waits once");
     }
 }

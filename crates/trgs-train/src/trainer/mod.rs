@@ -48,8 +48,8 @@ pub struct StepStats {
     /// How many times recording the step waited for the GPU ([`GpuContext::waits`]): none,
     /// unless its key list was sized exactly (the first step, the first recorded after a skipped
     /// step was known, the one after an edit of the set from outside the maintenance), phases
-    /// are timed, or the adapter is a
-    /// CPU one (which waits at the end of each phase: `Capabilities::records_while_busy`).
+    /// are timed, or the adapter is a CPU one (which waits at the end of each phase:
+    /// `Capabilities::records_while_busy`).
     pub record_waits: u64,
     /// Where the step's wall-clock time went.
     pub times: StepTimes,
