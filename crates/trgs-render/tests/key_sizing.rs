@@ -44,6 +44,16 @@ fn layers(ctx: &GpuContext, frame: &Frame) -> Vec<Vec<f32>> {
     Layer::ALL.iter().map(|&l| frame.read_layer(ctx, l).expect("readback").data).collect()
 }
 
+/// A scene, and the same camera over a fifth of its Gaussians: far fewer keys, so that a list
+/// sized from the small one's frame cannot hold the big one's.
+fn big_and_small() -> (Scene, Scene) {
+    let big = random_scene(&spec(133, 4000, 1, 30.0));
+    let mut small = big.clone();
+    let n = big.gaussians.len() / 5;
+    small.gaussians = big.gaussians.subset(|i| i < n);
+    (big, small)
+}
+
 /// Renders `scene` with an exact list into a fresh frame: its layers and key total.
 fn exact(renderer: &Renderer, scene: &GpuScene, camera: &Scene) -> (Vec<Vec<f32>>, u64) {
     let ctx = renderer.context();
@@ -107,11 +117,7 @@ fn a_list_sized_from_an_earlier_frame_in_two_pages_renders_as_the_exact_list() {
 fn a_frame_that_outgrows_its_list_says_so_and_sizes_the_next() {
     let ctx = ctx();
     let renderer = Renderer::new(&ctx);
-    let big = random_scene(&spec(133, 4000, 1, 30.0));
-    // The same camera over a fifth of the Gaussians: far fewer keys.
-    let mut small = big.clone();
-    let n = big.gaussians.len() / 5;
-    small.gaussians = big.gaussians.subset(|i| i < n);
+    let (big, small) = big_and_small();
     let (big_gpu, small_gpu) = (upload(&ctx, &big), upload(&ctx, &small));
     let (want, keys) = exact(&renderer, &big_gpu, &big);
     let (_, few) = exact(&renderer, &small_gpu, &small);
@@ -149,12 +155,7 @@ fn a_finished_render_that_outgrew_its_list_is_rendered_again_exactly() {
     // finishing pass's), and a frame that outgrew its list rendered again before it is used.
     let ctx = ctx();
     let renderer = Renderer::new(&ctx);
-    let big = random_scene(&spec(133, 4000, 1, 30.0));
-    // The same camera over a fifth of the Gaussians: a list sized from its frame cannot hold
-    // the whole scene's keys.
-    let mut small = big.clone();
-    let n = big.gaussians.len() / 5;
-    small.gaussians = big.gaussians.subset(|i| i < n);
+    let (big, small) = big_and_small();
     let (big_gpu, small_gpu) = (upload(&ctx, &big), upload(&ctx, &small));
     let (want, _) = exact(&renderer, &big_gpu, &big);
     // `options` asks for exact lists: `render_finished` sizes from earlier frames regardless.
