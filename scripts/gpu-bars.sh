@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The two GPU measurements of the scale work in one command that fits a short loan of a GPU
-# machine (docs/BENCHMARKS.md, "On a GPU"): run it there from the repository root with the
-# release `bench` and `train` built here and carried along (the machine needs no Rust toolchain).
+# machine (docs/BENCHMARKS.md, "The GPU measurements of the scale work"): run it there from the
+# repository root with the release `bench` and `train` built here and carried along (the
+# machine needs no Rust toolchain).
 #
 #   scripts/gpu-bars.sh OUT [SECONDS]
 #
@@ -19,11 +20,12 @@
 set -uo pipefail
 cd "$(dirname "$0")/.."
 
-[ $# -ge 1 ] || { sed -n '2,18p' "$0" >&2; exit 2; }
+[ $# -ge 1 ] || { sed -n '2,19p' "$0" >&2; exit 2; }
 out=$1
 budget=${2:-570}
 deadline=$((SECONDS + budget))
-run_dir=${BARS_RUN_DIR:-/tmp/gpu-bars-fixture}
+# The fixture and its run: outside OUT, whose files are copied back.
+run_dir=/tmp/gpu-bars-fixture
 mkdir -p "$out"
 rm -rf "$run_dir"
 
