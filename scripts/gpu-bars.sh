@@ -12,7 +12,8 @@
 #    or for as long as SECONDS (default 570, the whole command) leaves: OUT/fixture.log, the
 #    run's log.jsonl (gzipped) and metrics.json when it finishes.
 # Both logs end in OUT/summary.txt: steps reached, the step rate over the last 1000 steps and
-# the wall time that rate projects for the whole run, each evaluation's test PSNR.
+# the wall time that rate projects for the whole run, where a step's time went (recording,
+# waiting for the GPU, maintenance), each evaluation's test PSNR.
 #
 # BARS_BUSY_ARGS and BARS_FIXTURE_ARGS replace the two commands' size arguments (a smoke run on
 # lavapipe: BARS_BUSY_ARGS="--scale-sizes 256x192 --scale-gaussians 20000 --reps 2"
@@ -20,7 +21,7 @@
 set -uo pipefail
 cd "$(dirname "$0")/.."
 
-[ $# -ge 1 ] || { sed -n '2,19p' "$0" >&2; exit 2; }
+[ $# -ge 1 ] || { sed -n '2,20p' "$0" >&2; exit 2; }
 out=$1
 budget=${2:-570}
 deadline=$((SECONDS + budget))
@@ -89,6 +90,16 @@ print(f"fixture: {last['step']} steps in {last['seconds']:.0f} s of training, "
       f"{last['gaussians']} Gaussians, {sum(s['skipped'] for s in steps)} skipped")
 print(f"fixture: {1000 * rate:.1f} ms a step over the last {len(tail)} steps; "
       f"{target} steps at that rate: {last['seconds'] + rate * (target - last['step']):.0f} s")
+# On a GPU a step's phases are recorded without waiting (records_while_busy), so render, loss,
+# backward and adam are the CPU's recording time and readback is mostly the wait for the GPU:
+# a step waiting there is a step the GPU, not the CPU, set the pace of.
+med = lambda key: statistics.median(s["ms"].get(key, 0.0) for s in tail)
+record = statistics.median(sum(s["ms"].get(k, 0.0) for k in ("render", "loss", "backward", "adam"))
+                           for s in tail)
+waits = sum(s.get("record_waits", 0) for s in tail)
+print(f"fixture: median ms a step over the same steps: recording {record:.2f} ({waits} waits for "
+      f"the GPU in it over the {len(tail)} steps), reading back (waiting for the GPU) "
+      f"{med('readback'):.2f}, maintenance {med('densify'):.2f}")
 print(f"fixture: peak RAM {last['peak_ram_bytes'] / 2**30:.2f} GiB, "
       f"GPU buffers {last['gpu_bytes'] / 2**30:.2f} GiB, median keys "
       f"{statistics.median(s['keys'] for s in tail):.0f}")
