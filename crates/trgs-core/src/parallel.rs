@@ -1,5 +1,6 @@
 //! Jobs spread over threads: the per-view work (tracing the synthetic views, loading photos,
-//! costing a plane against every view's mask) where each view is a pure function of its index.
+//! costing a plane against every view's mask) where each view is a pure function of its index,
+//! and the rows of an image filter.
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Call `f(i)` for every `i` in `0..n` on up to `max_threads` threads (never more than the
@@ -46,6 +47,35 @@ pub fn map_in_order<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync) -
     })
 }
 
+/// Rows per thread when `rows` rows are split evenly over the cores.
+pub fn rows_per_thread(rows: usize) -> usize {
+    let threads = std::thread::available_parallelism().map_or(1, |t| t.get());
+    rows.div_ceil(threads).max(1)
+}
+
+/// Call `f(first_row, run)` for runs of `rows_per_run` rows of `data` (rows of `row_len` items;
+/// the last run, and its last row, may be shorter), each run on its own thread. A panic in `f`
+/// is resumed on the caller's thread.
+pub fn for_each_run_mut<T: Send>(
+    data: &mut [T],
+    row_len: usize,
+    rows_per_run: usize,
+    f: impl Fn(usize, &mut [T]) + Sync,
+) {
+    let step = rows_per_run.max(1);
+    let f = &f;
+    std::thread::scope(|scope| {
+        let handles: Vec<_> = data
+            .chunks_mut(step * row_len.max(1))
+            .enumerate()
+            .map(|(t, run)| scope.spawn(move || f(t * step, run)))
+            .collect();
+        for handle in handles {
+            handle.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
+        }
+    });
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -69,6 +99,24 @@ mod tests {
         // Index 3 stops the others: at most one index per thread after it.
         assert!(taken.load(Ordering::Relaxed) < 20, "{}", taken.load(Ordering::Relaxed));
         for_each_index(0, 4, |_| panic!("no index"));
+    }
+
+    #[test]
+    fn runs_cover_every_row_once_with_their_first_index() {
+        let mut data = vec![0usize; 1003];
+        for_each_run_mut(&mut data, 10, 7, |first, run| {
+            assert_eq!(first % 7, 0);
+            assert!(run.len() == 70 || (first == 98 && run.len() == 23), "{first}: {}", run.len());
+            run.iter_mut().enumerate().for_each(|(i, v)| *v = first * 10 + i);
+        });
+        assert_eq!(data, (0..1003).collect::<Vec<_>>());
+        for_each_run_mut(&mut Vec::<u8>::new(), 4, 2, |_, _| panic!("no run"));
+        assert_eq!(rows_per_thread(0), 1);
+        let cores = std::thread::available_parallelism().map_or(1, |t| t.get());
+        for rows in [1, 7, 1000] {
+            let per = rows_per_thread(rows);
+            assert!(per <= rows && per * cores >= rows, "{rows} rows: {per} per thread");
+        }
     }
 
     #[test]

@@ -264,13 +264,25 @@ fn view_cost(plane: &ReflectionPlane, v: &ViewPixels, s: &SilhouetteSettings) ->
             let local = to_origin + dir * dist;
             let edge = (hw - local.dot(t).abs()).min(hh - local.dot(b).abs());
             let px = edge * v.focal / dist;
-            1.0 / (1.0 + (-px / s.edge_px - shift).exp())
+            logistic(px / s.edge_px + shift)
         } else {
             0.0
         };
         cost += if labelled { 1.0 - inside } else { s.outside_weight * inside };
     }
     cost / v.labelled
+}
+
+/// `1 / (1 + exp(-z))`, without the exponential where it is 1 or 0 to a part in 1e17: most of
+/// the pixels a view's cost traces lie many soft-edge widths inside or outside the rectangle.
+fn logistic(z: f64) -> f64 {
+    if z > 40.0 {
+        1.0
+    } else if z < -40.0 {
+        0.0
+    } else {
+        1.0 / (1.0 + (-z).exp())
+    }
 }
 
 #[cfg(test)]
@@ -398,6 +410,17 @@ mod tests {
         let size = (truth.width * truth.height).sqrt();
         assert!((fit.plane.centre - truth.centre).length() < 0.003 * size);
         assert!(fit.cost_after <= fit.cost_before);
+    }
+
+    #[test]
+    fn the_logistic_is_cut_off_only_where_it_is_flat() {
+        let exact = |z: f64| 1.0 / (1.0 + (-z).exp());
+        for z in [-60.0, -40.5, -40.0, -3.0, 0.0, 0.7, 40.0, 40.5, 60.0] {
+            assert!((logistic(z) - exact(z)).abs() < 1e-17, "{z}");
+        }
+        // At and past the cut-off towards inside, the exact value is already 1.0 in f64.
+        assert_eq!(logistic(40.5), exact(40.5));
+        assert!(logistic(f64::NAN).is_nan());
     }
 
     #[test]

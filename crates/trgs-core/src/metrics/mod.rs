@@ -17,6 +17,10 @@
 //! can use [`ssim_map`] with [`Border::Zero`] as its CPU twin.
 use crate::image::Image;
 
+mod window_filter;
+use window_filter::filter_rows;
+pub use window_filter::{gaussian_filter, gaussian_window};
+
 /// Side of the SSIM window.
 pub const SSIM_WINDOW: usize = 11;
 /// Half the window side: the padding of 3DGS's conv2d and the border scikit-image crops.
@@ -122,91 +126,33 @@ pub fn ssim_map(
     let (w, h, ch) = (a.width as usize, a.height as usize, a.channels as usize);
     let mut out = Image::<f64>::new(a.width, a.height, a.channels);
     for c in 0..ch {
-        let x: Vec<f64> = (0..w * h).map(|i| f64::from(a.data[i * ch + c])).collect();
-        let y: Vec<f64> = (0..w * h).map(|i| f64::from(b.data[i * ch + c])).collect();
-        let product =
-            |p: &[f64], q: &[f64]| -> Vec<f64> { p.iter().zip(q).map(|(u, v)| u * v).collect() };
-        let mu_x = gaussian_filter(&x, w, h, border);
-        let mu_y = gaussian_filter(&y, w, h, border);
-        let e_xx = gaussian_filter(&product(&x, &x), w, h, border);
-        let e_yy = gaussian_filter(&product(&y, &y), w, h, border);
-        let e_xy = gaussian_filter(&product(&x, &y), w, h, border);
-        for i in 0..w * h {
-            let (mx, my) = (mu_x[i], mu_y[i]);
-            let var_x = e_xx[i] - mx * mx;
-            let var_y = e_yy[i] - my * my;
-            let cov = e_xy[i] - mx * my;
-            let num = (2.0 * mx * my + SSIM_C1) * (2.0 * cov + SSIM_C2);
-            let den = (mx * mx + my * my + SSIM_C1) * (var_x + var_y + SSIM_C2);
-            out.data[i * ch + c] = num / den;
-        }
-    }
-    Ok(out)
-}
-
-/// The normalised 1D Gaussian window: `exp(-k^2 / (2 sigma^2))` for `k = -5..=5`, divided by its
-/// sum (as both 3DGS's `gaussian()` and scipy's `_gaussian_kernel1d` do).
-pub fn gaussian_window() -> [f64; SSIM_WINDOW] {
-    let mut g = [0.0; SSIM_WINDOW];
-    for (i, v) in g.iter_mut().enumerate() {
-        let k = i as f64 - SSIM_RADIUS as f64;
-        *v = (-k * k / (2.0 * SSIM_SIGMA * SSIM_SIGMA)).exp();
-    }
-    let sum: f64 = g.iter().sum();
-    g.map(|v| v / sum)
-}
-
-/// Correlate a single-channel `width x height` plane (row-major) with the 11x11 Gaussian window,
-/// as two 1D passes: along each row, then along each column.
-pub fn gaussian_filter(plane: &[f64], width: usize, height: usize, border: Border) -> Vec<f64> {
-    let g = gaussian_window();
-    let mut rows = vec![0.0; width * height];
-    for y in 0..height {
-        let line = &plane[y * width..(y + 1) * width];
-        for x in 0..width {
-            rows[y * width + x] = window_sum(&g, x, width, border, |i| line[i]);
-        }
-    }
-    let mut out = vec![0.0; width * height];
-    for x in 0..width {
-        for y in 0..height {
-            out[y * width + x] = window_sum(&g, y, height, border, |i| rows[i * width + x]);
-        }
-    }
-    out
-}
-
-/// `sum_k g[k] * line[centre + k - R]` over a line of length `n`, with `border` outside it.
-#[inline]
-fn window_sum(
-    g: &[f64; SSIM_WINDOW],
-    centre: usize,
-    n: usize,
-    border: Border,
-    line: impl Fn(usize) -> f64,
-) -> f64 {
-    let mut sum = 0.0;
-    for (k, &gk) in g.iter().enumerate() {
-        let i = centre as isize + k as isize - SSIM_RADIUS as isize;
-        let v = if (0..n as isize).contains(&i) {
-            line(i as usize)
-        } else {
-            match border {
-                Border::Zero => 0.0,
-                Border::Reflect => line(reflect(i, n)),
+        // The five windowed planes: a, b, a a, b b and a b, row by row.
+        let source = |y: usize, lines: &mut [Vec<f64>; 5]| {
+            let row = y * w * ch;
+            for x in 0..w {
+                let (u, v) =
+                    (f64::from(a.data[row + x * ch + c]), f64::from(b.data[row + x * ch + c]));
+                lines[0][x] = u;
+                lines[1][x] = v;
+                lines[2][x] = u * u;
+                lines[3][x] = v * v;
+                lines[4][x] = u * v;
             }
         };
-        sum += gk * v;
+        let emit = |_: usize, m: &[Vec<f64>; 5], out_row: &mut [f64]| {
+            for x in 0..w {
+                let (mx, my) = (m[0][x], m[1][x]);
+                let var_x = m[2][x] - mx * mx;
+                let var_y = m[3][x] - my * my;
+                let cov = m[4][x] - mx * my;
+                let num = (2.0 * mx * my + SSIM_C1) * (2.0 * cov + SSIM_C2);
+                let den = (mx * mx + my * my + SSIM_C1) * (var_x + var_y + SSIM_C2);
+                out_row[x * ch + c] = num / den;
+            }
+        };
+        filter_rows(w, h, border, &mut out.data, w * ch, source, emit);
     }
-    sum
-}
-
-/// scipy's `reflect` index: the line mirrored about its outer sample edges, repeated with period
-/// `2n` (so it also holds when the window is wider than the line).
-fn reflect(i: isize, n: usize) -> usize {
-    let period = 2 * n as isize;
-    let m = i.rem_euclid(period) as usize;
-    if m < n { m } else { 2 * n - 1 - m }
+    Ok(out)
 }
 
 fn check_pair(a: &Image<f32>, b: &Image<f32>) -> Result<(), MetricsError> {
@@ -232,27 +178,4 @@ fn check_pair(a: &Image<f32>, b: &Image<f32>) -> Result<(), MetricsError> {
         return Err(MetricsError::Empty { width: a.width, height: a.height, channels: a.channels });
     }
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn reflect_matches_scipy_half_sample_symmetry() {
-        // scipy reflect on [a b c d]: ... c d | d c b a | a b c d | d c b a | a b ...
-        let got: Vec<usize> = (-6..10).map(|i| reflect(i, 4)).collect();
-        assert_eq!(got, [2, 3, 3, 2, 1, 0, 0, 1, 2, 3, 3, 2, 1, 0, 0, 1]);
-        assert!((-7..7).all(|i| reflect(i, 1) == 0));
-    }
-
-    #[test]
-    fn window_is_normalised_and_symmetric() {
-        let g = gaussian_window();
-        assert!((g.iter().sum::<f64>() - 1.0).abs() < 1e-15);
-        for k in 0..SSIM_WINDOW {
-            assert_eq!(g[k], g[SSIM_WINDOW - 1 - k]);
-        }
-        assert!(g[SSIM_RADIUS] > g[SSIM_RADIUS - 1]);
-    }
 }
