@@ -4,10 +4,13 @@
 # repository root with the release `bench` and `train` built here and carried along (the
 # machine needs no Rust toolchain).
 #
-#   scripts/gpu-bars.sh OUT [SECONDS]
+#   scripts/gpu-bars.sh OUT [SECONDS] [PARTS]
+#
+# PARTS is `both` (default), `busy` or `fixture`: a loan with room for two calls gives the
+# fixture a whole call of its own (`busy` first, then `fixture` with up to 590 s).
 #
 # 1. The GPU's busy share of a pipelined training step at 1M Gaussians and 1600x1200
-#    (`bench --scale`): OUT/busy.log.
+#    (`bench --scale`), given at most a third of SECONDS when both parts run: OUT/busy.log.
 # 2. The scale fixture (the built-in scene, 200 + 8 photos of 1280x960) trained for 30000 steps,
 #    or for as long as SECONDS (default 570, the whole command) leaves: OUT/fixture.log, the
 #    run's log.jsonl (gzipped) and metrics.json when it finishes.
@@ -21,9 +24,15 @@
 set -uo pipefail
 cd "$(dirname "$0")/.."
 
-[ $# -ge 1 ] || { sed -n '2,20p' "$0" >&2; exit 2; }
+[ $# -ge 1 ] || { sed -n '2,23p' "$0" >&2; exit 2; }
 out=$1
 budget=${2:-570}
+parts=${3:-both}
+case $parts in both | busy | fixture) ;; *)
+    echo "PARTS must be both, busy or fixture, not '$parts'" >&2
+    exit 2
+    ;;
+esac
 deadline=$((SECONDS + budget))
 # The fixture and its run: outside OUT, whose files are copied back.
 run_dir=/tmp/gpu-bars-fixture
@@ -48,12 +57,18 @@ if command -v nvidia-smi >/dev/null; then
 fi
 
 # The busy share gets at most a third of the budget: the fixture's run is the longer measurement.
-timeout $((budget / 3)) ./target/release/bench --scale "${busy_args[@]}" >"$out/busy.log" 2>&1
-echo "bench --scale rc=$? (124: timed out)" >>"$out/busy.log"
+if [ "$parts" != fixture ]; then
+    busy_budget=$budget
+    [ "$parts" = both ] && busy_budget=$((budget / 3))
+    timeout "$busy_budget" ./target/release/bench --scale "${busy_args[@]}" >"$out/busy.log" 2>&1
+    echo "bench --scale rc=$? (124: timed out)" >>"$out/busy.log"
+fi
 
 # SIGINT, then SIGKILL 10 s later: log.jsonl is written line by line, so the steps run stay.
 left=$((deadline - SECONDS - 20))
-if [ "$left" -gt 30 ]; then
+if [ "$parts" = busy ]; then
+    :
+elif [ "$left" -gt 30 ]; then
     timeout -k 10 -s INT "$left" ./target/release/train "${fixture_args[@]}" --out "$run_dir" \
         >"$out/fixture.log" 2>&1
     echo "train rc=$? (124: stopped at the time limit)" >>"$out/fixture.log"
@@ -64,9 +79,11 @@ fi
 [ -f "$run_dir/metrics.json" ] && cp "$run_dir/metrics.json" "$out/"
 
 {
-    grep -m1 "^adapter:" "$out/busy.log"
-    sed -n '/^| image/,$p' "$out/busy.log" | grep "^|" || echo "bench --scale: no table (busy.log)"
-    python3 - "$run_dir/log.jsonl" "$steps" <<'EOF'
+    if [ "$parts" != fixture ]; then
+        grep -m1 "^adapter:" "$out/busy.log"
+        sed -n '/^| image/,$p' "$out/busy.log" | grep "^|" || echo "bench --scale: no table"
+    fi
+    [ "$parts" = busy ] || python3 - "$run_dir/log.jsonl" "$steps" <<'EOF'
 import json, statistics, sys
 path, target = sys.argv[1], int(sys.argv[2])
 steps, evals = [], []
