@@ -26,10 +26,21 @@ impl<'a> ByteReader<'a> {
 
     /// The next `n` bytes, or a "truncated" message naming `what` was being read.
     pub(crate) fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8], String> {
+        self.take_with(n, || what.to_string())
+    }
+
+    /// [`ByteReader::take`] with the name of what is read made only for the message: readers of
+    /// millions of records (a splat PLY) name each value by its record.
+    pub(crate) fn take_with(
+        &mut self,
+        n: usize,
+        what: impl FnOnce() -> String,
+    ) -> Result<&'a [u8], String> {
         if n > self.remaining() {
             return Err(format!(
-                "truncated: the file ends at byte {} while reading {what} ({n} bytes needed, {} left)",
+                "truncated: the file ends at byte {} while reading {} ({n} bytes needed, {} left)",
                 self.bytes.len(),
+                what(),
                 self.remaining()
             ));
         }
@@ -45,8 +56,17 @@ impl<'a> ByteReader<'a> {
         endian: Endian,
         what: &str,
     ) -> Result<[u8; N], String> {
+        self.array_with(endian, || what.to_string())
+    }
+
+    /// [`ByteReader::array`] with `what` made only for the message ([`ByteReader::take_with`]).
+    pub(crate) fn array_with<const N: usize>(
+        &mut self,
+        endian: Endian,
+        what: impl FnOnce() -> String,
+    ) -> Result<[u8; N], String> {
         let mut a = [0u8; N];
-        a.copy_from_slice(self.take(N, what)?);
+        a.copy_from_slice(self.take_with(N, what)?);
         if endian == Endian::Big {
             a.reverse();
         }

@@ -41,16 +41,23 @@ impl<'a> Body<'a> {
         }
     }
 
-    pub(super) fn scalar(&mut self, ty: ScalarType, what: &str) -> Result<f64, String> {
+    /// The next value, of type `ty`; `what` names it in an error (made only then: a splat PLY
+    /// holds tens of millions of values).
+    pub(super) fn scalar(
+        &mut self,
+        ty: ScalarType,
+        what: &dyn Fn() -> String,
+    ) -> Result<f64, String> {
         match self {
             Body::Binary(r, e) => binary(r, *e, ty, what),
             Body::Ascii(tokens) => {
                 let tok = tokens
                     .next()
-                    .ok_or_else(|| format!("truncated: the data ends before {what}"))?;
+                    .ok_or_else(|| format!("truncated: the data ends before {}", what()))?;
                 let text = std::str::from_utf8(tok).unwrap_or("");
-                let bad =
-                    || format!("{what}: cannot read {:?} as {ty:?}", String::from_utf8_lossy(tok));
+                let bad = || {
+                    format!("{}: cannot read {:?} as {ty:?}", what(), String::from_utf8_lossy(tok))
+                };
                 let v = match ty {
                     // Parse f32 directly: going through f64 could round twice.
                     ScalarType::F32 => text.parse::<f32>().map(f64::from).map_err(|_| bad())?,
@@ -63,24 +70,33 @@ impl<'a> Body<'a> {
     }
 
     /// The item count of a list property.
-    pub(super) fn count(&mut self, ty: ScalarType, what: &str) -> Result<u64, String> {
+    pub(super) fn count(
+        &mut self,
+        ty: ScalarType,
+        what: &dyn Fn() -> String,
+    ) -> Result<u64, String> {
         let v = self.scalar(ty, what)?;
         if v < 0.0 || v.fract() != 0.0 {
-            return Err(format!("{what}: list count {v} is not a non-negative integer"));
+            return Err(format!("{}: list count {v} is not a non-negative integer", what()));
         }
         Ok(v as u64)
     }
 }
 
-fn binary(r: &mut ByteReader<'_>, e: Endian, ty: ScalarType, what: &str) -> Result<f64, String> {
+fn binary(
+    r: &mut ByteReader<'_>,
+    e: Endian,
+    ty: ScalarType,
+    what: &dyn Fn() -> String,
+) -> Result<f64, String> {
     Ok(match ty {
-        ScalarType::I8 => f64::from(i8::from_le_bytes(r.array(e, what)?)),
-        ScalarType::U8 => f64::from(u8::from_le_bytes(r.array(e, what)?)),
-        ScalarType::I16 => f64::from(i16::from_le_bytes(r.array(e, what)?)),
-        ScalarType::U16 => f64::from(u16::from_le_bytes(r.array(e, what)?)),
-        ScalarType::I32 => f64::from(i32::from_le_bytes(r.array(e, what)?)),
-        ScalarType::U32 => f64::from(u32::from_le_bytes(r.array(e, what)?)),
-        ScalarType::F32 => f64::from(f32::from_le_bytes(r.array(e, what)?)),
-        ScalarType::F64 => f64::from_le_bytes(r.array(e, what)?),
+        ScalarType::I8 => f64::from(i8::from_le_bytes(r.array_with(e, what)?)),
+        ScalarType::U8 => f64::from(u8::from_le_bytes(r.array_with(e, what)?)),
+        ScalarType::I16 => f64::from(i16::from_le_bytes(r.array_with(e, what)?)),
+        ScalarType::U16 => f64::from(u16::from_le_bytes(r.array_with(e, what)?)),
+        ScalarType::I32 => f64::from(i32::from_le_bytes(r.array_with(e, what)?)),
+        ScalarType::U32 => f64::from(u32::from_le_bytes(r.array_with(e, what)?)),
+        ScalarType::F32 => f64::from(f32::from_le_bytes(r.array_with(e, what)?)),
+        ScalarType::F64 => f64::from_le_bytes(r.array_with(e, what)?),
     })
 }

@@ -132,11 +132,11 @@ fn skip_element(body: &mut Body<'_>, element: &Element) -> Result<(), String> {
         for p in &element.properties {
             let what = || format!("{} {i} of {}, property {}", element.name, element.count, p.name);
             let n = match p.list_count {
-                Some(ty) => body.count(ty, &what())?,
+                Some(ty) => body.count(ty, &what)?,
                 None => 1,
             };
             for _ in 0..n {
-                body.scalar(p.ty, &what())?;
+                body.scalar(p.ty, &what)?;
             }
         }
     }
@@ -248,16 +248,14 @@ fn read_vertices(
             match (p.list_count, slot) {
                 (Some(ty), _) => {
                     let count =
-                        body.count(ty, &what()).map_err(|m| format!("vertex {i} of {n}: {m}"))?;
+                        body.count(ty, &what).map_err(|m| format!("vertex {i} of {n}: {m}"))?;
                     for _ in 0..count {
-                        body.scalar(p.ty, &what())
-                            .map_err(|m| format!("vertex {i} of {n}: {m}"))?;
+                        body.scalar(p.ty, &what).map_err(|m| format!("vertex {i} of {n}: {m}"))?;
                     }
                 }
                 (None, slot) => {
-                    let v = body
-                        .scalar(p.ty, &what())
-                        .map_err(|m| format!("vertex {i} of {n}: {m}"))?;
+                    let v =
+                        body.scalar(p.ty, &what).map_err(|m| format!("vertex {i} of {n}: {m}"))?;
                     if let Some(s) = slot {
                         row[*s] = v as f32;
                     }

@@ -46,11 +46,11 @@ pub fn read_point_cloud_ply(path: &Path) -> Result<Vec<ColouredPoint>, FormatErr
         for p in &vertex.properties {
             let what = || format!("vertex {i} of {n}: property {}", p.name);
             let count = match p.list_count {
-                Some(ty) => body.count(ty, &what()).map_err(fail)?,
+                Some(ty) => body.count(ty, &what).map_err(fail)?,
                 None => 1,
             };
             for _ in 0..count {
-                let v = body.scalar(p.ty, &what()).map_err(fail)?;
+                let v = body.scalar(p.ty, &what).map_err(fail)?;
                 if p.list_count.is_none()
                     && let Some(&s) = slot.get(p.name.as_str())
                 {
