@@ -139,7 +139,7 @@ pub fn ssim_map(
                 lines[4][x] = u * v;
             }
         };
-        let emit = |_: usize, m: &[Vec<f64>; 5], out_row: &mut [f64]| {
+        let emit = |m: &[Vec<f64>; 5], out_row: &mut [f64]| {
             for x in 0..w {
                 let (mx, my) = (m[0][x], m[1][x]);
                 let var_x = m[2][x] - mx * mx;

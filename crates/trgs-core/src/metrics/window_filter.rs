@@ -35,14 +35,14 @@ pub fn gaussian_filter(plane: &[f64], width: usize, height: usize, border: Borde
         |y, lines: &mut [Vec<f64>; 1]| {
             lines[0].copy_from_slice(&plane[y * width..(y + 1) * width]);
         },
-        |_, filtered, row| row.copy_from_slice(&filtered[0]),
+        |filtered, row| row.copy_from_slice(&filtered[0]),
     );
     out
 }
 
 /// Filter `N` planes of `width x height` with the window, on all cores. `source(y, lines)` fills
-/// row `y` of each plane (`lines[k]` holds `width` values); `emit(y, filtered, out_row)` receives
-/// row `y` of every filtered plane and writes row `y` of `out` (rows of `out_row_len` items).
+/// row `y` of each plane (`lines[k]` holds `width` values); `emit(filtered, out_row)` receives
+/// a row of every filtered plane and writes the same row of `out` (rows of `out_row_len` items).
 pub(super) fn filter_rows<const N: usize>(
     width: usize,
     height: usize,
@@ -50,7 +50,7 @@ pub(super) fn filter_rows<const N: usize>(
     out: &mut [f64],
     out_row_len: usize,
     source: impl Fn(usize, &mut [Vec<f64>; N]) + Sync,
-    emit: impl Fn(usize, &[Vec<f64>; N], &mut [f64]) + Sync,
+    emit: impl Fn(&[Vec<f64>; N], &mut [f64]) + Sync,
 ) {
     let rows_per_run = crate::parallel::rows_per_thread(height);
     filter_rows_in_runs(width, height, border, out, out_row_len, rows_per_run, source, emit);
@@ -66,7 +66,7 @@ fn filter_rows_in_runs<const N: usize>(
     out_row_len: usize,
     rows_per_run: usize,
     source: impl Fn(usize, &mut [Vec<f64>; N]) + Sync,
-    emit: impl Fn(usize, &[Vec<f64>; N], &mut [f64]) + Sync,
+    emit: impl Fn(&[Vec<f64>; N], &mut [f64]) + Sync,
 ) {
     debug_assert_eq!(out.len(), height * out_row_len);
     let g = gaussian_window();
@@ -105,7 +105,7 @@ fn filter_rows_in_runs<const N: usize>(
                     }
                 }
             }
-            emit(y, &sums, out_row);
+            emit(&sums, out_row);
         }
     });
 }
@@ -203,7 +203,7 @@ mod tests {
                                 lines[1][x] = plane[y * w + x] * plane[y * w + x];
                             }
                         },
-                        |_, f, row| {
+                        |f, row| {
                             row[..w].copy_from_slice(&f[0]);
                             row[w..].copy_from_slice(&f[1]);
                         },
