@@ -391,7 +391,10 @@ pub fn resize_area_u8(im: &Image<u8>, w: u32, h: u32) -> Image<f32> {
     if (im.width, im.height) == (w, h) {
         return im.to_f32();
     }
-    area_resample(im, w, h, |v| f64::from(v) / 255.0)
+    // The 256 values once, not a division per sample read (each is read for about two output
+    // pixels): the same values, so the same image.
+    let value: [f64; 256] = std::array::from_fn(|k| k as f64 / 255.0);
+    area_resample(im, w, h, |v| value[usize::from(v)])
 }
 
 fn area_resample<T: Copy>(im: &Image<T>, w: u32, h: u32, value: impl Fn(T) -> f64) -> Image<f32> {
@@ -412,24 +415,30 @@ fn area_resample<T: Copy>(im: &Image<T>, w: u32, h: u32, value: impl Fn(T) -> f6
     };
     let xs = spans(w, sx, im.width);
     let ys = spans(h, sy, im.height);
+    let (source_row, out_row) = (im.width as usize * ch, w as usize * ch);
     let mut out = Image::<f32>::new(w, h, im.channels);
-    for (oy, yspan) in ys.iter().enumerate() {
-        for (ox, xspan) in xs.iter().enumerate() {
-            let mut acc = vec![0.0f64; ch];
-            let mut total = 0.0;
-            for &(iy, wy) in yspan {
+    // An output row at a time, so that nothing is allocated per pixel; each output sample is
+    // still summed over the rows of its area, then the columns, as a loop per pixel would.
+    let mut sums = vec![0.0f64; out_row];
+    let mut totals = vec![0.0f64; w as usize];
+    for (yspan, out) in ys.iter().zip(out.data.chunks_exact_mut(out_row.max(1))) {
+        sums.fill(0.0);
+        totals.fill(0.0);
+        for &(iy, wy) in yspan {
+            let row = &im.data[iy as usize * source_row..][..source_row];
+            for ((xspan, sum), total) in xs.iter().zip(sums.chunks_exact_mut(ch)).zip(&mut totals) {
                 for &(ix, wx) in xspan {
                     let wgt = wx * wy;
-                    total += wgt;
-                    let base = (iy as usize * im.width as usize + ix as usize) * ch;
-                    for (c, a) in acc.iter_mut().enumerate() {
-                        *a += wgt * value(im.data[base + c]);
+                    *total += wgt;
+                    for (a, &v) in sum.iter_mut().zip(&row[ix as usize * ch..][..ch]) {
+                        *a += wgt * value(v);
                     }
                 }
             }
-            let base = (oy * w as usize + ox) * ch;
-            for (c, a) in acc.iter().enumerate() {
-                out.data[base + c] = (a / total) as f32;
+        }
+        for ((o, sum), total) in out.chunks_exact_mut(ch).zip(sums.chunks_exact(ch)).zip(&totals) {
+            for (o, a) in o.iter_mut().zip(sum) {
+                *o = (a / total) as f32;
             }
         }
     }
