@@ -9,8 +9,9 @@ use crate::densify::{DensifyStats, TrainState};
 use crate::plane_adam::OffsetLimit;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
+use std::io::{BufRead, Read, Write};
 use std::path::Path;
-use trgs_core::io::{FormatError, write_atomic};
+use trgs_core::io::{FormatError, write_atomic_with};
 use trgs_core::scene::{
     Attribute, Gaussians, Material, PerAttribute, Population, ReflectionPlane, attribute_widths,
 };
@@ -78,7 +79,7 @@ struct Header {
     arrays: Vec<(String, String, usize)>,
 }
 
-/// One array of the payload.
+/// One array of the payload, as read.
 enum Array {
     F32(Vec<f32>),
     F64(Vec<f64>),
@@ -101,18 +102,74 @@ impl Array {
             Array::U32(v) => v.len(),
         }
     }
+}
 
-    fn write(&self, out: &mut Vec<u8>) {
+/// One array of the payload, to write: borrowed from the checkpoint, so that writing holds no
+/// second copy of a state of millions of Gaussians.
+enum Values<'a> {
+    F32(&'a [f32]),
+    F64(&'a [f64]),
+    U32(&'a [u32]),
+}
+
+impl Values<'_> {
+    fn kind(&self) -> &'static str {
         match self {
-            Array::F32(v) => v.iter().for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
-            Array::F64(v) => v.iter().for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
-            Array::U32(v) => v.iter().for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
+            Values::F32(_) => "f32",
+            Values::F64(_) => "f64",
+            Values::U32(_) => "u32",
+        }
+    }
+
+    fn len(&self) -> usize {
+        match self {
+            Values::F32(v) => v.len(),
+            Values::F64(v) => v.len(),
+            Values::U32(v) => v.len(),
+        }
+    }
+
+    fn write(&self, w: &mut dyn Write) -> std::io::Result<()> {
+        match self {
+            Values::F32(v) => write_le(w, v, f32::to_le_bytes),
+            Values::F64(v) => write_le(w, v, f64::to_le_bytes),
+            Values::U32(v) => write_le(w, v, u32::to_le_bytes),
         }
     }
 }
 
-fn flat<const N: usize>(v: &[[f32; N]]) -> Vec<f32> {
-    v.iter().flatten().copied().collect()
+/// Values per chunk of a payload array written or read.
+const CHUNK: usize = 1 << 16;
+
+/// `values` little-endian, a chunk at a time.
+fn write_le<T: Copy, const N: usize>(
+    w: &mut dyn Write,
+    values: &[T],
+    bytes: impl Fn(T) -> [u8; N],
+) -> std::io::Result<()> {
+    let mut chunk = Vec::with_capacity(CHUNK.min(values.len()) * N);
+    for part in values.chunks(CHUNK) {
+        chunk.clear();
+        part.iter().for_each(|&v| chunk.extend_from_slice(&bytes(v)));
+        w.write_all(&chunk)?;
+    }
+    Ok(())
+}
+
+/// `len` little-endian values from `r`, a chunk at a time.
+fn read_le<T, const N: usize>(
+    r: &mut impl Read,
+    len: usize,
+    value: impl Fn([u8; N]) -> T,
+) -> std::io::Result<Vec<T>> {
+    let mut out = Vec::with_capacity(len);
+    let mut chunk = vec![0u8; CHUNK.min(len) * N];
+    while out.len() < len {
+        let bytes = &mut chunk[..(len - out.len()).min(CHUNK) * N];
+        r.read_exact(bytes)?;
+        out.extend(bytes.chunks_exact(N).map(|c| value(std::array::from_fn(|i| c[i]))));
+    }
+    Ok(out)
 }
 
 fn chunks<const N: usize>(v: &[f32]) -> Vec<[f32; N]> {
@@ -154,26 +211,27 @@ pub fn write_checkpoint(path: &Path, ck: &Checkpoint) -> Result<(), FormatError>
         )
     })?;
     let g = &ck.state.gaussians;
-    let mut arrays: Vec<(String, Array)> = vec![
-        ("means".into(), Array::F32(flat(&g.means))),
-        ("rotations".into(), Array::F32(flat(&g.rotations))),
-        ("log_scales".into(), Array::F32(flat(&g.log_scales))),
-        ("opacity_logits".into(), Array::F32(g.opacity_logits.clone())),
-        ("sh".into(), Array::F32(flat(&g.sh))),
-        ("mask_logits".into(), Array::F32(g.mask_logits.clone())),
-        ("log_reflections".into(), Array::F32(g.log_reflections.clone())),
-        ("populations".into(), Array::U32(g.populations.iter().map(|&p| p as u32).collect())),
+    let populations: Vec<u32> = g.populations.iter().map(|&p| p as u32).collect();
+    let mut arrays: Vec<(String, Values<'_>)> = vec![
+        ("means".into(), Values::F32(g.means.as_flattened())),
+        ("rotations".into(), Values::F32(g.rotations.as_flattened())),
+        ("log_scales".into(), Values::F32(g.log_scales.as_flattened())),
+        ("opacity_logits".into(), Values::F32(&g.opacity_logits)),
+        ("sh".into(), Values::F32(g.sh.as_flattened())),
+        ("mask_logits".into(), Values::F32(&g.mask_logits)),
+        ("log_reflections".into(), Values::F32(&g.log_reflections)),
+        ("populations".into(), Values::U32(&populations)),
     ];
     // Moments by the attribute's position in `Attribute::ALL` (the file format's names).
     for a in Attribute::ALL {
         let k = a.index();
-        arrays.push((format!("adam_m_{k}"), Array::F32(ck.state.m[a].clone())));
-        arrays.push((format!("adam_v_{k}"), Array::F32(ck.state.v[a].clone())));
+        arrays.push((format!("adam_m_{k}"), Values::F32(&ck.state.m[a])));
+        arrays.push((format!("adam_v_{k}"), Values::F32(&ck.state.v[a])));
     }
     if let Some(s) = &ck.densify_stats {
-        arrays.push(("densify_grad_sum".into(), Array::F64(s.grad_sum.clone())));
-        arrays.push(("densify_count".into(), Array::U32(s.count.clone())));
-        arrays.push(("densify_max_radius".into(), Array::F64(s.max_radius.clone())));
+        arrays.push(("densify_grad_sum".into(), Values::F64(&s.grad_sum)));
+        arrays.push(("densify_count".into(), Values::U32(&s.count)));
+        arrays.push(("densify_max_radius".into(), Values::F64(&s.max_radius)));
     }
     let header = Header {
         step: ck.step,
@@ -200,25 +258,36 @@ pub fn write_checkpoint(path: &Path, ck: &Checkpoint) -> Result<(), FormatError>
     };
     let json = serde_json::to_string(&header)
         .map_err(|e| FormatError::new(path, format!("encoding the header: {e}")))?;
-    let mut bytes = format!("{MAGIC}\n{json}\n").into_bytes();
-    for (_, a) in &arrays {
-        a.write(&mut bytes);
-    }
-    write_atomic(path, &bytes)
+    write_atomic_with(path, |w| {
+        w.write_all(format!("{MAGIC}\n{json}\n").as_bytes())?;
+        arrays.iter().try_for_each(|(_, a)| a.write(w))
+    })
 }
 
-/// Read a checkpoint written by [`write_checkpoint`].
+/// Read a checkpoint written by [`write_checkpoint`], an array at a time (the file is not held
+/// in memory whole).
 pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, FormatError> {
-    let bytes = std::fs::read(path).map_err(|e| FormatError::io(path, &e))?;
+    let io = |e: std::io::Error| FormatError::io(path, &e);
+    let file = std::fs::File::open(path).map_err(io)?;
+    let size = file.metadata().map_err(io)?.len();
+    let mut r = std::io::BufReader::with_capacity(1 << 20, file);
     let bad = |what: String| FormatError::new(path, what);
-    let mut lines = bytes.splitn(3, |&b| b == b'\n');
-    if lines.next() != Some(MAGIC.as_bytes()) {
+    // The first line, read no further than the magic's length (any file may be passed here).
+    let mut magic = Vec::new();
+    r.by_ref().take(MAGIC.len() as u64 + 1).read_until(b'\n', &mut magic).map_err(io)?;
+    if magic.strip_suffix(b"\n").unwrap_or(&magic) != MAGIC.as_bytes() {
         return Err(bad(format!("not a trgs checkpoint (expected a first line {MAGIC:?})")));
     }
-    let header_line = lines.next().ok_or_else(|| bad("no header line".into()))?;
+    if !magic.ends_with(b"\n") {
+        return Err(bad("no header line".into()));
+    }
+    let mut header_line = Vec::new();
+    r.read_until(b'\n', &mut header_line).map_err(io)?;
+    let read = (magic.len() + header_line.len()) as u64;
     let header: Header =
-        serde_json::from_slice(header_line).map_err(|e| bad(format!("malformed header: {e}")))?;
-    let mut payload = lines.next().unwrap_or_default();
+        serde_json::from_slice(header_line.strip_suffix(b"\n").unwrap_or(&header_line))
+            .map_err(|e| bad(format!("malformed header: {e}")))?;
+    let mut left = size.saturating_sub(read);
     let mut arrays = std::collections::HashMap::new();
     for (name, kind, len) in &header.arrays {
         let size = match kind.as_str() {
@@ -226,37 +295,23 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, FormatError> {
             "f64" => 8,
             other => return Err(bad(format!("array {name}: unknown element type {other:?}"))),
         };
-        let n = len * size;
-        if payload.len() < n {
+        let n = (*len as u64).saturating_mul(size);
+        if left < n {
             return Err(bad(format!(
-                "array {name}: expected {len} {kind} values, the file ends after {} bytes of it \
-                 (truncated?)",
-                payload.len()
+                "array {name}: expected {len} {kind} values, the file ends after {left} bytes of \
+                 it (truncated?)"
             )));
         }
-        let (data, rest) = payload.split_at(n);
-        payload = rest;
+        left -= n;
         let array = match kind.as_str() {
-            "f32" => Array::F32(
-                data.chunks_exact(4)
-                    .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-                    .collect(),
-            ),
-            "u32" => Array::U32(
-                data.chunks_exact(4)
-                    .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-                    .collect(),
-            ),
-            _ => Array::F64(
-                data.chunks_exact(8)
-                    .map(|c| f64::from_le_bytes(std::array::from_fn(|i| c[i])))
-                    .collect(),
-            ),
+            "f32" => Array::F32(read_le(&mut r, *len, f32::from_le_bytes).map_err(io)?),
+            "u32" => Array::U32(read_le(&mut r, *len, u32::from_le_bytes).map_err(io)?),
+            _ => Array::F64(read_le(&mut r, *len, f64::from_le_bytes).map_err(io)?),
         };
         arrays.insert(name.clone(), array);
     }
-    if !payload.is_empty() {
-        return Err(bad(format!("{} bytes after the last array", payload.len())));
+    if left > 0 {
+        return Err(bad(format!("{left} bytes after the last array")));
     }
     let n = header.gaussians;
     let coeffs = trgs_core::scene::sh_coeff_count(header.sh_degree);
@@ -468,6 +523,20 @@ mod tests {
         std::fs::write(&path, &bytes[..bytes.len() - 10]).expect("truncate");
         let err = read_checkpoint(&path).expect_err("truncated").to_string();
         assert!(err.contains("truncated") && err.contains(CHECKPOINT_FILE), "{err}");
+        std::fs::write(&path, [&bytes[..], b"\0\0\0"].concat()).expect("lengthen");
+        let err = read_checkpoint(&path).expect_err("lengthened").to_string();
+        assert!(err.contains("3 bytes after the last array"), "{err}");
+        // A manifest that promises more than the file holds is refused before it is allocated.
+        let text = String::from_utf8_lossy(&bytes).into_owned();
+        let means = r#"["means","f32",15]"#;
+        assert!(text.contains(means), "the sample's manifest names its means");
+        let huge = text.replacen(means, r#"["means","f32",1000000000000]"#, 1);
+        std::fs::write(&path, huge.as_bytes()).expect("inflate");
+        let err = read_checkpoint(&path).expect_err("inflated").to_string();
+        assert!(err.contains("array means: expected 1000000000000 f32 values"), "{err}");
+        std::fs::write(&path, MAGIC).expect("magic only");
+        let err = read_checkpoint(&path).expect_err("no header").to_string();
+        assert!(err.contains("no header line"), "{err}");
         std::fs::write(&path, b"ply\nformat binary_little_endian 1.0\n").expect("foreign");
         let err = read_checkpoint(&path).expect_err("foreign").to_string();
         assert!(err.contains("not a trgs checkpoint"), "{err}");

@@ -33,7 +33,7 @@ pub use cameras_json::{
 };
 pub use colmap::{ColmapCamera, ColmapImage, ColmapModel, ColmapPoint};
 pub use dataset::{SceneFolder, Split, ViewSpec, view_output_stem};
-pub use error::{FormatError, remove_stale_temporaries, write_atomic};
+pub use error::{FormatError, remove_stale_temporaries, write_atomic, write_atomic_with};
 pub use glb::{encode_glb, parse_glb, read_glb, write_glb};
 pub use masks::{mask_path, read_glass_mask, write_glass_mask};
 pub use model::{Model, find_ply, load_model};

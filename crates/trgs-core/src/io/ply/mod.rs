@@ -27,7 +27,7 @@ use header::{Element, Format, parse_header};
 
 use super::bytes::ByteReader;
 use super::error::read_bytes;
-use super::{FormatError, write_atomic};
+use super::{FormatError, write_atomic_with};
 use crate::scene::{Gaussians, Population, sh_coeff_count};
 
 /// trgs's extra properties: mask logit, log reflection intensity, population (0 / 1).
@@ -39,8 +39,9 @@ pub fn read_ply(path: &Path) -> Result<Gaussians<f32>, FormatError> {
 
 /// Write `g` as binary little-endian PLY (see the module docs for the layout).
 pub fn write_ply(path: &Path, g: &Gaussians<f32>) -> Result<(), FormatError> {
-    let bytes = encode_ply(g).map_err(|m| FormatError::new(path, m))?;
-    write_atomic(path, &bytes)
+    g.check_lengths().map_err(|m| FormatError::new(path, m))?;
+    // Streamed: a model of millions of Gaussians is not held again as bytes.
+    write_atomic_with(path, |w| write_rows(g, w))
 }
 
 /// Names of the float properties the writer emits, in order, for SH degree `degree`.
@@ -60,16 +61,23 @@ fn property_names(degree: u32) -> Vec<String> {
 /// The bytes of a binary little-endian PLY of `g`; an error when `g`'s arrays disagree in length.
 pub fn encode_ply(g: &Gaussians<f32>) -> Result<Vec<u8>, String> {
     g.check_lengths()?;
+    let mut out = Vec::new();
+    write_rows(g, &mut out).map_err(|e| e.to_string())?;
+    Ok(out)
+}
+
+/// The header and a row of floats per Gaussian (`g`'s lengths checked), into `w`.
+fn write_rows(g: &Gaussians<f32>, w: &mut dyn std::io::Write) -> std::io::Result<()> {
     let names = property_names(g.sh_degree);
     let mut header = format!("ply\nformat binary_little_endian 1.0\nelement vertex {}\n", g.len());
     for name in &names {
         let _ = writeln!(header, "property float {name}");
     }
     header.push_str("end_header\n");
+    w.write_all(header.as_bytes())?;
     let k = g.sh_coeffs();
-    let mut out = header.into_bytes();
-    out.reserve(g.len() * names.len() * 4);
     let mut row = Vec::with_capacity(names.len());
+    let mut bytes = Vec::with_capacity(names.len() * 4);
     for i in 0..g.len() {
         row.clear();
         row.extend(g.means[i]);
@@ -86,11 +94,11 @@ pub fn encode_ply(g: &Gaussians<f32>) -> Result<Vec<u8>, String> {
         row.push(g.log_reflections[i]);
         row.push(f32::from(g.populations[i] as u8));
         debug_assert_eq!(row.len(), names.len(), "SH count {k}");
-        for v in &row {
-            out.extend(v.to_le_bytes());
-        }
+        bytes.clear();
+        row.iter().for_each(|v| bytes.extend(v.to_le_bytes()));
+        w.write_all(&bytes)?;
     }
-    Ok(out)
+    Ok(())
 }
 
 /// Parse a PLY held in memory; `path` is only used to name the file in errors.
