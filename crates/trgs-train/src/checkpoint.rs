@@ -9,6 +9,7 @@ use crate::densify::{DensifyStats, TrainState};
 use crate::plane_adam::OffsetLimit;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
+use std::borrow::Cow;
 use std::io::{BufRead, Read, Write};
 use std::path::Path;
 use trgs_core::io::{FormatError, write_atomic_with};
@@ -79,14 +80,15 @@ struct Header {
     arrays: Vec<(String, String, usize)>,
 }
 
-/// One array of the payload, as read.
-enum Array {
-    F32(Vec<f32>),
-    F64(Vec<f64>),
-    U32(Vec<u32>),
+/// One array of the payload: borrowed from the checkpoint when written, so that writing holds
+/// no second copy of a state of millions of Gaussians; owned when read.
+enum Array<'a> {
+    F32(Cow<'a, [f32]>),
+    F64(Cow<'a, [f64]>),
+    U32(Cow<'a, [u32]>),
 }
 
-impl Array {
+impl Array<'_> {
     fn kind(&self) -> &'static str {
         match self {
             Array::F32(_) => "f32",
@@ -102,38 +104,12 @@ impl Array {
             Array::U32(v) => v.len(),
         }
     }
-}
-
-/// One array of the payload, to write: borrowed from the checkpoint, so that writing holds no
-/// second copy of a state of millions of Gaussians.
-enum Values<'a> {
-    F32(&'a [f32]),
-    F64(&'a [f64]),
-    U32(&'a [u32]),
-}
-
-impl Values<'_> {
-    fn kind(&self) -> &'static str {
-        match self {
-            Values::F32(_) => "f32",
-            Values::F64(_) => "f64",
-            Values::U32(_) => "u32",
-        }
-    }
-
-    fn len(&self) -> usize {
-        match self {
-            Values::F32(v) => v.len(),
-            Values::F64(v) => v.len(),
-            Values::U32(v) => v.len(),
-        }
-    }
 
     fn write(&self, w: &mut dyn Write) -> std::io::Result<()> {
         match self {
-            Values::F32(v) => write_le(w, v, f32::to_le_bytes),
-            Values::F64(v) => write_le(w, v, f64::to_le_bytes),
-            Values::U32(v) => write_le(w, v, u32::to_le_bytes),
+            Array::F32(v) => write_le(w, v, f32::to_le_bytes),
+            Array::F64(v) => write_le(w, v, f64::to_le_bytes),
+            Array::U32(v) => write_le(w, v, u32::to_le_bytes),
         }
     }
 }
@@ -212,26 +188,26 @@ pub fn write_checkpoint(path: &Path, ck: &Checkpoint) -> Result<(), FormatError>
     })?;
     let g = &ck.state.gaussians;
     let populations: Vec<u32> = g.populations.iter().map(|&p| p as u32).collect();
-    let mut arrays: Vec<(String, Values<'_>)> = vec![
-        ("means".into(), Values::F32(g.means.as_flattened())),
-        ("rotations".into(), Values::F32(g.rotations.as_flattened())),
-        ("log_scales".into(), Values::F32(g.log_scales.as_flattened())),
-        ("opacity_logits".into(), Values::F32(&g.opacity_logits)),
-        ("sh".into(), Values::F32(g.sh.as_flattened())),
-        ("mask_logits".into(), Values::F32(&g.mask_logits)),
-        ("log_reflections".into(), Values::F32(&g.log_reflections)),
-        ("populations".into(), Values::U32(&populations)),
+    let mut arrays: Vec<(String, Array<'_>)> = vec![
+        ("means".into(), Array::F32(Cow::Borrowed(g.means.as_flattened()))),
+        ("rotations".into(), Array::F32(Cow::Borrowed(g.rotations.as_flattened()))),
+        ("log_scales".into(), Array::F32(Cow::Borrowed(g.log_scales.as_flattened()))),
+        ("opacity_logits".into(), Array::F32(Cow::Borrowed(&g.opacity_logits))),
+        ("sh".into(), Array::F32(Cow::Borrowed(g.sh.as_flattened()))),
+        ("mask_logits".into(), Array::F32(Cow::Borrowed(&g.mask_logits))),
+        ("log_reflections".into(), Array::F32(Cow::Borrowed(&g.log_reflections))),
+        ("populations".into(), Array::U32(Cow::Borrowed(&populations))),
     ];
     // Moments by the attribute's position in `Attribute::ALL` (the file format's names).
     for a in Attribute::ALL {
         let k = a.index();
-        arrays.push((format!("adam_m_{k}"), Values::F32(&ck.state.m[a])));
-        arrays.push((format!("adam_v_{k}"), Values::F32(&ck.state.v[a])));
+        arrays.push((format!("adam_m_{k}"), Array::F32(Cow::Borrowed(&ck.state.m[a]))));
+        arrays.push((format!("adam_v_{k}"), Array::F32(Cow::Borrowed(&ck.state.v[a]))));
     }
     if let Some(s) = &ck.densify_stats {
-        arrays.push(("densify_grad_sum".into(), Values::F64(&s.grad_sum)));
-        arrays.push(("densify_count".into(), Values::U32(&s.count)));
-        arrays.push(("densify_max_radius".into(), Values::F64(&s.max_radius)));
+        arrays.push(("densify_grad_sum".into(), Array::F64(Cow::Borrowed(&s.grad_sum))));
+        arrays.push(("densify_count".into(), Array::U32(Cow::Borrowed(&s.count))));
+        arrays.push(("densify_max_radius".into(), Array::F64(Cow::Borrowed(&s.max_radius))));
     }
     let header = Header {
         step: ck.step,
@@ -304,9 +280,9 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, FormatError> {
         }
         left -= n;
         let array = match kind.as_str() {
-            "f32" => Array::F32(read_le(&mut r, *len, f32::from_le_bytes).map_err(io)?),
-            "u32" => Array::U32(read_le(&mut r, *len, u32::from_le_bytes).map_err(io)?),
-            _ => Array::F64(read_le(&mut r, *len, f64::from_le_bytes).map_err(io)?),
+            "f32" => Array::F32(read_le(&mut r, *len, f32::from_le_bytes).map_err(io)?.into()),
+            "u32" => Array::U32(read_le(&mut r, *len, u32::from_le_bytes).map_err(io)?.into()),
+            _ => Array::F64(read_le(&mut r, *len, f64::from_le_bytes).map_err(io)?.into()),
         };
         arrays.insert(name.clone(), array);
     }
@@ -317,7 +293,7 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, FormatError> {
     let coeffs = trgs_core::scene::sh_coeff_count(header.sh_degree);
     let mut take_f32 = |name: &str, len: usize| -> Result<Vec<f32>, FormatError> {
         match arrays.remove(name) {
-            Some(Array::F32(v)) if v.len() == len => Ok(v),
+            Some(Array::F32(v)) if v.len() == len => Ok(v.into_owned()),
             Some(a) => Err(bad(format!(
                 "array {name}: expected {len} f32 values, found {} {}",
                 a.len(),
@@ -342,7 +318,7 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, FormatError> {
         v[a] = take_f32(&format!("adam_v_{k}"), n * widths[a])?;
     }
     let mut take_u32 = |name: &str| match arrays.remove(name) {
-        Some(Array::U32(v)) if v.len() == n => Ok(v),
+        Some(Array::U32(v)) if v.len() == n => Ok(v.into_owned()),
         _ => Err(bad(format!("array {name}: expected {n} u32 values"))),
     };
     let populations = take_u32("populations")?
@@ -357,7 +333,7 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, FormatError> {
     let densify_stats = if header.densify {
         let count = take_u32("densify_count")?;
         let mut take_f64 = |name: &str| match arrays.remove(name) {
-            Some(Array::F64(v)) if v.len() == n => Ok(v),
+            Some(Array::F64(v)) if v.len() == n => Ok(v.into_owned()),
             _ => Err(bad(format!("array {name}: expected {n} f64 values"))),
         };
         Some(DensifyStats {
