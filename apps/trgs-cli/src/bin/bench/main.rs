@@ -7,6 +7,7 @@
 //! `--write FILE` writes the report as Markdown (docs/BENCHMARKS.md).
 mod backward;
 mod densify;
+mod host_work;
 mod report;
 mod scale;
 mod train_step;
@@ -51,6 +52,11 @@ struct Args {
     /// table; not part of the full run, and not written by --write)
     #[arg(long)]
     scale: bool,
+    /// Only the CPU's work around the GPU's at scale: a 12 MP photo decoded and downscaled, the
+    /// SSIM of a 1600x1200 view, a checkpoint and a model.ply of 1M Gaussians written and read
+    /// (no GPU needed; not part of the full run)
+    #[arg(long)]
+    host: bool,
     /// Image sizes of --scale
     #[arg(long, value_name = "WxH,...", value_delimiter = ',', value_parser = trgs_train::run::parse_size,
           default_value = "256x192,800x600,1280x960,1600x1200")]
@@ -377,6 +383,9 @@ fn measure_throughput(
 
 fn main() -> Result<()> {
     let args = Args::parse();
+    if args.host {
+        return host_work::bench_host(args.reps.max(1));
+    }
     let ctx = GpuContext::new()?;
     let renderer = Renderer::new(&ctx);
     println!("adapter: {}", ctx.describe());
