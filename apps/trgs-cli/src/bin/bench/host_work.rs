@@ -37,7 +37,7 @@ fn photo(width: u32, height: u32) -> Image<f32> {
     let mut im = Image::<f32>::new(width, height, 3);
     for (i, px) in im.data.chunks_exact_mut(3).enumerate() {
         let (x, y) = ((i as u32 % width) as f32, (i as u32 / width) as f32);
-        let check = if (x as u32 / 37 + y as u32 / 53) % 2 == 0 { 0.05 } else { -0.05 };
+        let check = if (x as u32 / 37 + y as u32 / 53).is_multiple_of(2) { 0.05 } else { -0.05 };
         for (c, v) in px.iter_mut().enumerate() {
             let shade = (x * 0.013 + c as f32).sin() * (y * 0.007).cos();
             *v = (0.5 + 0.4 * shade + check).clamp(0.0, 1.0);
