@@ -8,8 +8,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 /// When `f` returns false the threads take no further index (the ones already taken finish). A
 /// panic in `f` is resumed on the caller's thread.
 pub fn for_each_index(n: usize, max_threads: usize, f: impl Fn(usize) -> bool + Sync) {
-    let cores = std::thread::available_parallelism().map_or(1, |t| t.get());
-    let threads = cores.min(max_threads).min(n).max(1);
+    let threads = cores().min(max_threads).min(n).max(1);
     let next = AtomicUsize::new(0);
     let worker = || {
         loop {
@@ -32,7 +31,7 @@ pub fn for_each_index(n: usize, max_threads: usize, f: impl Fn(usize) -> bool + 
 
 /// `f` of every item, in order, computed on all cores (contiguous runs of items per thread).
 pub fn map_in_order<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync) -> Vec<R> {
-    let threads = std::thread::available_parallelism().map_or(1, |t| t.get());
+    let threads = cores();
     let per_thread = items.len().div_ceil(threads).max(1);
     let f = &f;
     std::thread::scope(|scope| {
@@ -47,9 +46,14 @@ pub fn map_in_order<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync) -
     })
 }
 
+/// The cores this process may use (1 when that cannot be known).
+fn cores() -> usize {
+    std::thread::available_parallelism().map_or(1, |t| t.get())
+}
+
 /// Rows per thread when `rows` rows are split evenly over the cores.
 pub fn rows_per_thread(rows: usize) -> usize {
-    let threads = std::thread::available_parallelism().map_or(1, |t| t.get());
+    let threads = cores();
     rows.div_ceil(threads).max(1)
 }
 
@@ -112,10 +116,9 @@ mod tests {
         assert_eq!(data, (0..1003).collect::<Vec<_>>());
         for_each_run_mut(&mut Vec::<u8>::new(), 4, 2, |_, _| panic!("no run"));
         assert_eq!(rows_per_thread(0), 1);
-        let cores = std::thread::available_parallelism().map_or(1, |t| t.get());
         for rows in [1, 7, 1000] {
             let per = rows_per_thread(rows);
-            assert!(per <= rows && per * cores >= rows, "{rows} rows: {per} per thread");
+            assert!(per <= rows && per * cores() >= rows, "{rows} rows: {per} per thread");
         }
     }
 
