@@ -13,11 +13,19 @@ pub(crate) enum Endian {
 pub(crate) struct ByteReader<'a> {
     bytes: &'a [u8],
     pos: usize,
+    /// Where `bytes` starts in the file, so that messages give file offsets when the file is
+    /// read a piece at a time.
+    base: usize,
 }
 
 impl<'a> ByteReader<'a> {
     pub(crate) fn new(bytes: &'a [u8]) -> Self {
-        Self { bytes, pos: 0 }
+        Self::at(bytes, 0)
+    }
+
+    /// A reader of `bytes`, a piece of a file that starts at byte `base` of it.
+    pub(crate) fn at(bytes: &'a [u8], base: usize) -> Self {
+        Self { bytes, pos: 0, base }
     }
 
     pub(crate) fn remaining(&self) -> usize {
@@ -39,7 +47,7 @@ impl<'a> ByteReader<'a> {
         if n > self.remaining() {
             return Err(format!(
                 "truncated: the file ends at byte {} while reading {} ({n} bytes needed, {} left)",
-                self.bytes.len(),
+                self.base + self.bytes.len(),
                 what(),
                 self.remaining()
             ));
@@ -99,7 +107,7 @@ impl<'a> ByteReader<'a> {
         let len = rest.iter().position(|&b| b == 0).ok_or_else(|| {
             format!(
                 "truncated: no NUL terminator after {what} (the file ends at byte {})",
-                self.bytes.len()
+                self.base + self.bytes.len()
             )
         })?;
         self.pos += len + 1;

@@ -35,6 +35,16 @@ impl ScalarType {
         })
     }
 
+    /// Bytes of a value in a binary body.
+    pub(super) fn size(self) -> usize {
+        match self {
+            Self::I8 | Self::U8 => 1,
+            Self::I16 | Self::U16 => 2,
+            Self::I32 | Self::U32 | Self::F32 => 4,
+            Self::F64 => 8,
+        }
+    }
+
     pub(super) fn is_integer(self) -> bool {
         !matches!(self, Self::F32 | Self::F64)
     }

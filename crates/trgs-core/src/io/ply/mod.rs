@@ -12,6 +12,7 @@
 //! [`crate::scene::validate_scene`] is where non-finite input is refused, with the Gaussian named.
 mod body;
 mod header;
+mod pieces;
 mod points;
 #[cfg(test)]
 mod tests;
@@ -24,17 +25,19 @@ use std::path::Path;
 
 use body::Body;
 use header::{Element, Format, parse_header};
+use pieces::{ROWS_PER_PIECE, read_in_pieces};
 
 use super::bytes::ByteReader;
-use super::error::read_bytes;
 use super::{FormatError, write_atomic_with};
 use crate::scene::{Gaussians, Population, sh_coeff_count};
 
 /// trgs's extra properties: mask logit, log reflection intensity, population (0 / 1).
 const EXTRAS: [&str; 3] = ["trgs_mask", "trgs_reflection", "trgs_population"];
 
+/// Read a 3DGS PLY file. A binary file's vertices are read a piece at a time, so that a model of
+/// millions of Gaussians is not held twice, as the file's bytes and as Gaussians.
 pub fn read_ply(path: &Path) -> Result<Gaussians<f32>, FormatError> {
-    parse_ply(&read_bytes(path)?, path)
+    read_in_pieces(path, ROWS_PER_PIECE)
 }
 
 /// Write `g` as binary little-endian PLY (see the module docs for the layout).
@@ -106,7 +109,11 @@ pub fn parse_ply(bytes: &[u8], path: &Path) -> Result<Gaussians<f32>, FormatErro
     let fail = |m: String| FormatError::new(path, m);
     let (mut body, vertex) = vertex_section(bytes, "one Gaussian per vertex").map_err(fail)?;
     let layout = Layout::of(&vertex).map_err(fail)?;
-    read_vertices(&mut body, &vertex, &layout).map_err(fail)
+    let mut rows = VertexRows::new(&vertex, &layout, body.remaining());
+    for i in 0..vertex.count {
+        rows.read(&mut body, i).map_err(fail)?;
+    }
+    Ok(rows.g)
 }
 
 /// The body read up to the first vertex (every element before it skipped) and the vertex
@@ -116,7 +123,8 @@ fn vertex_section<'a>(bytes: &'a [u8], expected: &str) -> Result<(Body<'a>, Elem
     let body = &bytes[header.body_offset..];
     let mut body = match header.format {
         Format::Ascii => Body::ascii(body),
-        Format::Binary(e) => Body::Binary(ByteReader::new(body), e),
+        // Offsets in messages count from the file's start, not the body's.
+        Format::Binary(e) => Body::Binary(ByteReader::at(body, header.body_offset), e),
     };
     let vertex_index = header
         .elements
@@ -226,32 +234,53 @@ impl Layout {
     }
 }
 
-fn read_vertices(
-    body: &mut Body<'_>,
-    vertex: &Element,
-    layout: &Layout,
-) -> Result<Gaussians<f32>, String> {
-    let n = vertex.count;
-    let r = layout.rest;
-    let mut g = Gaussians::empty(layout.degree);
-    let k = g.sh_coeffs();
-    // Defaults for the optional extras: mask logit 0, log reflection 0, primary.
-    let mut row = vec![0.0f32; 6 + r + 8 + EXTRAS.len()];
-    // A corrupt count must not make us allocate more than the body could hold (every property
-    // takes at least one byte, binary or ASCII).
-    let bound = body.remaining() / vertex.properties.len().max(1);
-    let cap = usize::try_from(n).map_or(bound, |n| n.min(bound));
-    g.means.reserve(cap);
-    g.rotations.reserve(cap);
-    g.log_scales.reserve(cap);
-    g.opacity_logits.reserve(cap);
-    g.sh.reserve(cap.saturating_mul(k));
-    g.mask_logits.reserve(cap);
-    g.log_reflections.reserve(cap);
-    g.populations.reserve(cap);
-    for i in 0..n {
+/// Gaussians built a vertex at a time, whether the body is held whole or read in pieces.
+struct VertexRows<'a> {
+    vertex: &'a Element,
+    layout: &'a Layout,
+    /// One vertex's values in [`Layout`]'s slots.
+    row: Vec<f32>,
+    sh: Vec<[f32; 3]>,
+    g: Gaussians<f32>,
+}
+
+impl<'a> VertexRows<'a> {
+    /// `remaining`: the bytes of the body from the first vertex on, which bound how many
+    /// vertices the file can hold.
+    fn new(vertex: &'a Element, layout: &'a Layout, remaining: usize) -> Self {
+        let g = Gaussians::empty(layout.degree);
+        let k = g.sh_coeffs();
+        let mut rows = Self {
+            vertex,
+            layout,
+            row: vec![0.0; 6 + layout.rest + 8 + EXTRAS.len()],
+            sh: vec![[0.0; 3]; k],
+            g,
+        };
+        // A corrupt count must not make us allocate more than the body could hold (every
+        // property takes at least one byte, binary or ASCII).
+        let bound = remaining / vertex.properties.len().max(1);
+        let cap = usize::try_from(vertex.count).map_or(bound, |n| n.min(bound));
+        let g = &mut rows.g;
+        g.means.reserve(cap);
+        g.rotations.reserve(cap);
+        g.log_scales.reserve(cap);
+        g.opacity_logits.reserve(cap);
+        g.sh.reserve(cap.saturating_mul(k));
+        g.mask_logits.reserve(cap);
+        g.log_reflections.reserve(cap);
+        g.populations.reserve(cap);
+        rows
+    }
+
+    /// Read vertex `i` from `body` and add its Gaussian.
+    fn read(&mut self, body: &mut Body<'_>, i: u64) -> Result<(), String> {
+        let n = self.vertex.count;
+        let r = self.layout.rest;
+        let row = &mut self.row;
+        // Defaults for the optional extras: mask logit 0, log reflection 0, primary.
         row[6 + r + 8..].fill(0.0);
-        for (p, slot) in vertex.properties.iter().zip(&layout.slots) {
+        for (p, slot) in self.vertex.properties.iter().zip(&self.layout.slots) {
             let what = || format!("property {}", p.name);
             match (p.list_count, slot) {
                 (Some(ty), _) => {
@@ -280,25 +309,27 @@ fn read_vertices(
                 ));
             }
         };
-        let mut sh = vec![[0.0f32; 3]; k];
+        let k = self.sh.len();
+        let sh = &mut self.sh;
         sh[0] = [row[3], row[4], row[5]];
         for c in 0..3 {
             for j in 1..k {
                 sh[j][c] = row[6 + c * (k - 1) + (j - 1)];
             }
         }
+        let g = &mut self.g;
         g.push(
             [row[0], row[1], row[2]],
             [row[t + 4], row[t + 5], row[t + 6], row[t + 7]],
             [row[t + 1], row[t + 2], row[t + 3]],
             row[t],
-            &sh,
+            sh,
             population,
         );
         if let (Some(m), Some(a)) = (g.mask_logits.last_mut(), g.log_reflections.last_mut()) {
             *m = row[t + 8];
             *a = row[t + 9];
         }
+        Ok(())
     }
-    Ok(g)
 }

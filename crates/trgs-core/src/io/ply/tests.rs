@@ -265,7 +265,9 @@ fn nan_loads_and_is_left_to_validation() {
 fn truncated_data_names_the_vertex() {
     let bytes = encode_ply(&sample(3, 1)).expect("encode");
     let err = parse_ply(&bytes[..bytes.len() - 10], Path::new(P)).expect_err("truncated");
-    assert_mentions(&err, &[P, "vertex 2 of 3", "truncated"]);
+    // The offset is the file's, not the body's.
+    let end = format!("ends at byte {}", bytes.len() - 10);
+    assert_mentions(&err, &[P, "vertex 2 of 3", "truncated", &end]);
     let text = format!("ply\nformat ascii 1.0\nelement vertex 1\n{MIN_PROPS}end_header\n1 2 3\n");
     let err = parse_ply(text.as_bytes(), Path::new(P)).expect_err("short ascii");
     assert_mentions(&err, &[P, "vertex 0 of 1", "f_dc_0"]);
@@ -351,4 +353,82 @@ fn inconsistent_gaussians_are_refused_by_the_writer() {
     let dir = scratch_dir("ply-bad");
     let err = write_ply(&dir.join("bad.ply"), &g).expect_err("lengths");
     assert_mentions(&err, &["bad.ply", "opacity_logits"]);
+}
+
+/// A big-endian file with its vertices first (read in pieces, unlike the one above).
+fn big_endian_vertices(n: usize) -> Vec<u8> {
+    let header = format!(
+        "ply\nformat binary_big_endian 1.0\nelement face 0\nproperty list uchar int idx\n\
+         element vertex {n}\n{MIN_PROPS}property double trgs_reflection\nproperty uchar \
+         trgs_population\nend_header\n"
+    );
+    let mut bytes = header.into_bytes();
+    for i in 0..n {
+        (0..14).for_each(|k| bytes.extend(value(i, k).to_be_bytes()));
+        bytes.extend(f64::from(value(i, 14)).to_be_bytes());
+        bytes.push((i % 2) as u8);
+    }
+    bytes
+}
+
+#[test]
+fn reading_in_pieces_is_parsing_whole() {
+    let mut files: Vec<Vec<u8>> =
+        (0..=3).map(|d| encode_ply(&sample(10, d)).expect("encode")).collect();
+    let mut props = names(&["x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2"]);
+    props.extend(rest(9));
+    props.extend(names(&[
+        "opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3",
+    ]));
+    files.push(emulate(&["a comment"], &props, 7));
+    files.push(big_endian_vertices(8));
+    files.push(encode_ply(&Gaussians::empty(2)).expect("encode"));
+    // Cut at every byte of the header and at every few bytes of the body: truncated rows, in the
+    // first piece and in later ones, and headers that end early.
+    let whole = files.clone();
+    for file in &whole {
+        let cuts = (0..file.len()).filter(|&c| c < 700 || c % 7 == 0 || file.len() - c < 9);
+        files.extend(cuts.map(|c| file[..c].to_vec()));
+    }
+    files.extend(
+        [
+            // Read whole: ASCII, a list before the vertices, a list among them, no vertices.
+            "ply\nformat ascii 1.0\nelement vertex 1\nPROPS end_header\n1 2 3 4 5 6 7 8 9 1 2 3 4 5\n",
+            "ply\nformat binary_little_endian 1.0\nelement f 1\nproperty list uchar int i\n\
+             element vertex 1\nPROPS end_header\n\x00",
+            "ply\nformat binary_little_endian 1.0\nelement vertex 1\nPROPS property list uchar \
+             int i\nend_header\n\x00",
+            "ply\nformat binary_little_endian 1.0\nelement face 0\nend_header\n",
+            // Huge counts and bad values, read in pieces.
+            "ply\nformat binary_little_endian 1.0\nelement vertex 18446744073709551615\nPROPS end_header\n",
+            "ply\nformat binary_little_endian 1.0\nelement vertex 1\nPROPS property uchar \
+             trgs_population\nend_header\n0123456789abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVW\x02",
+            "not a ply",
+            "ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty float x\nend_header\n",
+        ]
+        .map(|t| t.replace("PROPS ", MIN_PROPS).into_bytes()),
+    );
+    // The splat files are the ones read in pieces; the rest are read whole.
+    let in_pieces = |bytes: &[u8]| {
+        let end = bytes.windows(11).position(|w| w == b"end_header\n").expect("header") + 11;
+        pieces::vertices_in_pieces(&bytes[..end]).is_some()
+    };
+    assert!(whole.iter().all(|f| in_pieces(f)));
+    let read_whole = files[files.len() - 8..files.len() - 4].iter().all(|f| !in_pieces(f));
+    assert!(read_whole, "ASCII, lists and no vertices are read whole");
+    let dir = scratch_dir("ply-pieces");
+    let path = dir.join(P);
+    for (f, bytes) in files.iter().enumerate() {
+        std::fs::write(&path, bytes).expect("write");
+        let expected = parse_ply(bytes, &path);
+        for rows in [1, 3, ROWS_PER_PIECE] {
+            let got = pieces::read_in_pieces(&path, rows);
+            let same = match (&got, &expected) {
+                (Ok(a), Ok(b)) => bits(a) == bits(b),
+                (Err(a), Err(b)) => a.to_string() == b.to_string(),
+                _ => false,
+            };
+            assert!(same, "file {f}, {rows} rows a piece: {got:?} against {expected:?}");
+        }
+    }
 }
