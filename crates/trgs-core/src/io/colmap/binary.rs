@@ -2,8 +2,8 @@
 use std::path::Path;
 
 use super::{
-    ColmapCamera, ColmapImage, ColmapModel, ColmapPoint, Located, check_camera, check_finite,
-    check_image, id_u32, model_by_id, model_by_name,
+    ColmapCamera, ColmapImage, ColmapModel, ColmapPoint, Located, Location, check_camera,
+    check_finite, check_image, id_u32, model_by_id, model_by_name,
 };
 use crate::io::bytes::{ByteReader, capacity_for};
 use crate::io::error::read_bytes;
@@ -13,7 +13,7 @@ use crate::io::{FormatError, write_atomic};
 /// bytes left after the last record (a count that is too small) are an error too.
 fn read_records<T>(
     path: &Path,
-    kind: &str,
+    kind: &'static str,
     min_record_size: usize,
     mut parse: impl FnMut(&mut ByteReader<'_>) -> Result<T, String>,
 ) -> Result<Located<T>, FormatError> {
@@ -21,8 +21,8 @@ fn read_records<T>(
     let mut r = ByteReader::new(&bytes);
     let count = r.u64(&format!("the number of {kind}s")).map_err(|m| FormatError::new(path, m))?;
     let mut out = Vec::with_capacity(capacity_for(count, min_record_size, &r));
-    for i in 0..count {
-        let at = format!("{kind} record {i} (of {count})");
+    for index in 0..count {
+        let at = Location::Record { kind, index, count };
         let item = parse(&mut r).map_err(|m| FormatError::new(path, format!("{at}: {m}")))?;
         out.push((item, at));
     }
@@ -88,7 +88,7 @@ pub(super) fn read_points(path: &Path) -> Result<Vec<ColmapPoint>, FormatError> 
         for x in &mut xyz {
             *x = r.f64("xyz")?;
         }
-        check_finite(&format!("point {id} xyz"), &xyz)?;
+        check_finite(|| format!("point {id} xyz"), &xyz)?;
         let rgb = [r.u8("rgb")?, r.u8("rgb")?, r.u8("rgb")?];
         let error = r.f64("error")?;
         let n = r.u64("track_length")?;

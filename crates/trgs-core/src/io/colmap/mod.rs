@@ -88,8 +88,27 @@ pub struct ColmapModel {
     pub points: Vec<ColmapPoint>,
 }
 
-/// A parsed record and where it came from ("record 3", "line 17"), for later cross-checks.
-type Located<T> = Vec<(T, String)>;
+/// Parsed records and where each came from, for later cross-checks.
+type Located<T> = Vec<(T, Location)>;
+
+/// Where a record came from ("camera record 3 (of 5)", "line 17"), made into words only for a
+/// message: a model holds millions of points.
+#[derive(Clone, Copy, Debug)]
+enum Location {
+    Record { kind: &'static str, index: u64, count: u64 },
+    Line(usize),
+}
+
+impl std::fmt::Display for Location {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Location::Record { kind, index, count } => {
+                write!(f, "{kind} record {index} (of {count})")
+            }
+            Location::Line(n) => write!(f, "line {n}"),
+        }
+    }
+}
 
 impl ColmapModel {
     /// Read `dir/cameras.bin, images.bin, points3D.bin` if `cameras.bin` exists, else the `.txt`
@@ -254,11 +273,12 @@ fn assemble(
 }
 
 /// Checks applied to every record while parsing, in both layouts.
-fn check_finite(what: &str, values: &[f64]) -> Result<(), String> {
+/// `what` names the values, made only for the message.
+fn check_finite(what: impl FnOnce() -> String, values: &[f64]) -> Result<(), String> {
     if values.iter().all(|v| v.is_finite()) {
         Ok(())
     } else {
-        Err(format!("{what} is not finite: {values:?}"))
+        Err(format!("{} is not finite: {values:?}", what()))
     }
 }
 
@@ -274,12 +294,12 @@ fn check_camera(cam: &ColmapCamera) -> Result<(), String> {
             cam.params.len()
         ));
     }
-    check_finite(&format!("camera {} parameters", cam.id), &cam.params)
+    check_finite(|| format!("camera {} parameters", cam.id), &cam.params)
 }
 
 fn check_image(img: &ColmapImage) -> Result<(), String> {
-    check_finite(&format!("image {} qvec", img.id), &img.qvec)?;
-    check_finite(&format!("image {} tvec", img.id), &img.tvec)?;
+    check_finite(|| format!("image {} qvec", img.id), &img.qvec)?;
+    check_finite(|| format!("image {} tvec", img.id), &img.tvec)?;
     if img.qvec.iter().map(|v| v * v).sum::<f64>() < 1e-24 {
         return Err(format!("image {}: qvec is the zero quaternion", img.id));
     }

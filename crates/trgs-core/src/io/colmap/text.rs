@@ -5,8 +5,8 @@ use std::path::Path;
 use std::str::FromStr;
 
 use super::{
-    ColmapCamera, ColmapImage, ColmapModel, ColmapPoint, Located, check_camera, check_finite,
-    check_image,
+    ColmapCamera, ColmapImage, ColmapModel, ColmapPoint, Located, Location, check_camera,
+    check_finite, check_image,
 };
 use crate::io::error::read_text;
 use crate::io::{FormatError, write_atomic};
@@ -59,7 +59,7 @@ fn read_lines<T>(
     let text = read_text(path)?;
     let mut out = Vec::new();
     for (i, line) in text.lines().enumerate().filter(|(_, l)| is_data(l)) {
-        let at = format!("line {}", i + 1);
+        let at = Location::Line(i + 1);
         let item = parse(&mut Fields::new(line))
             .map_err(|m| FormatError::new(path, format!("{at}: {m}")))?;
         out.push((item, at));
@@ -93,7 +93,7 @@ pub(super) fn read_images(path: &Path) -> Result<Located<ColmapImage>, FormatErr
         if !is_data(line) {
             continue;
         }
-        let at = format!("line {}", i + 1);
+        let at = Location::Line(i + 1);
         let fail = |m: String| FormatError::new(path, format!("{at}: {m}"));
         let mut img = parse_image_line(line).map_err(fail)?;
         if let Some((j, keypoints)) = lines.next() {
@@ -138,7 +138,7 @@ pub(super) fn read_points(path: &Path) -> Result<Vec<ColmapPoint>, FormatError> 
     let points = read_lines(path, |f| {
         let id = f.parse("POINT3D_ID")?;
         let xyz = [f.parse("X")?, f.parse("Y")?, f.parse("Z")?];
-        check_finite(&format!("point {id} xyz"), &xyz)?;
+        check_finite(|| format!("point {id} xyz"), &xyz)?;
         let rgb = [f.parse("R")?, f.parse("G")?, f.parse("B")?];
         let error = f.parse("ERROR")?;
         let mut track = Vec::new();
