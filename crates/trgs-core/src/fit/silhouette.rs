@@ -72,9 +72,9 @@ struct ViewPixels {
 }
 
 /// `plane` moved to agree best with the pixels of `label` in `views` (camera, label image). None
-/// when no view holds the label. The plane's front side (its normal) and material are kept; a
-/// result beyond the [`SilhouetteSettings`] limits is refused (None), since then the masks and
-/// the fit disagree about which rectangle this is.
+/// when no view holds the label. The plane's front side (its normal) and material are kept. A
+/// search that moves the rectangle beyond the [`SilhouetteSettings`] limits is refused (None)
+/// when it does, since then the masks and the fit disagree about which rectangle this is.
 pub fn refine_to_masks(
     plane: &ReflectionPlane,
     views: &[(&Camera, &Image<u8>)],
@@ -97,18 +97,22 @@ pub fn refine_to_masks(
     // the turn; the search halves them down to 1/256.
     let steps = [0.02 * size, 0.02 * size, 0.02 * size, 0.02, 0.02, 0.01];
     let cost = |p: &Params| total_cost(&p.apply(plane), &pixels, settings);
+    let within = |p: &Params| within_limits(plane, &p.apply(plane), settings);
     let cost_before = cost(&start);
-    let (best, cost_after) = pattern_search(start, steps, settings.max_evaluations, &cost);
+    let (best, cost_after) =
+        pattern_search(start, steps, settings.max_evaluations, &cost, &within)?;
     let moved = best.apply(plane);
+    let offset_resolution = offset_resolution(&moved, &cameras);
+    Some(SilhouetteFit { plane: moved, cost_before, cost_after, offset_resolution })
+}
+
+/// Whether `moved` is within the [`SilhouetteSettings`] limits of a move from `plane`.
+fn within_limits(plane: &ReflectionPlane, moved: &ReflectionPlane, s: &SilhouetteSettings) -> bool {
+    let size = (plane.width * plane.height).sqrt();
     let shift = (moved.centre - plane.centre).length() / size;
     let scale = (moved.width / plane.width).max(moved.height / plane.height);
     let shrink = (plane.width / moved.width).max(plane.height / moved.height);
-    if !(shift <= settings.max_shift && scale <= settings.max_scale && shrink <= settings.max_scale)
-    {
-        return None;
-    }
-    let offset_resolution = offset_resolution(&moved, &cameras);
-    Some(SilhouetteFit { plane: moved, cost_before, cost_after, offset_resolution })
+    shift <= s.max_shift && scale <= s.max_scale && shrink <= s.max_scale
 }
 
 /// How far `plane` can move along its normal before some stretch of its outline in view of one
@@ -165,12 +169,20 @@ impl Params {
 /// Compass search: try each coordinate's step both ways, keep any improvement, halve the steps
 /// when none improves. Derivative-free and monotone, which suits a cost summed over pixels;
 /// no optimisation crate is needed for six parameters.
+///
+/// None as soon as an improvement lies outside `within` (or the start does): the search is then
+/// on its way to a rectangle the limits refuse. Its steps never grow, so from a start far from
+/// the masks' rectangle it would otherwise spend the whole evaluation budget getting there.
 fn pattern_search(
     start: Params,
     mut steps: [f64; 6],
     max_evaluations: usize,
     cost: &impl Fn(&Params) -> f64,
-) -> (Params, f64) {
+    within: &impl Fn(&Params) -> bool,
+) -> Option<(Params, f64)> {
+    if !within(&start) {
+        return None;
+    }
     let mut best = start;
     let mut best_cost = cost(&best);
     let mut evaluations = 1;
@@ -184,6 +196,9 @@ fn pattern_search(
                 let c = cost(&trial);
                 evaluations += 1;
                 if c < best_cost {
+                    if !within(&trial) {
+                        return None;
+                    }
                     (best, best_cost, improved) = (trial, c, true);
                     break;
                 }
@@ -194,7 +209,7 @@ fn pattern_search(
             halvings += 1;
         }
     }
-    (best, best_cost)
+    Some((best, best_cost))
 }
 
 /// The rays of the pixels of `camera` within a margin of the bounding box of `label` in `mask`,
@@ -410,6 +425,47 @@ mod tests {
         let size = (truth.width * truth.height).sqrt();
         assert!((fit.plane.centre - truth.centre).length() < 0.003 * size);
         assert!(fit.cost_after <= fit.cost_before);
+    }
+
+    #[test]
+    fn a_search_that_leaves_the_limits_stops_there() {
+        let evaluations = std::cell::Cell::new(0usize);
+        // Distance to `at` along the first parameter, the others at 0; evaluations counted.
+        let cost_to = |at: f64| {
+            let evaluations = &evaluations;
+            move |p: &Params| {
+                evaluations.set(evaluations.get() + 1);
+                (p.0[0] - at).powi(2) + p.0[1..].iter().map(|v| v * v).sum::<f64>()
+            }
+        };
+        let limit = |p: &Params| p.0[0] <= 1.0;
+        let steps = [0.02; 6];
+        // A minimum far beyond the limit: the search stops when it crosses it, at about 11
+        // evaluations a step of 0.02 (one forward, two each way for the other five) ...
+        let far = cost_to(10.0);
+        assert!(pattern_search(Params::default(), steps, 4000, &far, &limit).is_none());
+        assert!(evaluations.get() < 600, "{} evaluations", evaluations.get());
+        // ... where without a limit it spends the whole budget on its way there.
+        evaluations.set(0);
+        assert!(pattern_search(Params::default(), steps, 4000, &far, &|_| true).is_some());
+        assert!(evaluations.get() >= 4000, "{} evaluations", evaluations.get());
+        // A minimum within the limit: the same search as without one.
+        let near = cost_to(0.5);
+        let (a, ca) = pattern_search(Params::default(), steps, 4000, &near, &limit).expect("in");
+        let (b, cb) = pattern_search(Params::default(), steps, 4000, &near, &|_| true).expect("in");
+        assert_eq!((a.0, ca.to_bits()), (b.0, cb.to_bits()));
+        assert!((a.0[0] - 0.5).abs() < 1e-3);
+    }
+
+    #[test]
+    fn a_rectangle_twice_the_glass_is_refused() {
+        let truth = glass();
+        let cams = cameras(&truth);
+        let masks: Vec<_> = cams.iter().map(|c| mask(c, &truth, None)).collect();
+        let views: Vec<(&Camera, &Image<u8>)> = cams.iter().zip(&masks).collect();
+        let mut start = truth;
+        (start.width, start.height) = (2.0 * truth.width, 2.0 * truth.height);
+        assert!(refine_to_masks(&start, &views, 1, &SilhouetteSettings::default()).is_none());
     }
 
     #[test]
