@@ -61,8 +61,8 @@ pub struct View {
 }
 
 /// `progress(done, total)`: how many of the scene's photos are loaded, called from the loading
-/// threads.
-pub type LoadProgress = dyn Fn(usize, usize) + Sync;
+/// threads. It may borrow from its caller (`'a`).
+pub type LoadProgress<'a> = dyn Fn(usize, usize) + Sync + 'a;
 
 impl View {
     /// A view of `camera` showing `image` whole: no glass labels, every pixel covered, no lens.
@@ -99,12 +99,13 @@ impl TrainingData {
     pub fn load_with_progress(
         folder: &SceneFolder,
         resolution: Resolution,
-        progress: &LoadProgress,
+        progress: &LoadProgress<'_>,
     ) -> Result<Self> {
         let mut train = Vec::new();
         let mut test = Vec::new();
         let mut notes = LoadNotes::default();
-        for (view, report) in load_views(folder, resolution, progress)? {
+        let every: Vec<usize> = (0..folder.views.len()).collect();
+        for (view, report) in load_views(folder, &every, resolution, progress)? {
             notes.add(report);
             if folder.is_test(&view.camera.name) {
                 test.push(view);
@@ -115,8 +116,56 @@ impl TrainingData {
         if train.is_empty() {
             bail!("{}: every view is a test view; nothing to train on", folder.root.display());
         }
-        let centres: Vec<DVec3> = train.iter().map(|v| v.camera.pose.centre()).collect();
-        let centre = centres.iter().copied().sum::<DVec3>() / centres.len() as f64;
+        Ok(Self::assemble(folder, train, test, notes.lines(resolution)))
+    }
+
+    /// The views `split` evaluates on (those of [`TrainingData::eval_views`] for the test split
+    /// of a scene without test views), and only those decoded, in `test`: `eval` of a capture
+    /// of hundreds of photos then loads only the few it measures. `train` holds the views of a
+    /// scene without test views, and is empty otherwise. `extent` and `centre` are those of
+    /// training.
+    pub fn load_for_evaluation(
+        folder: &SceneFolder,
+        resolution: Resolution,
+        split: Split,
+        progress: &LoadProgress<'_>,
+    ) -> Result<Self> {
+        let (tests, trains): (Vec<usize>, Vec<usize>) =
+            (0..folder.views.len()).partition(|&i| folder.is_test(&folder.views[i].camera.name));
+        let no_test_views = split == Split::Test && tests.is_empty();
+        let chosen = match split {
+            Split::Test if no_test_views => trains[..trains.len().min(4)].to_vec(),
+            Split::Test => tests,
+            Split::Train => trains,
+            Split::All => (0..folder.views.len()).collect(),
+        };
+        if chosen.is_empty() {
+            bail!("{}: no views in the {} split", folder.root.display(), split.name());
+        }
+        let mut notes = LoadNotes::default();
+        let mut views = Vec::with_capacity(chosen.len());
+        for (view, report) in load_views(folder, &chosen, resolution, progress)? {
+            notes.add(report);
+            views.push(view);
+        }
+        if split == Split::All {
+            views.sort_by(|a, b| a.camera.name.cmp(&b.camera.name));
+        }
+        let (train, test) = if no_test_views { (views, Vec::new()) } else { (Vec::new(), views) };
+        Ok(Self::assemble(folder, train, test, notes.lines(resolution)))
+    }
+
+    /// The loaded views with the folder's points, materials, and the extent of its training
+    /// cameras (their poses do not depend on which photos were decoded).
+    fn assemble(
+        folder: &SceneFolder,
+        train: Vec<View>,
+        test: Vec<View>,
+        notes: Vec<String>,
+    ) -> Self {
+        let training = folder.views.iter().filter(|v| !folder.is_test(&v.camera.name));
+        let centres: Vec<DVec3> = training.map(|v| v.camera.pose.centre()).collect();
+        let centre = centres.iter().copied().sum::<DVec3>() / centres.len().max(1) as f64;
         let radius = centres.iter().map(|c| c.distance(centre)).fold(0.0, f64::max);
         // One camera (or all at one spot): the scene's scale is unknown; 1 as 3DGS would give.
         let extent = if radius > 0.0 { 1.1 * radius } else { 1.0 };
@@ -125,15 +174,15 @@ impl TrainingData {
             .iter()
             .map(|(p, c)| (DVec3::from_array(*p), c.map(|v| f64::from(v) / 255.0)))
             .collect();
-        let notes = notes.lines(resolution);
         let mut data = Self { train, test, points, extent, centre, materials: Vec::new(), notes };
         data.materials = data.mask_labels().into_iter().map(|l| (l, folder.material(l))).collect();
-        Ok(data)
+        data
     }
 
-    /// The width and height of the training images.
+    /// The width and height of the training images (of the evaluated ones, for data loaded by
+    /// [`TrainingData::load_for_evaluation`]).
     pub fn size(&self) -> (u32, u32) {
-        let c = &self.train[0].camera;
+        let c = &self.train.first().or(self.test.first()).expect("a loaded view").camera;
         (c.width(), c.height())
     }
 
@@ -147,23 +196,6 @@ impl TrainingData {
     /// its scores are on training views.
     pub fn eval_views_name(&self) -> &'static str {
         if self.test.is_empty() { "training (the scene has no test views)" } else { "test" }
-    }
-
-    /// Evaluate on `split` rather than the test views: `eval_views` (and with it `eval`'s
-    /// metrics and ground-truth comparison) then holds the training views, to see how well a
-    /// model fits what it was trained on, or every view in name order. Training never calls this.
-    pub fn evaluate_on(mut self, split: Split) -> Self {
-        match split {
-            Split::Test => {}
-            Split::Train => self.test = self.train.clone(),
-            Split::All => {
-                let mut all = self.train.clone();
-                all.append(&mut self.test);
-                all.sort_by(|a, b| a.camera.name.cmp(&b.camera.name));
-                self.test = all;
-            }
-        }
-        self
     }
 
     /// The glass-mask labels some training view uses, ascending.
@@ -184,19 +216,20 @@ impl TrainingData {
 /// they hold at once (36 MB for 12 MP at 8 bits) stay small.
 const LOAD_THREADS: usize = 8;
 
-/// Every view of `folder` at `resolution`, in the folder's order, decoded on up to
-/// [`LOAD_THREADS`] threads. The first failure in view order is the error; the other threads
+/// The views `indices` of `folder` at `resolution`, in that order, decoded on up to
+/// [`LOAD_THREADS`] threads. The first failure in that order is the error; the other threads
 /// stop taking views once one fails.
 fn load_views(
     folder: &SceneFolder,
+    indices: &[usize],
     resolution: Resolution,
-    progress: &LoadProgress,
+    progress: &LoadProgress<'_>,
 ) -> Result<Vec<Loaded>> {
-    let n = folder.views.len();
+    let n = indices.len();
     let done = AtomicUsize::new(0);
     let slots: Vec<Mutex<Option<Result<Loaded>>>> = (0..n).map(|_| Mutex::new(None)).collect();
     for_each_index(n, LOAD_THREADS, |i| {
-        let loaded = load_view(folder, i, resolution);
+        let loaded = load_view(folder, indices[i], resolution);
         let ok = loaded.is_ok();
         if let Ok(mut slot) = slots[i].lock() {
             *slot = Some(loaded);
@@ -454,7 +487,7 @@ pub fn load(root: &Path, resolution: Resolution) -> Result<TrainingData> {
 pub fn load_with_progress(
     root: &Path,
     resolution: Resolution,
-    progress: &LoadProgress,
+    progress: &LoadProgress<'_>,
 ) -> Result<TrainingData> {
     let folder = SceneFolder::open(root)
         .with_context(|| format!("opening the scene folder {}", root.display()))?;

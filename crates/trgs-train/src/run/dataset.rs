@@ -83,7 +83,7 @@ pub(super) fn load_data(
     config: &RunConfig,
     data_dir: &Path,
     note: &mut impl FnMut(String),
-    loading: &LoadProgress,
+    loading: &LoadProgress<'_>,
 ) -> Result<TrainingData> {
     let folder = trgs_core::io::SceneFolder::open(data_dir)
         .with_context(|| format!("opening the scene folder {}", data_dir.display()))?;

@@ -143,7 +143,7 @@ impl TrainingRun {
 
     /// [`TrainingRun::new`], calling `loading(done, total)` as the photos load (from the
     /// loading threads).
-    pub fn new_with_progress(config: RunConfig, loading: &LoadProgress) -> Result<Self> {
+    pub fn new_with_progress(config: RunConfig, loading: &LoadProgress<'_>) -> Result<Self> {
         // Refused before the device is set up.
         config.check()?;
         let ctx = GpuContext::new()?;
@@ -163,7 +163,7 @@ impl TrainingRun {
 
     /// [`TrainingRun::resume`] with the photos' loading progress, as
     /// [`TrainingRun::new_with_progress`].
-    pub fn resume_with_progress(out: &Path, loading: &LoadProgress) -> Result<Self> {
+    pub fn resume_with_progress(out: &Path, loading: &LoadProgress<'_>) -> Result<Self> {
         Self::resume_with_overrides(out, &ResumeOverrides::default(), loading)
     }
 
@@ -171,7 +171,7 @@ impl TrainingRun {
     pub fn resume_with_overrides(
         out: &Path,
         overrides: &ResumeOverrides,
-        loading: &LoadProgress,
+        loading: &LoadProgress<'_>,
     ) -> Result<Self> {
         Self::resume_on(GpuContext::new()?, out, overrides, loading)
     }
@@ -185,7 +185,7 @@ impl TrainingRun {
         ctx: GpuContext,
         out: &Path,
         overrides: &ResumeOverrides,
-        loading: &LoadProgress,
+        loading: &LoadProgress<'_>,
     ) -> Result<Self> {
         let path = out.join(CHECKPOINT_FILE);
         let ck = read_checkpoint(&path).with_context(|| {
@@ -219,7 +219,7 @@ impl TrainingRun {
         config: RunConfig,
         resumed: Option<(Checkpoint, RunState)>,
         mut events: Vec<RunEvent>,
-        loading: &LoadProgress,
+        loading: &LoadProgress<'_>,
     ) -> Result<Self> {
         let mut note = |line: String| events.push(RunEvent::Note(line));
         let (data_dir, written) = dataset::dataset_dir(&config)?;
