@@ -12,6 +12,12 @@ use trgs_core::lens::Undistortion;
 use trgs_core::parallel::for_each_index;
 use trgs_core::scene::{Camera, Material};
 
+mod notes;
+mod resize;
+
+use notes::{LensNote, LoadNotes, Loaded, ViewReport};
+pub use resize::{resize_area, resize_area_u8};
+
 /// The longer side photos are trained at by default (the INRIA code's limit too): a 12 MP photo
 /// at full size costs the renderer 6 times the pixels for detail the views rarely resolve.
 pub const DEFAULT_LONG_SIDE: u32 = 1600;
@@ -292,101 +298,6 @@ fn load_view(folder: &SceneFolder, i: usize, resolution: Resolution) -> Result<L
     Ok((view, report))
 }
 
-/// A width and height.
-type Size = (u32, u32);
-
-/// A loaded view and what loading did to it.
-type Loaded = (View, ViewReport);
-
-/// What loading did to one view.
-struct ViewReport {
-    /// Its pinhole size and its training size, when they differ.
-    scaled: Option<(Size, Size)>,
-    lens: Option<LensNote>,
-}
-
-/// How many views were scaled, and the first one's sizes.
-#[derive(Clone, Copy)]
-struct Scaled {
-    views: usize,
-    from: Size,
-    to: Size,
-}
-
-/// What loading did to the photos, gathered over the views for the run's log.
-#[derive(Default)]
-struct LoadNotes {
-    lenses: Vec<LensNote>,
-    scaled: Option<Scaled>,
-}
-
-impl LoadNotes {
-    fn add(&mut self, report: ViewReport) {
-        if let Some((from, to)) = report.scaled {
-            self.scaled.get_or_insert(Scaled { views: 0, from, to }).views += 1;
-        }
-        if let Some(lens) = report.lens {
-            match self
-                .lenses
-                .iter_mut()
-                .find(|n| n.lens == lens.lens && n.describe == lens.describe)
-            {
-                Some(n) => n.views += 1,
-                None => self.lenses.push(lens),
-            }
-        }
-    }
-
-    fn lines(&self, resolution: Resolution) -> Vec<String> {
-        let mut lines: Vec<String> = self.lenses.iter().map(LensNote::line).collect();
-        if let (Some(s), Resolution::LongSide(side)) = (self.scaled, resolution) {
-            let (n, (fw, fh), (w, h)) = (s.views, s.from, s.to);
-            lines.push(format!(
-                "{n} photos longer than {side} px are trained at {side} on their longer side \
-                 ({fw}x{fh} -> {w}x{h}); --full-size keeps their size, --resolution or \
-                 --downscale choose another"
-            ));
-        }
-        lines
-    }
-}
-
-/// What the loader did to the photos of one lens, for the run's log.
-struct LensNote {
-    lens: String,
-    describe: String,
-    photo: (u32, u32),
-    pinhole: (u32, u32),
-    views: usize,
-    /// Pixels without a source in the first view (at the training resolution), of `pixels`.
-    blank: usize,
-    pixels: usize,
-}
-
-impl LensNote {
-    fn line(&self) -> String {
-        let blank = if self.blank == 0 {
-            "every pixel has a source".to_string()
-        } else {
-            format!(
-                "{} of {} pixels have no source and are left out of the loss",
-                self.blank, self.pixels
-            )
-        };
-        format!(
-            "camera model {} ({}) on {} views: undistorted from {}x{} photos into {}x{} pinhole \
-             views, as colmap image_undistorter would; {blank}",
-            self.lens,
-            self.describe,
-            self.views,
-            self.photo.0,
-            self.photo.1,
-            self.pinhole.0,
-            self.pinhole.1
-        )
-    }
-}
-
 /// The size of an image of `w x h` at `resolution`.
 pub fn target_size(w: u32, h: u32, resolution: Resolution) -> Result<(u32, u32)> {
     let (tw, th) = match resolution {
@@ -410,74 +321,6 @@ pub fn target_size(w: u32, h: u32, resolution: Resolution) -> Result<(u32, u32)>
     Ok((tw, th))
 }
 
-/// Resample with an area (box) filter: each output pixel averages the input area it covers,
-/// partial pixels weighted by their overlap. Identity when the size is unchanged.
-pub fn resize_area(im: &Image<f32>, w: u32, h: u32) -> Image<f32> {
-    if (im.width, im.height) == (w, h) {
-        return im.clone();
-    }
-    area_resample(im, w, h, f64::from)
-}
-
-/// [`resize_area`] of an 8-bit image (samples k / 255), to [0, 1].
-pub fn resize_area_u8(im: &Image<u8>, w: u32, h: u32) -> Image<f32> {
-    if (im.width, im.height) == (w, h) {
-        return im.to_f32();
-    }
-    // The 256 values once, not a division per sample read (each is read for about two output
-    // pixels): the same values, so the same image.
-    let value: [f64; 256] = std::array::from_fn(|k| k as f64 / 255.0);
-    area_resample(im, w, h, |v| value[usize::from(v)])
-}
-
-fn area_resample<T: Copy>(im: &Image<T>, w: u32, h: u32, value: impl Fn(T) -> f64) -> Image<f32> {
-    let ch = im.channels as usize;
-    let sx = f64::from(im.width) / f64::from(w);
-    let sy = f64::from(im.height) / f64::from(h);
-    let spans = |n: u32, s: f64, limit: u32| -> Vec<Vec<(u32, f64)>> {
-        (0..n)
-            .map(|o| {
-                let (a, b) = (f64::from(o) * s, f64::from(o + 1) * s);
-                let (first, last) = (a.floor() as u32, (b.ceil() as u32).min(limit));
-                (first..last)
-                    .map(|i| (i, (b.min(f64::from(i + 1)) - a.max(f64::from(i))).max(0.0)))
-                    .filter(|&(_, wgt)| wgt > 0.0)
-                    .collect()
-            })
-            .collect()
-    };
-    let xs = spans(w, sx, im.width);
-    let ys = spans(h, sy, im.height);
-    let (source_row, out_row) = (im.width as usize * ch, w as usize * ch);
-    let mut out = Image::<f32>::new(w, h, im.channels);
-    // An output row at a time, so that nothing is allocated per pixel; each output sample is
-    // still summed over the rows of its area, then the columns, as a loop per pixel would.
-    let mut sums = vec![0.0f64; out_row];
-    let mut totals = vec![0.0f64; w as usize];
-    for (yspan, out) in ys.iter().zip(out.data.chunks_exact_mut(out_row.max(1))) {
-        sums.fill(0.0);
-        totals.fill(0.0);
-        for &(iy, wy) in yspan {
-            let row = &im.data[iy as usize * source_row..][..source_row];
-            for ((xspan, sum), total) in xs.iter().zip(sums.chunks_exact_mut(ch)).zip(&mut totals) {
-                for &(ix, wx) in xspan {
-                    let wgt = wx * wy;
-                    *total += wgt;
-                    for (a, &v) in sum.iter_mut().zip(&row[ix as usize * ch..][..ch]) {
-                        *a += wgt * value(v);
-                    }
-                }
-            }
-        }
-        for ((o, sum), total) in out.chunks_exact_mut(ch).zip(sums.chunks_exact(ch)).zip(&totals) {
-            for (o, a) in o.iter_mut().zip(sum) {
-                *o = (a / total) as f32;
-            }
-        }
-    }
-    out
-}
-
 /// Load `root` (a scene folder) at `resolution`.
 pub fn load(root: &Path, resolution: Resolution) -> Result<TrainingData> {
     load_with_progress(root, resolution, &|_, _| {})
@@ -497,18 +340,6 @@ pub fn load_with_progress(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn area_resize_averages_blocks_and_keeps_the_mean() {
-        let mut im = Image::<f32>::new(4, 2, 1);
-        im.data = vec![0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0];
-        let half = resize_area(&im, 2, 1);
-        assert_eq!(half.data, vec![2.5, 4.5]);
-        // A non-integer factor keeps the image mean.
-        let odd = resize_area(&im, 3, 2);
-        let mean = |v: &[f32]| v.iter().sum::<f32>() / v.len() as f32;
-        assert!((mean(&odd.data) - mean(&im.data)).abs() < 1e-5);
-    }
 
     #[test]
     fn sizes_follow_the_resolution() {
