@@ -73,8 +73,9 @@ struct ViewPixels {
 
 /// `plane` moved to agree best with the pixels of `label` in `views` (camera, label image). None
 /// when no view holds the label. The plane's front side (its normal) and material are kept. A
-/// search that moves the rectangle beyond the [`SilhouetteSettings`] limits is refused (None)
-/// when it does, since then the masks and the fit disagree about which rectangle this is.
+/// result beyond the [`SilhouetteSettings`] limits is refused (None), since then the masks and
+/// the fit disagree about which rectangle this is; so is a search that goes well beyond them,
+/// when it does ([`SEARCH_SLACK`]).
 pub fn refine_to_masks(
     plane: &ReflectionPlane,
     views: &[(&Camera, &Image<u8>)],
@@ -97,22 +98,39 @@ pub fn refine_to_masks(
     // the turn; the search halves them down to 1/256.
     let steps = [0.02 * size, 0.02 * size, 0.02 * size, 0.02, 0.02, 0.01];
     let cost = |p: &Params| total_cost(&p.apply(plane), &pixels, settings);
-    let within = |p: &Params| within_limits(plane, &p.apply(plane), settings);
+    let on_course = |p: &Params| within_limits(plane, &p.apply(plane), settings, SEARCH_SLACK);
     let cost_before = cost(&start);
     let (best, cost_after) =
-        pattern_search(start, steps, settings.max_evaluations, &cost, &within)?;
+        pattern_search(start, steps, settings.max_evaluations, &cost, &on_course)?;
     let moved = best.apply(plane);
+    if !within_limits(plane, &moved, settings, 0.0) {
+        return None;
+    }
     let offset_resolution = offset_resolution(&moved, &cameras);
     Some(SilhouetteFit { plane: moved, cost_before, cost_after, offset_resolution })
 }
 
-/// Whether `moved` is within the [`SilhouetteSettings`] limits of a move from `plane`.
-fn within_limits(plane: &ReflectionPlane, moved: &ReflectionPlane, s: &SilhouetteSettings) -> bool {
+/// How far beyond the [`SilhouetteSettings`] limits the search may go before it is refused, in
+/// fractions of the size (shift) and in log size (scale): five of its first steps. The compass
+/// search moves one coordinate a step at a time, so on its way to a result within the limits
+/// it can overshoot a coordinate by a step and cross them (the shift limit is on the length of
+/// a move along three coordinates); it should not be stopped there.
+const SEARCH_SLACK: f64 = 0.1;
+
+/// Whether `moved` is within the [`SilhouetteSettings`] limits of a move from `plane`, widened
+/// by `slack` (added to the shift, and to the log of the scale).
+fn within_limits(
+    plane: &ReflectionPlane,
+    moved: &ReflectionPlane,
+    s: &SilhouetteSettings,
+    slack: f64,
+) -> bool {
     let size = (plane.width * plane.height).sqrt();
     let shift = (moved.centre - plane.centre).length() / size;
     let scale = (moved.width / plane.width).max(moved.height / plane.height);
     let shrink = (plane.width / moved.width).max(plane.height / moved.height);
-    shift <= s.max_shift && scale <= s.max_scale && shrink <= s.max_scale
+    let most_scale = s.max_scale * slack.exp();
+    shift <= s.max_shift + slack && scale <= most_scale && shrink <= most_scale
 }
 
 /// How far `plane` can move along its normal before some stretch of its outline in view of one
@@ -172,7 +190,8 @@ impl Params {
 ///
 /// None as soon as an improvement lies outside `within` (or the start does): the search is then
 /// on its way to a rectangle the limits refuse. Its steps never grow, so from a start far from
-/// the masks' rectangle it would otherwise spend the whole evaluation budget getting there.
+/// the masks' rectangle it would otherwise spend the whole evaluation budget getting there
+/// (the likely cause of a 7-minute plane initialisation, docs/captures.md).
 fn pattern_search(
     start: Params,
     mut steps: [f64; 6],
@@ -455,6 +474,26 @@ mod tests {
         let (b, cb) = pattern_search(Params::default(), steps, 4000, &near, &|_| true).expect("in");
         assert_eq!((a.0, ca.to_bits()), (b.0, cb.to_bits()));
         assert!((a.0[0] - 0.5).abs() < 1e-3);
+    }
+
+    /// The search crosses the shift limit on its way to a result within it (the move along
+    /// the axis and the bitangent overshoots a step each) and keeps that result.
+    #[test]
+    fn a_result_within_the_limits_is_kept_when_the_search_crossed_them() {
+        let truth = glass();
+        let cams = cameras(&truth);
+        let masks: Vec<_> = cams.iter().map(|c| mask(c, &truth, None)).collect();
+        let views: Vec<(&Camera, &Image<u8>)> = cams.iter().zip(&masks).collect();
+        let size = (truth.width * truth.height).sqrt();
+        // Shifts along the axis and the bitangent, as fractions of the size, all within 0.25:
+        // without the slack, the search from each was refused.
+        for (t, b) in [(0.198, 0.152), (0.176, 0.176), (-0.176, -0.176), (-0.08, -0.23)] {
+            let mut start = truth;
+            start.centre += (truth.axis * t + truth.bitangent() * b) * size;
+            let fit = refine_to_masks(&start, &views, 1, &SilhouetteSettings::default())
+                .unwrap_or_else(|| panic!("({t}, {b}) is within the limits"));
+            assert!((fit.plane.centre - truth.centre).length() < 0.003 * size, "({t}, {b})");
+        }
     }
 
     #[test]
