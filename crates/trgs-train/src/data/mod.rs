@@ -129,7 +129,7 @@ impl TrainingData {
     /// of a scene without test views), and only those decoded, in `test`: `eval` of a capture
     /// of hundreds of photos then loads only the few it measures. `train` holds the views of a
     /// scene without test views, and is empty otherwise. `extent` and `centre` are those of
-    /// training.
+    /// training; `materials` are only those of the labels in `train`'s masks.
     pub fn load_for_evaluation(
         folder: &SceneFolder,
         resolution: Resolution,
