@@ -368,6 +368,13 @@ mod tests {
         m
     }
 
+    /// The cameras of [`cameras`] and their masks of `plane`, with nothing in front of it.
+    fn unhidden_views(plane: &ReflectionPlane) -> (Vec<Camera>, Vec<Image<u8>>) {
+        let cams = cameras(plane);
+        let masks = cams.iter().map(|c| mask(c, plane, None)).collect();
+        (cams, masks)
+    }
+
     fn refine_cost(plane: &ReflectionPlane, views: &[(&Camera, &Image<u8>)]) -> f64 {
         let s = SilhouetteSettings::default();
         let px: Vec<_> = views.iter().filter_map(|(c, m)| view_pixels(c, m, 1, s.margin)).collect();
@@ -436,8 +443,7 @@ mod tests {
     #[test]
     fn the_true_rectangle_stays_where_it_is() {
         let truth = glass();
-        let cams = cameras(&truth);
-        let masks: Vec<_> = cams.iter().map(|c| mask(c, &truth, None)).collect();
+        let (cams, masks) = unhidden_views(&truth);
         let views: Vec<(&Camera, &Image<u8>)> = cams.iter().zip(&masks).collect();
         let fit = refine_to_masks(&truth, &views, 1, &SilhouetteSettings::default())
             .expect("the masks hold the label");
@@ -481,8 +487,7 @@ mod tests {
     #[test]
     fn a_result_within_the_limits_is_kept_when_the_search_crossed_them() {
         let truth = glass();
-        let cams = cameras(&truth);
-        let masks: Vec<_> = cams.iter().map(|c| mask(c, &truth, None)).collect();
+        let (cams, masks) = unhidden_views(&truth);
         let views: Vec<(&Camera, &Image<u8>)> = cams.iter().zip(&masks).collect();
         let size = (truth.width * truth.height).sqrt();
         // Shifts along the axis and the bitangent, as fractions of the size, all within 0.25:
@@ -499,8 +504,7 @@ mod tests {
     #[test]
     fn a_rectangle_twice_the_glass_is_refused() {
         let truth = glass();
-        let cams = cameras(&truth);
-        let masks: Vec<_> = cams.iter().map(|c| mask(c, &truth, None)).collect();
+        let (cams, masks) = unhidden_views(&truth);
         let views: Vec<(&Camera, &Image<u8>)> = cams.iter().zip(&masks).collect();
         let mut start = truth;
         (start.width, start.height) = (2.0 * truth.width, 2.0 * truth.height);
