@@ -6,9 +6,9 @@ use anyhow::{Context, Result, bail};
 use clap::Parser;
 use std::path::PathBuf;
 use trgs_cli::args::SplitArg;
-use trgs_core::io::{SceneFolder, Split, write_atomic};
+use trgs_core::io::{Split, write_atomic};
 use trgs_render::{GpuContext, GpuScene, RenderOptions, Renderer};
-use trgs_train::data::{Resolution, TrainingData};
+use trgs_train::data::{self, Resolution};
 use trgs_train::eval::{Renderable, compare_with_truth, evaluate, render_fps, write_renders};
 use trgs_train::model::load_model;
 use trgs_train::run::parse_positive;
@@ -64,11 +64,9 @@ fn main() -> Result<()> {
         _ => bail!("--data is required: {} has no dataset/ folder", args.model.display()),
     };
     let model = load_model(&args.model, args.planes.as_deref())?;
-    let folder = SceneFolder::open(&data_dir)
-        .with_context(|| format!("opening the scene folder {}", data_dir.display()))?;
     let resolution = Resolution::from_flags(args.resolution, args.downscale, args.full_size);
     // Only the views measured are decoded: a few of a capture's hundreds of photos.
-    let data = TrainingData::load_for_evaluation(&folder, resolution, split, &|_, _| {})?;
+    let data = data::load_for_evaluation(&data_dir, resolution, split)?;
     let ctx = GpuContext::new()?;
     let scene = GpuScene::upload(&ctx, &model.gaussians, &model.planes)
         .with_context(|| format!("uploading {}", model.ply.display()))?;

@@ -107,18 +107,10 @@ impl TrainingData {
         resolution: Resolution,
         progress: &LoadProgress<'_>,
     ) -> Result<Self> {
-        let mut train = Vec::new();
-        let mut test = Vec::new();
-        let mut notes = LoadNotes::default();
         let every: Vec<usize> = (0..folder.views.len()).collect();
-        for (view, report) in load_views(folder, &every, resolution, progress)? {
-            notes.add(report);
-            if folder.is_test(&view.camera.name) {
-                test.push(view);
-            } else {
-                train.push(view);
-            }
-        }
+        let (views, notes) = load_views(folder, &every, resolution, progress)?;
+        let (test, train): (Vec<View>, Vec<View>) =
+            views.into_iter().partition(|v| folder.is_test(&v.camera.name));
         if train.is_empty() {
             bail!("{}: every view is a test view; nothing to train on", folder.root.display());
         }
@@ -148,12 +140,7 @@ impl TrainingData {
         if chosen.is_empty() {
             bail!("{}: no views in the {} split", folder.root.display(), split.name());
         }
-        let mut notes = LoadNotes::default();
-        let mut views = Vec::with_capacity(chosen.len());
-        for (view, report) in load_views(folder, &chosen, resolution, progress)? {
-            notes.add(report);
-            views.push(view);
-        }
+        let (mut views, notes) = load_views(folder, &chosen, resolution, progress)?;
         if split == Split::All {
             views.sort_by(|a, b| a.camera.name.cmp(&b.camera.name));
         }
@@ -222,15 +209,15 @@ impl TrainingData {
 /// they hold at once (36 MB for 12 MP at 8 bits) stay small.
 const LOAD_THREADS: usize = 8;
 
-/// The views `indices` of `folder` at `resolution`, in that order, decoded on up to
-/// [`LOAD_THREADS`] threads. The first failure in that order is the error; the other threads
+/// The views `indices` of `folder` at `resolution`, in that order, and what loading did to
+/// them, decoded on up to [`LOAD_THREADS`] threads. The first failure in that order is the error; the other threads
 /// stop taking views once one fails.
 fn load_views(
     folder: &SceneFolder,
     indices: &[usize],
     resolution: Resolution,
     progress: &LoadProgress<'_>,
-) -> Result<Vec<Loaded>> {
+) -> Result<(Vec<View>, LoadNotes)> {
     let n = indices.len();
     let done = AtomicUsize::new(0);
     let slots: Vec<Mutex<Option<Result<Loaded>>>> = (0..n).map(|_| Mutex::new(None)).collect();
@@ -244,14 +231,19 @@ fn load_views(
         ok
     });
     let mut views = Vec::with_capacity(n);
+    let mut notes = LoadNotes::default();
     for slot in slots {
         match slot.into_inner().ok().flatten() {
-            Some(view) => views.push(view?),
+            Some(loaded) => {
+                let (view, report) = loaded?;
+                notes.add(report);
+                views.push(view);
+            }
             // Not taken: a view failed, and its error comes first or later in this loop.
             None => continue,
         }
     }
-    Ok(views)
+    Ok((views, notes))
 }
 
 /// One view of `folder` at `resolution`, and what loading did to it.
@@ -332,9 +324,21 @@ pub fn load_with_progress(
     resolution: Resolution,
     progress: &LoadProgress<'_>,
 ) -> Result<TrainingData> {
-    let folder = SceneFolder::open(root)
-        .with_context(|| format!("opening the scene folder {}", root.display()))?;
-    TrainingData::load_with_progress(&folder, resolution, progress)
+    TrainingData::load_with_progress(&open_folder(root)?, resolution, progress)
+}
+
+/// Load the views of `root` (a scene folder) that `split` evaluates on, at `resolution`
+/// ([`TrainingData::load_for_evaluation`]).
+pub fn load_for_evaluation(
+    root: &Path,
+    resolution: Resolution,
+    split: Split,
+) -> Result<TrainingData> {
+    TrainingData::load_for_evaluation(&open_folder(root)?, resolution, split, &|_, _| {})
+}
+
+fn open_folder(root: &Path) -> Result<SceneFolder> {
+    SceneFolder::open(root).with_context(|| format!("opening the scene folder {}", root.display()))
 }
 
 #[cfg(test)]

@@ -12,7 +12,7 @@ use super::body::Body;
 use super::header::{Format, Header, parse_header};
 use super::{Layout, VertexRows, parse_ply};
 use crate::io::FormatError;
-use crate::io::bytes::ByteReader;
+use crate::io::bytes::{ByteReader, Endian};
 use crate::scene::Gaussians;
 
 /// Vertex rows per piece: a few MiB at SH degree 3, small beside the Gaussians themselves.
@@ -30,12 +30,9 @@ pub(super) fn read_in_pieces(
     let mut file = BufReader::new(File::open(path).map_err(io)?);
     let len = file.get_ref().metadata().map_err(io)?.len();
     let mut bytes = header_lines(&mut file).map_err(io)?;
-    let Some((header, vertex_index)) = vertices_in_pieces(&bytes) else {
+    let Some((header, vertex_index, endian)) = vertices_in_pieces(&bytes) else {
         file.read_to_end(&mut bytes).map_err(io)?;
         return parse_ply(&bytes, path);
-    };
-    let Format::Binary(endian) = header.format else {
-        unreachable!("vertices_in_pieces takes binary files only")
     };
     let vertex = &header.elements[vertex_index];
     let layout = Layout::of(vertex).map_err(fail)?;
@@ -78,16 +75,18 @@ fn header_lines(file: &mut impl BufRead) -> std::io::Result<Vec<u8>> {
     }
 }
 
-/// The header and the vertex element's index, when the body can be read in pieces of vertex
-/// rows: binary, every element before the vertices empty, and every vertex property a scalar.
-pub(super) fn vertices_in_pieces(header_bytes: &[u8]) -> Option<(Header, usize)> {
+/// The header, the vertex element's index and the byte order, when the body can be read in
+/// pieces of vertex rows: binary, every element before the vertices empty, and every vertex
+/// property a scalar.
+pub(super) fn vertices_in_pieces(header_bytes: &[u8]) -> Option<(Header, usize, Endian)> {
     let header = parse_header(header_bytes).ok()?;
-    if header.format == Format::Ascii || header.body_offset != header_bytes.len() {
+    let Format::Binary(endian) = header.format else { return None };
+    if header.body_offset != header_bytes.len() {
         return None;
     }
     let index = header.elements.iter().position(|e| e.name == "vertex")?;
     let before_empty =
         header.elements[..index].iter().all(|e| e.count == 0 || e.properties.is_empty());
     let scalars = header.elements[index].properties.iter().all(|p| p.list_count.is_none());
-    (before_empty && scalars).then_some((header, index))
+    (before_empty && scalars).then_some((header, index, endian))
 }
