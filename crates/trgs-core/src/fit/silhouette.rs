@@ -191,7 +191,7 @@ impl Params {
 /// None as soon as an improvement lies outside `within` (or the start does): the search is then
 /// on its way to a rectangle the limits refuse. Its steps never grow, so from a start far from
 /// the masks' rectangle it would otherwise spend the whole evaluation budget getting there
-/// (the likely cause of a 7-minute plane initialisation, docs/captures.md).
+/// (the likely cause of the slow plane initialisation that docs/captures.md records).
 fn pattern_search(
     start: Params,
     mut steps: [f64; 6],
