@@ -5,7 +5,7 @@ use trgs::core::Material;
 use trgs::core::fit::fit_rectangle;
 use trgs::core::io::SceneFolder;
 use trgs::core::rng::Rng;
-use trgs::core::synthetic::{SyntheticConfig, generate, write_dataset};
+use trgs::synthetic::{SyntheticConfig, generate, write_dataset};
 
 #[test]
 fn synthetic_scene_round_trips_through_a_scene_folder() {

@@ -6,7 +6,7 @@
 use trgs::render::toolkit::layout::StructInfo;
 use trgs::render::toolkit::shader::SOURCES;
 use trgs::render::toolkit::{BENCH_KERNELS, KernelSpec, RENDER_KERNELS};
-use trgs::train::kernels::TRAINING_KERNELS;
+use trgs::train::stages::TRAINING_KERNELS;
 
 fn registered() -> Vec<KernelSpec> {
     [RENDER_KERNELS.all(), BENCH_KERNELS.all(), TRAINING_KERNELS.all()].concat()
@@ -105,7 +105,7 @@ fn check_layouts(prelude: &str, structs: &[StructInfo]) {
 #[test]
 fn gpu_struct_layouts_match_rust() {
     use trgs::render::toolkit::layout as render;
-    use trgs::train::layout as train;
+    use trgs::train::stages::layout as train;
     check_layouts(&render::prelude(), &render::all_structs());
     check_layouts(&train::prelude(), &train::all_structs());
 }

@@ -4,7 +4,7 @@
 //! scene in docs/RESULTS.md, "Without glass" (GPU float atomics make two runs differ a little).
 use std::process::Command;
 use trgs_core::scratch::ScratchDir;
-use trgs_core::synthetic::{SyntheticConfig, generate, write_dataset};
+use trgs_synthetic::{SyntheticConfig, generate, write_dataset};
 
 #[test]
 fn scene_without_masks_trains_no_plane() {

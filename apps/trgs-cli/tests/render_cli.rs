@@ -84,8 +84,9 @@ fn missing_model_names_the_path() {
 /// a camera behind the plane is skipped; a plane the model lacks is refused.
 #[test]
 fn mirror_view_is_the_raw_reflection_inside_the_rectangle() {
+    use trgs_core::pipeline::RenderSettings;
     use trgs_core::plane_math::{mirror_camera, ray_rectangle_hit};
-    use trgs_core::reference::{RenderSettings, render};
+    use trgs_core::reference::render;
     let (dir, s) = model_folder("mirror");
     // The model as the PLY holds it (f32).
     let g = s.gaussians.cast::<f32>();

@@ -5,10 +5,10 @@
 //! docs/RESULTS.md, "Resume"; GPU float atomics make any two runs differ a
 //! little, so a small test could not tell a resume bug from that noise.)
 use std::path::Path;
-use std::process::{Command, Stdio};
+use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 use trgs_core::scratch::ScratchDir;
-use trgs_core::synthetic::{SyntheticConfig, generate, write_dataset};
+use trgs_synthetic::{SyntheticConfig, generate, write_dataset};
 use trgs_train::checkpoint::{CHECKPOINT_FILE, read_checkpoint};
 
 fn tmp(name: &str) -> ScratchDir {
@@ -31,18 +31,47 @@ fn killed_run_resumes_to_the_end() {
     write_dataset(&generate(&SyntheticConfig::small()), &data).expect("dataset");
     let out = dir.join("run");
     let iterations = 40;
+    let killed_at = kill_after_plane_checkpoint(&data, &out, iterations);
+    let metrics = resume_to_the_end(&out, iterations, killed_at);
+    let evaluated = eval_reproduces_the_run(&data, &out, &metrics);
+    let train_names =
+        eval_on_the_training_views(&dir.join("train_renders"), &data, &out, &evaluated);
+    resume_with_other_settings_is_refused(&out);
+    resuming_a_finished_run_rewrites_its_results(&out, iterations, &metrics);
+    resume_on_changed_training_views_is_refused(&data, &out, &train_names[0]);
+    new_run_drops_the_old_checkpoint(&data, &out);
+}
+
+/// `train` with the folder's settings via `--resume` and any `extra` arguments.
+fn resume(out: &Path, extra: &[&str], what: &str) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_train"))
+        .arg("--out")
+        .arg(out)
+        .arg("--resume")
+        .args(extra)
+        .output()
+        .expect(what)
+}
+
+/// `file` in `out` as JSON.
+fn read_json(out: &Path, file: &str, what: &str) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(out.join(file)).expect(file)).expect(what)
+}
+
+/// Starts a run of `iterations` steps and kills it once a checkpoint after the plane
+/// initialisation (step 4 of 40) exists; returns the step of the checkpoint it left.
+fn kill_after_plane_checkpoint(data: &Path, out: &Path, iterations: u32) -> u32 {
     let mut child = Command::new(env!("CARGO_BIN_EXE_train"))
         .arg("--data")
-        .arg(&data)
+        .arg(data)
         .arg("--out")
-        .arg(&out)
+        .arg(out)
         .args(["--iterations", &iterations.to_string(), "--checkpoint-every", "5"])
         .args(["--eval-every", "20", "--sh-degree", "1"])
         .stdout(Stdio::null())
         .stderr(Stdio::null())
         .spawn()
         .expect("start train");
-    // Kill it once a checkpoint after the plane initialisation (step 4 of 40) exists.
     let ckpt = out.join(CHECKPOINT_FILE);
     let t0 = Instant::now();
     let killed_at = loop {
@@ -63,46 +92,49 @@ fn killed_run_resumes_to_the_end() {
     assert!(ck.step >= killed_at && ck.step < iterations);
     assert_eq!(ck.planes.len(), 1, "the checkpoint holds the initialised plane");
     assert!(!out.join("metrics.json").exists(), "the killed run did not finish");
+    ck.step
+}
 
+/// `--resume` continues from the checkpoint at `step` to the planned end, logging every step
+/// once; returns the run's metrics.
+fn resume_to_the_end(out: &Path, iterations: u32, step: u32) -> serde_json::Value {
     // What a kill during a checkpoint write leaves behind is removed when the run resumes.
     let stale = out.join(format!(".{CHECKPOINT_FILE}.999.0.tmp"));
     std::fs::write(&stale, b"half a checkpoint").expect("stale temporary");
-    let resumed = Command::new(env!("CARGO_BIN_EXE_train"))
-        .arg("--out")
-        .arg(&out)
-        .arg("--resume")
-        .output()
-        .expect("resume");
+    let resumed = resume(out, &[], "resume");
     let stdout = String::from_utf8_lossy(&resumed.stdout);
     assert!(
         resumed.status.success(),
         "resume failed: {stdout}\n{}",
         String::from_utf8_lossy(&resumed.stderr)
     );
-    assert!(stdout.contains(&format!("at step {} of {iterations}", ck.step)), "{stdout}");
+    assert!(stdout.contains(&format!("at step {step} of {iterations}")), "{stdout}");
     assert!(!stale.exists(), "the stale temporary file was removed");
-    let metrics: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(out.join("metrics.json")).expect("metrics.json"),
-    )
-    .expect("metrics JSON");
+    let metrics = read_json(out, "metrics.json", "metrics JSON");
     assert_eq!(metrics["steps"], iterations);
     assert_eq!(metrics["planes"], 1);
     assert!(metrics["psnr"].as_f64().is_some_and(f64::is_finite));
     let steps = logged_steps(&out.join("log.jsonl"));
     assert_eq!(steps, (1..=u64::from(iterations)).collect::<Vec<_>>(), "every step logged once");
+    metrics
+}
 
-    // `eval` of the finished run reproduces its final test PSNR from the files it wrote.
+/// `eval` of the finished run reproduces its final test PSNR from the files it wrote; returns
+/// what it wrote to eval.json.
+fn eval_reproduces_the_run(
+    data: &Path,
+    out: &Path,
+    metrics: &serde_json::Value,
+) -> serde_json::Value {
     let eval = Command::new(env!("CARGO_BIN_EXE_eval"))
         .arg("--model")
-        .arg(&out)
+        .arg(out)
         .arg("--data")
-        .arg(&data)
+        .arg(data)
         .output()
         .expect("eval");
     assert!(eval.status.success(), "{}", String::from_utf8_lossy(&eval.stderr));
-    let evaluated: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("eval.json")).expect("eval.json"))
-            .expect("eval JSON");
+    let evaluated = read_json(out, "eval.json", "eval JSON");
     let (a, b) = (evaluated["psnr"].as_f64(), metrics["psnr"].as_f64());
     assert!(
         a.zip(b).is_some_and(|(a, b)| (a - b).abs() < 1e-3),
@@ -125,37 +157,31 @@ fn killed_run_resumes_to_the_end() {
     }
     let share = evaluated["truth"]["reflection_region_share"].as_f64().unwrap_or(0.0);
     assert!(share > 0.01 && share < 0.9, "reflection region share {share}");
+    evaluated
+}
 
-    // `eval --split train` measures the views the run trained on, writes them beside eval.json
-    // without replacing it, and `--renders` writes each one's render and layers.
-    let renders = dir.join("train_renders");
+/// `eval --split train` measures the views the run trained on, writes them beside eval.json
+/// without replacing it (still `evaluated`), and `--renders` writes each one's render and
+/// layers; returns the training views' file names, sorted.
+fn eval_on_the_training_views(
+    renders: &Path,
+    data: &Path,
+    out: &Path,
+    evaluated: &serde_json::Value,
+) -> Vec<String> {
     let eval = Command::new(env!("CARGO_BIN_EXE_eval"))
         .arg("--model")
-        .arg(&out)
+        .arg(out)
         .arg("--data")
-        .arg(&data)
+        .arg(data)
         .args(["--split", "train", "--renders"])
-        .arg(&renders)
+        .arg(renders)
         .output()
         .expect("eval --split train");
     assert!(eval.status.success(), "{}", String::from_utf8_lossy(&eval.stderr));
-    let on_train: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(out.join("eval_train.json")).expect("eval_train.json"),
-    )
-    .expect("eval JSON");
+    let on_train = read_json(out, "eval_train.json", "eval JSON");
     assert_eq!(on_train["split"], "train");
-    let test_names: Vec<String> = std::fs::read_to_string(data.join("test_views.txt"))
-        .expect("test_views.txt")
-        .lines()
-        .map(|l| l.trim().to_string())
-        .filter(|l| !l.is_empty() && !l.starts_with('#'))
-        .collect();
-    let mut train_names: Vec<String> = std::fs::read_dir(data.join("images"))
-        .expect("images")
-        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
-        .filter(|n| !test_names.contains(n))
-        .collect();
-    train_names.sort();
+    let train_names = training_view_names(data);
     let measured: Vec<String> = on_train["views"]
         .as_array()
         .expect("views")
@@ -168,51 +194,61 @@ fn killed_run_resumes_to_the_end() {
         assert!(renders.join(name).is_file(), "render of {name}");
         assert!(renders.join(format!("layers/{stem}_transmission.png")).is_file(), "{stem}");
     }
-    let again: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("eval.json")).expect("eval.json"))
-            .expect("eval JSON");
-    assert_eq!(again, evaluated, "eval.json (the test views) is left as it was");
+    let again = read_json(out, "eval.json", "eval JSON");
+    assert_eq!(&again, evaluated, "eval.json (the test views) is left as it was");
+    train_names
+}
 
-    // Settings come from the checkpoint: changing them on resume is refused.
-    let refused = Command::new(env!("CARGO_BIN_EXE_train"))
-        .arg("--out")
-        .arg(&out)
-        .args(["--resume", "--iterations", "80"])
-        .output()
-        .expect("run");
+/// The dataset's images not listed in test_views.txt, sorted.
+fn training_view_names(data: &Path) -> Vec<String> {
+    let test_names: Vec<String> = std::fs::read_to_string(data.join("test_views.txt"))
+        .expect("test_views.txt")
+        .lines()
+        .map(|l| l.trim().to_string())
+        .filter(|l| !l.is_empty() && !l.starts_with('#'))
+        .collect();
+    let mut train_names: Vec<String> = std::fs::read_dir(data.join("images"))
+        .expect("images")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .filter(|n| !test_names.contains(n))
+        .collect();
+    train_names.sort();
+    train_names
+}
+
+/// Settings come from the checkpoint: changing them on resume is refused.
+fn resume_with_other_settings_is_refused(out: &Path) {
+    let refused = resume(out, &["--iterations", "80"], "run");
     assert!(!refused.status.success());
     assert!(String::from_utf8_lossy(&refused.stderr).contains("drop --iterations"));
+}
 
-    // The finished run left its final state: `--resume` writes the same results again instead
-    // of training on from the last intermediate checkpoint.
+/// The finished run left its final state: `--resume` writes the same results again instead
+/// of training on from the last intermediate checkpoint.
+fn resuming_a_finished_run_rewrites_its_results(
+    out: &Path,
+    iterations: u32,
+    metrics: &serde_json::Value,
+) {
+    let ckpt = out.join(CHECKPOINT_FILE);
     assert_eq!(read_checkpoint(&ckpt).expect("final checkpoint").step, iterations);
-    let again = Command::new(env!("CARGO_BIN_EXE_train"))
-        .arg("--out")
-        .arg(&out)
-        .arg("--resume")
-        .output()
-        .expect("resume a finished run");
+    let again = resume(out, &[], "resume a finished run");
     let stdout = String::from_utf8_lossy(&again.stdout);
     assert!(again.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&again.stderr));
     assert!(stdout.contains(&format!("finished at step {iterations}")), "{stdout}");
     assert_eq!(logged_steps(&out.join("log.jsonl")).len(), iterations as usize, "no step rerun");
-    let rewritten: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(out.join("metrics.json")).expect("metrics.json"),
-    )
-    .expect("metrics JSON");
+    let rewritten = read_json(out, "metrics.json", "metrics JSON");
     let (a, b) = (rewritten["psnr"].as_f64(), metrics["psnr"].as_f64());
     assert!(a.zip(b).is_some_and(|(a, b)| (a - b).abs() < 1e-3), "{a:?} against {b:?}");
+}
 
-    // A dataset whose training views changed is refused by name, not indexed out of bounds.
+/// A dataset whose training views changed (`train_name` moved to the test split) is refused
+/// by name, not indexed out of bounds; the split is restored afterwards.
+fn resume_on_changed_training_views_is_refused(data: &Path, out: &Path, train_name: &str) {
     let split = data.join("test_views.txt");
     let original = std::fs::read_to_string(&split).expect("test_views.txt");
-    std::fs::write(&split, format!("{original}\n{}\n", train_names[0])).expect("edit split");
-    let refused = Command::new(env!("CARGO_BIN_EXE_train"))
-        .arg("--out")
-        .arg(&out)
-        .arg("--resume")
-        .output()
-        .expect("resume on changed data");
+    std::fs::write(&split, format!("{original}\n{train_name}\n")).expect("edit split");
+    let refused = resume(out, &[], "resume on changed data");
     let stderr = String::from_utf8_lossy(&refused.stderr);
     assert!(!refused.status.success());
     assert!(
@@ -220,19 +256,22 @@ fn killed_run_resumes_to_the_end() {
         "{stderr}"
     );
     std::fs::write(&split, original).expect("restore split");
+}
 
-    // A new run in the same folder drops the finished run's checkpoint first, so that a
-    // `--resume` after the new run stopped early cannot continue the old one.
+/// A new run in the same folder drops the finished run's checkpoint first, so that a
+/// `--resume` after the new run stopped early cannot continue the old one.
+fn new_run_drops_the_old_checkpoint(data: &Path, out: &Path) {
     let fresh = Command::new(env!("CARGO_BIN_EXE_train"))
         .arg("--data")
-        .arg(&data)
+        .arg(data)
         .arg("--out")
-        .arg(&out)
+        .arg(out)
         .args(["--iterations", "2", "--sh-degree", "0"])
         .output()
         .expect("a new run");
     let stdout = String::from_utf8_lossy(&fresh.stdout);
     assert!(fresh.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&fresh.stderr));
     assert!(stdout.contains("removed the previous run's checkpoint"), "{stdout}");
+    let ckpt = out.join(CHECKPOINT_FILE);
     assert_eq!(read_checkpoint(&ckpt).expect("the new run's checkpoint").step, 2);
 }

@@ -157,13 +157,58 @@ pub enum RoomDensity {
 /// behind the camera. `spec.density` says how the Gaussians are spread over the walls.
 pub fn room_scene(spec: &RoomSpec) -> Scene {
     let mut rng = Rng::new(spec.seed);
-    let (lo, hi) = (DVec3::new(-4.0, -3.0, -4.0), DVec3::new(4.0, 3.0, 6.0));
-    let size = hi - lo;
-    let areas = [size.y * size.z, size.x * size.z, size.x * size.y];
-    let total_area = 2.0 * (areas[0] + areas[1] + areas[2]);
-    let spacing = (total_area / spec.gaussians.max(1) as f64).sqrt();
+    let room = RoomBox::new(DVec3::new(-4.0, -3.0, -4.0), DVec3::new(4.0, 3.0, 6.0));
     let intr = Intrinsics::from_fov_x(70f64.to_radians(), spec.width, spec.height);
     let camera = Camera::new("room", intr, Pose::default());
+    let planes = room_planes(spec, &intr);
+    let viewers = RoomViewers::new(&camera, &planes);
+    let mut g = Gaussians::<f64>::empty(spec.sh_degree);
+    add_room_primaries(&mut g, spec, &room, &viewers, &mut rng);
+    add_room_glass(&mut g, spec, &planes, &mut rng);
+    Scene { gaussians: g, planes, camera }
+}
+
+/// The box of a benchmark room and the areas of its walls.
+struct RoomBox {
+    lo: DVec3,
+    hi: DVec3,
+    size: DVec3,
+    /// The area of each pair of walls' one wall, by the axis of their normal.
+    areas: [f64; 3],
+    total_area: f64,
+}
+
+impl RoomBox {
+    fn new(lo: DVec3, hi: DVec3) -> Self {
+        let size = hi - lo;
+        let areas = [size.y * size.z, size.x * size.z, size.x * size.y];
+        let total_area = 2.0 * (areas[0] + areas[1] + areas[2]);
+        Self { lo, hi, size, areas, total_area }
+    }
+
+    /// A uniform point inside the room.
+    fn inside(&self, rng: &mut Rng) -> DVec3 {
+        let p = DVec3::new(rng.uniform(), rng.uniform(), rng.uniform());
+        self.lo + p * self.size
+    }
+
+    /// A wall chosen by area, a uniform point on it; and the axis of the wall's normal.
+    fn wall_point(&self, rng: &mut Rng) -> (DVec3, usize) {
+        let mut pick = rng.uniform() * self.total_area;
+        let mut axis = 0;
+        while axis < 2 && pick >= 2.0 * self.areas[axis] {
+            pick -= 2.0 * self.areas[axis];
+            axis += 1;
+        }
+        let mut p = self.lo + DVec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * self.size;
+        p[axis] = if rng.uniform() < 0.5 { self.lo[axis] } else { self.hi[axis] };
+        (p, axis)
+    }
+}
+
+/// The planes of a benchmark room: a glass pane over the upper left quarter of the image, then
+/// a mirror over the lower right one (as many as `spec.planes` asks, at most two).
+fn room_planes(spec: &RoomSpec, intr: &Intrinsics) -> Vec<ReflectionPlane> {
     // A rectangle facing the camera at depth z covering the pixel box [u0, u1] x [v0, v1].
     let pane = |u0: f64, u1: f64, v0: f64, v1: f64, z: f64, material: Material| {
         let (w, h) = (f64::from(spec.width), f64::from(spec.height));
@@ -185,47 +230,79 @@ pub fn room_scene(spec: &RoomSpec) -> Scene {
     if spec.planes >= 2 {
         planes.push(pane(0.54, 0.96, 0.54, 0.96, 5.0, Material::Mirror));
     }
-    // The views that see the room: the camera, and the camera mirrored about each plane (which
-    // sees through its rectangle only). Distance from the nearest view that sees a point.
-    let view = ViewTransform::from(&camera.pose);
-    let mirrors: Vec<(ViewTransform, &ReflectionPlane)> =
-        planes.iter().map(|p| (crate::plane_math::mirrored_view(p, &view), p)).collect();
-    let (w, h) = (f64::from(spec.width), f64::from(spec.height));
-    let on_screen = |v: &ViewTransform, x: DVec3| -> Option<(f64, f64, f64)> {
+    planes
+}
+
+/// The views that see the room: the camera, and the camera mirrored about each plane (which
+/// sees through its rectangle only).
+struct RoomViewers<'a> {
+    camera: &'a Camera,
+    view: ViewTransform,
+    mirrors: Vec<(ViewTransform, &'a ReflectionPlane)>,
+}
+
+impl<'a> RoomViewers<'a> {
+    fn new(camera: &'a Camera, planes: &'a [ReflectionPlane]) -> Self {
+        let view = ViewTransform::from(&camera.pose);
+        let mirrors =
+            planes.iter().map(|p| (crate::plane_math::mirrored_view(p, &view), p)).collect();
+        Self { camera, view, mirrors }
+    }
+
+    /// Where `x` lands on `v`'s image (x, y) and its distance from `v`'s centre; None behind
+    /// the near plane.
+    fn on_screen(&self, v: &ViewTransform, x: DVec3) -> Option<(f64, f64, f64)> {
+        let intr = &self.camera.intrinsics;
         let c = v.transform_point(x);
         (c.z > 0.2).then(|| {
             (intr.fx * c.x / c.z + intr.cx, intr.fy * c.y / c.z + intr.cy, (x - v.centre).length())
         })
-    };
-    let view_distance = |x: DVec3| -> f64 {
+    }
+
+    /// Distance from the nearest view that sees `x` (infinite when none does).
+    fn distance(&self, x: DVec3) -> f64 {
+        let intr = &self.camera.intrinsics;
+        let (w, h) = (f64::from(intr.width), f64::from(intr.height));
         let mut best = f64::INFINITY;
-        if let Some((u, v, d)) = on_screen(&view, x)
+        if let Some((u, v, d)) = self.on_screen(&self.view, x)
             && (0.0..w).contains(&u)
             && (0.0..h).contains(&v)
         {
             best = d;
         }
-        for (mv, plane) in &mirrors {
+        let eye = self.camera.pose.centre();
+        for (mv, plane) in &self.mirrors {
             if plane.signed_distance(x) > 0.0
                 && let Some(hit) = crate::plane_math::ray_rectangle_hit(
                     plane,
-                    camera.pose.centre(),
-                    (crate::plane_math::reflect_point(plane, x) - camera.pose.centre()).normalize(),
+                    eye,
+                    (crate::plane_math::reflect_point(plane, x) - eye).normalize(),
                 )
                 && hit > 0.0
-                && let Some((_, _, d)) = on_screen(mv, x)
+                && let Some((_, _, d)) = self.on_screen(mv, x)
             {
                 best = best.min(d);
             }
         }
         best
-    };
-    let mut g = Gaussians::<f64>::empty(spec.sh_degree);
+    }
+}
+
+/// The room's primary Gaussians: on the walls (nine in ten) and floating inside, spread as
+/// `spec.density` says.
+fn add_room_primaries(
+    g: &mut Gaussians<f64>,
+    spec: &RoomSpec,
+    room: &RoomBox,
+    viewers: &RoomViewers<'_>,
+    rng: &mut Rng,
+) {
+    let spacing = (room.total_area / spec.gaussians.max(1) as f64).sqrt();
     let k = g.sh_coeffs();
     // AsCaptured: rejection-sample wall points with density (d_ref / d)^2 (constant screen
     // density); points no view sees get the density of a view 3x farther than the room's size.
     let d_ref = 2.0;
-    let unseen = 3.0 * size.length();
+    let unseen = 3.0 * room.size.length();
     let mut tried = 0usize;
     let mut accepted = 0usize;
     let spacing_of = |d: f64| {
@@ -233,24 +310,15 @@ pub fn room_scene(spec: &RoomSpec) -> Scene {
     };
     for i in 0..spec.gaussians {
         let (mean, flat_axis) = if i % 10 == 9 {
-            let p = DVec3::new(rng.uniform(), rng.uniform(), rng.uniform());
-            (lo + p * size, None)
+            (room.inside(rng), None)
         } else {
             loop {
-                // A wall chosen by area, a uniform point on it.
-                let mut pick = rng.uniform() * total_area;
-                let mut axis = 0;
-                while axis < 2 && pick >= 2.0 * areas[axis] {
-                    pick -= 2.0 * areas[axis];
-                    axis += 1;
-                }
-                let mut p = lo + DVec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * size;
-                p[axis] = if rng.uniform() < 0.5 { lo[axis] } else { hi[axis] };
+                let (p, axis) = room.wall_point(rng);
                 if spec.density == RoomDensity::Uniform {
                     break (p, Some(axis));
                 }
                 tried += 1;
-                let d = view_distance(p).min(unseen).max(d_ref);
+                let d = viewers.distance(p).min(unseen).max(d_ref);
                 if rng.uniform() < (d_ref / d).powi(2) {
                     accepted += 1;
                     break (p, Some(axis));
@@ -259,7 +327,7 @@ pub fn room_scene(spec: &RoomSpec) -> Scene {
         };
         // Discs in the wall (thin along its normal), random blobs inside. AsCaptured: the spacing
         // grows with the viewing distance (the mean spacing is rescaled below).
-        let local = spacing_of(view_distance(mean).min(unseen));
+        let local = spacing_of(viewers.distance(mean).min(unseen));
         let mut log_scale = [0.0; 3];
         for (a, s) in log_scale.iter_mut().enumerate() {
             let thin = flat_axis == Some(a);
@@ -271,7 +339,7 @@ pub fn room_scene(spec: &RoomSpec) -> Scene {
                 [s * rng.normal(), s * rng.normal(), s * rng.normal()]
             })
             .collect();
-        let q = random_unit(&mut rng) * 0.1;
+        let q = random_unit(rng) * 0.1;
         let rot = [1.0, q.x, q.y, q.z];
         g.push(mean.to_array(), rot, log_scale, rng.range(-0.5, 3.0), &sh, Population::Primary);
         let last = g.len() - 1;
@@ -288,10 +356,19 @@ pub fn room_scene(spec: &RoomSpec) -> Scene {
             }
         }
     }
-    // Glass Gaussians on each plane (about 1% of the count): the mask M is about 1 on the panes,
-    // as after training.
+}
+
+/// Glass Gaussians on each plane (about 1% of the count): the mask M is about 1 on the panes,
+/// as after training.
+fn add_room_glass(
+    g: &mut Gaussians<f64>,
+    spec: &RoomSpec,
+    planes: &[ReflectionPlane],
+    rng: &mut Rng,
+) {
+    let k = g.sh_coeffs();
     let per_plane = (spec.gaussians / 100).max(16);
-    for p in &planes {
+    for p in planes {
         let step = (p.width * p.height / per_plane as f64).sqrt();
         for _ in 0..per_plane {
             let mean = p.centre
@@ -304,5 +381,4 @@ pub fn room_scene(spec: &RoomSpec) -> Scene {
             g.mask_logits[last] = 3.0;
         }
     }
-    Scene { gaussians: g, planes, camera }
 }

@@ -3,10 +3,13 @@
 //! - [`scene`]: Gaussians (structure of arrays), cameras, reflection planes, input validation;
 //! - [`plane_math`]: Householder reflections, ray-rectangle hits, nearest-plane selection, Schlick;
 //! - [`fit`]: plane fitting for initialisation (RANSAC, minimum-area box, rectangle sampling);
+//! - [`pipeline`]: what the GPU stages and their CPU twins share: tile grid, key layout,
+//!   thresholds, reflection model, render settings, step guard, Adam's and the losses' settings;
 //! - [`reference`]: the CPU reference renderer, stage by stage, forward and backward (f64);
 //! - [`metrics`]: PSNR and SSIM as 3DGS evaluates them;
-//! - [`io`]: COLMAP, transforms.json, glass masks, test split, planes.json and PLY;
-//! - [`synthetic`]: the procedural glass scene rendered by a ground-truth ray tracer.
+//! - [`io`]: COLMAP, transforms.json, glass masks, test split, planes.json and PLY.
+//!
+//! The procedural glass scenes that demos and tests train on are the crate `trgs-synthetic`.
 pub mod fit;
 pub mod fixtures;
 pub mod image;
@@ -14,13 +17,13 @@ pub mod io;
 pub mod lens;
 pub mod metrics;
 pub mod parallel;
+pub mod pipeline;
 pub mod plane_math;
 pub mod reference;
 pub mod rng;
 pub mod scene;
 pub mod scratch;
 pub mod sh;
-pub mod synthetic;
 
 pub use image::Image;
 pub use scene::{

@@ -10,9 +10,8 @@
 //! (the fingerprint: culling, order, stop points, thresholds, hit mask) measures a step, not a
 //! derivative; it is retried with a 10x smaller step and otherwise counted and reported.
 use trgs_core::fixtures::{Scene, SceneSpec, random_scene};
-use trgs_core::reference::{
-    BackwardOptions, Frame, FrameGrads, ReflectionModel, RenderSettings, backward, render,
-};
+use trgs_core::pipeline::{ReflectionModel, RenderSettings};
+use trgs_core::reference::{BackwardOptions, Frame, FrameGrads, backward, render};
 use trgs_core::rng::Rng;
 
 #[derive(Clone, Copy, Debug)]

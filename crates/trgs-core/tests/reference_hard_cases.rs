@@ -2,7 +2,8 @@
 //! is rejected with an error that names what is wrong.
 use glam::DVec3;
 use trgs_core::fixtures::{Scene, SceneSpec, random_scene};
-use trgs_core::reference::{BackwardOptions, Frame, FrameGrads, RenderSettings, backward, render};
+use trgs_core::pipeline::RenderSettings;
+use trgs_core::reference::{BackwardOptions, Frame, FrameGrads, backward, render};
 use trgs_core::scene::InvalidInput;
 use trgs_core::{Camera, Image, Intrinsics, Pose};
 

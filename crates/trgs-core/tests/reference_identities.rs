@@ -3,13 +3,12 @@
 //! camera (the renderer uses the latter).
 use glam::{DMat3, DQuat, DVec3};
 use trgs_core::fixtures::{SceneSpec, random_scene};
+use trgs_core::pipeline::{RenderSettings, TileGrid};
 use trgs_core::plane_math::{
     flip_horizontal, householder, mirror_camera, mirrored_pass_gaussians, mirrored_view,
     ray_rectangle_hit, reflect_covariance, reflect_direction, reflect_point,
 };
-use trgs_core::reference::{
-    ProjectionFilter, RenderSettings, TileGrid, rasterize, render, render_view,
-};
+use trgs_core::reference::{ProjectionFilter, rasterize, render, render_view};
 use trgs_core::rng::Rng;
 use trgs_core::sh::C1;
 use trgs_core::{Gaussians, Image, Population, ReflectionPlane, ViewTransform};

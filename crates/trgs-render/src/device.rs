@@ -121,10 +121,11 @@ pub struct Capabilities {
     pub tile_layout: TileLayout,
     /// Values per workgroup of the prefix sum and the radix sort ([`BlockWidth`]).
     pub block_width: BlockWidth,
-    /// `rasterize` (pass 1) walks each 4 x 2 pixel block's entries only (shaders/rasterize.wgsl,
-    /// the define `BLOCK_WALK`): needs subgroups of at most 8 lanes, so that a subgroup lies in
-    /// one block and skips together. On a CPU adapter a subgroup is one SIMD vector, which
-    /// otherwise pays for every entry of its tile's list, reaching its pixels or not.
+    /// `rasterize` (pass 1) walks each 4 x 2 pixel block's entries only
+    /// (shaders/render/rasterize.wgsl, the define `BLOCK_WALK`): needs subgroups of at most 8
+    /// lanes, so that a subgroup lies in one block and skips together. On a CPU adapter a
+    /// subgroup is one SIMD vector, which otherwise pays for every entry of its tile's list,
+    /// reaching its pixels or not.
     pub block_walk: bool,
     /// Workgroups of a strided dispatch at most ([`crate::gpu::strided_grid`]).
     pub strided_groups: u32,

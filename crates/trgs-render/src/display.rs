@@ -6,7 +6,7 @@ use crate::stages::{self, Stage};
 use crate::toolkit::FrameStages;
 use crate::{Frame, GpuContext, Layer, Renderer};
 use trgs_core::Image;
-use trgs_core::reference::DisplayMapping;
+use trgs_core::pipeline::DisplayMapping;
 
 /// Texture rows must start every 256 bytes in a buffer-to-texture copy.
 const ROW_ALIGN_PIXELS: u32 = wgpu::COPY_BYTES_PER_ROW_ALIGNMENT / 4;

@@ -6,11 +6,12 @@ use crate::layout::{ProjectParams, RasterState, ReflectionState};
 use crate::stages::sort::KeyList;
 use crate::toolkit::paged::Paged;
 use trgs_core::Image;
-use trgs_core::reference::{TileGrid, TileRect};
+use trgs_core::pipeline::{TileGrid, TileRect};
 use trgs_core::scene::ViewTransform;
 
 mod intermediates;
 pub(crate) mod key_totals;
+mod stage_reads;
 pub use intermediates::{DepthOrderIntermediates, ViewIntermediates};
 pub use key_totals::{KeySizing, KeyTotals, PendingKeyTotals};
 
@@ -206,13 +207,14 @@ impl Frame {
         grid: TileGrid,
         plane_count: usize,
         gaussian_count: u32,
-        options: &crate::RenderOptions,
+        depth_variance: bool,
+        background: [f32; 3],
     ) {
         self.grid = Some(grid);
         self.plane_count = plane_count;
         self.gaussian_count = gaussian_count;
-        self.depth_variance = options.depth_variance;
-        self.background = options.background;
+        self.depth_variance = depth_variance;
+        self.background = background;
         self.views.clear();
         self.binning = None;
         self.stage_times = None;
@@ -469,49 +471,6 @@ impl Frame {
     }
 }
 
-impl crate::toolkit::FrameStages for Frame {
-    fn views(&self) -> &[ViewBuffers] {
-        &self.views
-    }
-
-    fn layer_buffers(&self) -> Option<&LayerBuffers> {
-        self.layers.as_ref()
-    }
-
-    fn read_states(&self, ctx: &GpuContext) -> Result<Vec<RasterState>, GpuError> {
-        self.layers
-            .as_ref()
-            .map_or_else(|| Ok(Vec::new()), |l| gpu::read_buffer(ctx, &l.states, 0, self.pixels()))
-    }
-
-    fn read_projected(
-        &self,
-        ctx: &GpuContext,
-        vi: usize,
-    ) -> Result<Option<Vec<crate::layout::ProjectedGaussian>>, GpuError> {
-        let Some(v) = self.views.get(vi) else {
-            return Ok(None);
-        };
-        v.projected.read(ctx).map(Some)
-    }
-
-    fn read_intermediates(
-        &self,
-        ctx: &GpuContext,
-        vi: usize,
-        gaussians: usize,
-    ) -> Result<Option<ViewIntermediates>, GpuError> {
-        self.intermediates_of(ctx, vi, gaussians)
-    }
-
-    fn read_depth_order(
-        &self,
-        ctx: &GpuContext,
-    ) -> Result<Option<DepthOrderIntermediates>, GpuError> {
-        self.depth_order_of(ctx)
-    }
-}
-
 /// The backward pass's working buffers, from the frame's pool (reused from step to step).
 #[derive(Debug)]
 pub(crate) struct BackwardBuffers {
@@ -531,7 +490,7 @@ impl Frame {
         ctx: &GpuContext,
         scene: &crate::GpuScene,
     ) -> BackwardBuffers {
-        use crate::layout::{PROJECTED_GRAD_FLOATS, VIEW_GRAD_FLOATS};
+        use crate::layout::{PLANE_GRAD_FLOATS, PROJECTED_GRAD_FLOATS, VIEW_GRAD_FLOATS};
         let n = self.gaussian_count;
         let views = self.views.len().max(1) as u64;
         let align = u64::from(ctx.device.limits().min_storage_buffer_offset_alignment);
@@ -551,7 +510,7 @@ impl Frame {
             plane_grads: pool.get(
                 ctx,
                 "trgs.compose_bwd.plane_grads",
-                planes * crate::stages::compose_bwd::PLANE_GRAD_FLOATS * 4,
+                planes * PLANE_GRAD_FLOATS * 4,
             ),
             scene_grads: crate::scene::SceneGradBuffers::new(ctx, pool, scene),
         }

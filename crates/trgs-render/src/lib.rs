@@ -71,4 +71,4 @@ pub use layer_grads::{LayerGrads, LayerGradsError};
 pub use renderer::{RenderError, RenderOptions, Renderer};
 pub use scene::{GpuScene, SceneGradBuffers, UploadError};
 pub use toolkit::KernelTime;
-pub use trgs_core::reference::ReflectionModel;
+pub use trgs_core::pipeline::ReflectionModel;

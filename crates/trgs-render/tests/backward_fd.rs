@@ -12,7 +12,8 @@
 //! renderer (the CPU twin's fingerprint of the perturbed scenes: culling, order, stop points,
 //! alpha thresholds, hit mask) measures a jump, not a derivative, and is skipped and counted.
 use trgs_core::fixtures::{Scene, random_scene};
-use trgs_core::reference::{self, FrameGrads, RenderSettings};
+use trgs_core::pipeline::RenderSettings;
+use trgs_core::reference::{self, FrameGrads};
 use trgs_core::rng::Rng;
 use trgs_core::scene::Gaussians;
 use trgs_render::{

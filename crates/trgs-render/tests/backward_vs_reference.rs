@@ -16,16 +16,16 @@
 //! Gaussians that sit within 1e-5 of D_t at a pixel they blend are left to the stage check.
 use trgs_core::Image;
 use trgs_core::fixtures::{SceneSpec, random_scene};
-use trgs_core::reference::{
-    self, FrameGrads, MIN_ALPHA, PixelState, ReflectionModel, RenderSettings, compose_bwd,
-};
+use trgs_core::pipeline::{MIN_ALPHA, ReflectionModel, RenderSettings, TILE_SIZE, TileGrid};
+use trgs_core::reference::{self, FrameGrads, PixelState, compose_bwd};
 use trgs_core::rng::Rng;
 use trgs_core::scene::Gaussians;
 use trgs_render::toolkit::gpu;
 use trgs_render::toolkit::layout::RasterState;
 use trgs_render::toolkit::{FrameStages as _, GradientStages as _};
 use trgs_render::{
-    BackwardOptions, DeviceOptions, GpuContext, GpuScene, RenderOptions, Renderer, TileLayout,
+    BackwardOptions, DeviceOptions, Frame, GpuContext, GpuScene, Gradients, PlaneGradsRead,
+    RenderOptions, Renderer, SceneGradBuffers, TileLayout,
 };
 use trgs_render::{Layer, LayerGrads};
 
@@ -263,11 +263,11 @@ fn check_scaled_within(
 fn on_depth_kink(frame: &reference::Frame) -> Vec<bool> {
     let pass = &frame.primary;
     let p = &pass.projected;
-    let grid = reference::TileGrid::new(frame.width(), frame.height());
+    let grid = TileGrid::new(frame.width(), frame.height());
     let mut kink = vec![false; p.len()];
     for y in 0..frame.height() {
         for x in 0..frame.width() {
-            let tile = (y / reference::TILE_SIZE) * grid.tiles_x + x / reference::TILE_SIZE;
+            let tile = (y / TILE_SIZE) * grid.tiles_x + x / TILE_SIZE;
             let (start, end) = pass.ranges[tile as usize];
             let last = frame.pixels[(y * frame.width() + x) as usize].last_t as usize;
             let d = frame.depth.get(x, y, 0);
@@ -336,7 +336,7 @@ fn check_rasterize_bwd_stage(
         &projected,
         &inter.sorted_values,
         &inter.ranges,
-        &reference::TileGrid::new(w, h),
+        &TileGrid::new(w, h),
         &states,
         &d,
         background,
@@ -415,119 +415,167 @@ fn check_backward_in_pages(
     for i in (5..n).step_by(97) {
         scene.gaussians.log_scales[i] = [0.3, -0.5, 0.0];
     }
-    let g32: Gaussians<f32> = scene.gaussians.cast();
-    let g = g32.cast::<f64>();
-    let background = [0.1, 0.2, 0.3];
-    let settings = RenderSettings { background, ..Default::default() };
-    let cpu_frame = reference::render(&g, &scene.planes, &scene.camera, &settings).expect("valid");
-    let grads = random_grads(n as u64 ^ 0xbac4, &cpu_frame, scene.planes.len());
-    let options = reference::BackwardOptions { block_reflection_to_gaussians: block };
-    let cpu = reference::backward(
-        &g,
-        &scene.planes,
-        &scene.camera,
-        &settings,
-        &cpu_frame,
-        &grads,
-        &options,
-    )
-    .expect("valid");
-    // The twin's stage: pass 1's adjoint from compose's totals.
-    let cg = compose_bwd(&scene.camera, &scene.planes, &cpu_frame, &grads, settings.reflection);
-    let (w, h) = (cpu_frame.width(), cpu_frame.height());
-    let grid = reference::TileGrid::new(w, h);
-    let pass = &cpu_frame.primary;
-    let cpu_pg = reference::rasterize_bwd(
-        &pass.projected,
-        &pass.values,
-        &pass.ranges,
-        &grid,
-        &cpu_frame.pixels,
-        &cpu_frame.depth,
-        background,
-        reference::RasterizeUpstream {
-            transmission: &cg.transmission,
-            depth: &grads.depth,
-            depth_variance: &grads.depth_variance,
-            mask: &cg.mask,
-            alpha: &grads.alpha,
-        },
-    );
-
-    let kink = on_depth_kink(&cpu_frame);
-    let kinks = kink.iter().filter(|&&k| k).count();
-    eprintln!("{name}: {kinks} Gaussians on a depth-variance kink");
-    assert!(kinks * 50 <= n, "{name}: {kinks} of {n} Gaussians on a kink");
+    let twin = Twin::new(name, &scene, block);
     for (mode, ctx) in contexts() {
         let what = format!("{name} ({mode})");
-        let mut renderer = Renderer::new(&ctx);
-        let mut gpu_scene = GpuScene::upload(&ctx, &g32, &scene.planes).expect("valid scene");
-        if let Some(c) = chunk {
-            gpu_scene.set_chunk_size(c);
-            gpu_scene.set_page_len(2 * c);
-        }
-        let render_options = RenderOptions {
-            background: background.map(|v| v as f32),
-            depth_variance: true,
-            capture_intermediates: true,
-            ..Default::default()
-        };
-        if key_pages {
-            let whole =
-                renderer.render(&gpu_scene, &scene.camera, &render_options).expect("render");
-            renderer.set_key_page_len(whole.key_count() as u32 / 2 + 1);
-        }
-        let mut frame =
-            renderer.render(&gpu_scene, &scene.camera, &render_options).expect("render");
-        if chunk.is_some() {
-            let pages: Vec<usize> =
-                frame.views().iter().map(|v| v.projected.pages().len()).collect();
-            assert!(pages.iter().all(|&p| p == 2), "{what}: pages per view {pages:?}");
-        }
-        if key_pages {
-            let keys = frame.views()[0].keys.as_ref().map(|k| k.keys.pages().len());
-            assert_eq!(keys, Some(2), "{what}: pages of the key list");
-        }
-        let layer_grads = LayerGrads::upload(&ctx, &frame, &grads).expect("finite gradients");
+        let (renderer, gpu_scene, mut frame) =
+            render_in_pages(&what, &ctx, &scene, &twin, chunk, key_pages);
+        let layer_grads = LayerGrads::upload(&ctx, &frame, &twin.grads).expect("finite gradients");
         let bwd = BackwardOptions { block_reflection_to_gaussians: block, profile: false };
         let out = renderer.backward(&gpu_scene, &mut frame, &layer_grads, &bwd).expect("backward");
+        check_screen_grads(&what, &ctx, &frame, &layer_grads, &out, &twin);
+        check_gaussian_grads(&what, &ctx, &out.gaussians, &twin);
+        check_plane_grads(&what, &ctx, out.planes, &twin);
+    }
+}
 
-        let pg = out.read_projected_grads(&ctx, 0).expect("readback").expect("primary view");
-        let gpu_pg: Vec<f32> = pg.iter().flatten().copied().collect();
-        check_rasterize_bwd_stage(&what, &ctx, &frame, &layer_grads, background, &gpu_pg);
-        let cpu_pg: Vec<f64> = (0..n).flat_map(|i| projected_record(&cpu_pg, i)).collect();
-        for (c, field) in PROJECTED_FIELDS.iter().enumerate() {
-            let gv: Vec<f32> = gpu_pg.iter().skip(c).step_by(12).copied().collect();
-            let cv: Vec<f64> = cpu_pg.iter().skip(c).step_by(12).copied().collect();
-            let skip = |i: usize| *field == "ddepth" && kink[i];
-            check_scaled_within(&format!("{what} rasterize_bwd {field}"), &gv, &cv, 1e-3, skip);
-        }
+/// The twin's side of a backward check: the same forward frame and upstream gradients, and the
+/// gradients they give.
+struct Twin {
+    /// The scene's Gaussians as the GPU holds them.
+    g32: Gaussians<f32>,
+    background: [f64; 3],
+    /// Random upstream gradients of every layer.
+    grads: FrameGrads,
+    /// The whole f64 backward.
+    cpu: reference::SceneGrads,
+    /// The real view's screen-space gradients: the stage rasterize_bwd from compose's totals.
+    cpu_pg: reference::ProjectedGrads,
+    /// The Gaussians on a depth-variance kink ([`on_depth_kink`]).
+    kink: Vec<bool>,
+}
 
-        let gg = out.gaussians.read(&ctx).expect("readback");
-        let c = &cpu.gaussians;
-        check_scaled_within(
-            &format!("{what} means"),
-            &flat(&gg.means),
-            &flat64(&c.means),
-            1e-3,
-            |v| kink[v / 3],
+impl Twin {
+    fn new(name: &str, scene: &trgs_core::fixtures::Scene, block: bool) -> Self {
+        let n = scene.gaussians.len();
+        let g32: Gaussians<f32> = scene.gaussians.cast();
+        let g = g32.cast::<f64>();
+        let background = [0.1, 0.2, 0.3];
+        let settings = RenderSettings { background, ..Default::default() };
+        let (planes, camera) = (&scene.planes, &scene.camera);
+        let cpu_frame = reference::render(&g, planes, camera, &settings).expect("valid");
+        let grads = random_grads(n as u64 ^ 0xbac4, &cpu_frame, planes.len());
+        let options = reference::BackwardOptions { block_reflection_to_gaussians: block };
+        let cpu = reference::backward(&g, planes, camera, &settings, &cpu_frame, &grads, &options)
+            .expect("valid");
+        // The twin's stage: pass 1's adjoint from compose's totals.
+        let cg = compose_bwd(camera, planes, &cpu_frame, &grads, settings.reflection);
+        let (w, h) = (cpu_frame.width(), cpu_frame.height());
+        let grid = TileGrid::new(w, h);
+        let pass = &cpu_frame.primary;
+        let cpu_pg = reference::rasterize_bwd(
+            &pass.projected,
+            &pass.values,
+            &pass.ranges,
+            &grid,
+            &cpu_frame.pixels,
+            &cpu_frame.depth,
+            background,
+            reference::RasterizeUpstream {
+                transmission: &cg.transmission,
+                depth: &grads.depth,
+                depth_variance: &grads.depth_variance,
+                mask: &cg.mask,
+                alpha: &grads.alpha,
+            },
         );
-        check_scaled(&format!("{what} rotations"), &flat(&gg.rotations), &flat64(&c.rotations));
-        check_scaled(&format!("{what} log_scales"), &flat(&gg.log_scales), &flat64(&c.log_scales));
-        check_scaled(&format!("{what} opacity_logits"), &gg.opacity_logits, &c.opacity_logits);
-        check_scaled(&format!("{what} sh"), &flat(&gg.sh), &flat64(&c.sh));
-        check_scaled(&format!("{what} mask_logits"), &gg.mask_logits, &c.mask_logits);
-        check_scaled(&format!("{what} log_reflections"), &gg.log_reflections, &c.log_reflections);
-        let planes = out.planes.read(&ctx).expect("plane readback");
-        assert_eq!(planes.len(), cpu.planes.len());
-        for (k, (gp, cp)) in planes.iter().zip(&cpu.planes).enumerate() {
-            let gv = [gp.centre.to_array(), gp.normal.to_array(), [gp.r0_logit, 0.0, 0.0]];
-            let cv = [cp.centre.to_array(), cp.normal.to_array(), [cp.r0_logit, 0.0, 0.0]];
-            for (part, (a, b)) in ["centre", "normal", "r0_logit"].iter().zip(gv.iter().zip(&cv)) {
-                let a32: Vec<f32> = a.iter().map(|&v| v as f32).collect();
-                eprintln!("{what} plane {k} {part}: gpu {a:?} cpu {b:?}");
-                check_scaled(&format!("{what} plane {k} {part}"), &a32, b);
-            }
+
+        let kink = on_depth_kink(&cpu_frame);
+        let kinks = kink.iter().filter(|&&k| k).count();
+        eprintln!("{name}: {kinks} Gaussians on a depth-variance kink");
+        assert!(kinks * 50 <= n, "{name}: {kinks} of {n} Gaussians on a kink");
+        Self { g32, background, grads, cpu, cpu_pg, kink }
+    }
+}
+
+/// Renders the twin's scene on `ctx` with the intermediates captured, the scene bound `chunk`
+/// Gaussians at a time and the key list in two pages as asked (checked).
+fn render_in_pages(
+    what: &str,
+    ctx: &GpuContext,
+    scene: &trgs_core::fixtures::Scene,
+    twin: &Twin,
+    chunk: Option<u32>,
+    key_pages: bool,
+) -> (Renderer, GpuScene, Frame) {
+    let mut renderer = Renderer::new(ctx);
+    let mut gpu_scene = GpuScene::upload(ctx, &twin.g32, &scene.planes).expect("valid scene");
+    if let Some(c) = chunk {
+        gpu_scene.set_chunk_size(c);
+        gpu_scene.set_page_len(2 * c);
+    }
+    let render_options = RenderOptions {
+        background: twin.background.map(|v| v as f32),
+        depth_variance: true,
+        capture_intermediates: true,
+        ..Default::default()
+    };
+    if key_pages {
+        let whole = renderer.render(&gpu_scene, &scene.camera, &render_options).expect("render");
+        renderer.set_key_page_len(whole.key_count() as u32 / 2 + 1);
+    }
+    let frame = renderer.render(&gpu_scene, &scene.camera, &render_options).expect("render");
+    if chunk.is_some() {
+        let pages: Vec<usize> = frame.views().iter().map(|v| v.projected.pages().len()).collect();
+        assert!(pages.iter().all(|&p| p == 2), "{what}: pages per view {pages:?}");
+    }
+    if key_pages {
+        let keys = frame.views()[0].keys.as_ref().map(|k| k.keys.pages().len());
+        assert_eq!(keys, Some(2), "{what}: pages of the key list");
+    }
+    (renderer, gpu_scene, frame)
+}
+
+/// The real view's screen-space gradients: as a stage, and against the twin's stage from the
+/// twin's own forward (the depth gradient of Gaussians on a kink left to the stage check).
+fn check_screen_grads(
+    what: &str,
+    ctx: &GpuContext,
+    frame: &Frame,
+    layer_grads: &LayerGrads,
+    out: &Gradients,
+    twin: &Twin,
+) {
+    let n = twin.g32.len();
+    let pg = out.read_projected_grads(ctx, 0).expect("readback").expect("primary view");
+    let gpu_pg: Vec<f32> = pg.iter().flatten().copied().collect();
+    check_rasterize_bwd_stage(what, ctx, frame, layer_grads, twin.background, &gpu_pg);
+    let cpu_pg: Vec<f64> = (0..n).flat_map(|i| projected_record(&twin.cpu_pg, i)).collect();
+    for (c, field) in PROJECTED_FIELDS.iter().enumerate() {
+        let gv: Vec<f32> = gpu_pg.iter().skip(c).step_by(12).copied().collect();
+        let cv: Vec<f64> = cpu_pg.iter().skip(c).step_by(12).copied().collect();
+        let skip = |i: usize| *field == "ddepth" && twin.kink[i];
+        check_scaled_within(&format!("{what} rasterize_bwd {field}"), &gv, &cv, 1e-3, skip);
+    }
+}
+
+/// Every Gaussian attribute's gradient against the twin's (the means of Gaussians on a kink
+/// left to the stage check).
+fn check_gaussian_grads(what: &str, ctx: &GpuContext, gaussians: &SceneGradBuffers, twin: &Twin) {
+    let gg = gaussians.read(ctx).expect("readback");
+    let c = &twin.cpu.gaussians;
+    check_scaled_within(&format!("{what} means"), &flat(&gg.means), &flat64(&c.means), 1e-3, |v| {
+        twin.kink[v / 3]
+    });
+    check_scaled(&format!("{what} rotations"), &flat(&gg.rotations), &flat64(&c.rotations));
+    check_scaled(&format!("{what} log_scales"), &flat(&gg.log_scales), &flat64(&c.log_scales));
+    check_scaled(&format!("{what} opacity_logits"), &gg.opacity_logits, &c.opacity_logits);
+    check_scaled(&format!("{what} sh"), &flat(&gg.sh), &flat64(&c.sh));
+    check_scaled(&format!("{what} mask_logits"), &gg.mask_logits, &c.mask_logits);
+    check_scaled(&format!("{what} log_reflections"), &gg.log_reflections, &c.log_reflections);
+}
+
+/// Every plane's centre, normal and R0 gradients against the twin's.
+fn check_plane_grads(what: &str, ctx: &GpuContext, planes: PlaneGradsRead, twin: &Twin) {
+    let planes = planes.read(ctx).expect("plane readback");
+    assert_eq!(planes.len(), twin.cpu.planes.len());
+    for (k, (gp, cp)) in planes.iter().zip(&twin.cpu.planes).enumerate() {
+        let gv = [gp.centre.to_array(), gp.normal.to_array(), [gp.r0_logit, 0.0, 0.0]];
+        let cv = [cp.centre.to_array(), cp.normal.to_array(), [cp.r0_logit, 0.0, 0.0]];
+        for (part, (a, b)) in ["centre", "normal", "r0_logit"].iter().zip(gv.iter().zip(&cv)) {
+            let a32: Vec<f32> = a.iter().map(|&v| v as f32).collect();
+            eprintln!("{what} plane {k} {part}: gpu {a:?} cpu {b:?}");
+            check_scaled(&format!("{what} plane {k} {part}"), &a32, b);
         }
     }
 }

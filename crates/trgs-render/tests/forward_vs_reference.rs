@@ -6,15 +6,16 @@
 //! per thread as on a GPU, four rows per thread as on a CPU adapter).
 use trgs_core::Image;
 use trgs_core::fixtures::{Scene, SceneSpec, random_scene};
+use trgs_core::pipeline::{ReflectionModel, RenderSettings, TileGrid, depth_key_base};
 use trgs_core::reference::{
-    self, ProjectionFilter, ReflectionModel, RenderSettings, TileGrid, depth_key, depth_key_base,
-    depth_order, emit_keys, prefix_sum, rasterize, rasterize_reflection, sort_keys, tile_counts,
-    tile_ranges,
+    self, Projected, ProjectionFilter, depth_key, depth_order, emit_keys, prefix_sum, rasterize,
+    rasterize_reflection, sort_keys, tile_counts, tile_ranges,
 };
 use trgs_core::scene::Gaussians;
-use trgs_render::toolkit::FrameStages as _;
+use trgs_render::toolkit::{FrameStages as _, ViewBuffers, ViewIntermediates};
 use trgs_render::{
-    BlockWidth, DeviceOptions, GpuContext, GpuScene, RenderOptions, Renderer, TileLayout,
+    BlockWidth, DeviceOptions, Frame, FrameImages, GpuContext, GpuScene, RenderOptions, Renderer,
+    TileLayout,
 };
 
 mod common;
@@ -79,28 +80,66 @@ fn check_given_scene(name: &str, scene: &Scene, split: Split) -> usize {
 }
 
 fn check_scene_in(name: &str, scene: &Scene, split: Split, ctx: &GpuContext) -> usize {
-    let mut renderer = Renderer::new(ctx);
     let g32: Gaussians<f32> = scene.gaussians.cast();
     let g = g32.cast::<f64>();
-    let mut gpu_scene = GpuScene::upload(ctx, &g32, &scene.planes).expect("valid scene");
-    if let Some(c) = split.chunk {
-        // Pages of two chunks: with more than two chunks the rasterize passes read the
-        // projected records from both of their pages.
-        gpu_scene.set_chunk_size(c);
-        gpu_scene.set_page_len(2 * c);
-    }
     let options = RenderOptions {
         depth_variance: true,
         capture_intermediates: true,
         background: [0.1, 0.2, 0.3],
         ..Default::default()
     };
+    let frame = render_split(name, scene, &g32, split, ctx, &options);
+    let k = &scene.camera.intrinsics;
+    let images = frame.read_images(ctx).expect("readback");
+    let r = Rendered {
+        ctx,
+        scene,
+        g: &g,
+        frame: &frame,
+        images: &images,
+        grid: TileGrid::new(k.width, k.height),
+        near: options.near,
+    };
+    let mut bad = 0;
+    let mut all_counts = Vec::new();
+    for (vi, view) in frame.views().iter().enumerate() {
+        let (view_bad, counts) = check_view(&format!("{name} view {vi}"), &r, vi, view);
+        bad += view_bad;
+        all_counts.push(counts);
+    }
+    check_depth_order(name, &r, &all_counts);
+    if frame.composed() {
+        bad += check_compose(name, &r);
+    }
+    assert_eq!(bad, 0, "{name}: values outside atol {ATOL} + rtol {RTOL}");
+    check_end_to_end(name, &r);
+    frame.views().len()
+}
+
+/// Renders `scene` (its Gaussians `g32`) with `options`, the scene bound and the key list paged
+/// as `split` says, and checks that they were.
+fn render_split(
+    name: &str,
+    scene: &Scene,
+    g32: &Gaussians<f32>,
+    split: Split,
+    ctx: &GpuContext,
+    options: &RenderOptions,
+) -> Frame {
+    let mut renderer = Renderer::new(ctx);
+    let mut gpu_scene = GpuScene::upload(ctx, g32, &scene.planes).expect("valid scene");
+    if let Some(c) = split.chunk {
+        // Pages of two chunks: with more than two chunks the rasterize passes read the
+        // projected records from both of their pages.
+        gpu_scene.set_chunk_size(c);
+        gpu_scene.set_page_len(2 * c);
+    }
     if split.keys {
         // The page boundary falls inside a sort block and, with planes, inside a view's keys.
-        let whole = renderer.render(&gpu_scene, &scene.camera, &options).expect("render");
+        let whole = renderer.render(&gpu_scene, &scene.camera, options).expect("render");
         renderer.set_key_page_len(whole.key_count() as u32 / 2 + 1);
     }
-    let frame = renderer.render(&gpu_scene, &scene.camera, &options).expect("render");
+    let frame = renderer.render(&gpu_scene, &scene.camera, options).expect("render");
     if let Some(c) = split.chunk {
         let want = (scene.gaussians.len() as u32).div_ceil(2 * c) as usize;
         for v in frame.views() {
@@ -115,114 +154,151 @@ fn check_scene_in(name: &str, scene: &Scene, split: Split, ctx: &GpuContext) -> 
             pages.collect::<Vec<_>>()
         );
     }
-    let k = &scene.camera.intrinsics;
-    let grid = TileGrid::new(k.width, k.height);
-    let images = frame.read_images(ctx).expect("readback");
-    let n = g.len();
-    let mut bad = 0;
-    let mut all_counts = Vec::new();
-    for (vi, view) in frame.views().iter().enumerate() {
-        let what = format!("{name} view {vi}");
-        let inter = frame.read_intermediates(ctx, vi, n).expect("readback").expect("intermediates");
-        // project: against the twin in f64 from the same f32 parameters.
-        let filter = match view.plane {
-            Some(p) => ProjectionFilter::FrontOf(&scene.planes[p]),
-            None => ProjectionFilter::All,
-        };
-        let cpu = reference::project(&g, &view.view, k, filter, &view.limit, 0.2);
-        let gpu = to_reference(&inter.projected);
-        let mut proj_bad = 0;
-        for i in 0..n {
-            if cpu.visible[i] != gpu.visible[i] {
-                eprintln!(
-                    "{what}: Gaussian {i} visible cpu {} gpu {}",
-                    cpu.visible[i], gpu.visible[i]
-                );
-                proj_bad += 1;
-                continue;
-            }
-            if !cpu.visible[i] {
-                continue;
-            }
-            let pairs = [
-                (gpu.mean2d[i].x, cpu.mean2d[i].x),
-                (gpu.mean2d[i].y, cpu.mean2d[i].y),
-                (gpu.depth[i], cpu.depth[i]),
-                (gpu.extent[i].x, cpu.extent[i].x),
-                (gpu.extent[i].y, cpu.extent[i].y),
-                (gpu.color[i][0], cpu.color[i][0]),
-                (gpu.color[i][1], cpu.color[i][1]),
-                (gpu.color[i][2], cpu.color[i][2]),
-                (gpu.opacity[i], cpu.opacity[i]),
-                (gpu.mask[i], cpu.mask[i]),
-                (gpu.reflection[i], cpu.reflection[i]),
-            ];
-            // The conic is compared relative to its largest entry (b can be near zero).
-            let scale = cpu.conic[i].iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            let conic_ok =
-                (0..3).all(|c| (gpu.conic[i][c] - cpu.conic[i][c]).abs() <= ATOL + RTOL * scale);
-            if !pairs.iter().all(|&(a, b)| close(a, b)) || !conic_ok || gpu.glass[i] != cpu.glass[i]
-            {
-                eprintln!("{what}: Gaussian {i} projected differently: {pairs:?}");
-                proj_bad += 1;
-            }
+    frame
+}
+
+/// A rendered frame and what it is checked against.
+struct Rendered<'a> {
+    ctx: &'a GpuContext,
+    scene: &'a Scene,
+    /// The scene's Gaussians as the GPU holds them (f32), in f64.
+    g: &'a Gaussians<f64>,
+    frame: &'a Frame,
+    images: &'a FrameImages,
+    grid: TileGrid,
+    near: f64,
+}
+
+/// View `vi` stage by stage against the twin; returns the values of its rasterize pass outside
+/// the tolerance, and its tile counts.
+fn check_view(what: &str, r: &Rendered, vi: usize, view: &ViewBuffers) -> (usize, Vec<u32>) {
+    let n = r.g.len();
+    let inter = r.frame.read_intermediates(r.ctx, vi, n).expect("readback").expect("intermediates");
+    let gpu = to_reference(&inter.projected);
+    check_projection(what, r, view, &gpu);
+    let (counts, values, ranges) = check_lists(what, r, view, &inter, &gpu);
+    let bad = check_pass(what, r, view, &gpu, &values, &ranges);
+    (bad, counts)
+}
+
+/// project: against the twin in f64 from the same f32 parameters.
+fn check_projection(what: &str, r: &Rendered, view: &ViewBuffers, gpu: &Projected) {
+    let filter = match view.plane {
+        Some(p) => ProjectionFilter::FrontOf(&r.scene.planes[p]),
+        None => ProjectionFilter::All,
+    };
+    let k = &r.scene.camera.intrinsics;
+    let cpu = reference::project(r.g, &view.view, k, filter, &view.limit, 0.2);
+    let mut proj_bad = 0;
+    for i in 0..r.g.len() {
+        if cpu.visible[i] != gpu.visible[i] {
+            eprintln!("{what}: Gaussian {i} visible cpu {} gpu {}", cpu.visible[i], gpu.visible[i]);
+            proj_bad += 1;
+            continue;
         }
-        assert_eq!(proj_bad, 0, "{what}: project");
-        // Binning, depth order, scan, keys, sort, ranges: exact, from the GPU's projected values.
-        let counts = tile_counts(&gpu, &grid, &view.limit);
-        assert_eq!(inter.counts, counts, "{what}: tile_counts");
-        let order = depth_order(&gpu, &counts, options.near);
-        assert_eq!(inter.order, order, "{what}: depth_order");
-        let ordered: Vec<u32> = order.iter().map(|&i| counts[i as usize]).collect();
-        let (offsets, total) = prefix_sum(&ordered);
-        assert_eq!(view.num_keys, total, "{what}: key total");
-        let (mut keys, mut values) = emit_keys(&gpu, &grid, &view.limit, &order, &offsets, total);
-        let (ek, ev) = inter.emitted.as_ref().expect("captured");
-        assert_eq!((ek, ev), (&keys, &values), "{what}: emit_keys");
-        sort_keys(&mut keys, &mut values);
-        assert_eq!(inter.sorted_keys, keys, "{what}: sort keys");
-        assert_eq!(inter.sorted_values, values, "{what}: sort values");
-        all_counts.push(counts);
-        let ranges = tile_ranges(&keys, grid.tile_count());
-        assert_eq!(inter.ranges, ranges, "{what}: tile_ranges");
-        eprintln!("{what}: {} visible, {total} keys", gpu.visible.iter().filter(|&&v| v).count());
-        // Rasterize passes from the GPU's sorted lists.
-        match view.plane {
-            None => {
-                let out = rasterize(&gpu, &values, &ranges, &grid, [0.1, 0.2, 0.3]);
-                bad += compare(&format!("{what} C_t"), &images.transmission, &out.transmission);
-                bad += compare(&format!("{what} D_t"), &images.depth, &out.depth);
-                bad += compare(&format!("{what} V"), &images.depth_variance, &out.depth_variance);
-                bad += compare(&format!("{what} M"), &images.mask, &out.mask);
-                bad += compare(&format!("{what} alpha"), &images.alpha, &out.alpha);
-                let states = frame.read_states(ctx).expect("readback");
-                let stops = states
-                    .iter()
-                    .zip(&out.pixels)
-                    .filter(|(g, c)| g.last_t != c.last_t || g.last_m != c.last_m)
-                    .count();
-                assert_eq!(stops, 0, "{what}: stop points");
-            }
-            Some(p) => {
-                let out = rasterize_reflection(
-                    &gpu,
-                    &values,
-                    &ranges,
-                    &grid,
-                    &view.limit,
-                    &scene.camera,
-                    &scene.planes[p],
-                );
-                let pi = images.planes[p].as_ref().expect("plane pass ran");
-                assert_eq!(pi.footprint, view.limit);
-                bad += compare(&format!("{what} C_raw"), &pi.raw_color, &out.raw_color);
-                bad += compare(&format!("{what} A"), &pi.intensity, &out.intensity);
-            }
+        if !cpu.visible[i] {
+            continue;
+        }
+        let pairs = [
+            (gpu.mean2d[i].x, cpu.mean2d[i].x),
+            (gpu.mean2d[i].y, cpu.mean2d[i].y),
+            (gpu.depth[i], cpu.depth[i]),
+            (gpu.extent[i].x, cpu.extent[i].x),
+            (gpu.extent[i].y, cpu.extent[i].y),
+            (gpu.color[i][0], cpu.color[i][0]),
+            (gpu.color[i][1], cpu.color[i][1]),
+            (gpu.color[i][2], cpu.color[i][2]),
+            (gpu.opacity[i], cpu.opacity[i]),
+            (gpu.mask[i], cpu.mask[i]),
+            (gpu.reflection[i], cpu.reflection[i]),
+        ];
+        // The conic is compared relative to its largest entry (b can be near zero).
+        let scale = cpu.conic[i].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let conic_ok =
+            (0..3).all(|c| (gpu.conic[i][c] - cpu.conic[i][c]).abs() <= ATOL + RTOL * scale);
+        if !pairs.iter().all(|&(a, b)| close(a, b)) || !conic_ok || gpu.glass[i] != cpu.glass[i] {
+            eprintln!("{what}: Gaussian {i} projected differently: {pairs:?}");
+            proj_bad += 1;
         }
     }
-    // The depth order of all views together, and the scan of its counts: exact.
+    assert_eq!(proj_bad, 0, "{what}: project");
+}
+
+/// Binning, depth order, scan, keys, sort, ranges: exact, from the GPU's projected values.
+/// Returns the view's tile counts, and its sorted values and tile ranges.
+fn check_lists(
+    what: &str,
+    r: &Rendered,
+    view: &ViewBuffers,
+    inter: &ViewIntermediates,
+    gpu: &Projected,
+) -> (Vec<u32>, Vec<u32>, Vec<(u32, u32)>) {
+    let grid = &r.grid;
+    let counts = tile_counts(gpu, grid, &view.limit);
+    assert_eq!(inter.counts, counts, "{what}: tile_counts");
+    let order = depth_order(gpu, &counts, r.near);
+    assert_eq!(inter.order, order, "{what}: depth_order");
+    let ordered: Vec<u32> = order.iter().map(|&i| counts[i as usize]).collect();
+    let (offsets, total) = prefix_sum(&ordered);
+    assert_eq!(view.num_keys, total, "{what}: key total");
+    let (mut keys, mut values) = emit_keys(gpu, grid, &view.limit, &order, &offsets, total);
+    let (ek, ev) = inter.emitted.as_ref().expect("captured");
+    assert_eq!((ek, ev), (&keys, &values), "{what}: emit_keys");
+    sort_keys(&mut keys, &mut values);
+    assert_eq!(inter.sorted_keys, keys, "{what}: sort keys");
+    assert_eq!(inter.sorted_values, values, "{what}: sort values");
+    let ranges = tile_ranges(&keys, grid.tile_count());
+    assert_eq!(inter.ranges, ranges, "{what}: tile_ranges");
+    eprintln!("{what}: {} visible, {total} keys", gpu.visible.iter().filter(|&&v| v).count());
+    (counts, values, ranges)
+}
+
+/// The view's rasterize pass from the GPU's sorted lists; returns the values outside the
+/// tolerance.
+fn check_pass(
+    what: &str,
+    r: &Rendered,
+    view: &ViewBuffers,
+    gpu: &Projected,
+    values: &[u32],
+    ranges: &[(u32, u32)],
+) -> usize {
+    let (images, grid) = (r.images, &r.grid);
+    let mut bad = 0;
+    match view.plane {
+        None => {
+            let out = rasterize(gpu, values, ranges, grid, [0.1, 0.2, 0.3]);
+            bad += compare(&format!("{what} C_t"), &images.transmission, &out.transmission);
+            bad += compare(&format!("{what} D_t"), &images.depth, &out.depth);
+            bad += compare(&format!("{what} V"), &images.depth_variance, &out.depth_variance);
+            bad += compare(&format!("{what} M"), &images.mask, &out.mask);
+            bad += compare(&format!("{what} alpha"), &images.alpha, &out.alpha);
+            let states = r.frame.read_states(r.ctx).expect("readback");
+            let stops = states
+                .iter()
+                .zip(&out.pixels)
+                .filter(|(g, c)| g.last_t != c.last_t || g.last_m != c.last_m)
+                .count();
+            assert_eq!(stops, 0, "{what}: stop points");
+        }
+        Some(p) => {
+            let (camera, plane) = (&r.scene.camera, &r.scene.planes[p]);
+            let out = rasterize_reflection(gpu, values, ranges, grid, &view.limit, camera, plane);
+            let pi = images.planes[p].as_ref().expect("plane pass ran");
+            assert_eq!(pi.footprint, view.limit);
+            bad += compare(&format!("{what} C_raw"), &pi.raw_color, &out.raw_color);
+            bad += compare(&format!("{what} A"), &pi.intensity, &out.intensity);
+        }
+    }
+    bad
+}
+
+/// The depth order of all views together (whose tile counts are `all_counts`), and the scan of
+/// its counts: exact.
+fn check_depth_order(name: &str, r: &Rendered, all_counts: &[Vec<u32>]) {
+    let (ctx, frame, n) = (r.ctx, r.frame, r.g.len());
     let depth = frame.read_depth_order(ctx).expect("readback").expect("depth order");
-    let base = depth_key_base(options.near);
+    let base = depth_key_base(r.near);
     let mut expected: Vec<(u32, u32, u32)> = Vec::new();
     for (vi, counts) in all_counts.iter().enumerate() {
         let projected = frame.read_projected(ctx, vi).expect("readback").expect("projected");
@@ -241,44 +317,50 @@ fn check_scene_in(name: &str, scene: &Scene, split: Split, ctx: &GpuContext) -> 
     let (offsets, total) = prefix_sum(&expected.iter().map(|e| e.2).collect::<Vec<_>>());
     assert_eq!(depth.offsets, offsets, "{name}: prefix_sum of the ordered counts");
     assert_eq!(depth.total, total, "{name}: key total");
-    // Compose from the GPU's own pass outputs.
-    if frame.composed() {
-        let f64img = |i: &Image<f32>| i.map(f64::from);
-        let raw: Vec<Option<Image<f64>>> =
-            images.planes.iter().map(|p| p.as_ref().map(|p| f64img(&p.raw_color))).collect();
-        let int: Vec<Option<Image<f64>>> =
-            images.planes.iter().map(|p| p.as_ref().map(|p| f64img(&p.intensity))).collect();
-        let raw_refs: Vec<Option<&Image<f64>>> = raw.iter().map(Option::as_ref).collect();
-        let int_refs: Vec<Option<&Image<f64>>> = int.iter().map(Option::as_ref).collect();
-        let out = reference::compose(
-            &scene.camera,
-            &scene.planes,
-            &f64img(&images.transmission),
-            &f64img(&images.mask),
-            &raw_refs,
-            &int_refs,
-            ReflectionModel::default(),
-        );
-        let hit_diff = images.hit.data.iter().zip(&out.hit.data).filter(|(a, b)| a != b).count();
-        eprintln!("{name}: compose hit mask differs at {hit_diff} pixels");
-        assert!(hit_diff <= 2, "{name}: hit mask differs at {hit_diff} pixels");
-        if hit_diff == 0 {
-            bad += compare(&format!("{name} C"), &images.color, &out.color);
-            bad += compare(&format!("{name} C_r"), &images.reflection, &out.reflection);
-            bad += compare(&format!("{name} R_raw"), &images.strength_raw, &out.strength_raw);
-            bad += compare(&format!("{name} R"), &images.strength, &out.strength);
-        }
+}
+
+/// Compose from the GPU's own pass outputs; returns the values outside the tolerance.
+fn check_compose(name: &str, r: &Rendered) -> usize {
+    let images = r.images;
+    let f64img = |i: &Image<f32>| i.map(f64::from);
+    let raw: Vec<Option<Image<f64>>> =
+        images.planes.iter().map(|p| p.as_ref().map(|p| f64img(&p.raw_color))).collect();
+    let int: Vec<Option<Image<f64>>> =
+        images.planes.iter().map(|p| p.as_ref().map(|p| f64img(&p.intensity))).collect();
+    let raw_refs: Vec<Option<&Image<f64>>> = raw.iter().map(Option::as_ref).collect();
+    let int_refs: Vec<Option<&Image<f64>>> = int.iter().map(Option::as_ref).collect();
+    let out = reference::compose(
+        &r.scene.camera,
+        &r.scene.planes,
+        &f64img(&images.transmission),
+        &f64img(&images.mask),
+        &raw_refs,
+        &int_refs,
+        ReflectionModel::default(),
+    );
+    let hit_diff = images.hit.data.iter().zip(&out.hit.data).filter(|(a, b)| a != b).count();
+    eprintln!("{name}: compose hit mask differs at {hit_diff} pixels");
+    assert!(hit_diff <= 2, "{name}: hit mask differs at {hit_diff} pixels");
+    let mut bad = 0;
+    if hit_diff == 0 {
+        bad += compare(&format!("{name} C"), &images.color, &out.color);
+        bad += compare(&format!("{name} C_r"), &images.reflection, &out.reflection);
+        bad += compare(&format!("{name} R_raw"), &images.strength_raw, &out.strength_raw);
+        bad += compare(&format!("{name} R"), &images.strength, &out.strength);
     }
-    assert_eq!(bad, 0, "{name}: values outside atol {ATOL} + rtol {RTOL}");
-    // End to end against the reference renderer.
+    bad
+}
+
+/// End to end against the reference renderer.
+fn check_end_to_end(name: &str, r: &Rendered) {
     let settings = RenderSettings { near: 0.2, background: [0.1, 0.2, 0.3], ..Default::default() };
-    let cpu = reference::render(&g, &scene.planes, &scene.camera, &settings).expect("reference");
+    let (scene, images) = (r.scene, r.images);
+    let cpu = reference::render(r.g, &scene.planes, &scene.camera, &settings).expect("reference");
     let total = compare(&format!("{name} end-to-end C"), &images.color, &cpu.color);
     assert!(
         total as f64 <= 1e-3 * cpu.color.data.len() as f64,
         "{name}: end-to-end C differs beyond tolerance at {total} values"
     );
-    frame.views().len()
 }
 
 #[test]
@@ -395,8 +477,8 @@ fn profiled_frame_times_each_kernel_within_its_stage() {
     // Every dispatch is timed under the stage it serves: the depth order's scan of its presence
     // bits, five radix passes of count, histogram scan and scatter, and its counts; the key
     // sort's passes and their scans under `sort`; `prefix_sum` is the scan of the tile counts.
-    let passes = trgs_core::reference::DEPTH_KEY_BITS
-        .div_ceil(trgs_render::toolkit::layout::SORT_RADIX_BITS);
+    let passes =
+        trgs_core::pipeline::DEPTH_KEY_BITS.div_ceil(trgs_render::toolkit::layout::SORT_RADIX_BITS);
     assert_eq!(find("depth_order", "prefix_sum_bits"), Some(1));
     assert_eq!(find("depth_order", "depth_order_compact"), Some(1));
     assert_eq!(find("depth_order", "sort_count"), Some(passes));

@@ -1,7 +1,7 @@
 //! Hard cases on the GPU path: outputs stay finite and bad input is refused before any kernel.
 use glam::DVec3;
 use trgs_core::fixtures::{RoomDensity, RoomSpec, SceneSpec, random_scene, room_scene};
-use trgs_core::reference::TILE_SIZE;
+use trgs_core::pipeline::TILE_SIZE;
 use trgs_core::scene::{
     Camera, Gaussians, Intrinsics, Material, Population, Pose, ReflectionPlane,
 };
@@ -157,7 +157,7 @@ fn huge_gaussians_extreme_logits_are_culled_alike_on_gpu_and_twin() {
     }
     let view = trgs_core::scene::ViewTransform::from(&s.camera.pose);
     let k = &s.camera.intrinsics;
-    let grid = trgs_core::reference::TileGrid::new(k.width, k.height);
+    let grid = trgs_core::pipeline::TileGrid::new(k.width, k.height);
     let p = trgs_core::reference::project(
         &g,
         &view,

@@ -1,7 +1,8 @@
 //! A PLY written by another tool (the `plyfile` package, in the INRIA 3DGS layout; see
 //! fixtures/make_inria_ply.py) renders the same on the GPU and on the CPU twin.
 use trgs_core::io::read_ply;
-use trgs_core::reference::{self, RenderSettings};
+use trgs_core::pipeline::RenderSettings;
+use trgs_core::reference;
 use trgs_core::scene::{Camera, Intrinsics, Pose};
 use trgs_render::{GpuContext, GpuScene, Layer, RenderOptions, Renderer};
 

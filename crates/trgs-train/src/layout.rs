@@ -1,11 +1,11 @@
 //! The training stages' GPU structs and constants, declared once here in Rust; the WGSL every
 //! training kernel sees ([`prelude`]) is the renderer's prelude followed by these, generated.
-use crate::densify::mcmc::{
+use crate::densify::mcmc::relocate::{
     MAX_SHARE, RELOCATION_BIN_LO, RELOCATION_BINS, RELOCATION_BINS_PER_UNIT,
 };
 use trgs_core::metrics::{SSIM_C1, SSIM_C2, SSIM_RADIUS, SSIM_WINDOW, gaussian_window};
-use trgs_core::reference::{GUARD_KEYS_DROPPED, GUARD_LOSS_NOT_FINITE};
-use trgs_core::reference::{MAX_REGULARISED_LOG_SCALE, NOISE_GATE_STEEPNESS, NOISE_GATE_THRESHOLD};
+use trgs_core::pipeline::{GUARD_KEYS_DROPPED, GUARD_LOSS_NOT_FINITE};
+use trgs_core::pipeline::{MAX_REGULARISED_LOG_SCALE, NOISE_GATE_STEEPNESS, NOISE_GATE_THRESHOLD};
 use trgs_render::gpu_struct;
 use trgs_render::toolkit::layout::{StructInfo, float, struct_info, wgsl_constants};
 

@@ -1,6 +1,6 @@
 //! Every setting of a training run, with the paper's and 3DGS's values as defaults. Lengths are
 //! given for the paper's 30k iterations and scale with `iterations`.
-use trgs_core::reference::{AdamRate, DSSIM_LAMBDA, ReflectionModel};
+use trgs_core::pipeline::{AdamRate, DSSIM_LAMBDA, ReflectionModel};
 use trgs_core::scene::{Attribute, PerAttribute};
 
 /// The paper's iteration budget, which the default lengths below refer to.
@@ -111,6 +111,10 @@ pub struct TrainSettings {
     pub reflection: ReflectionModel,
 }
 
+/// The paper's opacity perturbation noise: uniform in [-0.4, 0.4] on the opacity (not its
+/// logit).
+pub const PERTURB_AMPLITUDE: f64 = 0.4;
+
 /// When the opacity perturbation runs: every `every` steps of stage 3 before `until`, skipping
 /// the steps of an opacity reset (the paper interleaves the two).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -128,7 +132,7 @@ impl PerturbSchedule {
         Self {
             every: scale_len(1000, iterations).max(100),
             until: iterations - iterations / 10,
-            amplitude: crate::perturb::PERTURB_AMPLITUDE,
+            amplitude: PERTURB_AMPLITUDE,
         }
     }
 }

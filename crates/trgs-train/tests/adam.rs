@@ -1,10 +1,11 @@
 //! The GPU Adam step against its twin (`trgs_core::reference::adam`, f64) over several steps, on
 //! a buffer split into several binding ranges.
-use trgs_core::reference::{AdamRate, AdamSettings, adam};
+use trgs_core::pipeline::{AdamRate, AdamSettings};
+use trgs_core::reference::adam;
 use trgs_core::rng::Rng;
 use trgs_render::toolkit::gpu::{self, Recorder};
 use trgs_render::{DeviceOptions, GpuContext};
-use trgs_train::adam::{Adam, AdamMoments};
+use trgs_train::stages::{Adam, AdamMoments};
 
 #[test]
 fn gpu_adam_matches_twin() {
@@ -48,7 +49,7 @@ fn gpu_adam_matches_twin() {
         let lr = 1e-3 * f64::from(t);
         let rate = AdamRate { lr, lead_lr: 20.0 * lr, lead: 3, stride: 48 };
         let mut rec = Recorder::new(&ctx, "test.adam", false);
-        let open = trgs_train::step_guard::open(&ctx);
+        let open = trgs_train::stages::step_guard::open(&ctx);
         adam_gpu.record(&ctx, &mut rec, &values, &g_buf, &moments, &rate, t, &open);
         rec.submit_and_wait(&ctx).expect("GPU work");
         adam(&mut params, &grads, &mut m, &mut v, &rate, t, &adam_gpu.settings);

@@ -9,10 +9,9 @@ use trgs_core::rng::Rng;
 use trgs_core::scene::Attribute;
 use trgs_render::{DeviceOptions, GpuContext};
 use trgs_train::densify::classic::plan_densify;
-use trgs_train::densify::{
-    ClassicDensification, ClassicSettings, DensifyReport, DensifyStats, Geometry, TrainState,
-};
-use trgs_train::gaussian_state::GaussianState;
+use trgs_train::densify::{ClassicDensification, ClassicSettings, DensifyReport, DensifyStats};
+use trgs_train::stages::GaussianState;
+use trgs_train::stages::{Geometry, TrainState};
 
 fn ctx() -> GpuContext {
     GpuContext::with_options(&DeviceOptions { poison_fresh_buffers: true, ..Default::default() })

@@ -13,7 +13,7 @@ use trgs_render::{
     RenderOptions, Renderer,
 };
 use trgs_train::densify::DensifyStats;
-use trgs_train::densify_stats::GpuDensifyStats;
+use trgs_train::stages::GpuDensifyStats;
 
 fn ctx() -> GpuContext {
     GpuContext::with_options(&DeviceOptions { poison_fresh_buffers: true, ..Default::default() })
@@ -77,7 +77,7 @@ fn gpu_densify_stats_match_twin() {
                 &frame,
                 &grads,
                 views,
-                &trgs_train::step_guard::open(&ctx),
+                &trgs_train::stages::step_guard::open(&ctx),
             );
             rec.submit_and_wait(&ctx).expect("GPU work");
             twin.add(&passes[..views], frame.width(), frame.height());

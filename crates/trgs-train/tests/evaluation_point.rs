@@ -1,20 +1,24 @@
 //! `Trainer::train_step_then` calls its hook after the step's update and before the step's
 //! maintenance: an evaluation there sees the model the step made, not an opacity reset.
 use trgs_core::scene::Attribute;
-use trgs_core::synthetic::{SyntheticConfig, generate, write_dataset};
 use trgs_render::GpuContext;
-use trgs_train::data::{self, Resolution};
+use trgs_synthetic::{SyntheticConfig, generate, write_dataset};
+use trgs_train::TrainSettings;
+use trgs_train::Trainer;
 use trgs_train::densify::{ClassicSettings, Densification};
-use trgs_train::init::{InitialShape, SeedPoint, gaussians_from_points};
-use trgs_train::settings::TrainSettings;
-use trgs_train::trainer::Trainer;
+use trgs_train::{InitialShape, SeedPoint, gaussians_from_points};
+use trgs_train::{LoadOptions, Resolution, TrainingData};
 
 #[test]
 fn hook_runs_after_the_update_and_before_the_opacity_reset() {
     let dir = trgs_core::scratch::ScratchDir::new("evaluation-point");
     let scene = generate(&SyntheticConfig::small());
     write_dataset(&scene, &dir).expect("write the dataset");
-    let data = data::load(&dir, Resolution::Original).expect("load the dataset");
+    let data = TrainingData::load(
+        &trgs_core::io::SceneFolder::open(&dir).expect("open the dataset"),
+        &LoadOptions::at(Resolution::Original),
+    )
+    .expect("load the dataset");
     let seeds: Vec<SeedPoint> =
         data.points.iter().map(|&(position, color)| SeedPoint { position, color }).collect();
     let gaussians = gaussians_from_points(&seeds, 0, InitialShape::CLASSIC);

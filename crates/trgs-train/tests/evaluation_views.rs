@@ -1,10 +1,10 @@
-//! `eval` decodes only the views it measures (`TrainingData::load_for_evaluation`): the test
+//! `eval` decodes only the views it measures (`TrainingData::load` with `LoadOptions::evaluate`): the test
 //! views, the training views or all of them, each as a training load gives it, and for a scene
 //! without test views its first four training views, as training evaluates on.
 use std::sync::atomic::{AtomicUsize, Ordering};
 use trgs_core::io::{SceneFolder, Split};
-use trgs_core::synthetic::{SyntheticConfig, generate, write_dataset};
-use trgs_train::data::{Resolution, TrainingData, View};
+use trgs_synthetic::{SyntheticConfig, generate, write_dataset};
+use trgs_train::{LoadOptions, Resolution, TrainingData, View};
 
 fn names<'a>(views: impl IntoIterator<Item = &'a View>) -> Vec<String> {
     views.into_iter().map(|v| v.camera.name.clone()).collect()
@@ -16,8 +16,12 @@ fn evaluation(folder: &SceneFolder, split: Split) -> (TrainingData, usize) {
     let count = |_: usize, _: usize| {
         decoded.fetch_add(1, Ordering::Relaxed);
     };
-    let data = TrainingData::load_for_evaluation(folder, Resolution::Original, split, &count)
-        .expect("load for evaluation");
+    let options = LoadOptions {
+        resolution: Resolution::Original,
+        evaluate: Some(split),
+        progress: Some(&count),
+    };
+    let data = TrainingData::load(folder, &options).expect("load for evaluation");
     (data, decoded.into_inner())
 }
 
@@ -26,7 +30,8 @@ fn evaluation_decodes_only_the_views_it_measures() {
     let dir = trgs_core::scratch::ScratchDir::new("evaluation-views");
     write_dataset(&generate(&SyntheticConfig::small()), &dir).expect("write the dataset");
     let folder = SceneFolder::open(&dir).expect("open the dataset");
-    let whole = TrainingData::load(&folder, Resolution::Original).expect("load for training");
+    let whole = TrainingData::load(&folder, &LoadOptions::at(Resolution::Original))
+        .expect("load for training");
     assert!(!whole.test.is_empty() && whole.train.len() > whole.test.len());
     for split in [Split::Test, Split::Train, Split::All] {
         let mut expected: Vec<&View> = match split {
@@ -52,7 +57,8 @@ fn evaluation_decodes_only_the_views_it_measures() {
     // No test views: the first four training views stand in, and the report says so.
     std::fs::write(dir.join("test_views.txt"), "").expect("an empty split");
     let folder = SceneFolder::open(&dir).expect("open the dataset");
-    let whole = TrainingData::load(&folder, Resolution::Original).expect("load for training");
+    let whole = TrainingData::load(&folder, &LoadOptions::at(Resolution::Original))
+        .expect("load for training");
     let (data, decoded) = evaluation(&folder, Split::Test);
     assert_eq!(decoded, 4);
     assert_eq!(names(data.eval_views()), names(&whole.train[..4]));

@@ -7,16 +7,15 @@ use trgs_core::rng::Rng;
 use trgs_core::scene::{Attribute, Gaussians, PerAttribute, ReflectionPlane, attribute_widths};
 use trgs_render::toolkit::gpu::read_buffer;
 use trgs_render::{DeviceOptions, GpuContext, GpuScene};
-use trgs_train::adam::AdamMoments;
+use trgs_train::TrainSettings;
+use trgs_train::Trainer;
 use trgs_train::checkpoint::Checkpoint;
 use trgs_train::densify::mcmc::{McmcDensification, McmcSettings, plan_relocation};
 use trgs_train::densify::{ClassicDensification, Densification};
-use trgs_train::densify::{
-    ClassicSettings, DensifyStats, Geometry, RowPlan, TrainState, classic::plan_densify,
-};
-use trgs_train::gather_rows::GpuRowGather;
-use trgs_train::settings::TrainSettings;
-use trgs_train::trainer::Trainer;
+use trgs_train::densify::{ClassicSettings, DensifyStats, classic::plan_densify};
+use trgs_train::stages::AdamMoments;
+use trgs_train::stages::GpuRowGather;
+use trgs_train::stages::{Geometry, RowPlan, TrainState};
 
 fn ctx() -> GpuContext {
     GpuContext::with_options(&DeviceOptions { poison_fresh_buffers: true, ..Default::default() })

@@ -2,9 +2,9 @@
 //! before the loss (what a checkpoint holds) is intact: nothing panics, nothing saved is lost.
 use trgs_core::fixtures::{SceneSpec, random_scene};
 use trgs_render::{GpuContext, GpuError, Layer, RenderError};
-use trgs_train::data::View;
-use trgs_train::settings::TrainSettings;
-use trgs_train::trainer::Trainer;
+use trgs_train::TrainSettings;
+use trgs_train::Trainer;
+use trgs_train::View;
 
 #[test]
 fn a_training_step_on_a_lost_device_is_an_error() {

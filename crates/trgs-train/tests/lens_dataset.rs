@@ -2,8 +2,8 @@
 //! OPENCV and OPENCV_FISHEYE, as COLMAP would model them) loads as pinhole views: the loader says
 //! what it did, the views have the pinhole camera the undistortion chose, the glass masks stay
 //! labels, and the views load the same at every thread count and with the photos downscaled.
-use trgs_core::synthetic::{SyntheticConfig, SyntheticLens, generate, write_dataset};
-use trgs_train::data::{self, Resolution};
+use trgs_synthetic::{SyntheticConfig, SyntheticLens, generate, write_dataset};
+use trgs_train::{LoadOptions, Resolution, TrainingData};
 
 #[test]
 fn distorted_photos_load_as_pinhole_views() {
@@ -12,7 +12,11 @@ fn distorted_photos_load_as_pinhole_views() {
         let config = SyntheticConfig { lens, ..SyntheticConfig::small() };
         let scene = generate(&config);
         write_dataset(&scene, &dir).expect("write the dataset");
-        let data = data::load(&dir, Resolution::Original).expect("load the dataset");
+        let data = TrainingData::load(
+            &trgs_core::io::SceneFolder::open(&dir).expect("open the dataset"),
+            &LoadOptions::at(Resolution::Original),
+        )
+        .expect("load the dataset");
         let note = data.notes.iter().find(|n| n.contains("camera model")).expect("a lens note");
         assert!(note.contains(lens.colmap_model()), "{note}");
         assert!(note.contains(&format!("on {} views", scene.cameras.len())), "{note}");
@@ -30,7 +34,11 @@ fn distorted_photos_load_as_pinhole_views() {
             assert!(m.data.contains(&1), "the pane is in every masked view");
         }
         // At half the size the photos are downscaled before undistortion.
-        let half = data::load(&dir, Resolution::Downscale(2.0)).expect("load at half size");
+        let half = TrainingData::load(
+            &trgs_core::io::SceneFolder::open(&dir).expect("open the dataset"),
+            &LoadOptions::at(Resolution::Downscale(2.0)),
+        )
+        .expect("load at half size");
         let v = &half.train[0];
         let u = v.undistortion.as_ref().expect("undistorted");
         assert_eq!(u.photo_size(), (32, 24));

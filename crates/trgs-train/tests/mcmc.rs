@@ -1,7 +1,8 @@
 //! The GPU stages of MCMC densification (`mcmc_regularise`, `mcmc_noise`) against their twins
 //! (`trgs_core::reference`, f64), on a scene split into several binding ranges, with glass
 //! Gaussians (which both must leave alone) and opacities on both sides of the noise gate.
-use trgs_core::reference::{AdamRate, mcmc_noise, mcmc_regularise};
+use trgs_core::pipeline::AdamRate;
+use trgs_core::reference::{mcmc_noise, mcmc_regularise};
 use trgs_core::rng::Rng;
 use trgs_core::scene::{Attribute, Gaussians, Population};
 use trgs_render::toolkit::gpu::{self, Recorder};
@@ -93,7 +94,7 @@ fn gpu_mcmc_stages_match_twins() {
     let lr = AdamRate::uniform(1.6e-4 * 2.0);
     let seed = 77;
     let mut rec = Recorder::new(&ctx, "test.mcmc", false);
-    let open = trgs_train::step_guard::open(&ctx);
+    let open = trgs_train::stages::step_guard::open(&ctx);
     kernels.record_noise(&ctx, &mut rec, &gpu_scene, &settings, &lr, seed, &open);
     rec.submit_and_wait(&ctx).expect("GPU work");
     let mut want = twin.clone();
@@ -132,9 +133,9 @@ fn gpu_mcmc_stages_match_twins() {
 #[test]
 fn planes_added_under_mcmc_stay_within_the_cap() {
     use trgs_core::fixtures::{SceneSpec, random_scene};
+    use trgs_train::TrainSettings;
+    use trgs_train::Trainer;
     use trgs_train::densify::Densification;
-    use trgs_train::settings::TrainSettings;
-    use trgs_train::trainer::Trainer;
     let ctx = GpuContext::new().expect("adapter");
     let mut rng = Rng::new(7);
     let mut old = scene(300, &mut rng);

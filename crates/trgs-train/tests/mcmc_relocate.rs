@@ -8,9 +8,10 @@ mod common;
 use trgs_core::rng::Rng;
 use trgs_core::scene::{Attribute, Population};
 use trgs_render::{DeviceOptions, GpuContext};
+use trgs_train::densify::McmcReport;
 use trgs_train::densify::mcmc::{McmcDensification, McmcSettings, plan_relocation};
-use trgs_train::densify::{Geometry, McmcReport, TrainState};
-use trgs_train::gaussian_state::GaussianState;
+use trgs_train::stages::GaussianState;
+use trgs_train::stages::{Geometry, TrainState};
 
 fn ctx() -> GpuContext {
     GpuContext::with_options(&DeviceOptions { poison_fresh_buffers: true, ..Default::default() })

@@ -3,9 +3,9 @@
 use trgs_core::fixtures::{SceneSpec, random_scene};
 use trgs_core::scene::{Attribute, Gaussians, PerAttribute, attribute_widths};
 use trgs_render::GpuContext;
-use trgs_train::densify::TrainState;
 use trgs_train::densify::classic::{opacity_reset_cap, opacity_reset_logits};
-use trgs_train::gaussian_state::GaussianState;
+use trgs_train::stages::GaussianState;
+use trgs_train::stages::TrainState;
 
 #[test]
 fn the_gpu_caps_as_the_twin_does() {

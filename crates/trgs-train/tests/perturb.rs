@@ -9,7 +9,7 @@ use trgs_core::fixtures::{SceneSpec, random_scene};
 use trgs_core::rng::Rng;
 use trgs_core::scene::{Gaussians, Material, Population, ReflectionPlane};
 use trgs_render::{GpuContext, GpuScene};
-use trgs_train::perturb::{
+use trgs_train::stages::perturb::{
     BEHIND_MARGIN, GpuPerturb, PERTURB_AMPLITUDE, perturb_opacities, seen_through_planes,
 };
 

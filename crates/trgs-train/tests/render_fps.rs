@@ -1,20 +1,24 @@
 //! `render_fps`, the render speed `train` and `eval` report, times renders as a viewer pays
 //! them (each waited for), not the readback of their images.
-use trgs_core::synthetic::{SyntheticConfig, generate, write_dataset};
 use trgs_render::toolkit::gpu::wait_for_gpu;
 use trgs_render::{Frame, GpuContext, KeySizing, RenderOptions};
-use trgs_train::data::{self, Resolution};
+use trgs_synthetic::{SyntheticConfig, generate, write_dataset};
+use trgs_train::TrainSettings;
+use trgs_train::Trainer;
 use trgs_train::eval::{Renderable, render_fps};
-use trgs_train::init::{InitialShape, SeedPoint, gaussians_from_points};
-use trgs_train::settings::TrainSettings;
-use trgs_train::trainer::Trainer;
+use trgs_train::{InitialShape, SeedPoint, gaussians_from_points};
+use trgs_train::{LoadOptions, Resolution, TrainingData};
 
 #[test]
 fn render_fps_waits_for_each_render_and_reads_no_image_back() {
     let dir = trgs_core::scratch::ScratchDir::new("render-fps");
     let scene = generate(&SyntheticConfig::small());
     write_dataset(&scene, &dir).expect("write the dataset");
-    let data = data::load(&dir, Resolution::Original).expect("load the dataset");
+    let data = TrainingData::load(
+        &trgs_core::io::SceneFolder::open(&dir).expect("open the dataset"),
+        &LoadOptions::at(Resolution::Original),
+    )
+    .expect("load the dataset");
     let seeds: Vec<SeedPoint> =
         data.points.iter().map(|&(position, color)| SeedPoint { position, color }).collect();
     let gaussians = gaussians_from_points(&seeds, 1, InitialShape::CLASSIC);

@@ -5,8 +5,9 @@
 //! And a run reports every densification it applies, those it pipelines a step late included.
 use std::path::Path;
 use trgs_core::scratch::ScratchDir;
-use trgs_core::synthetic::{SyntheticConfig, generate, write_dataset};
-use trgs_train::run::{LOG_FILE, ResumeOverrides, RunConfig, RunEvent, TrainingRun};
+use trgs_synthetic::{SyntheticConfig, generate, write_dataset};
+use trgs_train::run::LOG_FILE;
+use trgs_train::{RunConfig, RunEvent, RunOptions, TrainingRun};
 
 fn logged_steps(log: &Path) -> Vec<u64> {
     std::fs::read_to_string(log)
@@ -32,7 +33,7 @@ fn a_stopped_run_resumes_through_the_library() {
         sh_degree: 1,
         ..RunConfig::default()
     };
-    let mut run = TrainingRun::new(config.clone()).expect("a new run");
+    let mut run = TrainingRun::start(config.clone(), RunOptions::default()).expect("a new run");
     let mut planes = 0;
     let mut seeded = Vec::new();
     let stopped = loop {
@@ -48,7 +49,7 @@ fn a_stopped_run_resumes_through_the_library() {
     drop(run);
     assert!(!out.join("metrics.json").exists(), "the stopped run did not finish");
 
-    let mut resumed = TrainingRun::resume(&out).expect("resume");
+    let mut resumed = TrainingRun::resume(&out, RunOptions::default()).expect("resume");
     let note = match resumed.next_event() {
         Some(Ok(RunEvent::Note(line))) => line,
         other => panic!("expected a note first, got {other:?}"),
@@ -83,9 +84,8 @@ fn a_stopped_run_resumes_through_the_library() {
     }
 
     // The machine's GPU budget for the views may be set anew; nothing else changes.
-    let overrides = ResumeOverrides { target_memory: Some(3) };
-    let mut again = TrainingRun::resume_with_overrides(&out, &overrides, &|_, _| {})
-        .expect("resume a finished run");
+    let options = RunOptions { target_memory: Some(3), ..RunOptions::default() };
+    let mut again = TrainingRun::resume(&out, options).expect("resume a finished run");
     assert_eq!(again.config().target_memory, Some(3));
     assert_eq!(again.trainer().targets().budget(), 3 << 20);
     assert_eq!(again.config(), &RunConfig { target_memory: Some(3), ..config.clone() });
@@ -115,7 +115,7 @@ fn a_run_reports_every_densification_it_applies() {
         sh_degree: 1,
         ..RunConfig::default()
     };
-    let mut run = TrainingRun::new(config).expect("a new run");
+    let mut run = TrainingRun::start(config, RunOptions::default()).expect("a new run");
     // Every 4 steps: at step 4, where stage 1 ends and the planes start, then at 8, 12 and 16
     // (pipelined: applied a step later) and 20 (an evaluation, taken whole: applied at once).
     let mut s = ClassicSettings::scaled(40);

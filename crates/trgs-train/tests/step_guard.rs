@@ -1,13 +1,14 @@
 //! Stage `step_guard` against its twin, and what a set guard does to the updates that read it:
 //! `adam` and `mcmc_noise` leave every value and moment as it was.
-use trgs_core::reference::{AdamRate, AdamSettings, GUARD_KEYS_DROPPED, step_guard};
+use trgs_core::pipeline::{AdamRate, AdamSettings, GUARD_KEYS_DROPPED};
+use trgs_core::reference::step_guard;
 use trgs_core::rng::Rng;
 use trgs_core::scene::Gaussians;
 use trgs_render::toolkit::gpu::{self, Recorder};
 use trgs_render::{DeviceOptions, GpuContext, GpuScene};
-use trgs_train::adam::{Adam, AdamMoments};
 use trgs_train::densify::mcmc::{McmcKernels, McmcSettings};
-use trgs_train::step_guard::StepGuard;
+use trgs_train::stages::step_guard::StepGuard;
+use trgs_train::stages::{Adam, AdamMoments};
 
 fn ctx() -> GpuContext {
     GpuContext::with_options(&DeviceOptions { poison_fresh_buffers: true, ..Default::default() })

@@ -7,10 +7,10 @@
 use trgs_core::fixtures::{SceneSpec, random_scene};
 use trgs_core::scene::{Camera, Gaussians, ReflectionPlane};
 use trgs_render::{DeviceOptions, GpuContext, Layer};
-use trgs_train::data::View;
+use trgs_train::TrainSettings;
+use trgs_train::Trainer;
+use trgs_train::View;
 use trgs_train::densify::{ClassicSettings, Densification, DensifyEvent, McmcSettings};
-use trgs_train::settings::TrainSettings;
-use trgs_train::trainer::Trainer;
 
 /// A context that records while the device is busy, as on a GPU (a CPU adapter waits between a
 /// step's phases by default, `Capabilities::records_while_busy`).

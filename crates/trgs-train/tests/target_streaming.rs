@@ -3,20 +3,24 @@
 //! holding every view (to the order of atomic sums), and a budget that cannot hold one view is
 //! refused before the photos load, naming the view and the flag.
 use trgs_core::scratch::ScratchDir;
-use trgs_core::synthetic::{SyntheticConfig, generate, write_dataset};
 use trgs_render::GpuContext;
-use trgs_train::data::{self, Resolution};
-use trgs_train::init::{InitialShape, SeedPoint, gaussians_from_points};
-use trgs_train::run::{RunConfig, TrainingRun};
-use trgs_train::settings::TrainSettings;
-use trgs_train::targets::{self, TargetCounts};
-use trgs_train::trainer::Trainer;
+use trgs_synthetic::{SyntheticConfig, generate, write_dataset};
+use trgs_train::TrainSettings;
+use trgs_train::Trainer;
+use trgs_train::stages::targets::{self, TargetCounts};
+use trgs_train::{InitialShape, SeedPoint, gaussians_from_points};
+use trgs_train::{LoadOptions, Resolution, TrainingData};
+use trgs_train::{RunConfig, RunOptions, TrainingRun};
 
 #[test]
 fn streamed_views_train_as_resident_ones() {
     let dir = ScratchDir::new("target-streaming");
     write_dataset(&generate(&SyntheticConfig::small()), &dir).expect("write the dataset");
-    let data = data::load(&dir, Resolution::Original).expect("load the dataset");
+    let data = TrainingData::load(
+        &trgs_core::io::SceneFolder::open(&dir).expect("open the dataset"),
+        &LoadOptions::at(Resolution::Original),
+    )
+    .expect("load the dataset");
     let seeds: Vec<SeedPoint> =
         data.points.iter().map(|&(position, color)| SeedPoint { position, color }).collect();
     let gaussians = gaussians_from_points(&seeds, 1, InitialShape::CLASSIC);
@@ -88,7 +92,7 @@ fn a_run_uploads_every_view_ahead_across_epochs() {
         target_memory: Some(1),
         ..RunConfig::default()
     };
-    let mut run = TrainingRun::new(config).expect("run");
+    let mut run = TrainingRun::start(config, RunOptions::default()).expect("run");
     run.run_to_end(|_| {}).expect("training");
     let train_views = run.trainer().targets().counts();
     assert!(train_views.evictions > 0, "the views were streamed: {train_views:?}");
@@ -108,7 +112,8 @@ fn a_budget_below_one_view_is_refused_before_training() {
         target_memory: Some(0),
         ..RunConfig::default()
     };
-    let err = TrainingRun::new(config).expect_err("a budget of 0 MiB is refused");
+    let err = TrainingRun::start(config, RunOptions::default())
+        .expect_err("a budget of 0 MiB is refused");
     let message = format!("{err:#}");
     assert!(message.contains("cannot hold one view"), "{message}");
     assert!(message.contains("--target-memory"), "{message}");

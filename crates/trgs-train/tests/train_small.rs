@@ -2,16 +2,16 @@
 //! loaded back as a user's scene folder would be: stage 1 improves the test views, the plane
 //! fitted from the masks lies near the true pane, and stages 2 and 3 keep every parameter finite.
 use trgs_core::metrics::psnr;
-use trgs_core::synthetic::{SyntheticConfig, generate, write_dataset};
 use trgs_render::{GpuContext, Layer};
-use trgs_train::data::{self, Resolution};
+use trgs_synthetic::{SyntheticConfig, generate, write_dataset};
+use trgs_train::TrainSettings;
+use trgs_train::Trainer;
 use trgs_train::densify::{ClassicSettings, Densification};
-use trgs_train::init::{InitialShape, SeedPoint, gaussians_from_points};
-use trgs_train::plane_init::{PlaneInitSettings, initialise_planes};
-use trgs_train::settings::TrainSettings;
-use trgs_train::trainer::Trainer;
+use trgs_train::{InitialShape, SeedPoint, gaussians_from_points};
+use trgs_train::{LoadOptions, Resolution, TrainingData};
+use trgs_train::{PlaneInitSettings, initialise_planes};
 
-fn test_psnr(trainer: &Trainer, data: &data::TrainingData) -> f64 {
+fn test_psnr(trainer: &Trainer, data: &TrainingData) -> f64 {
     let mut sum = 0.0;
     for v in &data.test {
         let frame = trainer.render(&v.camera).expect("render");
@@ -26,7 +26,11 @@ fn small_scene_trains_and_finds_its_plane() {
     let dir = trgs_core::scratch::ScratchDir::new("train-small");
     let scene = generate(&SyntheticConfig::small());
     write_dataset(&scene, &dir).expect("write the dataset");
-    let data = data::load(&dir, Resolution::Original).expect("load the dataset");
+    let data = TrainingData::load(
+        &trgs_core::io::SceneFolder::open(&dir).expect("open the dataset"),
+        &LoadOptions::at(Resolution::Original),
+    )
+    .expect("load the dataset");
     assert_eq!(data.materials.len(), 1, "one glass label");
     let seeds: Vec<SeedPoint> =
         data.points.iter().map(|&(position, color)| SeedPoint { position, color }).collect();

@@ -17,7 +17,7 @@ use glam::DVec3;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
-use trgs_core::reference::ReflectionModel;
+use trgs_core::pipeline::ReflectionModel;
 use trgs_core::scene::{Camera, ReflectionPlane};
 use trgs_render::{DisplayTarget, Frame, GpuContext, GpuScene, Layer, RenderOptions, Renderer};
 

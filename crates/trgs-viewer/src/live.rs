@@ -4,7 +4,7 @@
 //! never slows training by more than one readback per interval.
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
-use trgs_core::reference::ReflectionModel;
+use trgs_core::pipeline::ReflectionModel;
 use trgs_core::scene::{Camera, Gaussians, ReflectionPlane};
 
 /// The model at one point of training.

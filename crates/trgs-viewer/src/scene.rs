@@ -5,7 +5,7 @@ use anyhow::{Context, Result};
 use glam::DVec3;
 use std::path::{Path, PathBuf};
 use trgs_core::io::{load_model, read_cameras_json};
-use trgs_core::reference::ReflectionModel;
+use trgs_core::pipeline::ReflectionModel;
 use trgs_core::scene::{Camera, Gaussians, ReflectionPlane};
 
 /// A model read from disk.

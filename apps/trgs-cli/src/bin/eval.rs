@@ -6,12 +6,12 @@ use anyhow::{Context, Result, bail};
 use clap::Parser;
 use std::path::PathBuf;
 use trgs_cli::args::SplitArg;
-use trgs_core::io::{Split, write_atomic};
+use trgs_core::io::{SceneFolder, Split, write_atomic};
 use trgs_render::{GpuContext, GpuScene, RenderOptions, Renderer};
-use trgs_train::data::{self, Resolution};
 use trgs_train::eval::{Renderable, compare_with_truth, evaluate, render_fps, write_renders};
 use trgs_train::model::load_model;
 use trgs_train::run::parse_positive;
+use trgs_train::{LoadOptions, Resolution, TrainingData};
 
 /// Metrics of a trained model on a dataset's test (or training) views: PSNR and SSIM per view
 /// and their mean, render FPS, and for a synthetic scene the plane and transmission errors
@@ -66,7 +66,10 @@ fn main() -> Result<()> {
     let model = load_model(&args.model, args.planes.as_deref())?;
     let resolution = Resolution::from_flags(args.resolution, args.downscale, args.full_size);
     // Only the views measured are decoded: a few of a capture's hundreds of photos.
-    let data = data::load_for_evaluation(&data_dir, resolution, split)?;
+    let folder = SceneFolder::open(&data_dir)
+        .with_context(|| format!("opening the scene folder {}", data_dir.display()))?;
+    let options = LoadOptions { resolution, evaluate: Some(split), progress: None };
+    let data = TrainingData::load(&folder, &options)?;
     let ctx = GpuContext::new()?;
     let scene = GpuScene::upload(&ctx, &model.gaussians, &model.planes)
         .with_context(|| format!("uploading {}", model.ply.display()))?;

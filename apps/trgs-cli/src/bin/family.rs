@@ -1,5 +1,5 @@
 //! `family`: TR-Gaussians against plain 3DGS on members of the synthetic scene family
-//! (`trgs_core::synthetic::family`): each member's scene is generated once, both modes train on
+//! (`trgs_synthetic::family`): each member's scene is generated once, both modes train on
 //! it, and the table compares them against the truth: test PSNR overall, where the glass
 //! reflects and elsewhere, the transmission layer against the true transmission, the planes and
 //! their R0, and the training time. Interrupted runs resume; finished ones are read back.
@@ -8,10 +8,10 @@ use clap::Parser;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use trgs_core::io::write_atomic;
-use trgs_core::synthetic::family::{self, FamilyMember};
 use trgs_render::GpuContext;
+use trgs_synthetic::family::{self, FamilyMember};
 use trgs_train::eval::TruthComparison;
-use trgs_train::run::{RunConfig, RunEvent, TrainingRun};
+use trgs_train::{RunConfig, RunEvent, RunOptions, TrainingRun};
 
 /// TR-Gaussians against plain 3DGS on members of the synthetic scene family, with the table of
 /// issue 38 (PSNR overall, where the glass reflects and elsewhere, transmission against the
@@ -156,15 +156,20 @@ fn run_config(flags: &str) -> Result<RunConfig> {
     Ok(parsed.config)
 }
 
+/// Options that run on `ctx`.
+fn on(ctx: &GpuContext) -> RunOptions<'static> {
+    RunOptions { context: Some(ctx.clone()), ..RunOptions::default() }
+}
+
 /// One run to its end (resumed from its checkpoint when interrupted, read back when finished).
 fn train(ctx: &GpuContext, config: RunConfig) -> Result<Outcome> {
     let out = config.out.clone();
     let metrics = out.join("metrics.json");
     if !metrics.is_file() {
         let mut run = if out.join("checkpoint.trgs").is_file() {
-            TrainingRun::resume_with_context(ctx.clone(), &out)?
+            TrainingRun::resume(&out, on(ctx))?
         } else {
-            TrainingRun::with_context(ctx.clone(), config)?
+            TrainingRun::start(config, on(ctx))?
         };
         run.run_to_end(|event| match event {
             RunEvent::Evaluation(e) => {

@@ -6,7 +6,7 @@ use clap::{CommandFactory, FromArgMatches, Parser};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 use std::time::Duration;
-use trgs_train::run::{ResumeOverrides, RunConfig, RunEvent, RunSummary, TrainingRun};
+use trgs_train::{RunConfig, RunEvent, RunOptions, RunSummary, TrainingRun};
 use trgs_viewer::{LiveFeed, Snapshot, Source, ViewerOptions};
 
 /// The shortest time between two snapshots for the viewer (each is a readback of the scene).
@@ -39,11 +39,12 @@ struct Cli {
 /// How the run starts.
 enum Start {
     New(RunConfig),
-    Resume(PathBuf, ResumeOverrides),
+    /// The run folder and the `--target-memory` given anew.
+    Resume(PathBuf, Option<u64>),
 }
 
 /// The command line, refusing settings beside --resume (the run keeps its own) other than the
-/// machine's (`ResumeOverrides`).
+/// machine's (`RunOptions::target_memory`).
 fn parse() -> Result<(Start, bool)> {
     let command = Cli::command();
     let matches = command.clone().get_matches();
@@ -68,8 +69,7 @@ fn parse() -> Result<(Start, bool)> {
             given.join(" ")
         );
     }
-    let overrides = ResumeOverrides { target_memory: cli.config.target_memory };
-    Ok((Start::Resume(cli.config.out, overrides), cli.viewer))
+    Ok((Start::Resume(cli.config.out, cli.config.target_memory), cli.viewer))
 }
 
 fn main() -> Result<()> {
@@ -120,11 +120,14 @@ fn train(start: Start, feed: Option<&LiveFeed>) -> Result<()> {
         bar.set_length(total as u64);
         bar.set_position(done as u64);
     };
+    let options = |target_memory| RunOptions {
+        progress: Some(&progress),
+        target_memory,
+        ..RunOptions::default()
+    };
     let run = match start {
-        Start::New(config) => TrainingRun::new_with_progress(config, &progress),
-        Start::Resume(out, overrides) => {
-            TrainingRun::resume_with_overrides(&out, &overrides, &progress)
-        }
+        Start::New(config) => TrainingRun::start(config, options(None)),
+        Start::Resume(out, target_memory) => TrainingRun::resume(&out, options(target_memory)),
     };
     loading.finish_and_clear();
     let mut run = run?;
@@ -157,12 +160,12 @@ fn train(start: Start, feed: Option<&LiveFeed>) -> Result<()> {
                 }
                 let (loss, psnr) = (s.stats.loss, s.stats.psnr);
                 let ram = s.memory.peak_ram_bytes.map_or(String::new(), |b| {
-                    format!("  RAM peak {}", trgs_train::memory::human_bytes(b))
+                    format!("  RAM peak {}", trgs_train::human_bytes(b))
                 });
                 bar.set_message(format!(
                     "loss {loss:.4}  psnr {psnr:.2}  {} Gaussians  GPU {}{ram}",
                     s.gaussians,
-                    trgs_train::memory::human_bytes(s.memory.gpu.total())
+                    trgs_train::human_bytes(s.memory.gpu.total())
                 ));
                 if let Some(feed) = feed
                     && feed.wants_snapshot(SNAPSHOT_INTERVAL)

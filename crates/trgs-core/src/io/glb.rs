@@ -443,54 +443,69 @@ fn parse(bytes: &[u8]) -> Result<(Gaussians<f32>, Vec<ReflectionPlane>), String>
             return Err(format!("the {EXTENSION} object lacks its required {field:?}"));
         }
     }
-    let attrs = &primitive["attributes"];
-    let get = |semantic: &str, kinds: &[&str], count: Option<usize>| {
-        let index = &attrs[semantic];
+    let attrs = Attributes { doc: &doc, bin, attrs: &primitive["attributes"] };
+    let mut g = read_gaussians(&attrs)?;
+    read_trgs_attributes(&attrs, &mut g)?;
+    if let Some(m) = to_trgs {
+        placement::place(&mut g, &m)?;
+    }
+    let mut planes = Vec::new();
+    for (index, node) in doc["nodes"].as_array().into_iter().flatten().enumerate() {
+        let extras = &node["extras"]["trgs_plane"];
+        if !extras.is_null() {
+            planes.push(plane_of(index, planes.len(), extras)?);
+        }
+    }
+    Ok((g, planes))
+}
+
+/// The attributes of the splat primitive, read through its accessors.
+struct Attributes<'a> {
+    doc: &'a Value,
+    bin: &'a [u8],
+    attrs: &'a Value,
+}
+
+impl Attributes<'_> {
+    /// The values of attribute `semantic` (one of `kinds`, `count` elements), None when the
+    /// primitive lacks it.
+    fn get(
+        &self,
+        semantic: &str,
+        kinds: &[&str],
+        count: Option<usize>,
+    ) -> Result<Option<Vec<f32>>, String> {
+        let index = &self.attrs[semantic];
         if index.is_null() {
             return Ok(None);
         }
-        read_accessor(&doc, bin, index, semantic, kinds, count).map(|(v, _)| Some(v))
-    };
-    let required = |semantic: &str, kinds: &[&str], count: Option<usize>| {
-        get(semantic, kinds, count)?.ok_or_else(|| format!("no {semantic} attribute"))
-    };
-    let (positions, n) = match &attrs["POSITION"] {
+        read_accessor(self.doc, self.bin, index, semantic, kinds, count).map(|(v, _)| Some(v))
+    }
+
+    /// As [`Attributes::get`], for an attribute the file must have.
+    fn required(
+        &self,
+        semantic: &str,
+        kinds: &[&str],
+        count: Option<usize>,
+    ) -> Result<Vec<f32>, String> {
+        self.get(semantic, kinds, count)?.ok_or_else(|| format!("no {semantic} attribute"))
+    }
+}
+
+/// The Gaussians of the standard attributes: positions, rotations, scales, opacities and SH.
+fn read_gaussians(attrs: &Attributes<'_>) -> Result<Gaussians<f32>, String> {
+    let (positions, n) = match &attrs.attrs["POSITION"] {
         Value::Null => return Err("no POSITION attribute".into()),
-        index => read_accessor(&doc, bin, index, "POSITION", &["VEC3"], None)?,
+        index => read_accessor(attrs.doc, attrs.bin, index, "POSITION", &["VEC3"], None)?,
     };
     if n == 0 {
         return Err("POSITION has no elements".into());
     }
-    let rot = required("KHR_gaussian_splatting:ROTATION", &["VEC4"], Some(n))?;
-    let scale = required("KHR_gaussian_splatting:SCALE", &["VEC3"], Some(n))?;
-    let opacity = required("KHR_gaussian_splatting:OPACITY", &["SCALAR"], Some(n))?;
-    // The SH degree: every coefficient of each degree up to it, none partly.
-    let mut bands: Vec<Vec<Vec<f32>>> = Vec::new();
-    for degree in 0..=3u32 {
-        let mut band = Vec::new();
-        for order in 0..2 * degree + 1 {
-            let name = format!("KHR_gaussian_splatting:SH_DEGREE_{degree}_COEF_{order}");
-            band.push(get(&name, &["VEC3"], Some(n))?);
-        }
-        match band.iter().filter(|c| c.is_some()).count() {
-            0 => {
-                // Degrees come in order: a higher one after a missing one is a broken file.
-                let later = attrs.as_object().into_iter().flatten().find(|(name, _)| {
-                    (degree + 1..=3)
-                        .any(|d| name.starts_with(&format!("{EXTENSION}:SH_DEGREE_{d}_")))
-                });
-                if let Some((name, _)) = later {
-                    return Err(format!("{name} is present but SH degree {degree} is not"));
-                }
-                break;
-            }
-            k if k == band.len() => bands.push(band.into_iter().flatten().collect()),
-            k => return Err(format!("SH degree {degree} is partly defined ({k} coefficients)")),
-        }
-    }
-    if bands.is_empty() {
-        return Err("no KHR_gaussian_splatting:SH_DEGREE_0_COEF_0 attribute".into());
-    }
+    let rot = attrs.required("KHR_gaussian_splatting:ROTATION", &["VEC4"], Some(n))?;
+    let scale = attrs.required("KHR_gaussian_splatting:SCALE", &["VEC3"], Some(n))?;
+    let opacity = attrs.required("KHR_gaussian_splatting:OPACITY", &["SCALAR"], Some(n))?;
+    let bands = sh_bands(attrs, n)?;
     let degree = bands.len() as u32 - 1;
     let mut g = Gaussians::<f32>::zeros(n, degree);
     let coeffs = sh_coeff_count(degree);
@@ -528,16 +543,54 @@ fn parse(bytes: &[u8]) -> Result<(Gaussians<f32>, Vec<ReflectionPlane>), String>
         let o = o.clamp(1e-7, 1.0 - 1e-7);
         g.opacity_logits[i] = (o / (1.0 - o)).ln();
     }
-    if let Some(v) = get("_TRGS_OPACITY_LOGIT", &["SCALAR"], Some(n))? {
+    Ok(g)
+}
+
+/// The SH coefficients of `n` Gaussians, band by band (degree 0 first), each band's
+/// coefficients in order: every coefficient of each degree up to the file's, none partly.
+fn sh_bands(attrs: &Attributes<'_>, n: usize) -> Result<Vec<Vec<Vec<f32>>>, String> {
+    let mut bands: Vec<Vec<Vec<f32>>> = Vec::new();
+    for degree in 0..=3u32 {
+        let mut band = Vec::new();
+        for order in 0..2 * degree + 1 {
+            let name = format!("KHR_gaussian_splatting:SH_DEGREE_{degree}_COEF_{order}");
+            band.push(attrs.get(&name, &["VEC3"], Some(n))?);
+        }
+        match band.iter().filter(|c| c.is_some()).count() {
+            0 => {
+                // Degrees come in order: a higher one after a missing one is a broken file.
+                let later = attrs.attrs.as_object().into_iter().flatten().find(|(name, _)| {
+                    (degree + 1..=3)
+                        .any(|d| name.starts_with(&format!("{EXTENSION}:SH_DEGREE_{d}_")))
+                });
+                if let Some((name, _)) = later {
+                    return Err(format!("{name} is present but SH degree {degree} is not"));
+                }
+                break;
+            }
+            k if k == band.len() => bands.push(band.into_iter().flatten().collect()),
+            k => return Err(format!("SH degree {degree} is partly defined ({k} coefficients)")),
+        }
+    }
+    if bands.is_empty() {
+        return Err("no KHR_gaussian_splatting:SH_DEGREE_0_COEF_0 attribute".into());
+    }
+    Ok(bands)
+}
+
+/// trgs's own attributes, where the file has them: they replace what the standard ones gave.
+fn read_trgs_attributes(attrs: &Attributes<'_>, g: &mut Gaussians<f32>) -> Result<(), String> {
+    let n = g.len();
+    if let Some(v) = attrs.get("_TRGS_OPACITY_LOGIT", &["SCALAR"], Some(n))? {
         g.opacity_logits = v;
     }
-    if let Some(v) = get("_TRGS_MASK_LOGIT", &["SCALAR"], Some(n))? {
+    if let Some(v) = attrs.get("_TRGS_MASK_LOGIT", &["SCALAR"], Some(n))? {
         g.mask_logits = v;
     }
-    if let Some(v) = get("_TRGS_LOG_REFLECTION", &["SCALAR"], Some(n))? {
+    if let Some(v) = attrs.get("_TRGS_LOG_REFLECTION", &["SCALAR"], Some(n))? {
         g.log_reflections = v;
     }
-    if let Some(v) = get("_TRGS_POPULATION", &["SCALAR"], Some(n))? {
+    if let Some(v) = attrs.get("_TRGS_POPULATION", &["SCALAR"], Some(n))? {
         g.populations = v
             .iter()
             .enumerate()
@@ -548,17 +601,7 @@ fn parse(bytes: &[u8]) -> Result<(Gaussians<f32>, Vec<ReflectionPlane>), String>
             })
             .collect::<Result<_, _>>()?;
     }
-    if let Some(m) = to_trgs {
-        placement::place(&mut g, &m)?;
-    }
-    let mut planes = Vec::new();
-    for (index, node) in doc["nodes"].as_array().into_iter().flatten().enumerate() {
-        let extras = &node["extras"]["trgs_plane"];
-        if !extras.is_null() {
-            planes.push(plane_of(index, planes.len(), extras)?);
-        }
-    }
-    Ok((g, planes))
+    Ok(())
 }
 
 /// Decodes one component (its little-endian bytes; whether it is normalised) to f32.

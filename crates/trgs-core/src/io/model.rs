@@ -1,7 +1,7 @@
 //! Loading a trained model: a Gaussian PLY (trgs or any INRIA-layout file) and its planes, or a
 //! `.glb` with `KHR_gaussian_splatting` (Gaussians and planes in one file).
 use super::{FormatError, read_glb, read_planes_json, read_ply};
-use crate::reference::ReflectionModel;
+use crate::pipeline::ReflectionModel;
 use crate::scene::{Gaussians, ReflectionPlane};
 use std::path::{Path, PathBuf};
 

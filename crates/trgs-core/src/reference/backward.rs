@@ -7,7 +7,7 @@ use super::frame::{Frame, FrameGrads};
 use super::project_bwd::{ViewGrads, project_bwd};
 use super::rasterize_bwd::{RasterizeUpstream, rasterize_bwd};
 use super::rasterize_reflection_bwd::rasterize_reflection_bwd;
-use super::{RenderSettings, TileGrid};
+use crate::pipeline::{RenderSettings, TileGrid};
 use crate::plane_math::outer;
 use crate::scene::{
     Camera, Gaussians, InvalidInput, ReflectionPlane, ViewTransform, validate_scene,

@@ -3,7 +3,7 @@
 //! rasterize passes skip an entry for a block whose bit is clear, so the test must never clear a
 //! bit that a pixel's own f32 evaluation would pass; the tests below check that against the
 //! per-pixel evaluation on random and adversarial conics.
-use super::{MAX_ALPHA, MIN_ALPHA, TILE_SIZE};
+use crate::pipeline::{MAX_ALPHA, MIN_ALPHA, TILE_SIZE};
 
 /// Bit k set when the Gaussian (conic a, b, c and opacity; mean in pixels) may reach block k of
 /// the tile whose first pixel centre is `corner`, blocks of `block` pixels numbered row by row.

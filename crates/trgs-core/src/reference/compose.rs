@@ -3,41 +3,9 @@
 //! C = (1 - R) C_t + R C_r. Pixels that hit no plane show C_t. [`ReflectionModel`] switches
 //! Schlick and A off for the ablations.
 use crate::image::Image;
-use crate::plane_math::{incidence_cos, nearest_plane_hit, schlick, schlick_grad};
+use crate::pipeline::ReflectionModel;
+use crate::plane_math::{incidence_cos, nearest_plane_hit};
 use crate::scene::{Camera, ReflectionPlane};
-
-/// Which parts of the reflection model are on. The full model has both; each switch off is one
-/// of the paper's ablations (section "Reflection intensity and Fresnel-based reflection").
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct ReflectionModel {
-    /// Schlick's view-dependent R_raw; off: R_raw = R0, a learnable constant.
-    pub fresnel: bool,
-    /// The reflection intensity map A; off: C_r = C_raw.
-    pub intensity: bool,
-}
-
-impl Default for ReflectionModel {
-    fn default() -> Self {
-        Self { fresnel: true, intensity: true }
-    }
-}
-
-impl ReflectionModel {
-    /// R_raw at incidence cosine `cos`.
-    pub fn strength(self, r0: f64, cos: f64) -> f64 {
-        if self.fresnel { schlick(r0, cos) } else { r0 }
-    }
-
-    /// dR_raw/dR0 and dR_raw/dcos.
-    pub fn strength_grad(self, r0: f64, cos: f64) -> (f64, f64) {
-        if self.fresnel { schlick_grad(r0, cos) } else { (1.0, 0.0) }
-    }
-
-    /// The intensity a pixel's reflection is scaled by.
-    pub fn intensity(self, a: f64) -> f64 {
-        if self.intensity { a } else { 1.0 }
-    }
-}
 
 #[derive(Clone, Debug)]
 pub struct ComposeOutput {

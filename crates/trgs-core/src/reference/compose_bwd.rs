@@ -1,9 +1,9 @@
 //! Adjoint of `compose`: from dL/dC and the direct gradients of C_r, R and R_raw to dL/dC_t,
 //! dL/dM, each plane's dL/dC_raw^k and dL/dA^k, and each plane's R0 and unit-normal gradients
 //! (through Schlick's cosine). H is discrete and passes no gradient.
-use super::compose::ReflectionModel;
 use super::frame::{Frame, FrameGrads};
 use crate::image::Image;
+use crate::pipeline::ReflectionModel;
 use crate::plane_math::incidence_cos;
 use crate::scene::{Camera, ReflectionPlane};
 use glam::DVec3;

@@ -8,18 +8,7 @@
 //! every depth the projection keeps exactly as the depth does and fits in [`DEPTH_KEY_BITS`]
 //! bits, so the GPU's radix sort needs one pass fewer than for the raw 32 bits.
 use super::Projected;
-
-/// Bits of a [`depth_key`]: five six-bit radix passes instead of six for 32 bits.
-pub const DEPTH_KEY_BITS: u32 = 30;
-
-/// The smallest depth the keys count from: a near plane closer than this (allowed, but odd) keys
-/// depths from here instead, so that the 30 bits still span 2^128 from it.
-pub const DEPTH_KEY_FLOOR: f32 = 5.421_011e-20; // 2^-64
-
-/// The f32 bits of the depth base of [`depth_key`] for a near plane at `near`.
-pub fn depth_key_base(near: f64) -> u32 {
-    (near as f32).max(DEPTH_KEY_FLOOR).to_bits()
-}
+use crate::pipeline::{DEPTH_KEY_BITS, depth_key_base};
 
 /// The depth-order key of a depth: its f32 bits minus `base`'s ([`depth_key_base`]). The bits
 /// of positive floats grow with them, 2^23 per octave, so the difference keeps their order and
@@ -51,6 +40,7 @@ pub fn depth_order(p: &Projected, counts: &[u32], near: f64) -> Vec<u32> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::pipeline::DEPTH_KEY_FLOOR;
 
     #[test]
     fn front_to_back_ties_by_index_and_untouched_left_out() {

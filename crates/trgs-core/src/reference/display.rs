@@ -1,35 +1,10 @@
-//! Stage `display` (shaders/display.wgsl): a layer's per-pixel `vec4` values to 8-bit RGBA for a
-//! screen or a PNG. Colour layers are clamped to [0, 1] as they are (trgs's colours are
+//! Stage `display` (shaders/render/display.wgsl): a layer's per-pixel `vec4` values to 8-bit RGBA
+//! for a screen or a PNG. Colour layers are clamped to [0, 1] as they are (trgs's colours are
 //! display-referred, as in 3DGS); scalar layers become gray; depth becomes gray inverse depth
 //! between a near and a far distance, so that near things are bright and the range that matters
 //! indoors gets most of the levels. Packing follows WGSL's `pack4x8unorm`: red in the low byte,
 //! each channel `floor(0.5 + 255 clamp(v, 0, 1))`.
-
-/// How a layer's values map to display colours (`DisplayParams::mode` on the GPU).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum DisplayMapping {
-    /// `xyz` as RGB.
-    Rgb,
-    /// One channel as gray.
-    Gray { channel: u32 },
-    /// One channel holding a depth, as gray `(1/d - 1/far) / (1/near - 1/far)`; `d <= 0` (no
-    /// surface) is black.
-    InverseDepth { channel: u32, near: f32, far: f32 },
-    /// Black (a layer the frame does not have, e.g. the reflection of a frame without planes).
-    Black,
-}
-
-impl DisplayMapping {
-    /// The GPU's (mode, channel, near, far).
-    pub fn gpu_fields(self) -> (u32, u32, f32, f32) {
-        match self {
-            DisplayMapping::Rgb => (0, 0, 0.0, 0.0),
-            DisplayMapping::Gray { channel } => (1, channel, 0.0, 0.0),
-            DisplayMapping::InverseDepth { channel, near, far } => (2, channel, near, far),
-            DisplayMapping::Black => (3, 0, 0.0, 0.0),
-        }
-    }
-}
+use crate::pipeline::DisplayMapping;
 
 /// WGSL's `pack4x8unorm`.
 pub fn pack4x8unorm(v: [f32; 4]) -> u32 {

@@ -2,7 +2,8 @@
 //! Gaussian's index as its value. Gaussians are taken in `depth_order`, each writing from its
 //! offset (the exclusive prefix sum of the tile counts in that order), so the emitted list is
 //! front to back and a stable sort by tile alone yields every tile's list front to back.
-use super::{Projected, TileGrid, TileRect, tile_rect};
+use super::{Projected, tile_rect};
+use crate::pipeline::{TileGrid, TileRect};
 
 /// Keys (tile indices of the whole grid) and values (Gaussian indices); `order` is the depth
 /// order and `offsets[k]` the first slot of `order[k]`.

@@ -1,42 +1,9 @@
 //! Stage `footprint`: the screen tiles a plane's rectangle covers, dilated by one pixel (the
 //! gradient-conflict loss's Sobel reads one pixel beyond it). The mirrored pass rasterises only
 //! these tiles. It is a handful of vertices per plane, computed on the CPU for the GPU too.
-use super::{TILE_SIZE, TileGrid};
+use crate::pipeline::{TILE_SIZE, TileGrid, TileRect};
 use crate::scene::{Intrinsics, Pose, ReflectionPlane};
 use glam::DVec3;
-
-/// A half-open rectangle of tiles `[x0, x1) x [y0, y1)`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub struct TileRect {
-    pub x0: u32,
-    pub y0: u32,
-    pub x1: u32,
-    pub y1: u32,
-}
-
-impl TileRect {
-    pub fn is_empty(&self) -> bool {
-        self.x0 >= self.x1 || self.y0 >= self.y1
-    }
-
-    pub fn count(&self) -> u32 {
-        if self.is_empty() { 0 } else { (self.x1 - self.x0) * (self.y1 - self.y0) }
-    }
-
-    pub fn intersect(&self, o: &TileRect) -> TileRect {
-        let r = TileRect {
-            x0: self.x0.max(o.x0),
-            y0: self.y0.max(o.y0),
-            x1: self.x1.min(o.x1),
-            y1: self.y1.min(o.y1),
-        };
-        if r.is_empty() { TileRect::default() } else { r }
-    }
-
-    pub fn contains(&self, tx: u32, ty: u32) -> bool {
-        tx >= self.x0 && tx < self.x1 && ty >= self.y0 && ty < self.y1
-    }
-}
 
 /// Dilation of the footprint in pixels.
 const DILATION_PX: f64 = 1.0;

@@ -1,9 +1,22 @@
-//! The output layers of one render and their gradients.
-use super::TileRect;
+//! The output layers of one render and their gradients, and the geometry pass ([`ViewPass`]) of
+//! each view they are rasterised from.
+use super::project::Projected;
 use super::rasterize::PixelState;
 use super::rasterize_reflection::ReflectionPixelState;
-use super::render::ViewPass;
 use crate::image::Image;
+use crate::pipeline::{TileGrid, TileRect};
+use crate::scene::ViewTransform;
+
+/// The geometry stages of one view: projection and the sorted per-tile lists.
+#[derive(Clone, Debug)]
+pub struct ViewPass {
+    pub view: ViewTransform,
+    pub projected: Projected,
+    /// Sorted tile indices, one per key.
+    pub keys: Vec<u32>,
+    pub values: Vec<u32>,
+    pub ranges: Vec<(u32, u32)>,
+}
 
 /// Every layer of one view (docs/ARCHITECTURE.md, "Data flow"), plus what the backward replays.
 #[derive(Clone, Debug)]
@@ -162,7 +175,7 @@ impl Frame {
     pub fn fingerprint(&self) -> u64 {
         use std::hash::{Hash, Hasher};
         let mut h = std::collections::hash_map::DefaultHasher::new();
-        let grid = super::TileGrid::new(self.width(), self.height());
+        let grid = TileGrid::new(self.width(), self.height());
         let hash_pass = |h: &mut std::collections::hash_map::DefaultHasher,
                          pass: &ViewPass,
                          lasts: &[u32],

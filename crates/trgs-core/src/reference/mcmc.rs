@@ -1,6 +1,6 @@
 //! Stages `mcmc_regularise` and `mcmc_noise` of MCMC densification (3DGS-MCMC, Kheradmand et
-//! al. 2024), in f64; the GPU stages (shaders/mcmc_*.wgsl) run the same arithmetic in f32 with the
-//! same random numbers.
+//! al. 2024), in f64; the GPU stages (shaders/training/mcmc_regularise.wgsl and
+//! shaders/training/mcmc_noise.wgsl) run the same arithmetic in f32 with the same random numbers.
 //!
 //! - `mcmc_regularise` adds the gradient of the paper's regularisers to the Gaussians' gradients:
 //!   `lambda_o mean(o) + lambda_s mean(s)` over the primary Gaussians' opacities `o` and scale
@@ -13,19 +13,9 @@
 //!
 //! Glass Gaussians lie on their plane and take part in neither.
 use super::project::{covariance3d, sigmoid};
+use crate::pipeline::{MAX_REGULARISED_LOG_SCALE, NOISE_GATE_STEEPNESS, NOISE_GATE_THRESHOLD};
 use crate::scene::{Gaussians, Population};
 use glam::DVec3;
-
-/// Steepness and threshold of the noise gate on `1 - opacity` (the paper's k and t).
-pub const NOISE_GATE_STEEPNESS: f64 = 100.0;
-pub const NOISE_GATE_THRESHOLD: f64 = 0.995;
-
-/// The scale regulariser's gradient is exp(log-scale): above this log-scale (a scale of 2.4e17)
-/// it stops growing, so that one diverged Gaussian gets a large finite gradient (at most 8e14
-/// times the weight) whose square, Adam's second moment, is still finite in f32 (below 1.8e19
-/// is needed): Adam turns it into a bounded step. Uncapped, the gradient is infinite in f32 and
-/// Adam's step NaN; capped at 80, the square overflows and the coordinate freezes for good.
-pub const MAX_REGULARISED_LOG_SCALE: f64 = 40.0;
 
 /// PCG hash (Jarzynski and Olano 2020), on u32 exactly as in WGSL.
 pub fn pcg_hash(v: u32) -> u32 {

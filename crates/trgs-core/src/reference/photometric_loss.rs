@@ -10,9 +10,6 @@
 use crate::image::Image;
 use crate::metrics::{Border, MetricsError, SSIM_C1, SSIM_C2, gaussian_filter};
 
-/// 3DGS's weight of the D-SSIM term.
-pub const DSSIM_LAMBDA: f64 = 0.2;
-
 /// The loss of one image and dL/d(rendered image).
 #[derive(Clone, Debug)]
 pub struct PhotometricLoss {
@@ -168,6 +165,7 @@ fn ssim_terms(mx: f64, my: f64, mxx: f64, myy: f64, mxy: f64) -> SsimTerms {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::pipeline::DSSIM_LAMBDA;
     use crate::rng::Rng;
 
     fn random_image(w: u32, h: u32, rng: &mut Rng) -> Image<f64> {

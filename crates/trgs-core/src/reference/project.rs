@@ -1,7 +1,8 @@
 //! Stage `project`: EWA projection of every Gaussian for one view (the real camera, or the camera
 //! mirrored about a plane), with culling, the screen-space extent used for tile binning, and the
 //! SH colour for the view direction.
-use super::{COV2D_BLUR, GUARD_BAND, MIN_ALPHA, TileGrid, TileRect, tile_rect};
+use super::tile_rect;
+use crate::pipeline::{COV2D_BLUR, GUARD_BAND, MIN_ALPHA, TileGrid, TileRect};
 use crate::scene::{Gaussians, Intrinsics, Population, ReflectionPlane, ViewTransform};
 use crate::sh;
 use glam::{DMat3, DVec2, DVec3};

@@ -6,8 +6,9 @@
 //! V = sum_i w_i |z_i - D_t|, which needs D_t first. (The GPU's walk sums the near side only
 //! and doubles it, the same number since D_t is the weighted mean; this twin keeps the
 //! definition.)
-use super::{MAX_ALPHA, MIN_ALPHA, MIN_TRANSMITTANCE, Projected, TILE_SIZE, TileGrid};
+use super::Projected;
 use crate::image::Image;
+use crate::pipeline::{MAX_ALPHA, MIN_ALPHA, MIN_TRANSMITTANCE, TILE_SIZE, TileGrid};
 
 /// What the backward replay needs of one pixel of pass 1.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

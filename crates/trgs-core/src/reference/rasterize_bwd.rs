@@ -2,10 +2,11 @@
 //! recovers every transmittance by division (T_j = T_{j+1} / (1 - alpha_j), alpha <= 0.99), with
 //! the same skip and stop rules as the forward. Gradients reach each Gaussian's colour, depth,
 //! mask value, opacity and 2D mean and conic.
+use super::Projected;
 use super::project_bwd::ProjectedGrads;
 use super::rasterize::{PixelState, alpha_at, sign, tile_pixels};
-use super::{Projected, TileGrid};
 use crate::image::Image;
+use crate::pipeline::TileGrid;
 
 /// Upstream gradients of pass 1's layers.
 #[derive(Clone, Copy, Debug)]

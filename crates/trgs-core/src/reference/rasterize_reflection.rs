@@ -3,9 +3,10 @@
 //! rectangle from the front (no other pixel can show this reflection). It produces the raw
 //! reflection colour C_raw = sum c_i w_i and the intensity A = sum a_i w_i with a single
 //! transmittance; both are zero, and the pixel state default, everywhere else.
+use super::Projected;
 use super::rasterize::{alpha_at, tile_pixels};
-use super::{MIN_TRANSMITTANCE, Projected, TileGrid, TileRect};
 use crate::image::Image;
+use crate::pipeline::{MIN_TRANSMITTANCE, TileGrid, TileRect};
 use crate::plane_math::ray_rectangle_hit;
 use crate::scene::{Camera, ReflectionPlane};
 

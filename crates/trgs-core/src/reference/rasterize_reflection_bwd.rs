@@ -1,11 +1,12 @@
 //! Adjoint of `rasterize_reflection` (pass 2): the back-to-front replay over the footprint's
 //! tiles, into each mirrored Gaussian's colour, reflection intensity, opacity, 2D mean and conic.
+use super::Projected;
 use super::project_bwd::ProjectedGrads;
 use super::rasterize::{alpha_at, tile_pixels};
 use super::rasterize_bwd::alpha_bwd;
 use super::rasterize_reflection::ReflectionPixelState;
-use super::{Projected, TileGrid, TileRect};
 use crate::image::Image;
+use crate::pipeline::{TileGrid, TileRect};
 
 pub fn rasterize_reflection_bwd(
     p: &Projected,

@@ -10,6 +10,7 @@
 //! [`regularisers`] weights and combines the three as the GPU stage does: it writes the direct
 //! gradients of the transmission layer (C_t, alpha) and of the geometry layer (D_t, V, M).
 use crate::image::Image;
+use crate::pipeline::RegulariserWeights;
 
 /// A regulariser's value and its gradient with respect to one layer.
 #[derive(Clone, Debug)]
@@ -106,14 +107,6 @@ pub fn gradient_conflict_loss(ct: &Image<f64>, cr: &Image<f64>, hit: &Image<u32>
         }
     }
     LayerLoss { value: value / n, grad }
-}
-
-/// The weights of the three regularisers (zero switches one off).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct RegulariserWeights {
-    pub depth: f64,
-    pub conflict: f64,
-    pub mask: f64,
 }
 
 /// What stage `regularisers` reads: the frame's layers and the view's annotation.

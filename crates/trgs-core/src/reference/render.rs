@@ -1,44 +1,23 @@
 //! The forward pipeline of one view: validate -> project -> tile_counts -> depth_order ->
 //! prefix_sum -> emit_keys -> sort -> tile_ranges -> rasterize; per plane in front of the camera: footprint and
 //! the same geometry stages with the mirrored camera -> rasterize_reflection; then compose.
-use super::compose::{ReflectionModel, compose};
-use super::frame::{Frame, PlaneLayers};
-use super::{
-    Projected, ProjectionFilter, TileGrid, TileRect, depth_order, emit_keys, footprint, prefix_sum,
-    project, rasterize, rasterize_reflection, sort_keys, tile_counts, tile_ranges,
-};
+use super::compose::compose;
+use super::depth_order::depth_order;
+use super::emit_keys::emit_keys;
+use super::footprint::footprint;
+use super::frame::{Frame, PlaneLayers, ViewPass};
+use super::prefix_sum::prefix_sum;
+use super::project::{ProjectionFilter, project};
+use super::rasterize::rasterize;
+use super::rasterize_reflection::rasterize_reflection;
+use super::sort::sort_keys;
+use super::tile_counts::tile_counts;
+use super::tile_ranges::tile_ranges;
+use crate::pipeline::{RenderSettings, TileGrid, TileRect, check_render_settings};
 use crate::plane_math::mirrored_view;
 use crate::scene::{
     Camera, Gaussians, Intrinsics, InvalidInput, ReflectionPlane, ViewTransform, validate_scene,
 };
-
-/// Settings of the reference renderer.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RenderSettings {
-    /// Gaussians with a camera-space depth below this are culled (0.2 as in 3DGS).
-    pub near: f64,
-    /// Colour behind the last transmittance of C_t.
-    pub background: [f64; 3],
-    /// The reflection model's switches (the full model by default).
-    pub reflection: ReflectionModel,
-}
-
-impl Default for RenderSettings {
-    fn default() -> Self {
-        Self { near: 0.2, background: [0.0; 3], reflection: ReflectionModel::default() }
-    }
-}
-
-/// The geometry stages of one view: projection and the sorted per-tile lists.
-#[derive(Clone, Debug)]
-pub struct ViewPass {
-    pub view: ViewTransform,
-    pub projected: Projected,
-    /// Sorted tile indices, one per key.
-    pub keys: Vec<u32>,
-    pub values: Vec<u32>,
-    pub ranges: Vec<(u32, u32)>,
-}
 
 /// Project and bin the Gaussians for one view, restricted to the tiles of `limit`.
 pub fn render_view(
@@ -59,21 +38,6 @@ pub fn render_view(
     sort_keys(&mut keys, &mut values);
     let ranges = tile_ranges(&keys, grid.tile_count());
     ViewPass { view: *view, projected, keys, values, ranges }
-}
-
-/// Settings no frame can be made with, refused by the twin and the GPU renderer alike: a
-/// non-finite background (every pixel would be NaN), a near plane that is not a positive finite
-/// depth (at or behind the camera the projection divides by zero or draws what is behind it).
-pub fn check_render_settings(background: [f64; 3], near: f64) -> Result<(), InvalidInput> {
-    if !background.iter().all(|c| c.is_finite()) {
-        let problem = format!("background {background:?} must be finite");
-        return Err(InvalidInput::Setting { what: "background", problem });
-    }
-    if !(near > 0.0 && near.is_finite()) {
-        let problem = format!("near {near} must be a positive finite depth");
-        return Err(InvalidInput::Setting { what: "near", problem });
-    }
-    Ok(())
 }
 
 /// Render every layer of `camera`'s view. Non-finite or malformed input (Gaussians, planes,

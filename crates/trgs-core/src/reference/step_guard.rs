@@ -4,10 +4,7 @@
 //! finite. The updates of the step (`adam`, `mcmc_noise`, `densify_stats`) leave everything as
 //! it was when the guard is set, and the trainer learns why when the guard comes back.
 
-/// The guard's bit: the frame's key list dropped keys.
-pub const GUARD_KEYS_DROPPED: u32 = 1;
-/// The guard's bit: a strip sum of the loss is not finite.
-pub const GUARD_LOSS_NOT_FINITE: u32 = 2;
+use crate::pipeline::{GUARD_KEYS_DROPPED, GUARD_LOSS_NOT_FINITE};
 
 /// The guard word of a step: `keys_dropped` is `emit_keys`' flag (nonzero when the list dropped
 /// keys), `sums` the strips' sums of `loss_sums`.

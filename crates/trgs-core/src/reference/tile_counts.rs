@@ -1,37 +1,9 @@
 //! Stage `tile_counts`: the screen tiles each projected Gaussian touches. The rule is evaluated in
 //! f32 exactly as the WGSL stage does it, so that binning matches the GPU bit for bit when both
 //! start from the same projected values.
-use super::{Projected, TILE_SIZE, TileRect};
+use super::Projected;
+use crate::pipeline::{TILE_SIZE, TileGrid, TileRect};
 use glam::DVec2;
-
-/// The tile grid of an image.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct TileGrid {
-    pub width: u32,
-    pub height: u32,
-    pub tiles_x: u32,
-    pub tiles_y: u32,
-}
-
-impl TileGrid {
-    pub fn new(width: u32, height: u32) -> Self {
-        Self {
-            width,
-            height,
-            tiles_x: width.div_ceil(TILE_SIZE),
-            tiles_y: height.div_ceil(TILE_SIZE),
-        }
-    }
-
-    pub fn tile_count(&self) -> u32 {
-        self.tiles_x * self.tiles_y
-    }
-
-    /// Every tile.
-    pub fn full(&self) -> TileRect {
-        TileRect { x0: 0, y0: 0, x1: self.tiles_x, y1: self.tiles_y }
-    }
-}
 
 /// Inclusive range of pixel indices along one axis whose centres (p + 0.5) lie in
 /// `[centre - half, centre + half]`, clipped to `[0, size)`; None when empty.

@@ -1,8 +1,8 @@
-//! Stage `compose` (shaders/compose.wgsl; twin `trgs_core::reference::compose`).
+//! Stage `compose` (shaders/render/compose.wgsl; twin `trgs_core::reference::compose`).
 use super::Stage;
 use crate::gpu::{self, Recorder};
 use crate::layout::{ComposeParams, PlaneGpu};
-use trgs_core::reference::{TILE_SIZE, TileGrid, TileRect};
+use trgs_core::pipeline::{ReflectionModel, TILE_SIZE, TileGrid, TileRect};
 use trgs_core::scene::{Camera, ReflectionPlane};
 
 /// Compose's output buffers.
@@ -37,12 +37,7 @@ pub struct RayBuffers {
 }
 
 impl RayBuffers {
-    pub fn new(
-        s: Stage<'_>,
-        camera: &Camera,
-        planes: &[PlaneGpu],
-        model: trgs_core::reference::ReflectionModel,
-    ) -> Self {
+    pub fn new(s: Stage<'_>, camera: &Camera, planes: &[PlaneGpu], model: ReflectionModel) -> Self {
         let k = &camera.intrinsics;
         let to_world = camera.pose.rotation.transpose();
         let v4 = |v: glam::DVec3| [v.x as f32, v.y as f32, v.z as f32, 0.0];

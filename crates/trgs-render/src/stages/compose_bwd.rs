@@ -1,15 +1,13 @@
-//! Stage `compose_bwd` (shaders/compose_bwd.wgsl; twin `trgs_core::reference::compose_bwd`): the
-//! adjoint of `compose`. Adds the composition's gradients into the pass-layer gradient buffers
-//! in place and sums each plane's dL/dR0 and dL/d(unit normal) into `plane_grads`.
+//! Stage `compose_bwd` (shaders/backward/compose_bwd.wgsl; twin
+//! `trgs_core::reference::compose_bwd`): the adjoint of `compose`. Adds the composition's
+//! gradients into the pass-layer gradient buffers in place and sums each plane's dL/dR0 and
+//! dL/d(unit normal) into `plane_grads` ([`crate::layout::PLANE_GRAD_FLOATS`] per plane).
 use super::Stage;
 use super::compose::RayBuffers;
 use crate::frame::LayerBuffers;
 use crate::gpu::Recorder;
 use crate::layer_grads::LayerGrads;
-use trgs_core::reference::TileGrid;
-
-/// Floats per plane in the plane accumulator: dL/dR0 and dL/d(unit normal).
-pub const PLANE_GRAD_FLOATS: u64 = 4;
+use trgs_core::pipeline::TileGrid;
 
 pub fn record(
     s: Stage<'_>,

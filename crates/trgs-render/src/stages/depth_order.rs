@@ -1,7 +1,7 @@
-//! Stage `depth_order` (shaders/depth_order_compact.wgsl, the `sort` kernels, then
-//! shaders/depth_order_counts.wgsl; twin `trgs_core::reference::depth_order`): the entries that
-//! `tile_counts` marked present, every view's together, listed in entry order (a scan of the
-//! presence bits), sorted front to back by their depth keys
+//! Stage `depth_order` (shaders/render/depth_order_compact.wgsl, the `sort` kernels, then
+//! shaders/render/depth_order_counts.wgsl; twin `trgs_core::reference::depth_order`): the
+//! entries that `tile_counts` marked present, every view's together, listed in entry order (a
+//! scan of the presence bits), sorted front to back by their depth keys
 //! (`trgs_core::reference::depth_key`: 30 bits, five radix passes), and their tile counts in
 //! that order.
 //!
@@ -17,7 +17,7 @@ use super::tile_counts::DepthEntries;
 use super::{ItemCount, Stage, prefix_sum};
 use crate::gpu::{self, BufferPool, Recorder, grid_1d};
 use crate::layout::{DEPTH_COUNTS_BLOCK, ScanParams};
-use trgs_core::reference::DEPTH_KEY_BITS;
+use trgs_core::pipeline::DEPTH_KEY_BITS;
 
 /// The sorted entries and their count.
 #[derive(Debug)]

@@ -1,8 +1,8 @@
-//! Stage `display` (shaders/display.wgsl; twin `trgs_core::reference::display`).
+//! Stage `display` (shaders/render/display.wgsl; twin `trgs_core::reference::display`).
 use super::Stage;
 use crate::gpu::{self, Recorder};
 use crate::layout::DisplayParams;
-use trgs_core::reference::DisplayMapping;
+use trgs_core::pipeline::DisplayMapping;
 
 /// Record the conversion of `layer` (one vec4 per pixel, `width x height`) into `rgba`, one
 /// packed pixel per word and `row_pixels` words per row.

@@ -1,5 +1,5 @@
-//! Stage `emit_keys` (shaders/emit_keys.wgsl; twin `trgs_core::reference::emit_keys`): every
-//! view's keys at once, entry by entry of the depth order.
+//! Stage `emit_keys` (shaders/render/emit_keys.wgsl; twin `trgs_core::reference::emit_keys`):
+//! every view's keys at once, entry by entry of the depth order.
 use super::sort::KeyList;
 use super::tile_counts::DepthEntries;
 use super::{ItemCount, Stage};

@@ -1,6 +1,6 @@
-//! Stage `prefix_sum` (shaders/prefix_sum.wgsl and prefix_sum_add.wgsl; twin
-//! `trgs_core::reference::prefix_sum`): an in-place exclusive scan of u32 values, block by block,
-//! with the block totals scanned recursively and added back.
+//! Stage `prefix_sum` (shaders/render/prefix_sum.wgsl and shaders/render/prefix_sum_add.wgsl;
+//! twin `trgs_core::reference::prefix_sum`): an in-place exclusive scan of u32 values, block by
+//! block, with the block totals scanned recursively and added back.
 use super::{ItemCount, Stage};
 use crate::gpu::{self, BufferPool, Kernel, Recorder, grid_1d};
 use crate::layout::ScanParams;

@@ -1,14 +1,14 @@
-//! Stage `project` (shaders/project_candidates.wgsl then shaders/project.wgsl; twin
-//! `trgs_core::reference::project`): the cheap culls on every Gaussian, every view's in one
+//! Stage `project` (shaders/render/project_candidates.wgsl then shaders/render/project.wgsl;
+//! twin `trgs_core::reference::project`): the cheap culls on every Gaussian, every view's in one
 //! dispatch (up to CULL_VIEWS views, so that each Gaussian is read and its view-independent
 //! terms computed once), then per view the projection of its survivors only, dispatched
-//! indirectly over their list (see shared/project_cull.wgsl for why).
+//! indirectly over their list (see shaders/shared/project_cull.wgsl for why).
 use super::Stage;
 use crate::gpu::{self, BufferPool, Recorder, grid_1d, range};
 use crate::layout::{CULL_VIEWS, ProjectParams};
 use crate::scene::GpuScene;
 use crate::toolkit::paged::Paged;
-use trgs_core::reference::{GUARD_BAND, TileRect};
+use trgs_core::pipeline::{GUARD_BAND, TileRect};
 use trgs_core::scene::Attribute;
 use trgs_core::scene::{Intrinsics, ReflectionPlane, ViewTransform};
 
@@ -63,7 +63,7 @@ pub struct Candidates {
     pub work: wgpu::Buffer,
 }
 
-// project_candidates.wgsl declares the bindings of exactly this many views.
+// shaders/render/project_candidates.wgsl declares the bindings of exactly this many views.
 const _: () = assert!(CULL_VIEWS == 3, "project_candidates.wgsl binds three views");
 
 /// Bytes between two chunks' (workgroups, 1, 1, length) records.

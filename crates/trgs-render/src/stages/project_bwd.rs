@@ -1,5 +1,6 @@
-//! Stage `project_bwd` (shaders/project_bwd.wgsl; twin `trgs_core::reference::project_bwd`):
-//! from one view's screen-space gradients to the Gaussians' parameters and to the view itself.
+//! Stage `project_bwd` (shaders/backward/project_bwd.wgsl; twin
+//! `trgs_core::reference::project_bwd`): from one view's screen-space gradients to the Gaussians'
+//! parameters and to the view itself.
 use super::Stage;
 use super::project::{Candidates, WORK_STRIDE};
 use crate::gpu::{self, Recorder, range};

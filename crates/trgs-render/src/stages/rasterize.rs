@@ -1,14 +1,16 @@
-//! Stage `rasterize`, pass 1 (shaders/rasterize.wgsl; twin `trgs_core::reference::rasterize`).
+//! Stage `rasterize`, pass 1 (shaders/render/rasterize.wgsl; twin
+//! `trgs_core::reference::rasterize`).
 use super::Stage;
 use crate::gpu::{self, Recorder};
 use crate::layout::RasterParams;
 use crate::toolkit::paged::Paged;
-use trgs_core::reference::{TILE_SIZE, TileGrid};
+use trgs_core::pipeline::{TILE_SIZE, TileGrid};
 
-// rasterize.wgsl gives eight consecutive threads a 4 x 2 block of pixels of the tile.
+// shaders/render/rasterize.wgsl gives eight consecutive threads a 4 x 2 block of pixels of
+// the tile.
 const _: () =
     assert!(TILE_SIZE.is_multiple_of(4), "rasterize.wgsl tiles rows in blocks of 4 x 2 pixels");
-// shared/block_walk.wgsl keeps a batch's reaching entries as a 64-bit mask.
+// shaders/shared/block_walk.wgsl keeps a batch's reaching entries as a 64-bit mask.
 const _: () = assert!(TILE_SIZE * TILE_SIZE <= 64, "a batch of TILE_PIXELS entries fits 64 bits");
 
 /// Pass 1's output buffers.

@@ -1,4 +1,4 @@
-//! Stage `rasterize_bwd` (shaders/rasterize_bwd.wgsl; twin
+//! Stage `rasterize_bwd` (shaders/backward/rasterize_bwd.wgsl; twin
 //! `trgs_core::reference::rasterize_bwd`): the adjoint of pass 1, from the total gradients of
 //! C_t, alpha, D_t, V and M to each Gaussian's screen-space gradients.
 use super::Stage;
@@ -7,7 +7,7 @@ use crate::gpu::{self, Recorder};
 use crate::layer_grads::LayerGrads;
 use crate::layout::RasterParams;
 use crate::toolkit::paged::Paged;
-use trgs_core::reference::TileGrid;
+use trgs_core::pipeline::TileGrid;
 
 /// The sorted lists of the view being replayed.
 #[derive(Clone, Copy, Debug)]

@@ -1,4 +1,4 @@
-//! Stage `rasterize_reflection`, pass 2 (shaders/rasterize_reflection.wgsl; twin
+//! Stage `rasterize_reflection`, pass 2 (shaders/render/rasterize_reflection.wgsl; twin
 //! `trgs_core::reference::rasterize_reflection`): only the tiles of the plane's footprint run, and
 //! in them only the pixels whose ray hits the plane's rectangle.
 use super::Stage;
@@ -6,7 +6,7 @@ use super::compose::RayBuffers;
 use crate::gpu::{self, Recorder};
 use crate::layout::RasterParams;
 use crate::toolkit::paged::Paged;
-use trgs_core::reference::{TileGrid, TileRect};
+use trgs_core::pipeline::{TileGrid, TileRect};
 
 /// The parameter block of pass 2 (and of its adjoint): plane slot `slot`, dispatched over the tiles of
 /// `footprint`, whose first tile has sorted tile index `tile_base`.

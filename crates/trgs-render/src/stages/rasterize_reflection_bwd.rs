@@ -1,4 +1,4 @@
-//! Stage `rasterize_reflection_bwd` (shaders/rasterize_reflection_bwd.wgsl; twin
+//! Stage `rasterize_reflection_bwd` (shaders/backward/rasterize_reflection_bwd.wgsl; twin
 //! `trgs_core::reference::rasterize_reflection_bwd`): the adjoint of pass 2 over the plane's
 //! footprint, from dL/d(C_raw, A) to each mirrored Gaussian's screen-space gradients.
 use super::Stage;
@@ -7,7 +7,7 @@ use crate::frame::LayerBuffers;
 use crate::gpu::{self, Recorder};
 use crate::layer_grads::LayerGrads;
 use crate::toolkit::paged::Paged;
-use trgs_core::reference::{TileGrid, TileRect};
+use trgs_core::pipeline::{TileGrid, TileRect};
 
 #[allow(clippy::too_many_arguments)]
 pub fn record(

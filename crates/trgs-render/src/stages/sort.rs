@@ -1,4 +1,4 @@
-//! Stage `sort` (shaders/sort_count.wgsl and sort_scatter.wgsl; twins
+//! Stage `sort` (shaders/render/sort_count.wgsl and shaders/render/sort_scatter.wgsl; twins
 //! `trgs_core::reference::sort_keys` and `depth_order`): a stable LSD radix sort of 32-bit keys
 //! with their 32-bit values, in digits of SORT_RADIX_BITS bits. The caller names the key bits
 //! to sort: the key list the bits a tile index can have, the depth order the 32 depth bits. Each

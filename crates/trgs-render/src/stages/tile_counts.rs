@@ -1,13 +1,13 @@
-//! Stage `tile_counts` (shaders/tile_counts.wgsl; twin `trgs_core::reference::tile_counts`): the
-//! tiles each Gaussian of a view touches; the touching ones become entries of the frame's depth
-//! order (see [`DepthEntries`]).
+//! Stage `tile_counts` (shaders/render/tile_counts.wgsl; twin
+//! `trgs_core::reference::tile_counts`): the tiles each Gaussian of a view touches; the touching
+//! ones become entries of the frame's depth order (see [`DepthEntries`]).
 use super::Stage;
 use super::project::{Candidates, WORK_STRIDE};
 use crate::gpu::{self, BufferPool, Recorder, range};
 use crate::layout::TileParams;
 use crate::scene::GpuScene;
 use crate::toolkit::paged::Paged;
-use trgs_core::reference::{TileGrid, TileRect, depth_key_base};
+use trgs_core::pipeline::{TileGrid, TileRect, depth_key_base};
 
 /// The parameter block of a view's binning, limited to `limit` (a footprint, or the whole grid).
 pub fn params(grid: &TileGrid, limit: &TileRect, near: f64) -> TileParams {

@@ -1,4 +1,4 @@
-//! Stage `tile_ranges` (shaders/tile_ranges.wgsl; twin `trgs_core::reference::tile_ranges`).
+//! Stage `tile_ranges` (shaders/render/tile_ranges.wgsl; twin `trgs_core::reference::tile_ranges`).
 use super::{ItemCount, Stage};
 use crate::gpu::{self, Recorder, strided_grid};
 use crate::layout::ScanParams;

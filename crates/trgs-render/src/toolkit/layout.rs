@@ -4,8 +4,9 @@
 //! blur, SH constants) come from `trgs_core` the same way. A test compares every struct's field
 //! offsets and size with naga's layout of the generated WGSL, so a field whose WGSL alignment
 //! differs from its Rust position fails instead of drifting.
-use trgs_core::reference::{
-    COV2D_BLUR, MAX_ALPHA, MIN_ALPHA, MIN_TRANSMITTANCE, TILE_PIXELS, TILE_SIZE,
+use trgs_core::pipeline::{
+    COV2D_BLUR, DEPTH_KEY_BITS, MAX_ALPHA, MIN_ALPHA, MIN_TRANSMITTANCE, ReflectionModel,
+    TILE_PIXELS, TILE_SIZE,
 };
 use trgs_core::sh;
 
@@ -133,7 +134,7 @@ gpu_struct! {
         /// Index of the view (its key total is `key_totals[2 view]`, with its carries after).
         pub view: u32,
         /// The f32 bits the depth-order keys count from
-        /// (`trgs_core::reference::depth_key_base` of the near plane).
+        /// (`trgs_core::pipeline::depth_key_base` of the near plane).
         pub depth_base: u32,
         pub pad0: u32,
         pub pad1: u32,
@@ -300,6 +301,9 @@ pub const PROJECTED_GRAD_FLOATS: u32 = 12;
 /// Floats per view in the view-gradient buffer (twin: `ViewGrads`): the linear map by columns
 /// (9), the translation (3), the centre (3), one pad.
 pub const VIEW_GRAD_FLOATS: u32 = 16;
+/// Floats per plane in the backward's plane accumulator (compose_bwd sums into it): dL/dR0 and
+/// dL/d(unit normal).
+pub const PLANE_GRAD_FLOATS: u64 = 4;
 /// `ProjectParams::bwd_mode` bits. ADD: add into the Gaussian gradients (a mirrored view) instead
 /// of writing them (the primary view writes every Gaussian's, zero for culled ones); it picks
 /// `project_bwd`'s ADD_GRADIENTS variant. NO_GAUSSIANS:
@@ -308,7 +312,7 @@ pub const BWD_ADD: u32 = 1;
 pub const BWD_NO_GAUSSIANS: u32 = 2;
 pub const BWD_VIEW: u32 = 4;
 gpu_struct! {
-    /// Parameters of `display`: a layer to 8-bit RGBA (trgs_core::reference::DisplayMapping).
+    /// Parameters of `display`: a layer to 8-bit RGBA (trgs_core::pipeline::DisplayMapping).
     pub struct DisplayParams {
         pub width: u32,
         pub height: u32,
@@ -324,7 +328,7 @@ gpu_struct! {
     }
 }
 
-/// `ComposeParams::model` bits (trgs_core::reference::ReflectionModel).
+/// `ComposeParams::model` bits (trgs_core::pipeline::ReflectionModel).
 pub const MODEL_NO_FRESNEL: u32 = 1;
 pub const MODEL_NO_INTENSITY: u32 = 2;
 /// `Population::Glass` as stored in the population buffer.
@@ -401,7 +405,7 @@ pub fn wgsl_constants(u32s: &[(&str, u32)], f32s: &[(String, f64)]) -> String {
 }
 
 /// The `ComposeParams::model` bits of `model`.
-pub fn model_bits(model: trgs_core::reference::ReflectionModel) -> u32 {
+pub fn model_bits(model: ReflectionModel) -> u32 {
     (if model.fresnel { 0 } else { MODEL_NO_FRESNEL })
         | (if model.intensity { 0 } else { MODEL_NO_INTENSITY })
 }
@@ -440,7 +444,7 @@ pub fn prelude() -> String {
         ("BWD_VIEW", BWD_VIEW),
         ("MODEL_NO_FRESNEL", MODEL_NO_FRESNEL),
         ("MODEL_NO_INTENSITY", MODEL_NO_INTENSITY),
-        ("DEPTH_KEY_BITS", trgs_core::reference::DEPTH_KEY_BITS),
+        ("DEPTH_KEY_BITS", DEPTH_KEY_BITS),
         ("CULL_VIEWS", CULL_VIEWS),
         ("DEPTH_COUNTS_BLOCK", DEPTH_COUNTS_BLOCK),
     ];

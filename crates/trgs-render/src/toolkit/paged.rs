@@ -5,14 +5,15 @@
 //! whole. At 64 bytes a record, a binding of 128 MiB (lavapipe's limit) holds about 2.1 million
 //! Gaussians. Such an array is therefore split into pages of [`Paged::page_len`] Gaussians, each
 //! page its own buffer: the rasterize kernels bind [`MAX_PAGES`] of them and pick the page by
-//! the index (their `_paged` variants: `shared/raster_pages.wgsl`, `PAGED` in
-//! `shared/accumulate.wgsl`; a frame of one page runs the kernels without the choice); the
-//! per-Gaussian stages run over the scene's chunks, and a page holds a whole number of chunks
-//! ([`crate::GpuScene::page_len`]), so a chunk's range lies in one page.
+//! the index (their `_paged` variants: `shaders/shared/raster_pages.wgsl`, `PAGED` in
+//! `shaders/shared/accumulate.wgsl`; a frame of one page runs the kernels without the choice);
+//! the per-Gaussian stages run over the scene's chunks, and a page holds a whole number of
+//! chunks ([`crate::GpuScene::page_len`]), so a chunk's range lies in one page.
 //!
 //! The frame's tile keys are paged the same way ([`crate::stages::sort::KeyList`]): the key
 //! list is bound whole by `emit_keys`, `sort`, `tile_ranges` and the rasterize passes, and at 4
-//! bytes a key one binding of 128 MiB holds 33.5 million keys (`shared/key_pages.wgsl`).
+//! bytes a key one binding of 128 MiB holds 33.5 million keys
+//! (`shaders/shared/key_pages.wgsl`).
 use super::gpu::{self, BufferPool};
 use crate::GpuContext;
 use crate::gpu::GpuError;

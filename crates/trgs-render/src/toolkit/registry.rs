@@ -133,8 +133,8 @@ pub fn block_walk(caps: &Capabilities) -> Vec<&'static str> {
 /// kernel_registry! {
 ///     /// The kernels of this crate.
 ///     pub const MY_KERNELS: MyKernelSpecs => MyKernels, prelude: my_prelude, {
-///         my_stage: "training/my_stage.wgsl" => no_defines,
-///         my_stage_wide: "training/my_stage.wgsl" => |c| [block_width(c), vec!["WIDE"]].concat(),
+///         adam: "training/adam.wgsl" => no_defines,
+///         adam_wide: "training/adam.wgsl" => |c| [block_width(c), vec!["WIDE"]].concat(),
 ///     }
 /// }
 /// ```

@@ -1,6 +1,6 @@
 //! WGSL sources: one file per stage under `shaders/` (single entry point `main`) in a folder by
 //! where it runs (`render/`, `backward/`, `training/`, `bench/`), shared helpers under
-//! `shaders/shared/`, combined by a small preprocessor: `#include "shared/x.wgsl"` (each file
+//! `shaders/shared/`, combined by a small preprocessor: `#include "shared/<name>.wgsl"` (each file
 //! once), and `#ifdef NAME` / `#ifndef NAME` / `#else` / `#endif` against the variant's defines.
 //! Every shader starts with a prelude of constants and struct declarations generated from Rust
 //! ([`super::layout::prelude`], and a crate's own structs after it).

@@ -3,7 +3,6 @@
 //! `cameras_extent`, which scales the position learning rate and the densification thresholds).
 use anyhow::{Context, Result, bail};
 use glam::DVec3;
-use std::path::Path;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use trgs_core::Image;
@@ -16,7 +15,7 @@ mod notes;
 mod resize;
 
 use notes::{LensNote, LoadNotes, Loaded, ViewReport};
-pub use resize::{resize_area, resize_area_u8};
+pub use resize::resize_area_u8;
 
 /// The longer side photos are trained at by default (the INRIA code's limit too): a 12 MP photo
 /// at full size costs the renderer 6 times the pixels for detail the views rarely resolve.
@@ -35,9 +34,15 @@ pub enum Resolution {
     Width(u32),
 }
 
+impl Default for Resolution {
+    fn default() -> Self {
+        Resolution::LongSide(DEFAULT_LONG_SIDE)
+    }
+}
+
 impl Resolution {
     /// The resolution of a `--resolution W`, a `--downscale F` and a `--full-size` flag (in
-    /// that order of precedence); without any, photos longer than [`DEFAULT_LONG_SIDE`] are
+    /// that order of precedence); without any, photos longer than `DEFAULT_LONG_SIDE` (1600) are
     /// scaled down to it.
     pub fn from_flags(width: Option<u32>, downscale: Option<f64>, full_size: bool) -> Self {
         match (width, downscale) {
@@ -94,15 +99,52 @@ pub struct TrainingData {
     pub notes: Vec<String>,
 }
 
+/// How [`TrainingData::load`] loads a scene folder.
+#[derive(Clone, Copy, Default)]
+pub struct LoadOptions<'a> {
+    /// The size of the views (of their pinhole cameras: photos through a distorting lens are
+    /// downscaled as they are, then undistorted into the pinhole view).
+    pub resolution: Resolution,
+    /// None: every view, for training. `Some(split)`: only the views `split` evaluates on (those
+    /// of [`TrainingData::eval_views`] for the test split of a scene without test views), and
+    /// only those decoded, in `test`: `eval` of a capture of hundreds of photos then loads only
+    /// the few it measures. `train` then holds the views of a scene without test views and is
+    /// empty otherwise; `extent` and `centre` are those of training; `materials` are only those
+    /// of the labels in `train`'s masks.
+    pub evaluate: Option<Split>,
+    /// Called as `progress(done, total)` from the loading threads after each view.
+    pub progress: Option<&'a LoadProgress<'a>>,
+}
+
+impl std::fmt::Debug for LoadOptions<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("LoadOptions")
+            .field("resolution", &self.resolution)
+            .field("evaluate", &self.evaluate)
+            .field("progress", &self.progress.is_some())
+            .finish()
+    }
+}
+
+impl LoadOptions<'_> {
+    /// Every view at `resolution`, silently.
+    pub fn at(resolution: Resolution) -> Self {
+        Self { resolution, ..Self::default() }
+    }
+}
+
 impl TrainingData {
-    /// Load every view of `folder` at `resolution` (of its pinhole camera: photos through a
-    /// distorting lens are downscaled as they are, then undistorted into the pinhole view).
-    pub fn load(folder: &SceneFolder, resolution: Resolution) -> Result<Self> {
-        Self::load_with_progress(folder, resolution, &|_, _| {})
+    /// Load the views of `folder` as `options` say.
+    pub fn load(folder: &SceneFolder, options: &LoadOptions<'_>) -> Result<Self> {
+        let silent = |_: usize, _: usize| {};
+        let progress = options.progress.unwrap_or(&silent);
+        match options.evaluate {
+            None => Self::load_training(folder, options.resolution, progress),
+            Some(split) => Self::load_evaluation(folder, options.resolution, split, progress),
+        }
     }
 
-    /// [`Self::load`], calling `progress(done, total)` from the loading threads after each view.
-    pub fn load_with_progress(
+    fn load_training(
         folder: &SceneFolder,
         resolution: Resolution,
         progress: &LoadProgress<'_>,
@@ -117,12 +159,7 @@ impl TrainingData {
         Ok(Self::assemble(folder, train, test, notes.lines(resolution)))
     }
 
-    /// The views `split` evaluates on (those of [`TrainingData::eval_views`] for the test split
-    /// of a scene without test views), and only those decoded, in `test`: `eval` of a capture
-    /// of hundreds of photos then loads only the few it measures. `train` holds the views of a
-    /// scene without test views, and is empty otherwise. `extent` and `centre` are those of
-    /// training; `materials` are only those of the labels in `train`'s masks.
-    pub fn load_for_evaluation(
+    fn load_evaluation(
         folder: &SceneFolder,
         resolution: Resolution,
         split: Split,
@@ -173,7 +210,7 @@ impl TrainingData {
     }
 
     /// The width and height of the training images (of the evaluated ones, for data loaded by
-    /// [`TrainingData::load_for_evaluation`]).
+    /// [`LoadOptions::evaluate`]).
     pub fn size(&self) -> (u32, u32) {
         let c = &self.train.first().or(self.test.first()).expect("a loaded view").camera;
         (c.width(), c.height())
@@ -311,34 +348,6 @@ pub fn target_size(w: u32, h: u32, resolution: Resolution) -> Result<(u32, u32)>
         bail!("{w}x{h} at {resolution:?} leaves an empty image");
     }
     Ok((tw, th))
-}
-
-/// Load `root` (a scene folder) at `resolution`.
-pub fn load(root: &Path, resolution: Resolution) -> Result<TrainingData> {
-    load_with_progress(root, resolution, &|_, _| {})
-}
-
-/// [`load`], reporting each loaded view as [`TrainingData::load_with_progress`].
-pub fn load_with_progress(
-    root: &Path,
-    resolution: Resolution,
-    progress: &LoadProgress<'_>,
-) -> Result<TrainingData> {
-    TrainingData::load_with_progress(&open_folder(root)?, resolution, progress)
-}
-
-/// Load the views of `root` (a scene folder) that `split` evaluates on, at `resolution`
-/// ([`TrainingData::load_for_evaluation`]).
-pub fn load_for_evaluation(
-    root: &Path,
-    resolution: Resolution,
-    split: Split,
-) -> Result<TrainingData> {
-    TrainingData::load_for_evaluation(&open_folder(root)?, resolution, split, &|_, _| {})
-}
-
-fn open_folder(root: &Path) -> Result<SceneFolder> {
-    SceneFolder::open(root).with_context(|| format!("opening the scene folder {}", root.display()))
 }
 
 #[cfg(test)]

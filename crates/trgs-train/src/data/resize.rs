@@ -1,16 +1,9 @@
 //! Photos resampled to the training size with an area (box) filter.
 use trgs_core::Image;
 
-/// Resample with an area (box) filter: each output pixel averages the input area it covers,
-/// partial pixels weighted by their overlap. Identity when the size is unchanged.
-pub fn resize_area(im: &Image<f32>, w: u32, h: u32) -> Image<f32> {
-    if (im.width, im.height) == (w, h) {
-        return im.clone();
-    }
-    area_resample(im, w, h, f64::from)
-}
-
-/// [`resize_area`] of an 8-bit image (samples k / 255), to [0, 1].
+/// Resample an 8-bit image (samples k / 255) to [0, 1] with an area (box) filter: each output
+/// pixel averages the input area it covers, partial pixels weighted by their overlap. Identity
+/// (but for the scaling to [0, 1]) when the size is unchanged.
 pub fn resize_area_u8(im: &Image<u8>, w: u32, h: u32) -> Image<f32> {
     if (im.width, im.height) == (w, h) {
         return im.to_f32();
@@ -72,6 +65,11 @@ fn area_resample<T: Copy>(im: &Image<T>, w: u32, h: u32, value: impl Fn(T) -> f6
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The filter on f32 samples, to check it on values that are not multiples of 1 / 255.
+    fn resize_area(im: &Image<f32>, w: u32, h: u32) -> Image<f32> {
+        area_resample(im, w, h, f64::from)
+    }
 
     #[test]
     fn area_resize_averages_blocks_and_keeps_the_mean() {

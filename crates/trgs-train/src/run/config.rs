@@ -8,7 +8,7 @@ use crate::settings::TrainSettings;
 use anyhow::{Result, bail};
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
-use trgs_core::synthetic::{SyntheticConfig, SyntheticLens};
+use trgs_synthetic::{SyntheticConfig, SyntheticLens};
 
 /// MCMC's cap on the Gaussian count when `--cap` is not given.
 pub const DEFAULT_MCMC_CAP: usize = 300_000;

@@ -5,14 +5,14 @@
 //! embedding app consume alike.
 //!
 //! ```
-//! use trgs_core::synthetic::{SyntheticConfig, generate, write_dataset};
-//! use trgs_train::run::{RunConfig, RunEvent, TrainingRun};
+//! use trgs_synthetic::{SyntheticConfig, generate, write_dataset};
+//! use trgs_train::{RunConfig, RunEvent, RunOptions, TrainingRun};
 //!
 //! let dir = trgs_core::scratch::ScratchDir::new("run-doc-example");
 //! write_dataset(&generate(&SyntheticConfig::small()), &dir.join("scene"))?; // a glass scene
 //! let config = RunConfig { data: Some(dir.join("scene")), out: dir.join("run"), iterations: 40,
 //!                          ..RunConfig::default() };
-//! let mut run = TrainingRun::new(config)?;
+//! let mut run = TrainingRun::start(config, RunOptions::default())?;
 //! while let Some(event) = run.next_event() {
 //!     match event? {
 //!         RunEvent::PlaneCreated { label, plane } => println!("plane {label}: {:.2}", plane.r0()),
@@ -25,10 +25,13 @@
 //! assert_eq!((run.trainer().planes().len(), image.width), (1, 64));
 //! # Ok::<(), anyhow::Error>(())
 //! ```
+pub mod checkpoint;
 mod config;
-mod dataset;
+mod events;
 mod log;
+mod options;
 mod outputs;
+mod scene;
 mod state;
 mod steps;
 
@@ -36,79 +39,28 @@ pub use config::{
     Ablations, DEFAULT_MCMC_CAP, DemoScene, DensifyMode, RunConfig, parse_positive, parse_size,
     upgrade_config_record,
 };
-pub use dataset::DEMO_SCENE_MARKER;
+pub use events::{RunEvent, StepEvent, StepMemory};
 pub use log::LOG_FILE;
+pub use options::RunOptions;
 pub use outputs::RunSummary;
+pub use scene::DEMO_SCENE_MARKER;
 pub use state::RunState;
 
-pub use crate::data::LoadProgress;
-
-use crate::checkpoint::{CHECKPOINT_FILE, Checkpoint, read_checkpoint, write_checkpoint};
-use crate::data::TrainingData;
-use crate::eval::Evaluation;
-use crate::init::{SeedPoint, gaussians_from_points, random_points};
-use crate::plane_init::{PlaneInitSettings, initialise_planes};
-use crate::reflection_seed::{ReflectedSpaceSeeds, mirrored_seeds, reflected_space_seeds};
-use crate::trainer::{StepStats, StepTimes, Trainer};
+use crate::data::{LoadProgress, TrainingData};
+use crate::gaussians::init::{SeedPoint, gaussians_from_points, random_points};
+use crate::planes::init::{PlaneInitSettings, initialise_planes};
+use crate::planes::reflection_seed::{ReflectedSpaceSeeds, mirrored_seeds, reflected_space_seeds};
+use crate::trainer::{StepTimes, Trainer};
 use anyhow::{Context, Result};
+use checkpoint::{CHECKPOINT_FILE, Checkpoint, read_checkpoint, write_checkpoint};
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 use trgs_core::fit::SilhouetteSettings;
 use trgs_core::io::{remove_stale_temporaries, write_cameras_json};
 use trgs_core::rng::Rng;
-use trgs_core::scene::{Camera, ReflectionPlane};
+use trgs_core::scene::Camera;
 use trgs_render::GpuContext;
-
-/// What a resumed run may set anew: how the machine it now runs on holds the work, never what
-/// it trains (the run keeps every other setting it started with).
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub struct ResumeOverrides {
-    /// `--target-memory` in MiB: the training views' GPU budget on this machine (a run stopped
-    /// by a lack of GPU memory resumes with a smaller one).
-    pub target_memory: Option<u64>,
-}
-
-/// What a run reports, in the order it happens.
-#[derive(Clone, Debug)]
-pub enum RunEvent {
-    /// A line about the set-up: the dataset, the planes to come, a resumed or replaced run.
-    Note(String),
-    /// A training step finished.
-    Step(StepEvent),
-    /// A plane was initialised from the glass masks at the end of stage 1.
-    PlaneCreated { label: u32, plane: ReflectionPlane },
-    /// A glass label's plane could not be fitted.
-    PlaneFailed { label: u32, reason: String },
-    /// The test views were evaluated.
-    Evaluation(Evaluation),
-    /// A checkpoint was written: the run can be continued from here.
-    CheckpointWritten { step: u32, path: PathBuf },
-    /// The outputs are written; the run is over.
-    Finished(RunSummary),
-}
-
-/// One finished step.
-#[derive(Clone, Debug)]
-pub struct StepEvent {
-    /// Steps taken so far (this one included) and planned.
-    pub step: u32,
-    pub iterations: u32,
-    /// The training view of the step.
-    pub view: String,
-    pub gaussians: u32,
-    pub stats: StepStats,
-    /// The trainer's GPU buffers after the step and the process's peak RAM so far.
-    pub memory: StepMemory,
-}
-
-/// Memory after a step.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct StepMemory {
-    pub gpu: crate::memory::GpuMemory,
-    /// None where the system does not report it ([`crate::memory::peak_ram_bytes`]).
-    pub peak_ram_bytes: Option<u64>,
-}
 
 /// Files a run writes into its folder (stale temporaries of these are removed on start).
 const OUTPUTS: [&str; 5] = [CHECKPOINT_FILE, LOG_FILE, "metrics.json", "model.ply", "planes.json"];
@@ -135,56 +87,37 @@ pub struct TrainingRun {
 }
 
 impl TrainingRun {
-    /// A new run of `config` on the best adapter (removing a previous run's checkpoint in the
-    /// same folder).
-    pub fn new(config: RunConfig) -> Result<Self> {
-        Self::new_with_progress(config, &|_, _| {})
-    }
-
-    /// [`TrainingRun::new`], calling `loading(done, total)` as the photos load (from the
-    /// loading threads).
-    pub fn new_with_progress(config: RunConfig, loading: &LoadProgress<'_>) -> Result<Self> {
+    /// A new run of `config` (removing a previous run's checkpoint in the same folder).
+    pub fn start(mut config: RunConfig, options: RunOptions<'_>) -> Result<Self> {
         // Refused before the device is set up.
         config.check()?;
-        let ctx = GpuContext::new()?;
-        Self::start(ctx, config, None, Vec::new(), loading)
-    }
-
-    /// A new run of `config` on `ctx`.
-    pub fn with_context(ctx: GpuContext, config: RunConfig) -> Result<Self> {
-        config.check()?;
-        Self::start(ctx, config, None, Vec::new(), &|_, _| {})
+        if let Some(mib) = options.target_memory {
+            config.target_memory = Some(mib);
+        }
+        let ctx = match options.context {
+            Some(ctx) => ctx,
+            None => GpuContext::new()?,
+        };
+        let silent = |_: usize, _: usize| {};
+        let progress = options.progress.unwrap_or(&silent);
+        Self::begin(ctx, config, None, Vec::new(), progress)
     }
 
     /// Continue the run in `out` from its checkpoint, with the settings it started with.
-    pub fn resume(out: &Path) -> Result<Self> {
-        Self::resume_with_progress(out, &|_, _| {})
-    }
-
-    /// [`TrainingRun::resume`] with the photos' loading progress, as
-    /// [`TrainingRun::new_with_progress`].
-    pub fn resume_with_progress(out: &Path, loading: &LoadProgress<'_>) -> Result<Self> {
-        Self::resume_with_overrides(out, &ResumeOverrides::default(), loading)
-    }
-
-    /// [`TrainingRun::resume_with_progress`] with what the machine it resumes on sets anew.
-    pub fn resume_with_overrides(
-        out: &Path,
-        overrides: &ResumeOverrides,
-        loading: &LoadProgress<'_>,
-    ) -> Result<Self> {
-        Self::resume_on(GpuContext::new()?, out, overrides, loading)
-    }
-
-    /// [`TrainingRun::resume`] on `ctx`.
-    pub fn resume_with_context(ctx: GpuContext, out: &Path) -> Result<Self> {
-        Self::resume_on(ctx, out, &ResumeOverrides::default(), &|_, _| {})
+    pub fn resume(out: &Path, options: RunOptions<'_>) -> Result<Self> {
+        let ctx = match options.context {
+            Some(ctx) => ctx,
+            None => GpuContext::new()?,
+        };
+        let silent = |_: usize, _: usize| {};
+        let progress = options.progress.unwrap_or(&silent);
+        Self::resume_on(ctx, out, options.target_memory, progress)
     }
 
     fn resume_on(
         ctx: GpuContext,
         out: &Path,
-        overrides: &ResumeOverrides,
+        target_memory: Option<u64>,
         loading: &LoadProgress<'_>,
     ) -> Result<Self> {
         let path = out.join(CHECKPOINT_FILE);
@@ -193,7 +126,7 @@ impl TrainingRun {
         })?;
         let mut state = RunState::of_checkpoint(&ck, &path)?;
         state.config.out = out.to_path_buf();
-        if let Some(mib) = overrides.target_memory {
+        if let Some(mib) = target_memory {
             state.config.target_memory = Some(mib);
         }
         let note = if ck.step >= state.config.iterations {
@@ -211,10 +144,10 @@ impl TrainingRun {
             )
         };
         let config = state.config.clone();
-        Self::start(ctx, config, Some((ck, state)), vec![RunEvent::Note(note)], loading)
+        Self::begin(ctx, config, Some((ck, state)), vec![RunEvent::Note(note)], loading)
     }
 
-    fn start(
+    fn begin(
         ctx: GpuContext,
         config: RunConfig,
         resumed: Option<(Checkpoint, RunState)>,
@@ -222,9 +155,9 @@ impl TrainingRun {
         loading: &LoadProgress<'_>,
     ) -> Result<Self> {
         let mut note = |line: String| events.push(RunEvent::Note(line));
-        let (data_dir, written) = dataset::dataset_dir(&config)?;
+        let (data_dir, written) = scene::dataset_dir(&config)?;
         written.into_iter().for_each(&mut note);
-        let data = dataset::load_data(&ctx, &config, &data_dir, &mut note, loading)?;
+        let data = scene::load_data(&ctx, &config, &data_dir, &mut note, loading)?;
         let out = config.out.clone();
         std::fs::create_dir_all(&out)
             .with_context(|| format!("creating the output folder {}", out.display()))?;
@@ -291,9 +224,9 @@ impl TrainingRun {
             }
         };
         trainer.profile = config.profile;
-        let budget = crate::targets::budget_bytes(&ctx, config.target_memory);
+        let budget = crate::trainer::targets::budget_bytes(&ctx, config.target_memory);
         trainer.set_target_budget(budget);
-        let photos: u64 = data.train.iter().map(crate::targets::target_bytes).sum();
+        let photos: u64 = data.train.iter().map(crate::trainer::targets::target_bytes).sum();
         if photos > budget {
             note(format!(
                 "the training views need {} MiB on the GPU, over its budget of {} MiB \

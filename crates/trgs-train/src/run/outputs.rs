@@ -30,7 +30,7 @@ pub struct RunSummary {
     /// The ground truth's folder, when there is one.
     pub truth_dir: Option<PathBuf>,
     /// The trainer's GPU buffers at the end, by what they hold.
-    pub gpu_memory: crate::memory::GpuMemory,
+    pub gpu_memory: crate::trainer::memory::GpuMemory,
 }
 
 /// What outputs and evaluation need of the trainer.
@@ -124,7 +124,7 @@ fn metrics_json(s: &RunSummary, data: &TrainingData, state: &RunState) -> serde_
         "memory": {
             "peak_gpu_bytes": state.peak_gpu_bytes,
             "gpu_bytes": s.gpu_memory,
-            "peak_ram_bytes": crate::memory::peak_ram_bytes(),
+            "peak_ram_bytes": crate::trainer::memory::peak_ram_bytes(),
         },
     })
 }

@@ -1,7 +1,7 @@
 //! What a run keeps in its checkpoint besides the trainer's state: its settings, random state,
 //! the views still to visit in this epoch, evaluations and clocks.
+use super::checkpoint::Checkpoint;
 use super::config::{RunConfig, upgrade_config_record};
-use crate::checkpoint::Checkpoint;
 use crate::data::TrainingData;
 use crate::eval::Evaluation;
 use crate::trainer::StepTimes;

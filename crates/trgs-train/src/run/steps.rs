@@ -141,7 +141,7 @@ impl TrainingRun {
         let view = self.data.train[vi].camera.name.clone();
         let memory = StepMemory {
             gpu: self.trainer.gpu_memory(),
-            peak_ram_bytes: crate::memory::peak_ram_bytes(),
+            peak_ram_bytes: crate::trainer::memory::peak_ram_bytes(),
         };
         self.state.peak_gpu_bytes = self.state.peak_gpu_bytes.max(memory.gpu.total());
         let (step, iterations) = (stats.step, self.config().iterations);

@@ -3,25 +3,27 @@
 //! the planes (a few numbers each, on the CPU), then the densification strategy's maintenance.
 //! The whole run (stages, plane initialisation, evaluation, checkpoints) is
 //! [`crate::run::TrainingRun`]; this is the step it repeats.
-use crate::adam::Adam;
-use crate::checkpoint::{Checkpoint, PlaneMoments};
-use crate::densify::{Densification, Geometry, RowPlan};
-use crate::densify::{DensifyEvent, DensifyStrategy, NoDensification, TrainState};
-use crate::gaussian_state::GaussianState;
+use crate::densify::{Densification, DensifyEvent, DensifyStrategy, NoDensification};
+use crate::gaussians::adam::Adam;
+use crate::gaussians::plan::{Geometry, RowPlan, TrainState};
+use crate::gaussians::state::GaussianState;
 use crate::losses::LossKernels;
+use crate::run::checkpoint::{Checkpoint, PlaneMoments};
 use crate::settings::TrainSettings;
-use crate::targets::TargetCache;
+use targets::TargetCache;
 
+pub mod memory;
 mod phase_clock;
 mod planes;
 mod step;
 mod step_times;
+pub mod targets;
 
 pub use step::StepInFlight;
 pub use step_times::StepTimes;
 
 use anyhow::{Context, Result};
-use trgs_core::reference::AdamSettings;
+use trgs_core::pipeline::AdamSettings;
 use trgs_core::rng::Rng;
 use trgs_core::scene::{Camera, Gaussians, ReflectionPlane};
 use trgs_render::{Frame, GpuContext, GpuScene, LayerGrads, RenderOptions, Renderer};
@@ -94,8 +96,8 @@ pub struct Trainer {
     /// Wait for the GPU at the end of each phase of a step, so that [`StepTimes`] gives each
     /// phase its GPU time (the step then waits where it otherwise would not).
     pub time_phases: bool,
-    /// The word that lets a step's updates change the model ([`crate::step_guard`]).
-    guard: crate::step_guard::StepGuard,
+    /// The word that lets a step's updates change the model ([`crate::losses::step_guard`]).
+    guard: crate::losses::step_guard::StepGuard,
     /// Size the next frame's key list exactly (after a frame outgrew its list, or an edit of
     /// the set from outside the maintenance; the maintenance's changes scale the list instead).
     exact_keys_next: bool,
@@ -103,7 +105,7 @@ pub struct Trainer {
     /// a plane).
     camera_centres: Vec<glam::DVec3>,
     /// The opacity perturbation's kernel (stage `perturb`).
-    perturb: crate::perturb::GpuPerturb,
+    perturb: crate::planes::perturb::GpuPerturb,
     /// The count of a perturbation on its way back (reported when the maintenance settles).
     pending_perturbed: Option<trgs_render::toolkit::gpu::PendingRead>,
     /// What an edit from outside the maintenance applied on its way (a change the maintenance
@@ -142,7 +144,7 @@ impl Trainer {
             gaussians,
             frame: Frame::default(),
             losses: LossKernels::new(ctx),
-            targets: TargetCache::new(crate::targets::budget_bytes(ctx, None)),
+            targets: TargetCache::new(targets::budget_bytes(ctx, None)),
             layer_grads: None,
             step: 0,
             rng: Rng::new(settings.seed ^ 0x5eed),
@@ -151,10 +153,10 @@ impl Trainer {
             densification: Box::new(NoDensification),
             profile: false,
             time_phases: false,
-            guard: crate::step_guard::StepGuard::new(ctx),
+            guard: crate::losses::step_guard::StepGuard::new(ctx),
             exact_keys_next: false,
             camera_centres: Vec::new(),
-            perturb: crate::perturb::GpuPerturb::new(ctx),
+            perturb: crate::planes::perturb::GpuPerturb::new(ctx),
             pending_perturbed: None,
             unreported: (Vec::new(), 0),
         }
@@ -230,7 +232,7 @@ impl Trainer {
     }
 
     /// Bytes of the GPU buffers this trainer holds, by what they hold.
-    pub fn gpu_memory(&self) -> crate::memory::GpuMemory {
+    pub fn gpu_memory(&self) -> memory::GpuMemory {
         use trgs_core::scene::Attribute;
         let scene = self.gaussians.scene();
         let m = self.gaussians.moments();
@@ -240,7 +242,7 @@ impl Trainer {
                 .map(|b| b.size())
                 .sum()
         });
-        crate::memory::GpuMemory {
+        memory::GpuMemory {
             parameters: Attribute::ALL.iter().map(|&a| scene.parameter(a).size()).sum::<u64>()
                 + scene.populations().size(),
             moments: Attribute::ALL.iter().map(|&a| m[a].m.size() + m[a].v.size()).sum(),

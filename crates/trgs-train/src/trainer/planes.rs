@@ -1,9 +1,9 @@
 //! The trainer's reflection planes: adding them with their glass Gaussians, stepping their
 //! parameters, and the opacity perturbation of what the cameras see through them.
 use super::Trainer;
-use crate::checkpoint::PlaneMoments;
-use crate::densify::plan::gather;
-use crate::plane_adam::{OffsetLimit, PlaneRates, plane_adam};
+use crate::gaussians::plan::gather;
+use crate::planes::adam::{OffsetLimit, PlaneRates, plane_adam};
+use crate::run::checkpoint::PlaneMoments;
 use crate::settings::Stage;
 use anyhow::{Context, Result};
 use trgs_core::reference::PlaneGrad;

@@ -10,11 +10,13 @@ use crate::densify::{DensifyEvent, StepView};
 use crate::losses::{LossLayers, LossSettings, PendingLoss};
 use crate::settings::Stage;
 use anyhow::{Context, Result};
-use trgs_core::reference::{GUARD_KEYS_DROPPED, GUARD_LOSS_NOT_FINITE, RegulariserWeights};
+use trgs_core::pipeline::{GUARD_KEYS_DROPPED, GUARD_LOSS_NOT_FINITE, RegulariserWeights};
 use trgs_core::scene::Attribute;
 use trgs_render::PlaneGradsRead;
 use trgs_render::toolkit::gpu::{self, PendingRead, Recorder};
-use trgs_render::{BackwardOptions, KeySizing, KeyTotals, LayerGrads, PendingKeyTotals};
+use trgs_render::{
+    BackwardOptions, Gradients, KeySizing, KeyTotals, LayerGrads, PendingKeyTotals, RenderOptions,
+};
 
 /// A step recorded and submitted ([`Trainer::record_step`]) whose results are on their way
 /// back; [`Trainer::finish_step`] reads them.
@@ -34,6 +36,9 @@ pub struct StepInFlight {
     /// Waits for the GPU while it was recorded.
     record_waits: u64,
 }
+
+/// Milliseconds of each GPU stage of a phase, with `--profile`.
+type StageTimes = Vec<(&'static str, f64)>;
 
 /// The key totals of a step's frame: known when it was sized exactly, else on their way back.
 #[derive(Debug)]
@@ -158,15 +163,52 @@ impl Trainer {
         self.profile || self.time_phases || !self.ctx.capabilities.records_while_busy
     }
 
+    /// Records and submits the step's phases, each ending with a lap of the step's clock:
+    /// render, losses (with the guard and the readback), backward, update.
     fn record_step_scoped(&mut self, view: &View) -> Result<StepInFlight> {
-        let ctx = &self.ctx;
-        let waits = ctx.waits();
+        let waits = self.ctx.waits();
         let stage = self.settings.stage(self.step);
-        let has_planes = !self.planes().is_empty();
+        let mut times = StepTimes::default();
+        let mut clock = PhaseClock::start(self.waits_between_phases());
+        let keys = self.record_render(view)?;
+        times.render = clock.lap(&self.ctx)?;
+        let (loss, readback, loss_stages) = self.record_loss(view)?;
+        times.loss = clock.lap(&self.ctx)?;
+        let mut grads = self.record_backward(stage)?;
+        times.backward = clock.lap(&self.ctx)?;
+        let adam_stages = self.record_update(stage, &grads)?;
+        times.adam = clock.lap(&self.ctx)?;
+        let gpu_stages: Vec<_> = [
+            self.frame.stage_times(),
+            Some(&loss_stages[..]),
+            grads.stage_times(),
+            Some(&adam_stages[..]),
+        ]
+        .into_iter()
+        .flatten()
+        .flatten()
+        .copied()
+        .collect();
+        Ok(StepInFlight {
+            step: self.step,
+            view: view.camera.name.clone(),
+            readback,
+            loss,
+            keys,
+            planes: std::mem::take(&mut grads.planes),
+            times,
+            gpu_stages,
+            record_waits: self.ctx.waits() - waits,
+        })
+    }
+
+    /// The step's render options: the degree the model has after it, the depth variance where
+    /// a plane needs it, and the key list's sizing.
+    fn step_render_options(&mut self) -> RenderOptions {
         let mut options = self.render_options();
         // This step, numbered self.step + 1 from 1, trains the degree the model has after it.
         options.sh_degree = Some(self.settings.active_sh_degree(self.step + 1));
-        options.depth_variance = has_planes && self.settings.lambda_depth > 0.0;
+        options.depth_variance = !self.planes().is_empty() && self.settings.lambda_depth > 0.0;
         options.profile = self.profile;
         // The key list is sized from earlier steps' frames, so the render does not wait for its
         // binning; the guard keeps a frame that outgrew it from changing anything.
@@ -175,16 +217,25 @@ impl Trainer {
         } else {
             KeySizing::FromEarlierFrames
         };
-        let mut times = StepTimes::default();
-        let mut clock = PhaseClock::start(self.waits_between_phases());
+        options
+    }
+
+    /// Phase render: the frame of `view`, and its key totals (known, or on their way back).
+    fn record_render(&mut self, view: &View) -> Result<StepKeys> {
+        let options = self.step_render_options();
         let scene = self.gaussians.scene();
         self.renderer.render_into(scene, &view.camera, &options, &mut self.frame)?;
-        let keys = match self.frame.take_pending_keys() {
+        Ok(match self.frame.take_pending_keys() {
             Some(p) => StepKeys::Pending(p),
             // Sized exactly: known now, without waiting.
-            None => StepKeys::Known(self.frame.settle_keys(ctx)?),
-        };
-        times.render = clock.lap(ctx)?;
+            None => StepKeys::Known(self.frame.settle_keys(&self.ctx)?),
+        })
+    }
+
+    /// Phase loss: the losses against `view`'s photo into the layer gradients, the guard word
+    /// from the loss sums and the frame's key overflow, and their readback, submitted.
+    fn record_loss(&mut self, view: &View) -> Result<(PendingLoss, PendingRead, StageTimes)> {
+        let ctx = &self.ctx;
         let target = self
             .targets
             .get(ctx, view)
@@ -198,23 +249,19 @@ impl Trainer {
         let s = &self.settings;
         let loss_settings = LossSettings {
             lambda_dssim: s.lambda_dssim,
-            regularisers: has_planes.then_some(RegulariserWeights {
-                depth: s.lambda_depth,
-                conflict: s.lambda_conflict,
-                mask: s.lambda_mask,
-            }),
+            regularisers: (!self.gaussians.scene().planes().is_empty()).then_some(
+                RegulariserWeights {
+                    depth: s.lambda_depth,
+                    conflict: s.lambda_conflict,
+                    mask: s.lambda_mask,
+                },
+            ),
         };
         let mut rec = Recorder::new(ctx, "trgs.train.loss", self.profile);
+        let layers = LossLayers::of_frame(&self.frame)?;
         let loss = self
             .losses
-            .record(
-                ctx,
-                &mut rec,
-                &LossLayers::of_frame(&self.frame)?,
-                target,
-                layer_grads,
-                &loss_settings,
-            )
+            .record(ctx, &mut rec, &layers, target, layer_grads, &loss_settings)
             .with_context(|| format!("loss of view {}", view.camera.name))?;
         #[allow(clippy::expect_used)]
         let kept = self.frame.key_overflow_flag().expect("the frame was rendered above");
@@ -225,16 +272,27 @@ impl Trainer {
         rec.encoder.copy_buffer_to_buffer(sums, 0, &staging, 16, u64::from(vec4s) * 16);
         let submission = rec.submit(ctx)?;
         let readback = PendingRead::after(staging, submission);
-        let loss_stages = rec.stage_times().unwrap_or_default();
-        times.loss = clock.lap(ctx)?;
+        Ok((loss, readback, rec.stage_times().unwrap_or_default()))
+    }
+
+    /// Phase backward: every gradient from the layer gradients the losses wrote; in stage 2 the
+    /// reflection's gradient does not reach the Gaussians.
+    fn record_backward(&mut self, stage: Stage) -> Result<Gradients> {
         let backward = BackwardOptions {
             block_reflection_to_gaussians: stage == Stage::PlaneAdjustment,
             profile: self.profile,
         };
-        let mut g = self.renderer.backward(scene, &mut self.frame, layer_grads, &backward)?;
-        times.backward = clock.lap(ctx)?;
+        #[allow(clippy::expect_used)]
+        let layer_grads = &self.layer_grads.as_ref().expect("allocated by the loss").1;
+        let scene = self.gaussians.scene();
+        Ok(self.renderer.backward(scene, &mut self.frame, layer_grads, &backward)?)
+    }
+
+    /// Phase update: the step is counted, then Adam steps every attribute between the
+    /// strategy's hooks, all behind the guard word; submitted.
+    fn record_update(&mut self, stage: Stage, g: &Gradients) -> Result<StageTimes> {
         self.step += 1;
-        let t = self.step;
+        let (ctx, t, scene) = (&self.ctx, self.step, self.gaussians.scene());
         let rates = self.settings.rates.attribute_rates(
             t - 1,
             self.settings.iterations,
@@ -246,7 +304,7 @@ impl Trainer {
             ctx,
             scene,
             frame: &self.frame,
-            grads: &g,
+            grads: g,
             step: t,
             stage,
             rates: &rates,
@@ -262,30 +320,7 @@ impl Trainer {
         }
         self.densification.record_after_adam(&step_view, &mut rec);
         rec.submit(ctx)?;
-        let adam_stages = rec.stage_times().unwrap_or_default();
-        times.adam = clock.lap(ctx)?;
-        let gpu_stages: Vec<_> = [
-            self.frame.stage_times(),
-            Some(&loss_stages[..]),
-            g.stage_times(),
-            Some(&adam_stages[..]),
-        ]
-        .into_iter()
-        .flatten()
-        .flatten()
-        .copied()
-        .collect();
-        Ok(StepInFlight {
-            step: t,
-            view: view.camera.name.clone(),
-            readback,
-            loss,
-            keys,
-            planes: std::mem::take(&mut g.planes),
-            times,
-            gpu_stages,
-            record_waits: ctx.waits() - waits,
-        })
+        Ok(rec.stage_times().unwrap_or_default())
     }
 
     fn finish_step_scoped(&mut self, in_flight: StepInFlight) -> Result<StepStats> {
@@ -389,7 +424,7 @@ impl Trainer {
     /// The count of the perturbation left pending (0 when none).
     fn take_perturbed(&mut self) -> Result<usize> {
         match self.pending_perturbed.take() {
-            Some(read) => Ok(crate::perturb::read_count(&self.ctx, read)?),
+            Some(read) => Ok(crate::planes::perturb::read_count(&self.ctx, read)?),
             None => Ok(0),
         }
     }

@@ -3,7 +3,7 @@
 use trgs_core::fixtures::{SceneSpec, random_scene};
 use trgs_core::rng::Rng;
 use trgs_core::scene::{Gaussians, PerAttribute, attribute_widths};
-use trgs_train::densify::TrainState;
+use trgs_train::stages::TrainState;
 
 /// `n` Gaussians (SH degree 1, 10% glass) with sizes on both sides of classic densification's
 /// clone/split line (1% of a unit extent) and prune line (10%), opacity logits uniform in

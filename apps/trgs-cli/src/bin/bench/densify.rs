@@ -4,18 +4,19 @@
 //! as training does); decided on the CPU from the attributes read back and rebuilt on the GPU
 //! (as sets too large for the deciding stages' bindings are); and through the CPU (the whole
 //! state read back, rebuilt and uploaded).
-use crate::median;
+use crate::common::median;
 use anyhow::Result;
 use std::fmt::Write as _;
 use std::time::Instant;
 use trgs_core::fixtures::{RoomDensity, RoomSpec, room_scene};
 use trgs_core::rng::Rng;
 use trgs_render::GpuContext;
+use trgs_train::TrainSettings;
+use trgs_train::Trainer;
 use trgs_train::densify::classic::plan_densify;
 use trgs_train::densify::mcmc::{McmcDensification, McmcSettings, plan_relocation};
-use trgs_train::densify::{ClassicDensification, ClassicSettings, DensifyStats, Geometry, RowPlan};
-use trgs_train::settings::TrainSettings;
-use trgs_train::trainer::Trainer;
+use trgs_train::densify::{ClassicDensification, ClassicSettings, DensifyStats};
+use trgs_train::stages::{Geometry, RowPlan};
 
 /// Median times of one configuration's rebuilds.
 pub struct DensifyRow {

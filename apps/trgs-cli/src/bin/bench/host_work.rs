@@ -8,7 +8,7 @@ use trgs_core::Image;
 use trgs_core::fixtures::{RoomDensity, RoomSpec, room_scene};
 use trgs_core::scene::{PerAttribute, attribute_widths};
 use trgs_train::checkpoint::{Checkpoint, read_checkpoint, write_checkpoint};
-use trgs_train::densify::TrainState;
+use trgs_train::stages::TrainState;
 
 /// One measured piece of work.
 struct Timed {
@@ -29,7 +29,7 @@ fn timed<T>(reps: usize, mut work: impl FnMut() -> Result<T>) -> Result<(f64, T)
         last = Some(out);
     }
     #[allow(clippy::expect_used)]
-    Ok((super::median(times), last.expect("at least one rep")))
+    Ok((crate::common::median(times), last.expect("at least one rep")))
 }
 
 /// A photo-like image: smooth shading with edges, so that JPEG has detail to code.
@@ -55,14 +55,14 @@ pub fn bench_host(reps: usize) -> Result<()> {
     let (ms, decoded) = timed(reps, || Ok(trgs_core::io::png::read_rgb8_image(&jpeg)?))?;
     rows.push(Timed { work: "decode a JPEG photo", size: "4000x3000".into(), ms });
     let (ms, view) =
-        timed(reps, || Ok(trgs_train::data::resize_area_u8(&decoded, 1600, 1200).quantised()))?;
+        timed(reps, || Ok(trgs_train::resize_area_u8(&decoded, 1600, 1200).quantised()))?;
     rows.push(Timed {
         work: "downscale it (area filter, to 8 bits)",
         size: "to 1600x1200".into(),
         ms,
     });
 
-    let (a, b) = (view.to_f32(), trgs_train::data::resize_area_u8(&decoded, 1600, 1200));
+    let (a, b) = (view.to_f32(), trgs_train::resize_area_u8(&decoded, 1600, 1200));
     let (ms, _) = timed(reps, || Ok(trgs_core::metrics::ssim(&a, &b)?))?;
     rows.push(Timed { work: "SSIM of a test view", size: "1600x1200".into(), ms });
 
@@ -93,7 +93,7 @@ pub fn bench_host(reps: usize) -> Result<()> {
     let path = dir.join(trgs_train::checkpoint::CHECKPOINT_FILE);
     let (ms, ()) = timed(reps, || Ok(write_checkpoint(&path, &ck)?))?;
     let bytes = std::fs::metadata(&path).context("the checkpoint written")?.len();
-    let size = format!("{count} Gaussians, {}", trgs_train::memory::human_bytes(bytes));
+    let size = format!("{count} Gaussians, {}", trgs_train::human_bytes(bytes));
     rows.push(Timed { work: "write a checkpoint (synced)", size: size.clone(), ms });
     let (ms, _) = timed(reps, || Ok(read_checkpoint(&path)?))?;
     rows.push(Timed { work: "read it", size, ms });
@@ -101,7 +101,7 @@ pub fn bench_host(reps: usize) -> Result<()> {
     let ply = dir.join("model.ply");
     let (ms, ()) = timed(reps, || Ok(trgs_core::io::write_ply(&ply, &ck.state.gaussians)?))?;
     let bytes = std::fs::metadata(&ply).context("the model written")?.len();
-    let size = format!("{count} Gaussians, {}", trgs_train::memory::human_bytes(bytes));
+    let size = format!("{count} Gaussians, {}", trgs_train::human_bytes(bytes));
     rows.push(Timed { work: "write model.ply (synced)", size: size.clone(), ms });
     let (ms, _) = timed(reps, || Ok(trgs_core::io::read_ply(&ply)?))?;
     rows.push(Timed { work: "read it", size, ms });

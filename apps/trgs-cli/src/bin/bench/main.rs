@@ -6,6 +6,7 @@
 //! forward + backward per training-like step (`backward.rs`).
 //! `--write FILE` writes the report as Markdown (docs/BENCHMARKS.md).
 mod backward;
+mod common;
 mod densify;
 mod host_work;
 mod report;
@@ -15,13 +16,14 @@ mod train_step;
 use anyhow::{Context, Result};
 use backward::bench_backward;
 use clap::Parser;
+use common::{median, room_100k, upload, warm_up};
 use densify::bench_densify;
 use report::{Throughput, report};
 use std::path::PathBuf;
 use std::time::Instant;
 use train_step::bench_train_step;
-use trgs_core::fixtures::{RoomDensity, RoomSpec, room_scene};
-use trgs_core::reference::TILE_SIZE;
+use trgs_core::fixtures::{RoomDensity, RoomSpec};
+use trgs_core::pipeline::TILE_SIZE;
 use trgs_render::toolkit::FrameStages as _;
 use trgs_render::toolkit::gpu::{self, Kernel, Recorder};
 use trgs_render::toolkit::layout::{ProjectedGaussian, RasterParams};
@@ -88,33 +90,6 @@ struct Row {
     keys: u64,
     stages: Vec<(&'static str, f64)>,
     memory_mb: f64,
-}
-
-/// How long each configuration runs untimed before it is timed. One frame compiles the
-/// pipelines and fills the buffer pools; a real GPU also has to leave the idle clocks it drops to
-/// while the CPU builds the next scene (after a one-frame warm-up an H100 timed whole
-/// configurations several times slower in every stage). On lavapipe this adds a frame or two.
-const WARM_UP_SECONDS: f64 = 0.5;
-
-/// Runs `step` once, then again until `WARM_UP_SECONDS` have passed.
-pub(crate) fn warm_up<E>(mut step: impl FnMut() -> Result<(), E>) -> Result<(), E> {
-    let start = Instant::now();
-    step()?;
-    while start.elapsed().as_secs_f64() < WARM_UP_SECONDS {
-        step()?;
-    }
-    Ok(())
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
-fn upload(ctx: &GpuContext, spec: &RoomSpec) -> Result<(GpuScene, trgs_core::scene::Camera)> {
-    let scene = room_scene(spec);
-    let gpu_scene = GpuScene::upload(ctx, &scene.gaussians.cast::<f32>(), &scene.planes)?;
-    Ok((gpu_scene, scene.camera))
 }
 
 fn bench_config(
@@ -208,12 +183,6 @@ fn medians_alternating<K: PartialEq + Clone>(
         .into_iter()
         .map(|per| per.into_iter().map(|(n, v)| (n, median(v))).collect())
         .collect())
-}
-
-/// The room at 256x192 with 100k Gaussians and SH degree 3: the configuration of the plane-cost,
-/// backward and training-step measurements.
-fn room_100k(planes: usize, density: RoomDensity) -> RoomSpec {
-    RoomSpec { seed: 7, gaussians: 100_000, planes, width: 256, height: 192, sh_degree: 3, density }
 }
 
 fn plane_cost(
@@ -392,13 +361,52 @@ fn main() -> Result<()> {
     if args.scale {
         return run_scale(&ctx, &args);
     }
+    let reps = args.reps.max(1);
+    let (rows, throughput) = run_forward(&ctx, &renderer, &args)?;
+    let backward =
+        if args.runs(args.backward_only) { run_backward(&ctx, &renderer, reps)? } else { vec![] };
+    let pairs = (3 * args.reps).max(9);
+    let costs = if args.runs(args.plane_cost_only) {
+        run_plane_costs(&ctx, &renderer, pairs)?
+    } else {
+        vec![]
+    };
+    let steps = if args.runs(args.train_step_only) { run_train_steps(&ctx, reps)? } else { vec![] };
+    let densify =
+        if args.runs(args.densify_only) { run_densify(&ctx, args.quick, reps)? } else { vec![] };
+    let measured = report::Measured {
+        rows: &rows,
+        costs: &costs,
+        throughput,
+        backward: &backward,
+        steps: &steps,
+        densify: &densify,
+    };
+    publish(&ctx, &measured, &args)
+}
+
+impl Args {
+    /// Whether any `--<measurement>` flag restricts the run to the flagged measurements.
+    fn only(&self) -> bool {
+        self.plane_cost_only || self.backward_only || self.train_step_only || self.densify_only
+    }
+
+    /// Whether the measurement selected by `flag` runs: every one does without an only-flag.
+    fn runs(&self, flag: bool) -> bool {
+        !self.only() || flag
+    }
+}
+
+/// The forward grid's configurations (room, width, height, Gaussians): the capture-like room
+/// over every size and count, then the uniform room (the worst case for mirrored passes) at
+/// 256x192 with 100k Gaussians; none when an only-flag is given.
+fn forward_configs(args: &Args) -> Vec<(RoomDensity, u32, u32, usize)> {
+    if args.only() {
+        return Vec::new();
+    }
     let sizes: &[(u32, u32)] = if args.quick { &[(256, 192)] } else { &[(256, 192), (512, 384)] };
     let counts: &[usize] =
         if args.quick { &[10_000, 100_000] } else { &[10_000, 100_000, 500_000] };
-    let mut rows = Vec::new();
-    let mut throughput = None;
-    // The grid on the capture-like room; the uniform room (the worst case for mirrored passes)
-    // at 256x192 with 100k Gaussians.
     let mut configs = Vec::new();
     for &(width, height) in sizes {
         for &gaussians in counts {
@@ -406,69 +414,85 @@ fn main() -> Result<()> {
         }
     }
     configs.push((RoomDensity::Uniform, 256, 192, 100_000));
-    let only =
-        args.plane_cost_only || args.backward_only || args.train_step_only || args.densify_only;
-    if only {
-        configs.clear();
-    }
-    for (density, width, height, gaussians) in configs {
-        {
-            for planes in 0..=2 {
-                let spec =
-                    RoomSpec { seed: 7, gaussians, planes, width, height, sh_degree: 3, density };
-                let (row, frame) = bench_config(&ctx, &renderer, &spec, args.reps.max(1))?;
-                println!(
-                    "{density:?} {width}x{height} {gaussians:>6} Gaussians {planes} planes: {:8.2} ms wall, {:8.2} ms GPU, {} keys",
-                    row.wall_ms, row.gpu_ms, row.keys
-                );
-                if (density, width, height, gaussians, planes)
-                    == (RoomDensity::AsCaptured, 256, 192, 100_000, 0)
-                {
-                    let rounds = (3 * args.reps).max(9);
-                    let mut frame = frame;
-                    let t = measure_throughput(&ctx, &renderer, &spec, &mut frame, rounds)?;
-                    println!(
-                        "rasterize: {} evaluations in {:.2} ms = {:.3e}/s; trivial splat loop {:.3e}/s at {} per tile ({:.0}%), {:.3e}/s at 2048 ({:.0}%), medians over {rounds} rounds",
-                        t.evals,
-                        t.raster_ms,
-                        t.ours,
-                        t.matched,
-                        t.mean_list,
-                        100.0 * t.matched_ratio,
-                        t.long,
-                        100.0 * t.long_ratio
-                    );
-                    throughput = Some(t);
-                }
-                rows.push(row);
+    configs
+}
+
+/// Every forward configuration with 0, 1 and 2 planes; the capture-like room at 256x192 with
+/// 100k Gaussians and no plane also measures the rasterize throughput on its frame.
+fn run_forward(
+    ctx: &GpuContext,
+    renderer: &Renderer,
+    args: &Args,
+) -> Result<(Vec<Row>, Option<Throughput>)> {
+    let mut rows = Vec::new();
+    let mut throughput = None;
+    for (density, width, height, gaussians) in forward_configs(args) {
+        for planes in 0..=2 {
+            let spec =
+                RoomSpec { seed: 7, gaussians, planes, width, height, sh_degree: 3, density };
+            let (row, frame) = bench_config(ctx, renderer, &spec, args.reps.max(1))?;
+            println!(
+                "{density:?} {width}x{height} {gaussians:>6} Gaussians {planes} planes: {:8.2} ms wall, {:8.2} ms GPU, {} keys",
+                row.wall_ms, row.gpu_ms, row.keys
+            );
+            if (density, width, height, gaussians, planes)
+                == (RoomDensity::AsCaptured, 256, 192, 100_000, 0)
+            {
+                let rounds = (3 * args.reps).max(9);
+                let mut frame = frame;
+                let t = measure_throughput(ctx, renderer, &spec, &mut frame, rounds)?;
+                print_throughput(&t);
+                throughput = Some(t);
             }
+            rows.push(row);
         }
     }
+    Ok((rows, throughput))
+}
+
+fn print_throughput(t: &Throughput) {
+    println!(
+        "rasterize: {} evaluations in {:.2} ms = {:.3e}/s; trivial splat loop {:.3e}/s at {} per tile ({:.0}%), {:.3e}/s at 2048 ({:.0}%), medians over {} rounds",
+        t.evals,
+        t.raster_ms,
+        t.ours,
+        t.matched,
+        t.mean_list,
+        100.0 * t.matched_ratio,
+        t.long,
+        100.0 * t.long_ratio,
+        t.rounds
+    );
+}
+
+/// Forward + backward on both rooms with 0, 1 and 2 planes.
+fn run_backward(
+    ctx: &GpuContext,
+    renderer: &Renderer,
+    reps: usize,
+) -> Result<Vec<backward::BackwardRow>> {
     let mut backward = Vec::new();
-    if !only || args.backward_only {
-        for density in [RoomDensity::AsCaptured, RoomDensity::Uniform] {
-            for planes in 0..=2 {
-                let b = bench_backward(&ctx, &renderer, density, planes, args.reps.max(1))?;
-                println!(
-                    "backward, {density:?} 256x192 100k {planes} planes: forward {:.1} ms, backward {:.1} ms, median ratio {:.2}x",
-                    b.forward_ms, b.backward_ms, b.ratio
-                );
-                for (n, ms) in &b.stages {
-                    println!("    {n:26} {ms:8.2} ms GPU");
-                }
-                backward.push(b);
+    for density in [RoomDensity::AsCaptured, RoomDensity::Uniform] {
+        for planes in 0..=2 {
+            let b = bench_backward(ctx, renderer, density, planes, reps)?;
+            println!(
+                "backward, {density:?} 256x192 100k {planes} planes: forward {:.1} ms, backward {:.1} ms, median ratio {:.2}x",
+                b.forward_ms, b.backward_ms, b.ratio
+            );
+            for (n, ms) in &b.stages {
+                println!("    {n:26} {ms:8.2} ms GPU");
             }
+            backward.push(b);
         }
     }
-    let pairs = (3 * args.reps).max(9);
+    Ok(backward)
+}
+
+/// What one plane costs on both rooms, over `pairs` pairs of frames.
+fn run_plane_costs(ctx: &GpuContext, renderer: &Renderer, pairs: usize) -> Result<Vec<PlaneCost>> {
     let mut costs = Vec::new();
-    let densities = if !only || args.plane_cost_only {
-        vec![RoomDensity::AsCaptured, RoomDensity::Uniform]
-    } else {
-        vec![]
-    };
-    for density in densities {
-        let c = plane_cost(&ctx, &renderer, density, pairs)?;
+    for density in [RoomDensity::AsCaptured, RoomDensity::Uniform] {
+        let c = plane_cost(ctx, renderer, density, pairs)?;
         println!(
             "plane cost, {density:?} 256x192 100k: {:.1} ms without, {:.1} ms with, median pair ratio {:.3}x over {pairs} pairs",
             c.without_ms, c.with_ms, c.ratio
@@ -478,45 +502,44 @@ fn main() -> Result<()> {
         }
         costs.push(c);
     }
+    Ok(costs)
+}
+
+/// Whole training steps with 0 and 1 planes.
+fn run_train_steps(ctx: &GpuContext, reps: usize) -> Result<Vec<train_step::TrainStepRow>> {
     let mut steps = Vec::new();
-    if !only || args.train_step_only {
-        for planes in 0..=1 {
-            let t = bench_train_step(&ctx, planes, args.reps.max(1))?;
-            println!(
-                "training step, 256x192 {} Gaussians {planes} planes: {:.1} ms, pipelined {:.1} ms, GPU {} ms ({} busy; {})",
-                t.gaussians,
-                t.step_ms,
-                t.pipelined_ms,
-                report::gpu_ms_cell(t.gpu_ms, 1),
-                report::busy_percent(t.gpu_ms, t.pipelined_ms),
-                t.phases
-                    .iter()
-                    .map(|(n, ms)| format!("{n} {ms:.1}"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            );
-            steps.push(t);
-        }
+    for planes in 0..=1 {
+        let t = bench_train_step(ctx, planes, reps)?;
+        println!(
+            "training step, 256x192 {} Gaussians {planes} planes: {:.1} ms, pipelined {:.1} ms, GPU {} ms ({} busy; {})",
+            t.gaussians,
+            t.step_ms,
+            t.pipelined_ms,
+            report::gpu_ms_cell(t.gpu_ms, 1),
+            report::busy_percent(t.gpu_ms, t.pipelined_ms),
+            t.phases.iter().map(|(n, ms)| format!("{n} {ms:.1}")).collect::<Vec<_>>().join(", ")
+        );
+        steps.push(t);
     }
+    Ok(steps)
+}
+
+/// Densification at 100k Gaussians, and at 300k unless `quick`.
+fn run_densify(ctx: &GpuContext, quick: bool, reps: usize) -> Result<Vec<densify::DensifyRow>> {
     let mut densify = Vec::new();
-    if !only || args.densify_only {
-        let sizes: &[usize] = if args.quick { &[100_000] } else { &[100_000, 300_000] };
-        for &gaussians in sizes {
-            for r in bench_densify(&ctx, gaussians, args.reps.max(1))? {
-                println!("{r}");
-                densify.push(r);
-            }
+    let sizes: &[usize] = if quick { &[100_000] } else { &[100_000, 300_000] };
+    for &gaussians in sizes {
+        for r in bench_densify(ctx, gaussians, reps)? {
+            println!("{r}");
+            densify.push(r);
         }
     }
-    let measured = report::Measured {
-        rows: &rows,
-        costs: &costs,
-        throughput,
-        backward: &backward,
-        steps: &steps,
-        densify: &densify,
-    };
-    let report = report(&ctx, &measured, &args);
+    Ok(densify)
+}
+
+/// Prints the Markdown report, and writes it to `--write`'s file if given.
+fn publish(ctx: &GpuContext, measured: &report::Measured<'_>, args: &Args) -> Result<()> {
+    let report = report(ctx, measured, args);
     println!("\n{report}");
     if let Some(path) = &args.write {
         trgs_core::io::write_atomic(path, report.as_bytes())?;
@@ -527,7 +550,7 @@ fn main() -> Result<()> {
 
 /// `--scale`: each size and count, printed as it is measured and then as one Markdown table.
 fn run_scale(ctx: &GpuContext, args: &Args) -> Result<()> {
-    use trgs_train::memory::human_bytes;
+    use trgs_train::human_bytes;
     let mut lines = vec![
         "| image | Gaussians | keys | step ms | pipelined ms | GPU ms | GPU busy | densify step ms | densified to | parameters | moments | frame | losses | GPU total |".to_string(),
         "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|".to_string(),

@@ -2,14 +2,14 @@
 //! one plane (a glass pane) at growing image sizes and Gaussian counts, classic densification
 //! on, with the step's time, the time of a step that densifies, and the GPU memory the trainer
 //! holds.
-use crate::median;
+use crate::common::median;
 use crate::train_step::{pipelined_step_ms, profiled_steps};
 use anyhow::Result;
 use std::time::Instant;
 use trgs_core::fixtures::{RoomDensity, RoomSpec, room_scene};
 use trgs_render::GpuContext;
+use trgs_train::GpuMemory;
 use trgs_train::densify::{ClassicSettings, Densification};
-use trgs_train::memory::GpuMemory;
 
 /// One configuration's measurements.
 pub struct ScaleRow {

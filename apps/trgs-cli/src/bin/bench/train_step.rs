@@ -1,12 +1,12 @@
 //! The training-step measurement of `bench`: whole steps of `Trainer` (render, loss, backward,
 //! Adam) at 256x192 on the capture-like room with 100k Gaussians, with their phase breakdown.
-use crate::{median, room_100k, warm_up};
+use crate::common::{median, room_100k, warm_up};
 use anyhow::Result;
 use trgs_core::fixtures::{RoomDensity, Scene, room_scene};
 use trgs_render::{GpuContext, Layer};
-use trgs_train::data::View;
-use trgs_train::settings::TrainSettings;
-use trgs_train::trainer::Trainer;
+use trgs_train::TrainSettings;
+use trgs_train::Trainer;
+use trgs_train::View;
 
 /// Median times of one configuration's training steps.
 pub struct TrainStepRow {
@@ -45,7 +45,7 @@ pub fn bench_train_step(ctx: &GpuContext, planes: usize, steps: usize) -> Result
         .map(|_| pipelined_step_ms(&mut trainer, &view, steps))
         .collect::<Result<Vec<_>>>()?;
     trainer.time_phases = true;
-    let mut phases = vec![Vec::new(); trgs_train::trainer::StepTimes::default().phases().len()];
+    let mut phases = vec![Vec::new(); trgs_train::StepTimes::default().phases().len()];
     for _ in 0..steps {
         let s = trainer.train_step(&view)?;
         for (k, (_, ms)) in s.times.phases().into_iter().enumerate() {
@@ -54,7 +54,7 @@ pub fn bench_train_step(ctx: &GpuContext, planes: usize, steps: usize) -> Result
     }
     trainer.time_phases = false;
     let profiled = profiled_steps(&mut trainer, &view, steps)?;
-    let names = trgs_train::trainer::StepTimes::default().phases().map(|(n, _)| n);
+    let names = trgs_train::StepTimes::default().phases().map(|(n, _)| n);
     Ok(TrainStepRow {
         planes,
         gaussians: scene.gaussians.len(),

@@ -1,9 +1,10 @@
 //! COLMAP's binary layout (little endian, as COLMAP's `WriteCamerasBinary` etc. write it).
 use std::path::Path;
 
+use super::models::{model_by_id, model_by_name};
 use super::{
     ColmapCamera, ColmapImage, ColmapModel, ColmapPoint, Located, Location, check_camera,
-    check_finite, check_image, id_u32, model_by_id, model_by_name,
+    check_finite, check_image, id_u32,
 };
 use crate::io::bytes::{ByteReader, capacity_for};
 use crate::io::error::read_bytes;

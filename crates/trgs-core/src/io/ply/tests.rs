@@ -199,7 +199,7 @@ fn reads_gsplat_export_without_normals() {
 
 #[test]
 fn reads_brush_export_order_and_comments() {
-    // Brush (brush-serde export.rs): comments, then x y z, scales, opacity, rotation, f_dc, f_rest.
+    // Brush (its brush-serde exporter): comments, then x y z, scales, opacity, rotation, f_dc, f_rest.
     let comments =
         ["Exported from Brush", "Vertical axis: y", "SH degree: 1", "SplatRenderMode: default"];
     let mut props = names(&["x", "y", "z", "scale_0", "scale_1", "scale_2", "opacity"]);

@@ -1,9 +1,9 @@
 //! Classic densification's decisions on the CPU: the twin of the GPU's `densify_plan`
-//! ([`crate::densify_plan`]), which also decides for sets too large for that stage's bindings.
+//! ([`super::densify_plan`]), which also decides for sets too large for that stage's bindings.
 //! Both compare the same f32 values ([`plan_params`]) by the same rules, so they make the same
 //! plan.
-use super::{ClassicSettings, DensifyReport, DensifyStats};
-use crate::densify::{Geometry, RowPlan, TrainState};
+use super::settings::{ClassicSettings, DensifyReport, DensifyStats};
+use crate::gaussians::plan::{Geometry, RowPlan, TrainState};
 use crate::layout::DensifyPlanParams;
 use glam::{DMat3, DQuat, DVec3};
 use trgs_core::reference::noise_normal;

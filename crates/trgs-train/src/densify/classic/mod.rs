@@ -8,144 +8,27 @@
 //! (`gather_rows`): survivors keep their moments, new Gaussians start from zero moments, as in
 //! the reference code.
 pub mod decide;
+pub mod densify_plan;
+pub mod densify_stats;
+pub mod opacity_reset;
+pub mod settings;
 
-pub(crate) use decide::plan_seed;
 pub use decide::{densify_and_prune, plan_densify, plan_params};
+pub use densify_plan::{DensifyPlanOutput, GpuDensifyPlan};
+pub use densify_stats::GpuDensifyStats;
+pub use opacity_reset::{GpuOpacityReset, opacity_reset_cap, opacity_reset_logits};
+pub use settings::{ClassicSettings, DensifyReport, DensifyStats};
 
-use super::{DensifyEvent, DensifyStrategy, StepView};
-use crate::densify_plan::{GpuDensifyPlan, PendingDensifyPlan};
-use crate::densify_stats::GpuDensifyStats;
-use crate::gaussian_state::GaussianState;
-use crate::settings::{Stage, scale_len};
+use super::strategy::{DensifyEvent, DensifyStrategy, StepView};
+use crate::gaussians::state::GaussianState;
+use crate::settings::Stage;
 use anyhow::{Context, Result};
+use decide::plan_seed;
+use densify_plan::PendingDensifyPlan;
 use trgs_core::rng::Rng;
 use trgs_render::GpuContext;
 use trgs_render::toolkit::FrameStages;
 use trgs_render::toolkit::gpu::Recorder;
-use trgs_render::toolkit::layout::{FLAG_VISIBLE, PROJECTED_GRAD_FLOATS, ProjectedGaussian};
-
-/// The schedule and thresholds (3DGS defaults for 30k steps; lengths scale with the run).
-#[derive(Clone, Debug, PartialEq)]
-pub struct ClassicSettings {
-    pub from: u32,
-    pub until: u32,
-    pub every: u32,
-    pub opacity_reset_every: u32,
-    /// Average norm of dL/d(mean in NDC) above which a Gaussian densifies.
-    pub grad_threshold: f64,
-    /// Fraction of the scene extent separating clone (smaller) from split (larger).
-    pub percent_dense: f64,
-    pub min_opacity: f64,
-    /// Prune Gaussians whose screen radius exceeds this (pixels), after the first reset
-    /// (infinite: no screen-size prune).
-    pub max_screen_radius: f64,
-    /// Never grow beyond this many Gaussians.
-    pub max_gaussians: usize,
-}
-
-impl ClassicSettings {
-    /// The start and end scale with the run; the interval does not (the statistics need about a
-    /// hundred views' gradients each time, whatever the run's length), and the opacity reset comes
-    /// at least ten densifications apart, so runs of 2000 steps or fewer have none: resets three
-    /// densifications apart (steps 300 and 600 of 2000) leave a short run no time to recover,
-    /// and plain 3DGS ended lower on the synthetic scenes with them.
-    pub fn scaled(iterations: u32) -> Self {
-        let every = 100;
-        Self {
-            from: scale_len(500, iterations),
-            until: scale_len(15_000, iterations),
-            every,
-            opacity_reset_every: scale_len(3000, iterations).max(10 * every),
-            grad_threshold: 2e-4,
-            percent_dense: 0.01,
-            min_opacity: 0.005,
-            // Off, as in effect in the references: INRIA's code zeroes the radii just before its
-            // prune, so its 20-pixel test never fires, and gsplat disables it by default. A fixed
-            // pixel radius would also mean a different share of the image at each resolution.
-            max_screen_radius: f64::INFINITY,
-            max_gaussians: 1_000_000,
-        }
-    }
-
-    /// Whether step `t` ends with an opacity reset: every `opacity_reset_every` steps while
-    /// densification goes on (3DGS: 3000 ... 12000 of 15000).
-    pub fn resets_opacity_at(&self, t: u32) -> bool {
-        t > 0 && t < self.until && t.is_multiple_of(self.opacity_reset_every)
-    }
-}
-
-/// Per-Gaussian statistics gathered between densification steps.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct DensifyStats {
-    /// Per Gaussian, the sum over its observations of its screen-space gradient norm (in NDC).
-    pub grad_sum: Vec<f64>,
-    /// Steps in which a pass saw the Gaussian.
-    pub count: Vec<u32>,
-    /// The largest screen radius in pixels it had.
-    pub max_radius: Vec<f64>,
-}
-
-impl DensifyStats {
-    pub fn new(n: usize) -> Self {
-        Self { grad_sum: vec![0.0; n], count: vec![0; n], max_radius: vec![0.0; n] }
-    }
-
-    /// Add one step's screen-space gradients of an image `width x height` (the twin of the GPU's
-    /// `densify_stats`, which training uses): the camera's pass, then
-    /// any mirrored passes (whose images are the camera's). A Gaussian seen in any pass counts as
-    /// one observation whose gradient is the sum of its passes' norms, as its mean's gradient is
-    /// the sum of theirs: averaged as separate views, the faint reflection would dilute what the
-    /// camera's pass measures, and a surface seen mostly in a reflection (the room behind the
-    /// cameras) would be densified only from the few views that see it directly.
-    pub fn add(
-        &mut self,
-        passes: &[(Vec<ProjectedGaussian>, Vec<[f32; PROJECTED_GRAD_FLOATS as usize]>)],
-        width: u32,
-        height: u32,
-    ) {
-        let (hw, hh) = (0.5 * f64::from(width), 0.5 * f64::from(height));
-        for i in 0..self.count.len() {
-            let mut seen = false;
-            for (projected, grads) in passes {
-                let (Some(p), Some(g)) = (projected.get(i), grads.get(i)) else { continue };
-                if p.flags & FLAG_VISIBLE == 0 {
-                    continue;
-                }
-                seen = true;
-                // 3DGS measures the gradient in NDC: d/d(ndc) = d/d(pixel) * size / 2.
-                let (gx, gy) = (f64::from(g[0]) * hw, f64::from(g[1]) * hh);
-                self.grad_sum[i] += (gx * gx + gy * gy).sqrt();
-                let r = f64::from(p.extent[0].max(p.extent[1]));
-                self.max_radius[i] = self.max_radius[i].max(r);
-            }
-            if seen {
-                self.count[i] += 1;
-            }
-        }
-    }
-}
-
-/// What one densification step did: the count went from n to n + cloned + split - pruned (a
-/// split replaces one Gaussian by two; children pruned at once count as pruned).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct DensifyReport {
-    pub cloned: usize,
-    pub split: usize,
-    pub pruned: usize,
-    /// Gaussians drawn in a view since the last densification (their means had a gradient):
-    /// those the frames' keys mostly come from, and the only ones that can densify.
-    pub seen: usize,
-}
-
-impl DensifyReport {
-    /// How many times the keys of a frame of the new set may grow: as many more as Gaussians
-    /// cloned or split per Gaussian drawn. Those that densify are among the drawn, and often
-    /// the larger of them, so the share of the Gaussians in view (most of which are hidden and
-    /// make fewer keys) would undershoot; the undrawn ones' keys make this an overestimate.
-    pub fn key_growth(&self) -> f64 {
-        1.0 + (self.cloned + self.split) as f64 / self.seen.max(1) as f64
-    }
-}
 
 /// Classic densification as a [`DensifyStrategy`]: statistics gathered on the GPU every step,
 /// densify and prune every `every` steps, opacity resets.
@@ -313,27 +196,12 @@ impl DensifyStrategy for ClassicDensification {
     }
 }
 
-/// The logit of 3DGS's opacity reset: every opacity becomes at most 0.01.
-pub fn opacity_reset_cap() -> f32 {
-    (0.01f64 / 0.99).ln() as f32
-}
-
-/// 3DGS's opacity reset of the logits (the twin of `opacity_reset`, which training runs).
-pub fn opacity_reset_logits(logits: &mut [f32]) {
-    let cap = opacity_reset_cap();
-    for o in logits {
-        // A NaN becomes the cap too, as on the GPU.
-        if !(*o <= cap) {
-            *o = cap;
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::densify::{TrainState, sigmoid};
+    use crate::gaussians::plan::{TrainState, sigmoid};
     use trgs_core::scene::{Attribute, Gaussians, PerAttribute, Population, attribute_widths};
+    use trgs_render::toolkit::layout::{FLAG_VISIBLE, PROJECTED_GRAD_FLOATS, ProjectedGaussian};
 
     fn state(n: usize) -> TrainState {
         let mut g = Gaussians::<f32>::empty(0);

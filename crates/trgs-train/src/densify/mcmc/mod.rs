@@ -14,98 +14,29 @@
 //!
 //! There is no pruning and no opacity reset. Glass Gaussians are never moved, sampled or noised:
 //! they belong to their plane.
+pub mod mcmc_relocate;
 pub mod relocate;
+pub mod settings;
+pub mod step_kernels;
 
-pub(crate) use relocate::relocation_seeds;
+pub use mcmc_relocate::{GpuMcmcRelocate, McmcRelocateOutput};
 pub use relocate::{
     MAX_SHARE, RELOCATION_BIN_LO, RELOCATION_BINS, RELOCATION_BINS_PER_UNIT, RelocationLimits,
     draw, growth_rows, opacity_bin, plan_relocation, relocate_and_grow, relocation,
     relocation_table, weight_table,
 };
+pub use settings::{MIN_RELOCATION_INTERVAL, McmcReport, McmcSettings, OPACITY_LEARNING_RATE};
+pub use step_kernels::McmcKernels;
 
-use super::{DensifyEvent, DensifyStrategy, StepView};
-use crate::gaussian_state::GaussianState;
-use crate::kernels::TRAINING_KERNELS;
-use crate::layout::McmcParams;
-use crate::mcmc_relocate::{GpuMcmcRelocate, PendingMcmcRelocate};
-use crate::settings::scale_len;
+use super::strategy::{DensifyEvent, DensifyStrategy, StepView};
+use crate::gaussians::state::GaussianState;
 use anyhow::{Context, Result};
-use trgs_core::reference::AdamRate;
+use mcmc_relocate::PendingMcmcRelocate;
+use relocate::relocation_seeds;
 use trgs_core::rng::Rng;
 use trgs_core::scene::Attribute;
-use trgs_render::toolkit::gpu::{self, Kernel, Recorder, grid_1d, range};
-use trgs_render::{GpuContext, GpuScene, SceneGradBuffers};
-
-/// The shortest relocation interval in steps (each relocation rebuilds every buffer: several
-/// steps' time, `bench --densify`).
-pub const MIN_RELOCATION_INTERVAL: u32 = 5;
-
-/// 3DGS-MCMC's opacity learning rate (its `arguments/__init__.py`), twice 3DGS's 0.025: its
-/// regulariser pulls opacities down all through the run and relocation needs dead Gaussians.
-pub const OPACITY_LEARNING_RATE: f64 = 0.05;
-
-/// The schedule and constants (the paper's values for 30k steps; lengths scale with the run).
-#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct McmcSettings {
-    pub from: u32,
-    pub until: u32,
-    pub every: u32,
-    /// Never more Gaussians than this.
-    pub cap: usize,
-    /// Gaussians at or below this opacity are dead and get relocated.
-    pub min_opacity: f64,
-    /// Growth per relocation step (1.05: 5% more Gaussians).
-    pub growth: f64,
-    /// The noise's rate relative to the position learning rate (the paper's 5e5).
-    pub noise_rate: f64,
-    /// Weights of mean(opacity) and mean(scale) in the loss (the paper's 0.01 each).
-    pub opacity_weight: f64,
-    pub scale_weight: f64,
-}
-
-impl McmcSettings {
-    /// The paper's settings with the count capped at `cap`. The relocation interval scales with
-    /// the run like every other length (at least 5 steps, which bounds the cost of the
-    /// relocations, each a rebuild of the set, in very short runs): growing 5% per relocation,
-    /// a run then reaches its cap at the same fraction of its length as the paper's run does. A
-    /// fixed floor of 20 steps made a 2000-step run reach its cap at 64% of the run, where
-    /// classic densification has its count at 50%, and MCMC trained with about half as many
-    /// Gaussians until then.
-    pub fn scaled(iterations: u32, cap: usize) -> Self {
-        Self {
-            from: scale_len(500, iterations),
-            until: scale_len(25_000, iterations),
-            every: scale_len(100, iterations).max(MIN_RELOCATION_INTERVAL),
-            cap,
-            min_opacity: 0.005,
-            growth: 1.05,
-            noise_rate: 5e5,
-            opacity_weight: 0.01,
-            scale_weight: 0.01,
-        }
-    }
-
-    /// Whether step `t` (1-based, after its optimiser step) relocates and grows.
-    pub fn relocates_at(&self, t: u32) -> bool {
-        t > self.from && t < self.until && t.is_multiple_of(self.every)
-    }
-}
-
-/// What one relocation step did.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct McmcReport {
-    pub relocated: usize,
-    pub added: usize,
-}
-
-impl McmcReport {
-    /// How many times the keys of a frame may grow after this step on a set of `n`: every
-    /// relocated or added Gaussian copies a live one, drawn by opacity, so as many more as
-    /// those per Gaussian of the set (most of which MCMC keeps live).
-    pub fn key_growth(&self, n: usize) -> f64 {
-        1.0 + (self.relocated + self.added) as f64 / n.max(1) as f64
-    }
-}
+use trgs_render::GpuContext;
+use trgs_render::toolkit::gpu::Recorder;
 
 /// MCMC densification as a [`DensifyStrategy`].
 #[derive(Debug)]
@@ -240,100 +171,11 @@ impl DensifyStrategy for McmcDensification {
     }
 }
 
-/// The two per-step GPU stages.
-#[derive(Debug)]
-pub struct McmcKernels {
-    regularise: Kernel,
-    noise: Kernel,
-}
-
-impl McmcKernels {
-    pub fn new(ctx: &GpuContext) -> Self {
-        Self {
-            regularise: TRAINING_KERNELS.mcmc_regularise.build(ctx),
-            noise: TRAINING_KERNELS.mcmc_noise.build(ctx),
-        }
-    }
-
-    /// Record `mcmc_regularise`: add the regularisers' gradients to `grads`.
-    pub fn record_regularise(
-        &self,
-        ctx: &GpuContext,
-        rec: &mut Recorder,
-        scene: &GpuScene,
-        grads: &SceneGradBuffers,
-        settings: &McmcSettings,
-    ) {
-        let n = f64::from(scene.len().max(1));
-        let base = McmcParams {
-            opacity_weight: (settings.opacity_weight / n) as f32,
-            scale_weight: (settings.scale_weight / (3.0 * n)) as f32,
-            ..Default::default()
-        };
-        let p = scene.parameters();
-        let (log_scales, opacities) = (p[Attribute::LogScales], p[Attribute::OpacityLogits]);
-        for (first, count) in scene.chunks() {
-            let block =
-                gpu::params(ctx, "trgs.mcmc_regularise.params", &McmcParams { count, ..base });
-            let (f, c) = (u64::from(first), u64::from(count));
-            let bind = self.regularise.bind(
-                ctx,
-                &[
-                    block.as_entire_binding(),
-                    range(log_scales, f * 12, c * 12),
-                    range(opacities, f * 4, c * 4),
-                    range(scene.populations(), f * 4, c * 4),
-                    range(grads.parameter(Attribute::LogScales), f * 12, c * 12),
-                    range(grads.parameter(Attribute::OpacityLogits), f * 4, c * 4),
-                ],
-            );
-            rec.dispatch("mcmc_regularise", &self.regularise, &bind, grid_1d(count.div_ceil(256)));
-        }
-    }
-
-    /// Record `mcmc_noise` with the position learning rate `position_lr` of this step.
-    pub fn record_noise(
-        &self,
-        ctx: &GpuContext,
-        rec: &mut Recorder,
-        scene: &GpuScene,
-        settings: &McmcSettings,
-        position_lr: &AdamRate,
-        seed: u32,
-        guard: &wgpu::Buffer,
-    ) {
-        let base = McmcParams {
-            seed,
-            noise_scale: (settings.noise_rate * position_lr.lr) as f32,
-            ..Default::default()
-        };
-        let p = scene.parameters();
-        for (first, count) in scene.chunks() {
-            let block =
-                gpu::params(ctx, "trgs.mcmc_noise.params", &McmcParams { count, first, ..base });
-            let (f, c) = (u64::from(first), u64::from(count));
-            let bind = self.noise.bind(
-                ctx,
-                &[
-                    block.as_entire_binding(),
-                    range(p[Attribute::Means], f * 12, c * 12),
-                    range(p[Attribute::Rotations], f * 16, c * 16),
-                    range(p[Attribute::LogScales], f * 12, c * 12),
-                    range(p[Attribute::OpacityLogits], f * 4, c * 4),
-                    range(scene.populations(), f * 4, c * 4),
-                    guard.as_entire_binding(),
-                ],
-            );
-            rec.dispatch("mcmc_noise", &self.noise, &bind, grid_1d(count.div_ceil(256)));
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::relocate::logit;
     use super::*;
-    use crate::densify::{TrainState, sigmoid};
+    use crate::gaussians::plan::{TrainState, sigmoid};
     use trgs_core::scene::{Gaussians, PerAttribute, Population};
 
     /// N copies at the relocated opacity composite to the old opacity where they overlap

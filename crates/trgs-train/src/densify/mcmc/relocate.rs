@@ -1,8 +1,8 @@
 //! MCMC's relocation and growth as planned on the CPU: the twin of the GPU's `mcmc_relocate`
-//! ([`crate::mcmc_relocate`]), and the tables and draws the two share. Eq. 9 of the paper gives
+//! ([`super::mcmc_relocate`]), and the tables and draws the two share. Eq. 9 of the paper gives
 //! the opacity and scale of the Gaussians that share one; [`plan_relocation`] makes the plan.
-use super::McmcSettings;
-use crate::densify::{Geometry, McmcReport, RowPlan, TrainState, sigmoid};
+use super::settings::{McmcReport, McmcSettings};
+use crate::gaussians::plan::{Geometry, RowPlan, TrainState, sigmoid};
 use trgs_core::reference::draw_below;
 use trgs_core::rng::Rng;
 use trgs_core::scene::Population;
