@@ -35,7 +35,7 @@ pub fn parse_colour(v: &str) -> Result<[f32; 3], String> {
 }
 
 /// A size `WxH` in points, each at least 1.
-pub fn parse_size(v: &str) -> Result<[f32; 2], String> {
+pub fn parse_window_size(v: &str) -> Result<[f32; 2], String> {
     let (w, h) = v.split_once('x').ok_or("expected WxH, e.g. 800x600")?;
     let size: [f32; 2] = [
         w.parse().map_err(|_| format!("width {w:?}: expected a number (WxH)"))?,
@@ -57,8 +57,8 @@ mod tests {
         for bad in ["1,x,0", "1,1", "2,0,0", "NaN,0,0"] {
             assert!(parse_colour(bad).is_err(), "{bad}");
         }
-        assert_eq!(parse_size("800x600"), Ok([800.0, 600.0]));
-        assert!(parse_size("big").is_err_and(|e| e.contains("WxH")));
-        assert!(parse_size("0x600").is_err_and(|e| e.contains("at least 1")));
+        assert_eq!(parse_window_size("800x600"), Ok([800.0, 600.0]));
+        assert!(parse_window_size("big").is_err_and(|e| e.contains("WxH")));
+        assert!(parse_window_size("0x600").is_err_and(|e| e.contains("at least 1")));
     }
 }

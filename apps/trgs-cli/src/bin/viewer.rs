@@ -2,7 +2,7 @@
 use anyhow::{Result, bail};
 use clap::Parser;
 use std::path::PathBuf;
-use trgs_cli::args::parse_size;
+use trgs_cli::args::parse_window_size;
 use trgs_render::Layer;
 use trgs_viewer::{Script, Source, ViewerOptions, load_for_viewer};
 
@@ -29,7 +29,7 @@ struct Args {
     #[arg(long, value_name = "NAME", default_value = "color", value_parser = layer_parser())]
     layer: Layer,
     /// Window size in points
-    #[arg(long, value_name = "WxH", default_value = "1100x700", value_parser = parse_size)]
+    #[arg(long, value_name = "WxH", default_value = "1100x700", value_parser = parse_window_size)]
     size: [f32; 2],
     /// Start with the plane overlays off
     #[arg(long)]

@@ -25,7 +25,7 @@ pub struct RunConfig {
     #[arg(long, value_enum, value_name = "SCENE", default_value = "showcase")]
     pub demo_scene: DemoScene,
     /// The built-in scene's photo size, e.g. 1600x1200 [default: 256x192]
-    #[arg(long, value_name = "WxH", value_parser = parse_size, conflicts_with = "data")]
+    #[arg(long, value_name = "WxH", value_parser = parse_image_size, conflicts_with = "data")]
     #[serde(default)]
     pub demo_size: Option<(u32, u32)>,
     /// Views on the built-in scene's camera loop, every 8th a test view (8 views looking back
@@ -118,7 +118,7 @@ pub struct RunConfig {
 }
 
 /// `WxH` with both sides at least 16 pixels (clap's parser of `--demo-size`).
-pub fn parse_size(v: &str) -> Result<(u32, u32), String> {
+pub fn parse_image_size(v: &str) -> Result<(u32, u32), String> {
     let bad = || format!("{v:?}: expected WxH, e.g. 1600x1200, each side at least 16");
     let (w, h) = v.split_once(['x', 'X']).ok_or_else(bad)?;
     let (w, h) =
@@ -476,8 +476,8 @@ mod tests {
 
     #[test]
     fn demo_flags_shape_the_built_in_scene_and_name_it() {
-        assert_eq!(parse_size("1600x1200"), Ok((1600, 1200)));
-        assert!(parse_size("1600").is_err() && parse_size("8x8").is_err());
+        assert_eq!(parse_image_size("1600x1200"), Ok((1600, 1200)));
+        assert!(parse_image_size("1600").is_err() && parse_image_size("8x8").is_err());
         let c = RunConfig {
             demo_size: Some((1600, 1200)),
             demo_views: Some(200),

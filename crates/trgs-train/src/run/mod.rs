@@ -36,8 +36,8 @@ mod state;
 mod steps;
 
 pub use config::{
-    Ablations, DEFAULT_MCMC_CAP, DemoScene, DensifyMode, RunConfig, parse_positive, parse_size,
-    upgrade_config_record,
+    Ablations, DEFAULT_MCMC_CAP, DemoScene, DensifyMode, RunConfig, parse_image_size,
+    parse_positive, upgrade_config_record,
 };
 pub use events::{RunEvent, StepEvent, StepMemory};
 pub use log::LOG_FILE;

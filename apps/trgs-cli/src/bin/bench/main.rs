@@ -60,7 +60,7 @@ struct Args {
     #[arg(long)]
     host: bool,
     /// Image sizes of --scale
-    #[arg(long, value_name = "WxH,...", value_delimiter = ',', value_parser = trgs_train::run::parse_size,
+    #[arg(long, value_name = "WxH,...", value_delimiter = ',', value_parser = trgs_train::run::parse_image_size,
           default_value = "256x192,800x600,1280x960,1600x1200")]
     scale_sizes: Vec<(u32, u32)>,
     /// Gaussian counts of --scale
