@@ -2,6 +2,7 @@
 //!
 //! - [`scene`]: Gaussians (structure of arrays), cameras, reflection planes, input validation;
 //! - [`plane_math`]: Householder reflections, ray-rectangle hits, nearest-plane selection, Schlick;
+//! - [`plane_grad`]: a mirrored view's gradient chained into its plane's parameters;
 //! - [`fit`]: plane fitting for initialisation (RANSAC, minimum-area box, rectangle sampling);
 //! - [`pipeline`]: what the GPU stages and their CPU twins share: tile grid, key layout,
 //!   thresholds, reflection model, render settings, step guard, Adam's and the losses' settings;
@@ -18,6 +19,7 @@ pub mod lens;
 pub mod metrics;
 pub mod parallel;
 pub mod pipeline;
+pub mod plane_grad;
 pub mod plane_math;
 pub mod reference;
 pub mod rng;

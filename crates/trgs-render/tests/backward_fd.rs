@@ -68,7 +68,7 @@ impl Param {
         }
     }
 
-    fn analytic(self, g: &Gaussians<f32>, planes: &[reference::PlaneGrad]) -> f64 {
+    fn analytic(self, g: &Gaussians<f32>, planes: &[trgs_core::plane_grad::PlaneGrad]) -> f64 {
         match self {
             Param::Mean(i, a) => f64::from(g.means[i][a]),
             Param::Rotation(i, a) => f64::from(g.rotations[i][a]),

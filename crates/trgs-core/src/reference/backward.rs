@@ -4,15 +4,13 @@
 //! normalisation and R0's sigmoid last.
 use super::compose_bwd::compose_bwd;
 use super::frame::{Frame, FrameGrads};
-use super::project_bwd::{ViewGrads, project_bwd};
+use super::project_bwd::project_bwd;
 use super::rasterize_bwd::{RasterizeUpstream, rasterize_bwd};
 use super::rasterize_reflection_bwd::rasterize_reflection_bwd;
 use crate::pipeline::{RenderSettings, TileGrid};
-use crate::plane_math::outer;
-use crate::scene::{
-    Camera, Gaussians, InvalidInput, ReflectionPlane, ViewTransform, validate_scene,
-};
-use glam::{DMat3, DVec3};
+use crate::plane_grad::{PlaneGrad, mirrored_view_bwd, plane_grad};
+use crate::scene::{Camera, Gaussians, InvalidInput, ReflectionPlane, validate_scene};
+use glam::DVec3;
 
 /// Switches of the backward pass that the training stages need.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -22,59 +20,11 @@ pub struct BackwardOptions {
     pub block_reflection_to_gaussians: bool,
 }
 
-/// dL/d(plane parameters as stored).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PlaneGrad {
-    pub centre: DVec3,
-    /// With respect to the unnormalised normal.
-    pub normal: DVec3,
-    pub r0_logit: f64,
-}
-
 /// Gradients of every parameter: Gaussians (same layout as the scene) and planes.
 #[derive(Clone, Debug)]
 pub struct SceneGrads {
     pub gaussians: Gaussians<f64>,
     pub planes: Vec<PlaneGrad>,
-}
-
-/// Chain the gradient of a mirrored view into the plane's centre and unit normal, given the real
-/// camera's view. `W' = R H`, `t' = t + 2 (u.n) R n`, `c' = c - 2 ((c - u).n) n`.
-pub fn mirrored_view_bwd(
-    plane: &ReflectionPlane,
-    real: &ViewTransform,
-    vg: &ViewGrads,
-) -> (DVec3, DVec3) {
-    let n = plane.unit_normal();
-    let u = plane.centre;
-    let (r, c) = (real.linear, real.centre);
-    let rn = r * n;
-    let mut g_n = -2.0 * (r.transpose() * vg.linear * n + vg.linear.transpose() * rn);
-    let gt_rn = vg.translation.dot(rn);
-    let mut g_u = 2.0 * gt_rn * n;
-    g_n += 2.0 * gt_rn * u + 2.0 * u.dot(n) * (r.transpose() * vg.translation);
-    let cu = c - u;
-    g_u += 2.0 * n.dot(vg.centre) * n;
-    g_n -= 2.0 * (vg.centre.dot(n) * cu + cu.dot(n) * vg.centre);
-    (g_u, g_n)
-}
-
-/// The gradient of a plane's stored parameters from those of its centre, unit normal and R0:
-/// through the normalisation `n = n_raw / |n_raw|` and `R0 = sigmoid(logit)`.
-pub fn plane_grad(
-    plane: &ReflectionPlane,
-    g_centre: DVec3,
-    g_unit_normal: DVec3,
-    g_r0: f64,
-) -> PlaneGrad {
-    let len = plane.normal.length();
-    let nu = plane.normal / len;
-    let r0 = plane.r0();
-    PlaneGrad {
-        centre: g_centre,
-        normal: (DMat3::IDENTITY - outer(nu, nu)) * g_unit_normal / len,
-        r0_logit: g_r0 * r0 * (1.0 - r0),
-    }
 }
 
 /// Gradients of a scalar loss given dL/d(each layer of `frame`), which `render` produced from the

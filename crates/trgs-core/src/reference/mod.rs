@@ -38,9 +38,7 @@ mod tile_counts;
 mod tile_ranges;
 
 pub use adam::adam;
-pub use backward::{
-    BackwardOptions, PlaneGrad, SceneGrads, backward, mirrored_view_bwd, plane_grad,
-};
+pub use backward::{BackwardOptions, SceneGrads, backward};
 pub use block_reach::{block_reach, reaches_f32};
 pub use compose::{ComposeOutput, compose};
 pub use compose_bwd::{ComposeGrads, compose_bwd};
@@ -53,7 +51,7 @@ pub use mcmc::{draw_below, mcmc_noise, mcmc_regularise, noise_normal, noise_offs
 pub use photometric_loss::{PhotometricLoss, photometric_loss, photometric_loss_covered};
 pub use prefix_sum::prefix_sum;
 pub use project::{Projected, ProjectionFilter, project};
-pub use project_bwd::{ProjectedGrads, ViewGrads, project_bwd};
+pub use project_bwd::{ProjectedGrads, project_bwd};
 pub use rasterize::{PixelState, rasterize};
 pub use rasterize_bwd::{RasterizeUpstream, rasterize_bwd};
 pub use rasterize_reflection::{ReflectionPixelState, rasterize_reflection};

@@ -4,6 +4,7 @@
 //! mirrored view learn.
 use super::Projected;
 use super::project::{covariance2d, covariance3d, jacobian, quat_to_mat, tan_limits};
+use crate::plane_grad::ViewGrads;
 use crate::plane_math::outer;
 use crate::scene::{Gaussians, Intrinsics, ViewTransform};
 use crate::sh;
@@ -32,20 +33,6 @@ impl ProjectedGrads {
             mask: vec![0.0; n],
             reflection: vec![0.0; n],
         }
-    }
-}
-
-/// dL/d(view): the view's linear map, translation and centre.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ViewGrads {
-    pub linear: DMat3,
-    pub translation: DVec3,
-    pub centre: DVec3,
-}
-
-impl Default for ViewGrads {
-    fn default() -> Self {
-        Self { linear: DMat3::ZERO, translation: DVec3::ZERO, centre: DVec3::ZERO }
     }
 }
 

@@ -7,7 +7,7 @@ use crate::GpuContext;
 use crate::gpu::{GpuError, PendingRead};
 use crate::layout::VIEW_GRAD_FLOATS;
 use glam::{DMat3, DVec3};
-use trgs_core::reference::{PlaneGrad, ViewGrads, mirrored_view_bwd, plane_grad};
+use trgs_core::plane_grad::{PlaneGrad, ViewGrads, mirrored_view_bwd, plane_grad};
 use trgs_core::scene::{ReflectionPlane, ViewTransform};
 
 /// dL/d(each plane's centre, unnormalised normal, R0 logit) of one backward pass, on its way

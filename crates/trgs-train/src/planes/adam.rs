@@ -15,7 +15,8 @@ use crate::run::checkpoint::PlaneMoments;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use trgs_core::pipeline::{AdamRate, AdamSettings};
-use trgs_core::reference::{PlaneGrad, adam};
+use trgs_core::plane_grad::PlaneGrad;
+use trgs_core::reference::adam;
 use trgs_core::scene::ReflectionPlane;
 
 /// Learning rates of one plane step.

@@ -6,7 +6,7 @@ use crate::planes::adam::{OffsetLimit, PlaneRates, plane_adam};
 use crate::run::checkpoint::PlaneMoments;
 use crate::settings::Stage;
 use anyhow::{Context, Result};
-use trgs_core::reference::PlaneGrad;
+use trgs_core::plane_grad::PlaneGrad;
 use trgs_core::scene::{Attribute, Gaussians, Population, ReflectionPlane, attribute_widths};
 use trgs_render::toolkit::gpu::PendingRead;
 
