@@ -1,6 +1,6 @@
 // Helpers shared by every stage. The constants (TILE_SIZE, MAX_ALPHA, ...) and the GPU structs
 // come from the prelude that trgs-render generates from its Rust definitions (one source of
-// truth); see crates/trgs-render/src/layout.rs.
+// truth); see crates/trgs-render/src/toolkit/layout.rs.
 
 // Linear invocation index of a 1D dispatch that may have been split into 2D (more than 65,535
 // workgroups) with `workgroup_size` threads per group.

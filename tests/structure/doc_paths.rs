@@ -1,11 +1,11 @@
 //! The paths that the docs and the code's comments name: README.md, docs/*.md and every comment
-//! of every `.rs` file. A path names a file of the repository when it starts at one of its top
-//! folders (`crates/`, `shaders/`, `docs/` ...) or is a source file of the project's kinds
-//! (`.rs`, `.wgsl`, `.md`); such a path must exist, from the folder of the file that names it or
-//! as the end of some file's path (`stages/sort.rs`). Other files named without a top folder
-//! (`metrics.py`) are taken to be other projects', as is a path after `$` (an environment
-//! variable's folder). `{a,b}` lists and `*` globs are expanded; a path with a placeholder (`<stem>`) is a run's
-//! output, not a file of the repository.
+//! of every `.rs` and `.wgsl` file. A path names a file of the repository when it starts at one
+//! of its top folders (`crates/`, `shaders/`, `docs/` ...) or is a source file of the project's
+//! kinds (`.rs`, `.wgsl`, `.md`); such a path must exist, from the folder of the file that names
+//! it or as the end of some file's path (`stages/sort.rs`). Other files named without a top
+//! folder (`metrics.py`) are taken to be other projects', as is a path after `$` (an environment
+//! variable's folder). `{a,b}` lists and `*` globs are expanded; a path with a placeholder
+//! (`<stem>`) is a run's output, not a file of the repository.
 
 use super::source::{files_with, root, shown, split};
 use std::path::{Path, PathBuf};
@@ -30,7 +30,10 @@ pub fn documents() -> Vec<(PathBuf, String)> {
     for path in markdown {
         out.push((path.clone(), std::fs::read_to_string(&path).unwrap_or_default()));
     }
-    for path in files_with(&root, ".rs") {
+    // WGSL's comments are written as Rust's, so the same split finds them.
+    let mut sources = files_with(&root, ".rs");
+    sources.extend(files_with(&root.join("shaders"), ".wgsl"));
+    for path in sources {
         let text = std::fs::read_to_string(&path).unwrap_or_default();
         out.push((path, split(&text).comments));
     }

@@ -205,7 +205,7 @@ fn throughput_section(s: &mut String, t: &Throughput) {
     let _ = writeln!(
         s,
         "Evaluations: per pixel, the list entries `rasterize` visited before the pixel stopped. \
-         The trivial loop (`shaders/splat_loop.wgsl`) blends the same number of Gaussians in every \
+         The trivial loop (`shaders/bench/splat_loop.wgsl`) blends the same number of Gaussians in every \
          tile with one transmittance, no early exit and no sorting. Timed in turns over {} rounds \
          (a profiled frame, then one dispatch of each loop), so that the machine's drift hits all \
          alike: rates are medians over rounds, the percentages medians over rounds of the ratio.\n",

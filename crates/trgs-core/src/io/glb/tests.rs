@@ -1,6 +1,9 @@
+use super::read::{chunks, read_accessor, word};
 use super::*;
 use crate::io::test_util::{assert_mentions, scratch_dir};
 use crate::rng::Rng;
+use crate::scene::Population;
+use glam::DVec3;
 
 fn random_gaussians(n: usize, degree: u32, rng: &mut Rng) -> Gaussians<f32> {
     let mut g = Gaussians::<f32>::zeros(n, degree);
