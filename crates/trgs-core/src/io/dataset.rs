@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use super::FormatError;
 use super::colmap::ColmapModel;
-use super::masks::{mask_path, read_glass_mask};
+use super::masks::{GlassMask, mask_path, read_glass_mask};
 use super::planes_json::{PlaneSpec, read_planes_json};
 use super::ply::read_point_cloud_ply;
 use super::png::read_rgb8_image;
@@ -205,8 +205,9 @@ impl SceneFolder {
         Ok(image)
     }
 
-    /// The glass mask of view `i`, if it has one, at the photo's own size.
-    pub fn load_mask(&self, i: usize) -> Result<Option<Image<u8>>, FormatError> {
+    /// The glass mask of view `i`, if it has one, at the photo's own size, its soft edges moved
+    /// to the nearest label ([`super::masks`]).
+    pub fn load_mask(&self, i: usize) -> Result<Option<GlassMask>, FormatError> {
         let view = self.view(i)?;
         let (w, h) = view.photo_size();
         match &view.mask_path {
@@ -224,7 +225,8 @@ impl SceneFolder {
         let mut labels = BTreeSet::new();
         for i in 0..self.views.len() {
             if let Some(mask) = self.load_mask(i)? {
-                labels.extend(mask.data.iter().filter(|&&v| v > 0).map(|&v| u32::from(v)));
+                let data = &mask.labels.data;
+                labels.extend(data.iter().filter(|&&v| v > 0).map(|&v| u32::from(v)));
             }
         }
         Ok(labels.into_iter().collect())
@@ -389,7 +391,7 @@ mod tests {
         assert_eq!(scene.points, [([1.0, 2.0, 3.0], [9, 8, 7])]);
         assert!(scene.is_test("b.png") && !scene.is_test("a.png"));
         assert_eq!(scene.load_image(1).expect("image").data[0], 128);
-        assert_eq!(scene.load_mask(1).expect("mask"), Some(mask));
+        assert_eq!(scene.load_mask(1).expect("mask").map(|m| m.labels), Some(mask));
         assert_eq!(scene.load_mask(0).expect("no mask"), None);
         assert_eq!(scene.mask_labels().expect("labels"), [2, 5]);
         assert_eq!((scene.material(2), scene.material(5)), (Material::Mirror, Material::Glass));

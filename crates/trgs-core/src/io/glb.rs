@@ -38,6 +38,7 @@ use glam::{DMat3, DQuat};
 use serde_json::{Value, json};
 
 use super::error::{FormatError, write_atomic};
+use super::model_values::{Field, check_gaussians};
 use crate::scene::{Gaussians, Material, ReflectionPlane, sh_coeff_count};
 use crate::sh::C0;
 
@@ -70,12 +71,9 @@ fn columns(g: &Gaussians<f32>) -> Vec<Column> {
             g.rotations
                 .iter()
                 .flat_map(|q| {
+                    // Finite and non-zero: `writable` has checked.
                     let norm = q.iter().map(|v| v * v).sum::<f32>().sqrt();
-                    if norm > 0.0 && norm.is_finite() {
-                        [q[1] / norm, q[2] / norm, q[3] / norm, q[0] / norm]
-                    } else {
-                        [0.0, 0.0, 0.0, 1.0]
-                    }
+                    [q[1] / norm, q[2] / norm, q[3] / norm, q[0] / norm]
                 })
                 .collect(),
         ),
@@ -114,6 +112,38 @@ fn columns(g: &Gaussians<f32>) -> Vec<Column> {
         g.populations.iter().map(|&p| p as u8 as f32).collect(),
     ));
     cols
+}
+
+/// What the file stores `field` as, for messages (scales are stored as their exp, and read back
+/// as its log).
+fn attribute_name(field: Field) -> String {
+    match field {
+        Field::Mean(a) => format!("POSITION[{a}]"),
+        Field::Rotation(a) => format!("rotation[{a}] (w x y z; KHR_gaussian_splatting:ROTATION)"),
+        Field::LogScale(a) => format!("log-scale[{a}] (ln of KHR_gaussian_splatting:SCALE)"),
+        Field::OpacityLogit => "_TRGS_OPACITY_LOGIT".into(),
+        Field::Sh { coeff, channel } => {
+            let degree = coeff.isqrt();
+            let order = coeff - degree * degree;
+            format!("KHR_gaussian_splatting:SH_DEGREE_{degree}_COEF_{order}[{channel}]")
+        }
+        Field::MaskLogit => "_TRGS_MASK_LOGIT".into(),
+        Field::LogReflection => "_TRGS_LOG_REFLECTION".into(),
+    }
+}
+
+/// Every value of `g` one a model file can hold, and a rotation with a direction (the file
+/// stores a unit quaternion).
+fn writable(g: &Gaussians<f32>) -> Result<(), String> {
+    check_gaussians(g).map_err(|u| u.message(&attribute_name(u.field)))?;
+    match g.rotations.iter().position(|q| q.iter().all(|&v| v * v == 0.0)) {
+        Some(i) => Err(format!(
+            "Gaussian {i}: rotation {:?} has no direction, and a glTF rotation is a unit \
+             quaternion",
+            g.rotations[i]
+        )),
+        None => Ok(()),
+    }
 }
 
 fn components(kind: &str) -> Option<usize> {
@@ -160,6 +190,7 @@ pub fn encode_glb(g: &Gaussians<f32>, planes: &[ReflectionPlane]) -> Result<Vec<
     if g.is_empty() {
         return Err("a glTF point primitive needs at least one Gaussian".into());
     }
+    writable(g)?;
     let mut bin: Vec<u8> = Vec::new();
     let mut views = Vec::new();
     let mut accessors = Vec::new();

@@ -1,6 +1,6 @@
 //! Loading a trained model: a Gaussian PLY (trgs or any INRIA-layout file) and its planes, or a
 //! `.glb` with `KHR_gaussian_splatting` (Gaussians and planes in one file).
-use super::{FormatError, read_glb, read_planes_json, read_ply};
+use super::{FormatError, check_finished_run, read_glb, read_planes_json, read_ply};
 use crate::pipeline::ReflectionModel;
 use crate::scene::{Gaussians, ReflectionPlane};
 use std::path::{Path, PathBuf};
@@ -74,6 +74,7 @@ pub fn find_ply(path: &Path) -> Result<PathBuf, FormatError> {
 /// Load the Gaussians of `path` and the planes of `planes` (or, when None, of a `planes.json`
 /// beside the PLY or in the run folder; none found means no planes: plain 3DGS).
 pub fn load_model(path: &Path, planes: Option<&Path>) -> Result<Model, FormatError> {
+    refuse_unfinished_run(path)?;
     if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("glb")) {
         let (gaussians, mut inside) = read_glb(path)?;
         checked(path, &gaussians)?;
@@ -98,6 +99,18 @@ pub fn load_model(path: &Path, planes: Option<&Path>) -> Result<Model, FormatErr
     };
     let reflection = trained_reflection_model(path, &ply);
     Ok(Model { gaussians, planes, ply, reflection })
+}
+
+/// A model in the folder of a run that has not finished is what an earlier run or a partial
+/// write left: refused, whether the folder or a file in it was named.
+fn refuse_unfinished_run(path: &Path) -> Result<(), FormatError> {
+    if path.is_dir() {
+        return check_finished_run(path);
+    }
+    match path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        Some(dir) => check_finished_run(dir),
+        None => check_finished_run(Path::new(".")),
+    }
 }
 
 /// What the renderer would refuse at upload (a NaN, a zero quaternion), as an error that names
@@ -155,6 +168,22 @@ mod tests {
         let err = load_model(&dir, None).expect_err("zero quaternion").to_string();
         assert!(err.contains("model.ply") && err.contains("Gaussian 1"), "{err}");
         assert!(err.contains("zero quaternion"), "{err}");
+    }
+
+    #[test]
+    fn a_model_in_an_unfinished_runs_folder_is_refused() {
+        let dir = crate::scratch::ScratchDir::new("model-unfinished");
+        let mut g = Gaussians::<f32>::empty(0);
+        g.push([0.0, 0.0, 2.0], [1.0, 0.0, 0.0, 0.0], [-2.0; 3], 0.0, &[], Population::Primary);
+        write_ply(&dir.join("model.ply"), &g).expect("write");
+        let run = crate::io::UnfinishedRun { iterations: 30, checkpoint_step: 10 };
+        crate::io::write_unfinished_run(&dir, &run).expect("mark");
+        for path in [dir.to_path_buf(), dir.join("model.ply")] {
+            let err = load_model(&path, None).expect_err("unfinished").to_string();
+            assert!(err.contains("unfinished training run"), "{err}");
+        }
+        crate::io::clear_unfinished_run(&dir).expect("finished");
+        assert_eq!(load_model(&dir, None).expect("finished").gaussians.len(), 1);
     }
 
     #[test]

@@ -1,12 +1,15 @@
 //! Images: reading photos (PNG or JPEG) as RGB in [0, 1], writing RGB renders and gray label
 //! images as PNG. Label images (glass masks) must be PNG: a lossy JPEG would invent labels at
 //! edges. Other formats are recognised by their magic bytes so the error can say what to do.
+//! Every photo is decoded strictly: a PNG or JPEG cut short or with corrupt data is an error, not
+//! an image with grey or black rows (JPEG in [`super::jpeg`]).
 use std::io::Cursor;
 use std::path::Path;
 
 use image::{DynamicImage, ExtendedColorType, ImageEncoder, ImageFormat, ImageReader};
 
 use super::error::read_bytes;
+use super::jpeg::decode_jpeg;
 use super::{FormatError, write_atomic};
 use crate::image::Image;
 
@@ -19,6 +22,9 @@ fn decode(path: &Path, allowed: &[ImageFormat]) -> Result<DynamicImage, FormatEr
         .with_guessed_format()
         .map_err(|e| FormatError::io(path, &e))?;
     let format = check_format(path, reader.format(), allowed)?;
+    if format == ImageFormat::Jpeg {
+        return decode_jpeg(path, &bytes);
+    }
     reader
         .decode()
         .map_err(|e| FormatError::new(path, format!("cannot decode the {format:?} image: {e}")))
@@ -92,7 +98,8 @@ pub(crate) fn decode_label_png(path: &Path) -> Result<Image<u8>, FormatError> {
     Ok(Image { width: info.width, height: info.height, channels: 1, data })
 }
 
-/// The size of a photo from its header alone (PNG or JPEG).
+/// The size of a photo from its header alone (PNG or JPEG): a file cut short after its header
+/// has a size, and reading its pixels is what refuses it.
 pub(crate) fn image_dimensions(path: &Path) -> Result<(u32, u32), FormatError> {
     let reader = ImageReader::open(path)
         .and_then(|r| r.with_guessed_format())
@@ -322,14 +329,90 @@ mod tests {
         let path = dir.join("a.jpg");
         std::fs::write(&path, [0xff, 0xd8, 0xff, 0xe0, 0, 16, b'J', b'F', b'I', b'F', 0])
             .expect("write");
-        // A truncated JPEG is recognised and fails to decode, naming the file.
-        assert_mentions(&read_rgb_image(&path).expect_err("jpeg"), &["a.jpg", "Jpeg"]);
+        // A truncated JPEG is recognised and refused, naming the file.
+        assert_mentions(&read_rgb_image(&path).expect_err("jpeg"), &["a.jpg", "cut short"]);
         // A JPEG is not accepted as a label image.
         assert_mentions(&decode_label_png(&path).expect_err("jpeg mask"), &["a.jpg", "only PNG"]);
         std::fs::write(&path, b"hello").expect("write");
         assert_mentions(&read_rgb_image(&path).expect_err("junk"), &["a.jpg", "not a PNG"]);
         let missing = dir.join("missing.png");
         assert_mentions(&read_rgb_image(&missing).expect_err("missing"), &["missing.png"]);
+    }
+
+    /// A 64x48 photo with texture (a gradient and noise), as a camera's JPEG holds: enough
+    /// image data that a cut lands inside it.
+    fn textured_jpeg(path: &Path) -> Vec<u8> {
+        let mut rng = crate::rng::Rng::new(61);
+        let mut img = Image::<f32>::new(64, 48, 3);
+        for (i, v) in img.data.iter_mut().enumerate() {
+            let (x, y) = ((i / 3) % 64, i / 3 / 64);
+            *v = (0.5 * (x + y) as f32 / 110.0 + 0.5 * rng.uniform() as f32).min(1.0);
+        }
+        write_jpeg_rgb(path, &img, 90).expect("write the JPEG");
+        std::fs::read(path).expect("read the JPEG back")
+    }
+
+    /// Where the first start-of-scan marker (FF DA) is.
+    fn start_of_scan(jpeg: &[u8]) -> usize {
+        jpeg.windows(2).position(|w| w == [0xFF, 0xDA]).expect("a start of scan")
+    }
+
+    #[test]
+    fn a_cut_short_jpeg_is_refused_naming_the_file() {
+        let dir = scratch_dir("jpeg-cut");
+        let whole = textured_jpeg(&dir.join("whole.jpg"));
+        assert_eq!(read_rgb8_image(&dir.join("whole.jpg")).expect("whole").width, 64);
+        let cuts = [("scan40.jpg", start_of_scan(&whole) + 40), ("third.jpg", whole.len() / 3)];
+        for (name, cut) in cuts {
+            let path = dir.join(name);
+            std::fs::write(&path, &whole[..cut]).expect("write");
+            let size = format!("({cut} bytes)");
+            assert_mentions(&read_rgb_image(&path).expect_err(name), &[name, "cut short", &size]);
+            assert_mentions(&read_rgb8_image(&path).expect_err(name), &[name, "cut short"]);
+        }
+        // Cut a few bytes before its end, inside the last row of blocks.
+        let path = dir.join("tail.jpg");
+        std::fs::write(&path, &whole[..whole.len() - 6]).expect("write");
+        assert_mentions(&read_rgb8_image(&path).expect_err("tail"), &["tail.jpg", "cut short"]);
+    }
+
+    #[test]
+    fn a_jpeg_with_corrupt_image_data_is_refused() {
+        let dir = scratch_dir("jpeg-corrupt");
+        let mut bytes = textured_jpeg(&dir.join("a.jpg"));
+        // Sixteen one bits (stuffed as FF 00) in the middle of the scan: no Huffman table has a
+        // code of sixteen ones, so this cannot be read as image data.
+        let at = start_of_scan(&bytes) + 200;
+        bytes.splice(at..at + 16, [0xFF, 0x00].repeat(8));
+        let path = dir.join("corrupt.jpg");
+        std::fs::write(&path, &bytes).expect("write");
+        assert_mentions(&read_rgb8_image(&path).expect_err("corrupt"), &["corrupt.jpg", "corrupt"]);
+        // A marker that may not follow image data, inside it.
+        let mut bytes = textured_jpeg(&dir.join("b.jpg"));
+        let at = start_of_scan(&bytes) + 200;
+        bytes.splice(at..at + 2, [0xFF, 0xC0]);
+        std::fs::write(&path, &bytes).expect("write");
+        assert_mentions(&read_rgb8_image(&path).expect_err("marker"), &["corrupt.jpg", "FF C0"]);
+    }
+
+    #[test]
+    fn a_jpeg_with_metadata_and_bytes_after_its_end_reads() {
+        let dir = scratch_dir("jpeg-extra");
+        let plain = textured_jpeg(&dir.join("plain.jpg"));
+        let expected = read_rgb8_image(&dir.join("plain.jpg")).expect("plain");
+        // An APP1 (EXIF) segment holding a thumbnail with its own end-of-image marker, after the
+        // start-of-image marker, and padding after the end, as cameras write.
+        let thumbnail = [b"Exif\0\0".as_slice(), &[0xFF, 0xD8, 1, 2, 3, 0xFF, 0xD9]].concat();
+        let length = (thumbnail.len() + 2) as u16;
+        let mut bytes = vec![0xFF, 0xD8, 0xFF, 0xE1];
+        bytes.extend(length.to_be_bytes());
+        bytes.extend(&thumbnail);
+        bytes.extend(&plain[2..]);
+        bytes.extend([0u8; 300]);
+        let path = dir.join("camera.jpg");
+        std::fs::write(&path, &bytes).expect("write");
+        assert_eq!(read_rgb8_image(&path).expect("camera JPEG"), expected);
+        assert_eq!(image_dimensions(&path).expect("size"), (64, 48));
     }
 
     #[test]

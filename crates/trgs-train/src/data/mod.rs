@@ -6,7 +6,7 @@ use glam::DVec3;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use trgs_core::Image;
-use trgs_core::io::{SceneFolder, Split};
+use trgs_core::io::{SceneFolder, Split, check_plane_count};
 use trgs_core::lens::Undistortion;
 use trgs_core::parallel::for_each_index;
 use trgs_core::scene::{Camera, Material};
@@ -14,7 +14,7 @@ use trgs_core::scene::{Camera, Material};
 mod notes;
 mod resize;
 
-use notes::{LensNote, LoadNotes, Loaded, ViewReport};
+use notes::{LensNote, LoadNotes, Loaded, SoftMask, ViewReport};
 pub use resize::resize_area_u8;
 
 /// The longer side photos are trained at by default (the INRIA code's limit too): a 12 MP photo
@@ -61,7 +61,8 @@ pub struct View {
     /// The photo, 8-bit RGB as it was stored (a quarter of f32's memory: a few hundred views at
     /// 1600 px fit beside the model).
     pub image: Image<u8>,
-    /// Glass-mask labels (0: no glass, k: plane label k), nearest-neighbour resized.
+    /// Glass-mask labels (0: no glass, k: plane label k; soft edges moved to the nearest label,
+    /// `trgs_core::io::masks`), nearest-neighbour resized.
     pub mask: Option<Image<u8>>,
     /// Which pixels the photo covers (1) and which it does not (0: the border of an undistorted
     /// photo, black in `image`), left out of the loss and the metrics. None: every pixel.
@@ -156,7 +157,7 @@ impl TrainingData {
         if train.is_empty() {
             bail!("{}: every view is a test view; nothing to train on", folder.root.display());
         }
-        Ok(Self::assemble(folder, train, test, notes.lines(resolution)))
+        Self::assemble(folder, train, test, notes.lines(resolution))
     }
 
     fn load_evaluation(
@@ -182,17 +183,30 @@ impl TrainingData {
             views.sort_by(|a, b| a.camera.name.cmp(&b.camera.name));
         }
         let (train, test) = if no_test_views { (views, Vec::new()) } else { (Vec::new(), views) };
-        Ok(Self::assemble(folder, train, test, notes.lines(resolution)))
+        Self::assemble(folder, train, test, notes.lines(resolution))
     }
 
     /// The loaded views with the folder's points, materials, and the extent of its training
-    /// cameras (their poses do not depend on which photos were decoded).
+    /// cameras (their poses do not depend on which photos were decoded); an error when the
+    /// views' masks together hold more labels than `trgs_core::io::MAX_PLANES`, before any
+    /// training work starts.
     fn assemble(
         folder: &SceneFolder,
         train: Vec<View>,
         test: Vec<View>,
         notes: Vec<String>,
-    ) -> Self {
+    ) -> Result<Self> {
+        let mut labels: Vec<u32> = train
+            .iter()
+            .chain(&test)
+            .filter_map(|v| v.mask.as_ref())
+            .flat_map(|m| m.data.iter().filter(|&&v| v > 0).map(|&v| u32::from(v)))
+            .collect();
+        labels.sort_unstable();
+        labels.dedup();
+        if let Err(problem) = check_plane_count(&labels) {
+            bail!("{}: the glass masks together hold {problem}", folder.root.display());
+        }
         let training = folder.views.iter().filter(|v| !folder.is_test(&v.camera.name));
         let centres: Vec<DVec3> = training.map(|v| v.camera.pose.centre()).collect();
         let centre = centres.iter().copied().sum::<DVec3>() / centres.len().max(1) as f64;
@@ -206,7 +220,7 @@ impl TrainingData {
             .collect();
         let mut data = Self { train, test, points, extent, centre, materials: Vec::new(), notes };
         data.materials = data.mask_labels().into_iter().map(|l| (l, folder.material(l))).collect();
-        data
+        Ok(data)
     }
 
     /// The width and height of the training images (of the evaluated ones, for data loaded by
@@ -287,11 +301,20 @@ fn load_views(
 fn load_view(folder: &SceneFolder, i: usize, resolution: Resolution) -> Result<Loaded> {
     let spec = &folder.views[i];
     let photo = folder.load_image(i)?;
-    let labels = folder.load_mask(i)?;
+    let mask = folder.load_mask(i)?;
+    let soft = match (&mask, &spec.mask_path) {
+        (Some(m), Some(path)) if m.soft_pixels > 0 => {
+            let shown = path.strip_prefix(&folder.root).unwrap_or(path);
+            Some(SoftMask { path: shown.display().to_string(), pixels: m.soft_pixels })
+        }
+        _ => None,
+    };
+    let labels = mask.map(|m| m.labels);
     let full = (spec.camera.width(), spec.camera.height());
     let (w, h) = target_size(full.0, full.1, resolution)
         .with_context(|| format!("resizing {}", spec.image_path.display()))?;
-    let mut report = ViewReport { scaled: ((w, h) != full).then_some((full, (w, h))), lens: None };
+    let scaled = ((w, h) != full).then_some((full, (w, h)));
+    let mut report = ViewReport { scaled, lens: None, soft };
     let mut camera = spec.camera.clone();
     camera.intrinsics = camera.intrinsics.resized(w, h);
     let Some(u) = &spec.undistortion else {
@@ -353,6 +376,72 @@ pub fn target_size(w: u32, h: u32, resolution: Resolution) -> Result<(u32, u32)>
 #[cfg(test)]
 mod tests {
     use super::*;
+    use trgs_core::io::{read_glass_mask, write_glass_mask};
+    use trgs_core::scratch::ScratchDir;
+
+    /// The small synthetic scene written to a folder, each of its glass masks replaced by what
+    /// `mask(view, width, height)` paints.
+    fn scene_with_masks(tag: &str, mask: impl Fn(usize, u32, u32) -> Vec<u8>) -> ScratchDir {
+        let dir = ScratchDir::new(tag);
+        let scene = trgs_synthetic::generate(&trgs_synthetic::SyntheticConfig::small());
+        trgs_synthetic::write_dataset(&scene, &dir).expect("write the dataset");
+        let mut paths: Vec<_> = std::fs::read_dir(dir.join("glass_masks"))
+            .expect("masks")
+            .map(|e| e.expect("entry").path())
+            .collect();
+        paths.sort();
+        assert!(paths.len() >= 3, "the scene has masked views");
+        for (k, path) in paths.iter().enumerate() {
+            let (w, h) = (scene.cameras[0].width(), scene.cameras[0].height());
+            let data = mask(k, w, h);
+            let image = Image { width: w, height: h, channels: 1, data };
+            write_glass_mask(path, &image).expect("write a mask");
+        }
+        dir
+    }
+
+    #[test]
+    fn soft_edged_masks_load_as_their_labels_with_a_note() {
+        // A 0/255 disc with a ramp of grey a few pixels wide at its edge, as a soft brush paints.
+        let disc = |_: usize, w: u32, h: u32| -> Vec<u8> {
+            let (cx, cy, r) = (f64::from(w) / 2.0, f64::from(h) / 2.0, f64::from(h) / 3.0);
+            (0..w * h)
+                .map(|i| {
+                    let (x, y) = (f64::from(i % w) + 0.5, f64::from(i / w) + 0.5);
+                    let d = (x - cx).hypot(y - cy);
+                    (255.0 * ((r - d) / 3.0 + 0.5).clamp(0.0, 1.0)).round() as u8
+                })
+                .collect()
+        };
+        let dir = scene_with_masks("soft-masks", disc);
+        let folder = SceneFolder::open(&dir).expect("open");
+        let data =
+            TrainingData::load(&folder, &LoadOptions::at(Resolution::Original)).expect("load");
+        assert_eq!(data.mask_labels(), [255], "one plane, not one per grey level");
+        let note = data.notes.iter().find(|n| n.contains("soft edges")).expect("a soft-edge note");
+        let masked = data.train.iter().filter(|v| v.mask.is_some()).count();
+        assert!(note.starts_with(&format!("{masked} glass masks have soft edges")), "{note}");
+        assert!(note.contains("(first: glass_masks/") && note.contains("nearest label"), "{note}");
+        let first = folder.views.iter().find_map(|v| v.mask_path.clone()).expect("a mask");
+        let read = read_glass_mask(&first, 64, 48).expect("read");
+        assert!(note.contains(&format!("{} pixels between labels", read.soft_pixels)), "{note}");
+    }
+
+    #[test]
+    fn masks_with_more_labels_than_planes_together_are_refused() {
+        // Three flat bands a mask, of labels no other mask uses: nine labels in all.
+        let bands = |k: usize, w: u32, h: u32| -> Vec<u8> {
+            (0..w * h).map(|i| (3 * k as u32 + 1 + 3 * (i % w) / w) as u8).collect()
+        };
+        let dir = scene_with_masks("many-masks", bands);
+        let folder = SceneFolder::open(&dir).expect("open");
+        let err = TrainingData::load(&folder, &LoadOptions::at(Resolution::Original))
+            .expect_err("nine labels")
+            .to_string();
+        for part in ["9 labels", "1, 2, 3, 4, 5, 6, 7, 8, 9", "more than the 8 planes", "plane k"] {
+            assert!(err.contains(part), "{err}");
+        }
+    }
 
     #[test]
     fn sizes_follow_the_resolution() {

@@ -1,5 +1,5 @@
-//! What loading did to the photos (scaled down, undistorted), gathered over the views into the
-//! lines of the run's log.
+//! What loading did to the photos (scaled down, undistorted) and the glass masks (soft edges
+//! moved to the nearest label), gathered over the views into the lines of the run's log.
 use super::{Resolution, View};
 
 /// A width and height.
@@ -13,6 +13,14 @@ pub(super) struct ViewReport {
     /// Its pinhole size and its training size, when they differ.
     pub(super) scaled: Option<(Size, Size)>,
     pub(super) lens: Option<LensNote>,
+    pub(super) soft: Option<SoftMask>,
+}
+
+/// A glass mask with soft edges: its path (as the scene folder names it) and how many of its
+/// pixels were moved to the nearest label.
+pub(super) struct SoftMask {
+    pub(super) path: String,
+    pub(super) pixels: usize,
 }
 
 /// How many views were scaled, and the first one's sizes.
@@ -28,12 +36,17 @@ struct Scaled {
 pub(super) struct LoadNotes {
     lenses: Vec<LensNote>,
     scaled: Option<Scaled>,
+    /// How many masks had soft edges, and the first.
+    soft: Option<(usize, SoftMask)>,
 }
 
 impl LoadNotes {
     pub(super) fn add(&mut self, report: ViewReport) {
         if let Some((from, to)) = report.scaled {
             self.scaled.get_or_insert(Scaled { views: 0, from, to }).views += 1;
+        }
+        if let Some(mask) = report.soft {
+            self.soft.get_or_insert((0, mask)).0 += 1;
         }
         if let Some(lens) = report.lens {
             match self
@@ -55,6 +68,15 @@ impl LoadNotes {
                 "{n} photos longer than {side} px are trained at {side} on their longer side \
                  ({fw}x{fh} -> {w}x{h}); --full-size keeps their size, --resolution or \
                  --downscale choose another"
+            ));
+        }
+        if let Some((n, first)) = &self.soft {
+            let masks =
+                if *n == 1 { "1 glass mask has".into() } else { format!("{n} glass masks have") };
+            lines.push(format!(
+                "{masks} soft edges (first: {}, {} pixels between labels): assigned to the \
+                 nearest label; paint each pane with one value",
+                first.path, first.pixels
             ));
         }
         lines

@@ -6,8 +6,11 @@ use glam::DVec3;
 use serde_json::Value;
 
 use super::placement;
-use super::{CHUNK_BIN, CHUNK_JSON, EXTENSION, FLOAT, MAGIC, MODE_POINTS, components};
+use super::{
+    CHUNK_BIN, CHUNK_JSON, EXTENSION, FLOAT, MAGIC, MODE_POINTS, attribute_name, components,
+};
 use crate::io::error::{FormatError, read_bytes};
+use crate::io::model_values::check_gaussians;
 use crate::scene::{Gaussians, Material, Population, ReflectionPlane, sh_coeff_count};
 
 /// Read the Gaussians and planes of the GLB at `path`.
@@ -222,6 +225,8 @@ fn parse(bytes: &[u8]) -> Result<(Gaussians<f32>, Vec<ReflectionPlane>), String>
     if let Some(m) = to_trgs {
         placement::place(&mut g, &m)?;
     }
+    // After the placement, which moves, turns and scales what the file holds.
+    check_gaussians(&g).map_err(|u| u.message(&attribute_name(u.field)))?;
     let mut planes = Vec::new();
     for (index, node) in doc["nodes"].as_array().into_iter().flatten().enumerate() {
         let extras = &node["extras"]["trgs_plane"];
@@ -307,7 +312,12 @@ fn read_gaussians(attrs: &Attributes<'_>) -> Result<Gaussians<f32>, String> {
             }
             // A zero scale (a flat splat, or one below f32's range written out as 0) becomes the
             // smallest normal f32: ln(0) would be an infinite log-scale, which the renderer refuses.
-            g.log_scales[i][a] = s.max(f32::MIN_POSITIVE).ln();
+            let mut log = s.max(f32::MIN_POSITIVE).ln();
+            // The ln of a scale within a rounding of f32::MAX can round up to where exp overflows.
+            while !log.exp().is_finite() {
+                log = log.next_down();
+            }
+            g.log_scales[i][a] = log;
         }
         let o = opacity[i];
         if !(0.0..=1.0).contains(&o) {

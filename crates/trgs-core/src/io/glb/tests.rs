@@ -133,6 +133,51 @@ fn round_trip_is_lossless() {
 /// The glTF 2.0 and KHR_gaussian_splatting rules a validator checks: container layout, required
 /// properties, attribute types and counts, POSITION bounds, value ranges, buffer alignment.
 #[test]
+fn a_ply_model_converts_to_glb_and_reads_back() {
+    let dir = scratch_dir("glb-from-ply");
+    let g = random_gaussians(40, 3, &mut Rng::new(61));
+    crate::io::write_ply(&dir.join("m.ply"), &g).expect("write the PLY");
+    let from_ply = crate::io::read_ply(&dir.join("m.ply")).expect("read the PLY");
+    write_glb(&dir.join("m.glb"), &from_ply, &planes()).expect("write the GLB");
+    let (back, planes_back) = read_glb(&dir.join("m.glb")).expect("read the GLB");
+    assert_eq!(planes_back.len(), 2);
+    assert_eq!((back.len(), back.sh_degree), (40, 3));
+    assert_eq!((back.means.clone(), back.sh.clone()), (g.means.clone(), g.sh.clone()));
+    assert_eq!(back.opacity_logits, g.opacity_logits);
+    for (a, b) in back.log_scales.iter().flatten().zip(g.log_scales.iter().flatten()) {
+        assert!((a - b).abs() < 1e-5, "log-scale {a} against {b}");
+    }
+}
+
+#[test]
+fn values_a_model_cannot_hold_are_refused_both_ways() {
+    let path = Path::new("m.glb");
+    let g = random_gaussians(3, 1, &mut Rng::new(5));
+    let good = encode_glb(&g, &[]).expect("encode");
+    let with = |attribute: &str, k: usize, v: f32| {
+        let mut bad = good.clone();
+        let at = attribute_offset(&good, attribute) + 4 * k;
+        bad[at..at + 4].copy_from_slice(&v.to_le_bytes());
+        bad
+    };
+    // Green of Gaussian 1's second SH coefficient, and Gaussian 2's log reflection.
+    let sh = with("KHR_gaussian_splatting:SH_DEGREE_1_COEF_0", 3 + 1, f32::NAN);
+    let err = parse_glb(&sh, path).expect_err("NaN");
+    assert_mentions(&err, &["m.glb", "Gaussian 1", "SH_DEGREE_1_COEF_0[1] = NaN"]);
+    let reflection = with("_TRGS_LOG_REFLECTION", 2, 1e20);
+    let err = parse_glb(&reflection, path).expect_err("huge");
+    assert_mentions(&err, &["Gaussian 2", "_TRGS_LOG_REFLECTION = 1e20", "exp"]);
+    // The largest scale f32 holds reads as a log-scale whose exp is finite.
+    let (big, _) =
+        parse_glb(&with("KHR_gaussian_splatting:SCALE", 0, f32::MAX), path).expect("max");
+    assert!(big.log_scales[0][0] > 88.0 && big.log_scales[0][0].exp().is_finite());
+    // What cannot be stored is not written: a zero quaternion has no direction to store.
+    let mut zero = g.clone();
+    zero.rotations[1] = [0.0; 4];
+    assert_mentions(&encode_glb(&zero, &[]).expect_err("zero"), &["Gaussian 1", "unit quaternion"]);
+}
+
+#[test]
 fn the_file_follows_the_extension_rules() {
     let mut rng = Rng::new(3);
     let g = random_gaussians(101, 3, &mut rng);

@@ -1,5 +1,5 @@
 //! Reading scalar values from a PLY body, binary (either byte order) or ASCII.
-use super::header::ScalarType;
+use super::header::{Element, ScalarType};
 use crate::io::bytes::{ByteReader, Endian};
 
 /// A cursor over the body that yields every scalar as f64 (exact for every PLY type, f32
@@ -65,6 +65,47 @@ impl<'a> Body<'a> {
                     _ => text.parse::<i64>().map(|v| v as f64).map_err(|_| bad())?,
                 };
                 Ok(v)
+            }
+        }
+    }
+
+    /// Read past every instance of `element` (list properties included).
+    pub(super) fn skip(&mut self, element: &Element) -> Result<(), String> {
+        // Nothing to read, however large its count.
+        if element.properties.is_empty() {
+            return Ok(());
+        }
+        for i in 0..element.count {
+            for p in &element.properties {
+                let what =
+                    || format!("{} {i} of {}, property {}", element.name, element.count, p.name);
+                let n = match p.list_count {
+                    Some(ty) => self.count(ty, &what)?,
+                    None => 1,
+                };
+                for _ in 0..n {
+                    self.scalar(p.ty, &what)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// What is left unread, in words ("12 bytes", "3 values on 1 line"), or None when nothing
+    /// but whitespace in an ASCII body is.
+    pub(super) fn left_over(&self) -> Option<String> {
+        let plural = |n: usize, one: &str| format!("{n} {one}{}", if n == 1 { "" } else { "s" });
+        match self {
+            Body::Binary(r, _) => (r.remaining() > 0).then(|| plural(r.remaining(), "byte")),
+            Body::Ascii(t) => {
+                let rest = &t.bytes[t.pos..];
+                let values = Tokens { bytes: rest, pos: 0 }.count();
+                let lines = rest
+                    .split(|&b| b == b'\n')
+                    .filter(|l| l.iter().any(|b| !b.is_ascii_whitespace()))
+                    .count();
+                (values > 0)
+                    .then(|| format!("{} on {}", plural(values, "value"), plural(lines, "line")))
             }
         }
     }

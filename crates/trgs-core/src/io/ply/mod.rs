@@ -8,9 +8,13 @@
 //!
 //! The reader accepts any property order and type, ASCII and both binary byte orders, and skips
 //! other elements, so files from INRIA's code, gsplat, Brush, SuperSplat's uncompressed export
-//! and others load. Non-finite values load as they are: this is a file format, and
-//! [`crate::scene::validate_scene`] is where non-finite input is refused, with the Gaussian named.
+//! and others load. It refuses data after the elements the header declares, and values a model
+//! file cannot hold (not finite, or a log-scale whose exp is not: `io::model_values`), naming
+//! the Gaussian and the property; the writer refuses the same values. What the renderer needs
+//! beyond that (no zero quaternion, reflection intensities it can compose) is
+//! [`crate::scene::validate_scene`]'s to refuse.
 mod body;
+mod end;
 mod header;
 mod pieces;
 mod points;
@@ -24,10 +28,12 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use body::Body;
-use header::{Element, Format, parse_header};
+use end::check_end;
+use header::{Element, Format, Header, parse_header};
 use pieces::{ROWS_PER_PIECE, read_in_pieces};
 
 use super::bytes::ByteReader;
+use super::model_values::{Field, check_gaussian, check_gaussians};
 use super::{FormatError, write_atomic_with};
 use crate::scene::{Gaussians, Population, sh_coeff_count};
 
@@ -42,9 +48,29 @@ pub fn read_ply(path: &Path) -> Result<Gaussians<f32>, FormatError> {
 
 /// Write `g` as binary little-endian PLY (see the module docs for the layout).
 pub fn write_ply(path: &Path, g: &Gaussians<f32>) -> Result<(), FormatError> {
-    g.check_lengths().map_err(|m| FormatError::new(path, m))?;
+    writable(g).map_err(|m| FormatError::new(path, m))?;
     // Streamed: a model of millions of Gaussians is not held again as bytes.
     write_atomic_with(path, |w| write_rows(g, w))
+}
+
+/// `g`'s lengths agree and every value is one a model file can hold.
+fn writable(g: &Gaussians<f32>) -> Result<(), String> {
+    g.check_lengths()?;
+    check_gaussians(g).map_err(|u| u.message(&property_name(u.field, g.sh_coeffs())))
+}
+
+/// The PLY property of `field`, at `coeffs` SH coefficients a channel.
+fn property_name(field: Field, coeffs: usize) -> String {
+    match field {
+        Field::Mean(a) => ["x", "y", "z"][a].to_string(),
+        Field::Rotation(a) => format!("rot_{a}"),
+        Field::LogScale(a) => format!("scale_{a}"),
+        Field::OpacityLogit => "opacity".into(),
+        Field::Sh { coeff: 0, channel } => format!("f_dc_{channel}"),
+        Field::Sh { coeff, channel } => format!("f_rest_{}", channel * (coeffs - 1) + coeff - 1),
+        Field::MaskLogit => EXTRAS[0].into(),
+        Field::LogReflection => EXTRAS[1].into(),
+    }
 }
 
 /// Names of the float properties the writer emits, in order, for SH degree `degree`.
@@ -61,9 +87,10 @@ fn property_names(degree: u32) -> Vec<String> {
     names
 }
 
-/// The bytes of a binary little-endian PLY of `g`; an error when `g`'s arrays disagree in length.
+/// The bytes of a binary little-endian PLY of `g`; an error when `g`'s arrays disagree in length
+/// or it holds a value a model file cannot hold.
 pub fn encode_ply(g: &Gaussians<f32>) -> Result<Vec<u8>, String> {
-    g.check_lengths()?;
+    writable(g)?;
     let mut out = Vec::new();
     write_rows(g, &mut out).map_err(|e| e.to_string())?;
     Ok(out)
@@ -107,18 +134,25 @@ fn write_rows(g: &Gaussians<f32>, w: &mut dyn std::io::Write) -> std::io::Result
 /// Parse a PLY held in memory; `path` is only used to name the file in errors.
 pub fn parse_ply(bytes: &[u8], path: &Path) -> Result<Gaussians<f32>, FormatError> {
     let fail = |m: String| FormatError::new(path, m);
-    let (mut body, vertex) = vertex_section(bytes, "one Gaussian per vertex").map_err(fail)?;
-    let layout = Layout::of(&vertex).map_err(fail)?;
-    let mut rows = VertexRows::new(&vertex, &layout, body.remaining());
+    let (mut body, header, index) =
+        vertex_section(bytes, "one Gaussian per vertex").map_err(fail)?;
+    let vertex = &header.elements[index];
+    let layout = Layout::of(vertex).map_err(fail)?;
+    let mut rows = VertexRows::new(vertex, &layout, body.remaining());
     for i in 0..vertex.count {
         rows.read(&mut body, i).map_err(fail)?;
     }
+    check_end(&mut body, &header.elements[index + 1..], &header.elements).map_err(fail)?;
     Ok(rows.g)
 }
 
-/// The body read up to the first vertex (every element before it skipped) and the vertex
-/// element; `expected` says what a vertex is, for the error when there is none.
-fn vertex_section<'a>(bytes: &'a [u8], expected: &str) -> Result<(Body<'a>, Element), String> {
+/// The body read up to the first vertex (every element before it skipped), the header and the
+/// vertex element's index in it; `expected` says what a vertex is, for the error when there is
+/// none.
+fn vertex_section<'a>(
+    bytes: &'a [u8],
+    expected: &str,
+) -> Result<(Body<'a>, Header, usize), String> {
     let header = parse_header(bytes)?;
     let body = &bytes[header.body_offset..];
     let mut body = match header.format {
@@ -132,31 +166,9 @@ fn vertex_section<'a>(bytes: &'a [u8], expected: &str) -> Result<(Body<'a>, Elem
         .position(|e| e.name == "vertex")
         .ok_or_else(|| format!("the file has no `vertex` element (expected {expected})"))?;
     for element in &header.elements[..vertex_index] {
-        skip_element(&mut body, element)?;
+        body.skip(element)?;
     }
-    let vertex = header.elements.into_iter().nth(vertex_index);
-    #[allow(clippy::expect_used)]
-    Ok((body, vertex.expect("found above")))
-}
-
-/// Read past every instance of an element we do not use (list properties included).
-fn skip_element(body: &mut Body<'_>, element: &Element) -> Result<(), String> {
-    if element.properties.is_empty() {
-        return Ok(());
-    }
-    for i in 0..element.count {
-        for p in &element.properties {
-            let what = || format!("{} {i} of {}, property {}", element.name, element.count, p.name);
-            let n = match p.list_count {
-                Some(ty) => body.count(ty, &what)?,
-                None => 1,
-            };
-            for _ in 0..n {
-                body.scalar(p.ty, &what)?;
-            }
-        }
-    }
-    Ok(())
+    Ok((body, header, vertex_index))
 }
 
 /// Where each vertex property goes in a per-vertex row of values:
@@ -330,6 +342,6 @@ impl<'a> VertexRows<'a> {
             *m = row[t + 8];
             *a = row[t + 9];
         }
-        Ok(())
+        check_gaussian(g, g.len() - 1).map_err(|u| u.message(&property_name(u.field, k)))
     }
 }

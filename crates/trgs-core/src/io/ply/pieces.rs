@@ -2,13 +2,15 @@
 //! property a scalar, as every 3DGS tool writes) is read in pieces of whole vertex rows, so that a
 //! model of millions of Gaussians is not held twice. Any other file (ASCII, an element with
 //! lists before the vertices, a header that does not parse) is read whole and left to
-//! [`super::parse_ply`]. Both ways give the same values and the same messages, which
+//! [`super::parse_ply`]. Both ways give the same values and the same messages (data after the
+//! declared elements is refused either way), which
 //! `tests::reading_in_pieces_is_parsing_whole` checks.
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
 
 use super::body::Body;
+use super::end::check_end;
 use super::header::{Format, Header, parse_header};
 use super::{Layout, VertexRows, parse_ply};
 use crate::io::FormatError;
@@ -54,6 +56,12 @@ pub(super) fn read_in_pieces(
         }
         offset += piece.len();
     }
+    // The rest: the elements declared after the vertices, and nothing else.
+    piece.clear();
+    file.read_to_end(&mut piece).map_err(io)?;
+    let mut body = Body::Binary(ByteReader::at(&piece, offset), endian);
+    let after = &header.elements[vertex_index + 1..];
+    check_end(&mut body, after, &header.elements).map_err(fail)?;
     Ok(rows.g)
 }
 

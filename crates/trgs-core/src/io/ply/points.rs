@@ -1,8 +1,10 @@
 //! Point clouds as PLY (`x y z` and optional `red green blue`), as nerfstudio writes its sparse
 //! points (`sparse_pc.ply`) and COLMAP its `points3D.ply`: the seeds of a transforms.json scene.
+//! As for Gaussians, data after the elements the header declares is refused.
 use std::collections::HashMap;
 use std::path::Path;
 
+use super::end::check_end;
 use super::header::ScalarType;
 use super::vertex_section;
 use crate::io::FormatError;
@@ -16,7 +18,8 @@ pub type ColouredPoint = ([f64; 3], [u8; 3]);
 pub fn read_point_cloud_ply(path: &Path) -> Result<Vec<ColouredPoint>, FormatError> {
     let bytes = read_bytes(path)?;
     let fail = |m: String| FormatError::new(path, m);
-    let (mut body, vertex) = vertex_section(&bytes, "one per point").map_err(fail)?;
+    let (mut body, header, index) = vertex_section(&bytes, "one per point").map_err(fail)?;
+    let vertex = &header.elements[index];
     let names = ["x", "y", "z", "red", "green", "blue"];
     let slot: HashMap<&str, usize> = names.iter().enumerate().map(|(i, n)| (*n, i)).collect();
     let mut found = [None::<ScalarType>; 6];
@@ -67,6 +70,7 @@ pub fn read_point_cloud_ply(path: &Path) -> Result<Vec<ColouredPoint>, FormatErr
         let colour = [row[3], row[4], row[5]].map(|c| c.round().clamp(0.0, 255.0) as u8);
         out.push(([row[0], row[1], row[2]], colour));
     }
+    check_end(&mut body, &header.elements[index + 1..], &header.elements).map_err(fail)?;
     Ok(out)
 }
 
@@ -120,5 +124,10 @@ mod tests {
                    property float z\nend_header\n0 nan 1\n";
         std::fs::write(&path, nan).expect("write");
         assert_mentions(&read_point_cloud_ply(&path).expect_err("nan"), &["pc.ply", "vertex 0"]);
+        let more = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n\
+                    property float z\nend_header\n0 0 1\n1 1 1\n";
+        std::fs::write(&path, more).expect("write");
+        let err = read_point_cloud_ply(&path).expect_err("a point more than declared");
+        assert_mentions(&err, &["pc.ply", "element vertex 1", "3 values on 1 line"]);
     }
 }

@@ -17,16 +17,23 @@ fn values(seed: u64) -> impl FnMut() -> f32 {
     }
 }
 
+/// Gaussians of arbitrary values a model file can hold: log-scales and log reflections whose exp
+/// is finite (negated when it is not), rotations whose squared length is finite.
 fn sample(n: usize, degree: u32) -> Gaussians<f32> {
+    let mut v = values(u64::from(degree) + 70);
+    let mut log = move || {
+        let l = v();
+        if l.exp().is_finite() { l } else { -l.abs() }
+    };
     let mut v = values(u64::from(degree) + 7);
     let mut g = Gaussians::zeros(n, degree);
     for i in 0..n {
         g.means[i] = [v(), v(), v()];
-        g.rotations[i] = [v(), v(), v(), v()];
-        g.log_scales[i] = [v(), v(), v()];
+        g.rotations[i] = [v(), v(), v(), v()].map(|r| r.clamp(-1e18, 1e18));
+        g.log_scales[i] = [log(), log(), log()];
         g.opacity_logits[i] = v();
         g.mask_logits[i] = v();
-        g.log_reflections[i] = v();
+        g.log_reflections[i] = log();
         g.populations[i] = if i % 3 == 1 { Population::Glass } else { Population::Primary };
     }
     g.sh.iter_mut().for_each(|c| *c = [v(), v(), v()]);
@@ -134,8 +141,9 @@ fn emulate(comments: &[&str], names: &[String], n: usize) -> Vec<u8> {
     bytes
 }
 
+/// Distinct for every vertex and property, exact in f32, and small enough for a log-scale.
 fn value(i: usize, p: usize) -> f32 {
-    (i * 1000 + p) as f32 + 0.25
+    (i * 1000 + p) as f32 / 128.0 + 0.25
 }
 
 /// Check every attribute of `g` against the emulated file, looking each value up by name.
@@ -253,12 +261,104 @@ fn reads_big_endian_with_list_element_before_vertex() {
     assert_eq!(g.log_reflections[0], 0.75);
 }
 
+/// `n` plain Gaussians at SH degree `degree`: unit rotations, small scales, every value usable.
+fn plain(n: usize, degree: u32) -> Gaussians<f32> {
+    let mut g = Gaussians::<f32>::zeros(n, degree);
+    for i in 0..n {
+        g.means[i] = [i as f32, 0.5, 2.0];
+        g.rotations[i] = [1.0, 0.0, 0.0, 0.0];
+        g.log_scales[i] = [-2.0, -3.0, -4.0];
+        g.opacity_logits[i] = 0.5;
+    }
+    g
+}
+
+/// `bytes` with the 4 bytes of property `name` of vertex `i` (a file `encode_ply` wrote at
+/// `degree`) replaced by `v`.
+fn with_value(bytes: &[u8], degree: u32, i: usize, name: &str, v: f32) -> Vec<u8> {
+    let names = property_names(degree);
+    let body = bytes.windows(11).position(|w| w == b"end_header\n").expect("header") + 11;
+    let p = names.iter().position(|n| n == name).expect(name);
+    let at = body + (i * names.len() + p) * 4;
+    let mut out = bytes.to_vec();
+    out[at..at + 4].copy_from_slice(&v.to_le_bytes());
+    out
+}
+
 #[test]
-fn nan_loads_and_is_left_to_validation() {
-    let mut g = sample(2, 0);
-    g.opacity_logits[1] = f32::NAN;
-    let back = parse_ply(&encode_ply(&g).expect("encode"), Path::new(P)).expect("NaN is loaded");
-    assert!(back.opacity_logits[1].is_nan());
+fn values_that_cannot_be_used_finitely_are_refused_at_the_read() {
+    let dir = scratch_dir("ply-finite");
+    let path = dir.join("huge.ply");
+    let good = encode_ply(&plain(20, 1)).expect("encode");
+    let cases: [(&str, f32, &[&str]); 5] = [
+        ("scale_0", 1e30, &["Gaussian 17", "scale_0 = 1e30", "log-scale", "exp"]),
+        ("scale_2", 89.0, &["Gaussian 17", "scale_2 = 89.0", "log-scale"]),
+        ("opacity", f32::NAN, &["Gaussian 17", "opacity = NaN", "not finite"]),
+        ("f_rest_4", f32::INFINITY, &["Gaussian 17", "f_rest_4 = inf"]),
+        ("trgs_reflection", 100.0, &["Gaussian 17", "trgs_reflection = 100.0", "exp"]),
+    ];
+    for (name, v, parts) in cases {
+        let bytes = with_value(&good, 1, 17, name, v);
+        std::fs::write(&path, &bytes).expect("write");
+        assert_mentions(&read_ply(&path).expect_err(name), &[&["huge.ply"], parts].concat());
+        assert_mentions(&parse_ply(&bytes, &path).expect_err(name), parts);
+    }
+    // The largest log-scale whose exp is finite reads.
+    let bytes = with_value(&good, 1, 17, "scale_1", 88.0);
+    assert_eq!(parse_ply(&bytes, &path).expect("e^88").log_scales[17][1], 88.0);
+}
+
+#[test]
+fn the_writers_refuse_what_the_readers_would_refuse() {
+    let dir = scratch_dir("ply-write-finite");
+    let mut g = plain(3, 0);
+    g.log_scales[1][2] = 100.0;
+    let err = write_ply(&dir.join("w.ply"), &g).expect_err("huge log-scale");
+    assert_mentions(&err, &["w.ply", "Gaussian 1", "scale_2 = 100.0"]);
+    let err = crate::io::write_glb(&dir.join("w.glb"), &g, &[]).expect_err("huge log-scale");
+    assert_mentions(&err, &["w.glb", "Gaussian 1", "SCALE", "100.0"]);
+    let mut g = plain(3, 0);
+    g.means[2][1] = f32::NAN;
+    assert_mentions(&encode_ply(&g).expect_err("NaN"), &["Gaussian 2", "y = NaN"]);
+    let err = crate::io::encode_glb(&g, &[]).expect_err("NaN");
+    assert_mentions(&err, &["Gaussian 2", "POSITION", "NaN"]);
+}
+
+#[test]
+fn data_after_the_declared_elements_is_refused() {
+    let dir = scratch_dir("ply-after");
+    let path = dir.join("short.ply");
+    // Binary: three Gaussians written, two declared.
+    let three = encode_ply(&plain(3, 0)).expect("encode");
+    let header_end = three.windows(11).position(|w| w == b"end_header\n").expect("header");
+    let header = String::from_utf8(three[..header_end].to_vec()).expect("text");
+    let two = [header.replace("vertex 3", "vertex 2").as_bytes(), &three[header_end..]].concat();
+    std::fs::write(&path, &two).expect("write");
+    let row = format!("{} bytes", property_names(0).len() * 4);
+    for err in [parse_ply(&two, &path).expect_err("whole"), read_ply(&path).expect_err("pieces")] {
+        assert_mentions(&err, &["short.ply", "element vertex 2", &row]);
+    }
+    // ASCII: a row more than declared (blank lines at the end are fine).
+    let zeros = "0 ".repeat(14);
+    let text = format!("ply\nformat ascii 1.0\nelement vertex 1\n{MIN_PROPS}end_header\n{zeros}\n");
+    assert_eq!(parse_ply(format!("{text}\n  \n").as_bytes(), &path).expect("one").len(), 1);
+    let err = parse_ply(format!("{text}{zeros}\n").as_bytes(), &path).expect_err("ascii");
+    assert_mentions(&err, &["short.ply", "element vertex 1", "14 values on 1 line"]);
+    // Elements after the vertices are data the header declares; only what follows them is not.
+    let faces = header.replace("end_header", "");
+    let faces =
+        format!("{faces}element face 1\nproperty list uchar int vertex_indices\nend_header\n");
+    let mut bytes = [faces.as_bytes(), &three[header_end + 11..]].concat();
+    bytes.push(3);
+    [0i32, 1, 2].iter().for_each(|v| bytes.extend(v.to_le_bytes()));
+    std::fs::write(&path, &bytes).expect("write");
+    assert_eq!(read_ply(&path).expect("faces after the vertices").len(), 3);
+    bytes.extend([7u8; 5]);
+    std::fs::write(&path, &bytes).expect("write");
+    for err in [parse_ply(&bytes, &path).expect_err("whole"), read_ply(&path).expect_err("pieces")]
+    {
+        assert_mentions(&err, &["short.ply", "element vertex 3", "element face 1", "5 bytes"]);
+    }
 }
 
 #[test]
