@@ -39,7 +39,7 @@ fn killed_run_resumes_to_the_end() {
     resume_with_other_settings_is_refused(&out);
     resuming_a_finished_run_rewrites_its_results(&out, iterations, &metrics);
     resume_on_changed_training_views_is_refused(&data, &out, &train_names[0]);
-    new_run_drops_the_old_checkpoint(&data, &out);
+    new_run_sets_the_old_checkpoint_aside(&data, &out);
 }
 
 /// `train` with the folder's settings via `--resume` and any `extra` arguments.
@@ -258,9 +258,9 @@ fn resume_on_changed_training_views_is_refused(data: &Path, out: &Path, train_na
     std::fs::write(&split, original).expect("restore split");
 }
 
-/// A new run in the same folder drops the finished run's checkpoint first, so that a
+/// A new run in the same folder sets the finished run's checkpoint aside first, so that a
 /// `--resume` after the new run stopped early cannot continue the old one.
-fn new_run_drops_the_old_checkpoint(data: &Path, out: &Path) {
+fn new_run_sets_the_old_checkpoint_aside(data: &Path, out: &Path) {
     let fresh = Command::new(env!("CARGO_BIN_EXE_train"))
         .arg("--data")
         .arg(data)
@@ -271,7 +271,8 @@ fn new_run_drops_the_old_checkpoint(data: &Path, out: &Path) {
         .expect("a new run");
     let stdout = String::from_utf8_lossy(&fresh.stdout);
     assert!(fresh.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&fresh.stderr));
-    assert!(stdout.contains("removed the previous run's checkpoint"), "{stdout}");
+    assert!(stdout.contains("the previous run's files"), "{stdout}");
+    assert!(out.join("previous-1").join(CHECKPOINT_FILE).is_file(), "set aside, not lost");
     let ckpt = out.join(CHECKPOINT_FILE);
     assert_eq!(read_checkpoint(&ckpt).expect("the new run's checkpoint").step, 2);
 }

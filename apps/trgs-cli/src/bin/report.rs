@@ -38,6 +38,7 @@ fn main() -> Result<()> {
     }
     let mut curves = Vec::new();
     for (i, run) in runs.iter().enumerate() {
+        trgs_core::io::check_finished_run(run)?;
         let path = run.join("metrics.json");
         let text = std::fs::read_to_string(&path)
             .with_context(|| format!("{}: cannot read the run's metrics", path.display()))?;

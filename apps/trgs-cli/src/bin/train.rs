@@ -4,8 +4,9 @@ use anyhow::{Context, Result, bail};
 use clap::parser::ValueSource;
 use clap::{CommandFactory, FromArgMatches, Parser};
 use indicatif::{ProgressBar, ProgressStyle};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Duration;
+use trgs_train::checkpoint::CHECKPOINT_FILE;
 use trgs_train::{RunConfig, RunEvent, RunOptions, RunSummary, TrainingRun};
 use trgs_viewer::{LiveFeed, Snapshot, Source, ViewerOptions};
 
@@ -74,6 +75,15 @@ fn parse() -> Result<(Start, bool)> {
 
 fn main() -> Result<()> {
     let (start, viewer) = parse()?;
+    let out = match &start {
+        Start::New(config) => config.out.clone(),
+        Start::Resume(out, _) => out.clone(),
+    };
+    ctrlc::set_handler(move || {
+        eprintln!("\n{}", interrupted(&out));
+        std::process::exit(130);
+    })
+    .context("setting up the Ctrl-C handler")?;
     if !viewer {
         return train(start, None);
     }
@@ -98,6 +108,31 @@ fn main() -> Result<()> {
     }
     feed.close();
     worker.join().map_err(|_| anyhow::anyhow!("the training thread panicked"))?
+}
+
+/// What an interrupted run in `out` leaves: its checkpoint is written whole or not at all, so
+/// the last one stands (a write cut short leaves a temporary file that the next start removes).
+fn interrupted(out: &Path) -> String {
+    let resume = format!("`train --out {} --resume` continues from it", out.display());
+    match trgs_core::io::read_unfinished_run(out) {
+        Some(r) if r.checkpoint_step > 0 => format!(
+            "interrupted: the checkpoint of step {} of {} is saved in {}; {resume}",
+            r.checkpoint_step,
+            r.iterations,
+            out.join(CHECKPOINT_FILE).display()
+        ),
+        Some(r) => format!(
+            "interrupted before the first checkpoint of {} steps: nothing to continue from; a \
+             new run in {} starts over",
+            r.iterations,
+            out.display()
+        ),
+        // Before the run marked its folder (loading), or while it wrote its final results.
+        None if out.join(CHECKPOINT_FILE).is_file() => {
+            format!("interrupted: {} is kept; {resume}", out.join(CHECKPOINT_FILE).display())
+        }
+        None => "interrupted before training started: nothing was saved".to_string(),
+    }
 }
 
 /// A line above the progress bar (`ProgressBar::println` prints nothing when the bar is hidden,

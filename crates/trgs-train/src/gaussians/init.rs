@@ -49,6 +49,48 @@ pub fn random_points(count: usize, lo: DVec3, hi: DVec3, rng: &mut Rng) -> Vec<S
         .collect()
 }
 
+/// The points the Gaussians start from: the scene's sparse `points`, or `random_init` random
+/// points within `extent` of the cameras' `centre` when it has none or when they cannot seed a
+/// scene (all at one spot: every Gaussian would get the smallest scale, no tile would see one,
+/// and training would learn nothing); with the line that says which, when it is not the sparse
+/// points.
+pub fn seed_points(
+    points: &[(DVec3, [f64; 3])],
+    centre: DVec3,
+    extent: f64,
+    random_init: usize,
+    rng: &mut Rng,
+) -> (Vec<SeedPoint>, Option<String>) {
+    let r = extent;
+    let around = format!("{random_init} random points within {r:.2} of the cameras' centre");
+    let random = |rng: &mut Rng| random_points(random_init, centre - r, centre + r, rng);
+    if points.is_empty() {
+        return (random(rng), Some(format!("no sparse points: {around}")));
+    }
+    let positions: Vec<DVec3> = points.iter().map(|p| p.0).collect();
+    let spread = rms_spread(&positions);
+    if !(spread > DEGENERATE_SPREAD * r) {
+        let line = format!(
+            "the {} sparse points lie at one spot (spread {spread:.1e} in a scene of extent \
+             {r:.2}): they cannot seed Gaussians, so training starts from {around}",
+            points.len()
+        );
+        return (random(rng), Some(line));
+    }
+    let seeds = points.iter().map(|&(position, color)| SeedPoint { position, color });
+    (seeds.collect(), None)
+}
+
+/// Points of a spread below this fraction of the scene's extent are taken to be one spot.
+const DEGENERATE_SPREAD: f64 = 1e-6;
+
+/// Root mean squared distance of `points` to their mean (not finite for non-finite points).
+fn rms_spread(points: &[DVec3]) -> f64 {
+    let n = points.len().max(1) as f64;
+    let mean = points.iter().copied().sum::<DVec3>() / n;
+    (points.iter().map(|p| p.distance_squared(mean)).sum::<f64>() / n).sqrt()
+}
+
 /// One primary Gaussian per point (see the module text).
 pub fn gaussians_from_points(
     points: &[SeedPoint],
@@ -195,6 +237,26 @@ mod tests {
                 got[i]
             );
         }
+    }
+
+    #[test]
+    fn points_at_one_spot_give_way_to_random_points_with_a_word() {
+        let mut rng = Rng::new(7);
+        let spot = vec![(DVec3::new(0.5, -1.0, 2.0), [0.2, 0.4, 0.6]); 500];
+        let (seeds, said) = seed_points(&spot, DVec3::ZERO, 3.0, 1000, &mut rng);
+        let said = said.expect("a line saying what was done");
+        assert!(said.contains("500 sparse points lie at one spot"), "{said}");
+        assert!(said.contains("1000 random points"), "{said}");
+        assert_eq!(seeds.len(), 1000);
+        let spread = rms_spread(&seeds.iter().map(|s| s.position).collect::<Vec<_>>());
+        assert!(spread > 1.0, "random points fill the cameras' box: spread {spread}");
+        // Points with a spread, however small against the scene, are used as they are.
+        let cloud: Vec<_> =
+            (0..50).map(|i| (DVec3::new(f64::from(i) * 1e-3, 0.0, 2.0), [0.5; 3])).collect();
+        let (seeds, said) = seed_points(&cloud, DVec3::ZERO, 3.0, 1000, &mut rng);
+        assert_eq!((seeds.len(), said), (50, None));
+        let (seeds, said) = seed_points(&[], DVec3::ZERO, 3.0, 10, &mut rng);
+        assert!(seeds.len() == 10 && said.is_some_and(|s| s.starts_with("no sparse points")));
     }
 
     #[test]

@@ -273,15 +273,41 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, FormatError> {
     })
 }
 
+/// The most bytes of a first line read to tell a checkpoint of another format version from
+/// another file.
+const MAGIC_LINE_MAX: u64 = 64;
+
+/// Why a file whose first line is `first` is not read as a checkpoint: a checkpoint of another
+/// format version (a newer trgs, or an old one this trgs no longer reads), or not one at all.
+fn not_this_format(first: &[u8]) -> String {
+    let (name, ours) = MAGIC.rsplit_once(' ').unwrap_or((MAGIC, "1"));
+    let ours: u32 = ours.parse().unwrap_or(1);
+    let version = std::str::from_utf8(first)
+        .ok()
+        .and_then(|l| l.strip_prefix(name)?.strip_prefix(' ')?.trim().parse::<u32>().ok());
+    match version {
+        Some(v) if v > ours => format!(
+            "a checkpoint of format version {v}, written by a newer trgs (this one reads version \
+             {ours}): continue it with that trgs"
+        ),
+        Some(v) => format!(
+            "a checkpoint of format version {v}, which this trgs (version {ours}) no longer \
+             reads: continue it with the trgs that wrote it"
+        ),
+        None => format!("not a trgs checkpoint (expected a first line {MAGIC:?})"),
+    }
+}
+
 /// The magic line and the header line; with the bytes they took.
 fn read_header(r: &mut impl BufRead, path: &Path) -> Result<(Header, u64), FormatError> {
     let io = |e: std::io::Error| FormatError::io(path, &e);
     let bad = |what: String| FormatError::new(path, what);
     // The first line, read no further than the magic's length (any file may be passed here).
     let mut magic = Vec::new();
-    r.by_ref().take(MAGIC.len() as u64 + 1).read_until(b'\n', &mut magic).map_err(io)?;
-    if magic.strip_suffix(b"\n").unwrap_or(&magic) != MAGIC.as_bytes() {
-        return Err(bad(format!("not a trgs checkpoint (expected a first line {MAGIC:?})")));
+    r.by_ref().take(MAGIC_LINE_MAX).read_until(b'\n', &mut magic).map_err(io)?;
+    let first = magic.strip_suffix(b"\n").unwrap_or(&magic);
+    if first != MAGIC.as_bytes() {
+        return Err(bad(not_this_format(first)));
     }
     if !magic.ends_with(b"\n") {
         return Err(bad("no header line".into()));
@@ -571,6 +597,13 @@ mod tests {
         std::fs::write(&path, b"ply\nformat binary_little_endian 1.0\n").expect("foreign");
         let err = read_checkpoint(&path).expect_err("foreign").to_string();
         assert!(err.contains("not a trgs checkpoint"), "{err}");
+        // Another format version is said to be one, not "not a checkpoint".
+        std::fs::write(&path, b"trgs-checkpoint 2\n{}\n").expect("newer");
+        let err = read_checkpoint(&path).expect_err("newer").to_string();
+        assert!(err.contains("format version 2, written by a newer trgs"), "{err}");
+        std::fs::write(&path, b"trgs-checkpoint 0\n{}\n").expect("older");
+        let err = read_checkpoint(&path).expect_err("older").to_string();
+        assert!(err.contains("format version 0, which this trgs (version 1) no longer"), "{err}");
         // A hand-edited offset limit that would break the plane step is refused on reading.
         let mut ck = sample();
         ck.plane_moments[0].offset_limit =

@@ -362,6 +362,9 @@ impl RunConfig {
         if self.cap.is_some() && self.densify != DensifyMode::Mcmc {
             bail!("--cap is the MCMC count: it needs --densify mcmc");
         }
+        if self.cap == Some(0) {
+            bail!("--cap 0: MCMC keeps at most --cap Gaussians, so it must be at least 1");
+        }
         if self.no_planes && !self.ablations.names().is_empty() {
             bail!(
                 "--no-planes trains plain 3DGS, which has none of TR-Gaussians' components to \
@@ -496,7 +499,7 @@ mod tests {
 
     #[test]
     fn a_library_caller_gets_the_command_line_refusals() {
-        let bad: [(&str, RunConfig); 9] = [
+        let bad: [(&str, RunConfig); 10] = [
             ("--iterations", RunConfig { iterations: 0, ..RunConfig::default() }),
             ("--sh-degree", RunConfig { sh_degree: 4, ..RunConfig::default() }),
             ("--eval-every", RunConfig { eval_every: Some(0), ..RunConfig::default() }),
@@ -506,6 +509,10 @@ mod tests {
                 RunConfig { resolution: Some(64), downscale: Some(2.0), ..RunConfig::default() },
             ),
             ("--cap", RunConfig { cap: Some(10), ..RunConfig::default() }),
+            (
+                "--cap 0",
+                RunConfig { densify: DensifyMode::Mcmc, cap: Some(0), ..RunConfig::default() },
+            ),
             (
                 "--full-size keeps",
                 RunConfig { full_size: true, downscale: Some(2.0), ..RunConfig::default() },

@@ -28,6 +28,7 @@
 pub mod checkpoint;
 mod config;
 mod events;
+mod folder;
 mod log;
 mod options;
 mod outputs;
@@ -40,6 +41,7 @@ pub use config::{
     parse_positive, upgrade_config_record,
 };
 pub use events::{RunEvent, StepEvent, StepMemory};
+pub use folder::LOCK_FILE;
 pub use log::LOG_FILE;
 pub use options::RunOptions;
 pub use outputs::RunSummary;
@@ -47,23 +49,24 @@ pub use scene::DEMO_SCENE_MARKER;
 pub use state::RunState;
 
 use crate::data::{LoadProgress, TrainingData};
-use crate::gaussians::init::{SeedPoint, gaussians_from_points, random_points};
+use crate::gaussians::init::{gaussians_from_points, seed_points};
 use crate::planes::init::{PlaneInitSettings, initialise_planes};
 use crate::planes::reflection_seed::{ReflectedSpaceSeeds, mirrored_seeds, reflected_space_seeds};
 use crate::trainer::{StepTimes, Trainer};
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use checkpoint::{CHECKPOINT_FILE, Checkpoint, read_checkpoint, write_checkpoint};
+use folder::RunLock;
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 use trgs_core::fit::SilhouetteSettings;
-use trgs_core::io::{remove_stale_temporaries, write_cameras_json};
+use trgs_core::io::{
+    UnfinishedRun, clear_unfinished_run, remove_stale_temporaries, write_cameras_json,
+    write_unfinished_run,
+};
 use trgs_core::rng::Rng;
 use trgs_core::scene::Camera;
 use trgs_render::GpuContext;
-
-/// Files a run writes into its folder (stale temporaries of these are removed on start).
-const OUTPUTS: [&str; 5] = [CHECKPOINT_FILE, LOG_FILE, "metrics.json", "model.ply", "planes.json"];
 
 /// A training run from its start or from a checkpoint (see the module docs).
 #[derive(Debug)]
@@ -84,6 +87,8 @@ pub struct TrainingRun {
     /// The step recorded last, not yet finished (see `advance`).
     in_flight: Option<steps::InFlight>,
     done: bool,
+    /// The run folder, held for this run alone while the run lives.
+    _lock: RunLock,
 }
 
 impl TrainingRun {
@@ -91,6 +96,7 @@ impl TrainingRun {
     pub fn start(mut config: RunConfig, options: RunOptions<'_>) -> Result<Self> {
         // Refused before the device is set up.
         config.check()?;
+        let lock = RunLock::acquire(&config.out)?;
         if let Some(mib) = options.target_memory {
             config.target_memory = Some(mib);
         }
@@ -100,32 +106,30 @@ impl TrainingRun {
         };
         let silent = |_: usize, _: usize| {};
         let progress = options.progress.unwrap_or(&silent);
-        Self::begin(ctx, config, None, Vec::new(), progress)
+        Self::begin(ctx, lock, config, None, Vec::new(), progress)
     }
 
     /// Continue the run in `out` from its checkpoint, with the settings it started with.
     pub fn resume(out: &Path, options: RunOptions<'_>) -> Result<Self> {
+        let lock = RunLock::acquire(out)?;
+        // Refused before the device is set up.
+        let (ck, state, path) = checkpoint_to_resume(out)?;
         let ctx = match options.context {
             Some(ctx) => ctx,
             None => GpuContext::new()?,
         };
         let silent = |_: usize, _: usize| {};
         let progress = options.progress.unwrap_or(&silent);
-        Self::resume_on(ctx, out, options.target_memory, progress)
+        Self::resume_on(ctx, lock, (ck, state, path), options.target_memory, progress)
     }
 
     fn resume_on(
         ctx: GpuContext,
-        out: &Path,
+        lock: RunLock,
+        (ck, mut state, path): (Checkpoint, RunState, PathBuf),
         target_memory: Option<u64>,
         loading: &LoadProgress<'_>,
     ) -> Result<Self> {
-        let path = out.join(CHECKPOINT_FILE);
-        let ck = read_checkpoint(&path).with_context(|| {
-            format!("--resume: no checkpoint to continue from in {}", out.display())
-        })?;
-        let mut state = RunState::of_checkpoint(&ck, &path)?;
-        state.config.out = out.to_path_buf();
         if let Some(mib) = target_memory {
             state.config.target_memory = Some(mib);
         }
@@ -144,11 +148,12 @@ impl TrainingRun {
             )
         };
         let config = state.config.clone();
-        Self::begin(ctx, config, Some((ck, state)), vec![RunEvent::Note(note)], loading)
+        Self::begin(ctx, lock, config, Some((ck, state)), vec![RunEvent::Note(note)], loading)
     }
 
     fn begin(
         ctx: GpuContext,
+        lock: RunLock,
         config: RunConfig,
         resumed: Option<(Checkpoint, RunState)>,
         mut events: Vec<RunEvent>,
@@ -158,11 +163,10 @@ impl TrainingRun {
         let (data_dir, written) = scene::dataset_dir(&config)?;
         written.into_iter().for_each(&mut note);
         let data = scene::load_data(&ctx, &config, &data_dir, &mut note, loading)?;
+        // Created when the lock was taken.
         let out = config.out.clone();
-        std::fs::create_dir_all(&out)
-            .with_context(|| format!("creating the output folder {}", out.display()))?;
         let was_finished = resumed.as_ref().is_some_and(|(ck, _)| ck.step >= config.iterations);
-        remove_stale_temporaries(&out, &OUTPUTS);
+        remove_stale_temporaries(&out, &folder::RUN_FILES);
         let settings = config.settings();
         let densification = config.densification();
         let (mut trainer, state, log) = match resumed {
@@ -177,52 +181,13 @@ impl TrainingRun {
                     Trainer::from_checkpoint(&ctx, &ck, settings, data.extent, &densification)?;
                 (trainer, state, log)
             }
-            None => {
-                let mut rng = Rng::new(config.seed);
-                let seeds: Vec<SeedPoint> = if data.points.is_empty() {
-                    let r = data.extent;
-                    note(format!(
-                        "no sparse points: {} random points within {r:.2} of the cameras' centre",
-                        config.random_init
-                    ));
-                    random_points(config.random_init, data.centre - r, data.centre + r, &mut rng)
-                } else {
-                    data.points
-                        .iter()
-                        .map(|&(position, color)| SeedPoint { position, color })
-                        .collect()
-                };
-                let shape = densification.initial_shape();
-                let gaussians = gaussians_from_points(&seeds, config.sh_degree, shape);
-                let mut trainer = Trainer::new(&ctx, &gaussians, &[], settings, data.extent)?;
-                trainer.set_densification(&densification)?;
-                // A previous run's checkpoint in this folder would be what `--resume` continues
-                // if this run stopped before its own first one.
-                let old = out.join(CHECKPOINT_FILE);
-                if old.is_file() {
-                    std::fs::remove_file(&old).with_context(|| {
-                        format!("removing the previous run's {}", old.display())
-                    })?;
-                    note(format!(
-                        "a new run in {}: removed the previous run's checkpoint",
-                        out.display()
-                    ));
-                }
-                let state = RunState {
-                    config: config.clone(),
-                    rng_state: rng.state(),
-                    order: Vec::new(),
-                    evaluations: Vec::new(),
-                    train_seconds: 0.0,
-                    seconds: 0.0,
-                    phase_ms: StepTimes::default(),
-                    train_views: view_names(&data),
-                    peak_gpu_bytes: 0,
-                    skipped_steps: 0,
-                };
-                (trainer, state, log::RunLog::create(&out)?)
-            }
+            None => new_run_state(&ctx, &config, &data, &mut note)?,
         };
+        if !was_finished {
+            let checkpoint_step = trainer.step;
+            let iterations = config.iterations;
+            write_unfinished_run(&out, &UnfinishedRun { iterations, checkpoint_step })?;
+        }
         trainer.profile = config.profile;
         let budget = crate::trainer::targets::budget_bytes(&ctx, config.target_memory);
         trainer.set_target_budget(budget);
@@ -256,6 +221,7 @@ impl TrainingRun {
             events: events.into(),
             in_flight: None,
             done: false,
+            _lock: lock,
         };
         // Every view once, as the INRIA code writes it: viewers snap to these.
         write_cameras_json(&out.join("cameras.json"), &run.cameras())?;
@@ -353,6 +319,7 @@ impl TrainingRun {
         }
         let summary =
             outputs::write_outputs(&self.trainer, &self.data, &self.data_dir, &self.state)?;
+        clear_unfinished_run(&self.config().out)?;
         self.events.push_back(RunEvent::Finished(summary));
         self.done = true;
         Ok(())
@@ -367,6 +334,9 @@ impl TrainingRun {
         write_checkpoint(&path, &self.trainer.checkpoint(extra)?)?;
         self.log.flush()?;
         let step = self.trainer.step;
+        let iterations = self.config().iterations;
+        let marker = UnfinishedRun { iterations, checkpoint_step: step };
+        write_unfinished_run(&self.config().out, &marker)?;
         self.events.push_back(RunEvent::CheckpointWritten { step, path });
         Ok(())
     }
@@ -430,6 +400,81 @@ impl TrainingRun {
         }
         Ok(())
     }
+}
+
+/// The trainer, state and log of a new run of `config` on `data`, the previous run's files in
+/// its folder set aside.
+fn new_run_state(
+    ctx: &GpuContext,
+    config: &RunConfig,
+    data: &TrainingData,
+    note: &mut impl FnMut(String),
+) -> Result<(Trainer, RunState, log::RunLog)> {
+    let mut rng = Rng::new(config.seed);
+    let (seeds, said) =
+        seed_points(&data.points, data.centre, data.extent, config.random_init, &mut rng);
+    said.into_iter().for_each(&mut *note);
+    let densification = config.densification();
+    let gaussians = gaussians_from_points(&seeds, config.sh_degree, densification.initial_shape());
+    let mut trainer = Trainer::new(ctx, &gaussians, &[], config.settings(), data.extent)?;
+    trainer.set_densification(&densification)?;
+    // A previous run's files in this folder would pass as this run's (and its checkpoint be
+    // what `--resume` continues) if this run stopped early.
+    let out = &config.out;
+    if let Some((aside, moved)) = folder::set_aside_previous_run(out)? {
+        note(format!(
+            "a new run in {}: the previous run's files ({}) were moved to {}",
+            out.display(),
+            moved.join(", "),
+            aside.display()
+        ));
+    }
+    let state = RunState {
+        config: config.clone(),
+        rng_state: rng.state(),
+        order: Vec::new(),
+        evaluations: Vec::new(),
+        train_seconds: 0.0,
+        seconds: 0.0,
+        phase_ms: StepTimes::default(),
+        train_views: view_names(data),
+        peak_gpu_bytes: 0,
+        skipped_steps: 0,
+    };
+    Ok((trainer, state, log::RunLog::create(out)?))
+}
+
+/// The checkpoint `--resume` continues in `out`, the run's state it holds, and its path; a
+/// missing one, a folder in its place, one that cannot be read and one past its run's end are
+/// told apart.
+fn checkpoint_to_resume(out: &Path) -> Result<(Checkpoint, RunState, PathBuf)> {
+    let path = out.join(CHECKPOINT_FILE);
+    if let Err(e) = std::fs::symlink_metadata(&path)
+        && e.kind() == std::io::ErrorKind::NotFound
+    {
+        bail!(
+            "--resume: no checkpoint to continue from in {} ({CHECKPOINT_FILE} is missing: the \
+             run stopped before its first checkpoint, or this is not its folder)",
+            out.display()
+        );
+    }
+    if path.is_dir() {
+        bail!("--resume: {} is a folder, not a checkpoint file", path.display());
+    }
+    let ck = read_checkpoint(&path)
+        .with_context(|| format!("--resume: the checkpoint in {} cannot be read", out.display()))?;
+    let mut state = RunState::of_checkpoint(&ck, &path)?;
+    state.config.out = out.to_path_buf();
+    if ck.step > state.config.iterations {
+        bail!(
+            "{}: the checkpoint is at step {}, past the {} steps of the run it records: it is \
+             not this run's, or it was changed",
+            path.display(),
+            ck.step,
+            state.config.iterations
+        );
+    }
+    Ok((ck, state, path))
 }
 
 fn view_names(data: &TrainingData) -> Vec<String> {

@@ -1,0 +1,226 @@
+//! The run folder belongs to one run at a time: [`RunLock`] holds it for the run's life, a new
+//! run first sets a previous run's files aside ([`set_aside_previous_run`]), and the
+//! unfinished-run marker (`trgs_core::io::run_folder`) tells every reader that the folder's
+//! results are not written yet.
+use anyhow::{Context, Result, bail};
+use std::fs::{File, OpenOptions, TryLockError};
+use std::io::{Read, Seek, Write};
+use std::path::{Path, PathBuf};
+use trgs_core::io::UNFINISHED_RUN_MARKER;
+
+/// The lock file in a run folder. The operating system's lock on it (released on any exit, a
+/// kill -9 included) is what holds the folder; the text in it names the holder for the message
+/// that refuses a second run.
+pub const LOCK_FILE: &str = "run.lock";
+
+/// What a run writes into its folder, set aside whole when a new run starts there: its results,
+/// its checkpoint and log, what `eval` wrote beside them, and the marker of an unfinished run.
+/// (Temporaries of these that a kill left are removed when a run starts.)
+pub(super) const RUN_FILES: [&str; 10] = [
+    super::checkpoint::CHECKPOINT_FILE,
+    super::log::LOG_FILE,
+    "metrics.json",
+    "model.ply",
+    "planes.json",
+    "cameras.json",
+    "renders",
+    "eval.json",
+    "eval_train.json",
+    UNFINISHED_RUN_MARKER,
+];
+
+/// The folder of a run, held while the value lives (see the module docs).
+#[derive(Debug)]
+pub struct RunLock {
+    file: File,
+}
+
+impl RunLock {
+    /// Hold `out` (created if need be) for this process, or say which run holds it.
+    pub fn acquire(out: &Path) -> Result<Self> {
+        std::fs::create_dir_all(out)
+            .with_context(|| format!("creating the output folder {}", out.display()))?;
+        let path = out.join(LOCK_FILE);
+        let mut file = OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .open(&path)
+            .with_context(|| format!("opening the run folder's lock {}", path.display()))?;
+        match file.try_lock() {
+            Ok(()) => {}
+            Err(TryLockError::WouldBlock) => {
+                bail!(held_by_another_run(out, &read_holder(&mut file)))
+            }
+            // A file system without locks (some network shares): the holder's pid and host
+            // stand in for the operating system's lock.
+            Err(TryLockError::Error(e)) if e.kind() == std::io::ErrorKind::Unsupported => {
+                let holder = read_holder(&mut file);
+                if Holder::parse(&holder).is_some_and(|h| h.may_be_running()) {
+                    bail!(
+                        "{}; if no run is using it, delete {}",
+                        held_by_another_run(out, &holder),
+                        path.display()
+                    );
+                }
+            }
+            Err(TryLockError::Error(e)) => {
+                return Err(e).with_context(|| format!("locking {}", path.display()));
+            }
+        }
+        let me = Holder::this_process().line();
+        file.set_len(0)
+            .and_then(|()| file.rewind())
+            .and_then(|()| file.write_all(me.as_bytes()))
+            .and_then(|()| file.flush())
+            .with_context(|| format!("writing {}", path.display()))?;
+        Ok(Self { file })
+    }
+}
+
+impl Drop for RunLock {
+    fn drop(&mut self) {
+        // The holder's line is cleared; the file stays, as removing it would let a run that
+        // opened it just before lock a file no other run can see. The operating system's lock
+        // goes with the file handle.
+        let _ = self.file.set_len(0);
+    }
+}
+
+/// The lock file's text (empty when it cannot be read).
+fn read_holder(file: &mut File) -> String {
+    let mut text = String::new();
+    let _ = file.rewind().and_then(|()| file.read_to_string(&mut text));
+    text
+}
+
+fn held_by_another_run(out: &Path, holder: &str) -> String {
+    let who = match Holder::parse(holder) {
+        Some(h) => format!(" (process {} on {})", h.pid, h.host),
+        None => String::new(),
+    };
+    format!(
+        "{} is in use by another training run{who}: two runs in one folder would mix their \
+         files; wait for it to end or choose another --out",
+        out.display()
+    )
+}
+
+/// The process that holds a run folder, as its lock file names it: `pid host`.
+#[derive(Debug, PartialEq)]
+struct Holder {
+    pid: u32,
+    host: String,
+}
+
+impl Holder {
+    fn this_process() -> Self {
+        Self { pid: std::process::id(), host: host_name() }
+    }
+
+    fn line(&self) -> String {
+        format!("{} {}\n", self.pid, self.host)
+    }
+
+    fn parse(text: &str) -> Option<Self> {
+        let (pid, host) = text.trim().split_once(' ')?;
+        Some(Self { pid: pid.parse().ok()?, host: host.to_string() })
+    }
+
+    /// Whether the process may still be running: on this host, whether it is (where the
+    /// system says: /proc); on another host there is no telling.
+    fn may_be_running(&self) -> bool {
+        if self.host != host_name() {
+            return true;
+        }
+        if self.pid == std::process::id() {
+            return false;
+        }
+        let proc = Path::new("/proc");
+        !proc.is_dir() || proc.join(self.pid.to_string()).exists()
+    }
+}
+
+fn host_name() -> String {
+    gethostname::gethostname().to_string_lossy().replace(char::is_whitespace, "_")
+}
+
+/// Move the files of a previous run in `out` into a new folder `out/previous-<n>` (the first
+/// free n), so that nothing of it passes as this run's and nothing is lost; returns that folder
+/// and the names moved, or None when there was nothing to move.
+pub fn set_aside_previous_run(out: &Path) -> Result<Option<(PathBuf, Vec<&'static str>)>> {
+    let present: Vec<&str> =
+        RUN_FILES.into_iter().filter(|f| out.join(f).symlink_metadata().is_ok()).collect();
+    if present.is_empty() {
+        return Ok(None);
+    }
+    let aside = (1..)
+        .map(|n| out.join(format!("previous-{n}")))
+        .find(|p| p.symlink_metadata().is_err())
+        .context("no free name for the previous run's files")?;
+    std::fs::create_dir(&aside)
+        .with_context(|| format!("creating {} for the previous run's files", aside.display()))?;
+    for name in &present {
+        std::fs::rename(out.join(name), aside.join(name)).with_context(|| {
+            format!("moving {} into {}", out.join(name).display(), aside.display())
+        })?;
+    }
+    Ok(Some((aside, present)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use trgs_core::scratch::ScratchDir;
+
+    #[test]
+    fn a_held_folder_is_refused_until_its_lock_is_dropped() {
+        let dir = ScratchDir::new("run-lock");
+        let out = dir.join("run");
+        let held = RunLock::acquire(&out).expect("first");
+        let text = std::fs::read_to_string(out.join(LOCK_FILE)).expect("lock file");
+        assert_eq!(Holder::parse(&text), Some(Holder::this_process()));
+        let err = RunLock::acquire(&out).expect_err("second").to_string();
+        assert!(err.contains("in use by another training run"), "{err}");
+        assert!(err.contains(&format!("process {}", std::process::id())), "{err}");
+        drop(held);
+        let again = RunLock::acquire(&out).expect("free again");
+        drop(again);
+    }
+
+    #[test]
+    fn a_stale_holder_is_told_apart_by_pid_and_host() {
+        let me = Holder::this_process();
+        assert!(!me.may_be_running(), "this process's own stale line");
+        let elsewhere = Holder { pid: 1, host: format!("{}-other", me.host) };
+        assert!(elsewhere.may_be_running(), "another host: no telling");
+        if Path::new("/proc").is_dir() {
+            // pid_max is at most 2^22 on Linux.
+            let gone = Holder { pid: u32::MAX - 1, host: me.host.clone() };
+            assert!(!gone.may_be_running());
+        }
+        assert_eq!(Holder::parse("garbage"), None);
+    }
+
+    #[test]
+    fn a_previous_run_is_set_aside_whole() {
+        let dir = ScratchDir::new("run-set-aside");
+        let out = dir.join("run");
+        assert_eq!(set_aside_previous_run(&dir.join("none")).expect("no folder"), None);
+        std::fs::create_dir_all(out.join("renders")).expect("renders");
+        std::fs::create_dir_all(out.join("dataset")).expect("dataset");
+        for f in ["model.ply", "metrics.json", "log.jsonl"] {
+            std::fs::write(out.join(f), f).expect("file");
+        }
+        let (aside, moved) = set_aside_previous_run(&out).expect("set aside").expect("moved");
+        assert_eq!(aside, out.join("previous-1"));
+        assert_eq!(moved, ["log.jsonl", "metrics.json", "model.ply", "renders"]);
+        assert!(out.join("dataset").is_dir(), "the dataset is the run's input, not its output");
+        assert!(!out.join("model.ply").exists());
+        assert_eq!(std::fs::read_to_string(aside.join("model.ply")).expect("kept"), "model.ply");
+        std::fs::write(out.join("model.ply"), "second").expect("file");
+        let (aside, _) = set_aside_previous_run(&out).expect("again").expect("moved");
+        assert_eq!(aside, out.join("previous-2"), "an earlier set-aside is kept");
+    }
+}
