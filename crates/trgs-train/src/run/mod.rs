@@ -87,8 +87,8 @@ pub struct TrainingRun {
     /// The step recorded last, not yet finished (see `advance`).
     in_flight: Option<steps::InFlight>,
     done: bool,
-    /// The run folder, held for this run alone while the run lives.
-    _lock: RunLock,
+    /// The run folder, held for this run alone until it has finished or failed.
+    lock: Option<RunLock>,
 }
 
 impl TrainingRun {
@@ -221,7 +221,7 @@ impl TrainingRun {
             events: events.into(),
             in_flight: None,
             done: false,
-            _lock: lock,
+            lock: Some(lock),
         };
         // Every view once, as the INRIA code writes it: viewers snap to these.
         write_cameras_json(&out.join("cameras.json"), &run.cameras())?;
@@ -243,8 +243,13 @@ impl TrainingRun {
                 // Events of the failed step are not reported after its error.
                 self.events.clear();
                 self.done = true;
+                self.lock = None;
                 return Some(Err(e));
             }
+        }
+        if self.done {
+            // Nothing more is written: the folder is free for a resume or a new run.
+            self.lock = None;
         }
         self.events.pop_front().map(Ok)
     }
