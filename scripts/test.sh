@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # The test command of the README: installs what the tests need (a Vulkan driver, Xvfb for the
-# viewer's window test), then runs every test of the workspace (CPU reference, formats, GPU
-# stages on lavapipe or a real GPU, the viewer in a virtual X window).
+# viewer's window test, COLMAP for prepare's), then runs every test of the workspace (CPU
+# reference, formats, GPU stages on lavapipe or a real GPU, the viewer in a virtual X window).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/ensure-vulkan.sh
+scripts/ensure-colmap.sh
 # On its own line so that `set -e` stops here when the set-up fails (a failure inside the
 # for-list's substitution would be ignored and the window test silently skipped).
 settings=$(scripts/ensure-xvfb.sh)

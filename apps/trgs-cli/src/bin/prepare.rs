@@ -1,0 +1,57 @@
+//! `prepare`: a folder of photos or a video's frames to a scene folder `train` reads, through
+//! COLMAP ([`trgs_cli::prepare`]).
+use anyhow::Result;
+use clap::Parser;
+use std::path::PathBuf;
+use trgs_cli::prepare::{Matching, PrepareOptions, prepare};
+
+/// A scene folder from photos: COLMAP's features, matches and mapping (the `colmap` program),
+/// the largest model kept as sparse/0, the photos checked and turned upright into images/.
+///
+/// Photos taken around a room or an object: the default exhaustive matching. A video's frames
+/// (named in order): --matching sequential, with --every to thin them.
+#[derive(Debug, Parser)]
+#[command(name = "prepare", version, after_help = "Then: train --data OUT")]
+struct Args {
+    /// The folder of photos or frames (JPEG or PNG)
+    input: PathBuf,
+    /// The scene folder to write (images/, sparse/0/, and COLMAP's database in colmap/)
+    #[arg(long)]
+    out: PathBuf,
+    /// How COLMAP pairs images to match
+    #[arg(long, value_enum, default_value = "exhaustive")]
+    matching: Matching,
+    /// Keep every N-th image in file-name order (a video's frames overlap more than needed)
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    every: usize,
+    /// COLMAP's camera model, one camera for every image (trgs undistorts SIMPLE_RADIAL,
+    /// RADIAL, OPENCV, the fisheye models and the pinholes)
+    #[arg(long, value_name = "MODEL", default_value = "SIMPLE_RADIAL")]
+    camera_model: String,
+    /// Keep the first focal length estimate: a capture that only pans (a video along a facade)
+    /// has too little parallax for COLMAP to refine it
+    #[arg(long)]
+    fix_focal: bool,
+    /// The COLMAP program
+    #[arg(long, value_name = "PATH", default_value = "colmap")]
+    colmap: PathBuf,
+    /// CPU threads for COLMAP [default: all]
+    #[arg(long, value_name = "N", default_value_t = -1, allow_negative_numbers = true)]
+    threads: i32,
+}
+
+fn main() -> Result<()> {
+    let a = Args::parse();
+    let options = PrepareOptions {
+        input: a.input,
+        out: a.out,
+        matching: a.matching,
+        every: a.every,
+        camera_model: a.camera_model,
+        fix_focal: a.fix_focal,
+        colmap: a.colmap,
+        threads: a.threads,
+    };
+    prepare(&options, &mut |line| println!("{line}"))?;
+    Ok(())
+}

@@ -1,0 +1,80 @@
+//! `prepare` on photos the project makes: the built-in scene's views (every second of its orbit)
+//! become a scene folder that trgs opens, with most views registered; photos that share nothing
+//! and a missing COLMAP are named errors. Needs COLMAP's `colmap` program
+//! (scripts/ensure-colmap.sh installs it, as scripts/test.sh does).
+use std::path::Path;
+use std::process::{Command, Output};
+use trgs_core::io::SceneFolder;
+use trgs_core::scratch::ScratchDir;
+use trgs_train::RunConfig;
+
+fn prepare(input: &Path, out: &Path, extra: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_prepare"))
+        .arg(input)
+        .arg("--out")
+        .arg(out)
+        .args(extra)
+        .output()
+        .expect("run prepare")
+}
+
+fn text(output: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&output.stdout),
+        String::from_utf8_lossy(&output.stderr)
+    )
+}
+
+#[test]
+fn the_built_in_scenes_photos_become_a_scene_folder() {
+    assert!(
+        Command::new("colmap").arg("help").output().is_ok(),
+        "COLMAP's colmap program is missing: scripts/ensure-colmap.sh installs it"
+    );
+    let dir = ScratchDir::new("prepare-cli");
+    let demo = RunConfig::default().demo_config();
+    trgs_synthetic::write_generated(&demo, &dir.join("demo")).expect("the built-in scene");
+    let photos = dir.join("demo").join("images");
+    let scene = dir.join("scene");
+    let made = prepare(&photos, &scene, &["--every", "2"]);
+    let said = text(&made);
+    assert!(made.status.success(), "{said}");
+    let given = std::fs::read_dir(&photos).expect("photos").count().div_ceil(2);
+    for stage in ["feature extraction done", "exhaustive matching done", "mapping done"] {
+        assert!(said.contains(stage), "a line for each COLMAP stage: {said}");
+    }
+    let folder = SceneFolder::open(&scene).expect("trgs opens the scene folder");
+    assert!(
+        10 * folder.views.len() >= 7 * given,
+        "{} of {given} views registered: {said}",
+        folder.views.len()
+    );
+    assert!(folder.points.len() > 100, "{} sparse points", folder.points.len());
+    assert!(said.contains(&format!("of {given} images registered")), "{said}");
+    // A second prepare into the same folder is refused rather than mixed with the first.
+    let again = prepare(&photos, &scene, &[]);
+    assert!(!again.status.success() && text(&again).contains("already holds"), "{}", text(&again));
+}
+
+#[test]
+fn photos_that_share_nothing_and_a_missing_colmap_are_named() {
+    let dir = ScratchDir::new("prepare-cli-errors");
+    let photos = dir.join("noise");
+    std::fs::create_dir_all(&photos).expect("folder");
+    let mut state = 12345u32;
+    for i in 0..3 {
+        let img = image::RgbImage::from_fn(160, 120, |_, _| {
+            state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            image::Rgb([(state >> 24) as u8, (state >> 16) as u8, (state >> 8) as u8])
+        });
+        img.save(photos.join(format!("{i}.png"))).expect("noise photo");
+    }
+    let missing = prepare(&photos, &dir.join("a"), &["--colmap", "no-such-colmap"]);
+    assert!(!missing.status.success());
+    assert!(text(&missing).contains("COLMAP is not installed"), "{}", text(&missing));
+    let refused = prepare(&photos, &dir.join("b"), &[]);
+    assert!(!refused.status.success());
+    let said = text(&refused);
+    assert!(said.contains("registered none of the 3 images") || said.contains("only"), "{said}");
+}
