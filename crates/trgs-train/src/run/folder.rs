@@ -88,6 +88,18 @@ impl Drop for RunLock {
     }
 }
 
+/// Remove the folder `out` if it holds nothing but its lock file (a run refused before it
+/// wrote anything); best effort.
+pub fn remove_if_only_the_lock(out: &Path) {
+    let only_lock = std::fs::read_dir(out)
+        .map(|entries| entries.flatten().all(|e| e.file_name() == LOCK_FILE))
+        .unwrap_or(false);
+    if only_lock {
+        let _ = std::fs::remove_file(out.join(LOCK_FILE));
+        let _ = std::fs::remove_dir(out);
+    }
+}
+
 /// The lock file's text (empty when it cannot be read).
 fn read_holder(file: &mut File) -> String {
     let mut text = String::new();

@@ -92,21 +92,30 @@ pub struct TrainingRun {
 }
 
 impl TrainingRun {
-    /// A new run of `config` (removing a previous run's checkpoint in the same folder).
+    /// A new run of `config` (setting a previous run's files in the same folder aside). A run
+    /// refused before it starts leaves no folder behind that it made itself.
     pub fn start(mut config: RunConfig, options: RunOptions<'_>) -> Result<Self> {
         // Refused before the device is set up.
         config.check()?;
-        let lock = RunLock::acquire(&config.out)?;
+        let out = config.out.clone();
+        let made_folder = !out.exists();
+        let lock = RunLock::acquire(&out)?;
         if let Some(mib) = options.target_memory {
             config.target_memory = Some(mib);
         }
-        let ctx = match options.context {
-            Some(ctx) => ctx,
-            None => GpuContext::new()?,
-        };
-        let silent = |_: usize, _: usize| {};
-        let progress = options.progress.unwrap_or(&silent);
-        Self::begin(ctx, lock, config, None, Vec::new(), progress)
+        let begun = match options.context {
+            Some(ctx) => Ok(ctx),
+            None => GpuContext::new().map_err(anyhow::Error::from),
+        }
+        .and_then(|ctx| {
+            let silent = |_: usize, _: usize| {};
+            let progress = options.progress.unwrap_or(&silent);
+            Self::begin(ctx, lock, config, None, Vec::new(), progress)
+        });
+        if begun.is_err() && made_folder {
+            folder::remove_if_only_the_lock(&out);
+        }
+        begun
     }
 
     /// Continue the run in `out` from its checkpoint, with the settings it started with.
