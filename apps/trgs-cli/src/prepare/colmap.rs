@@ -8,6 +8,12 @@ use anyhow::{Context, Result, bail};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
+/// The smallest triangulation angle (degrees) of the pair a second mapping starts from, when the
+/// first found no pair at COLMAP's default (16): a video panning along a facade moves the camera
+/// little between frames, so no pair reaches 16 degrees, while 4 still triangulates the pair's
+/// points well enough for the model to grow from it.
+pub const SHORT_BASELINE_INIT_ANGLE: f64 = 4.0;
+
 /// The `colmap` program found on this machine, with the threads it may use.
 #[derive(Debug)]
 pub struct Colmap {
@@ -74,13 +80,15 @@ impl Colmap {
         self.run(command, &args)
     }
 
-    /// Incremental mapping into `models` (one folder per model COLMAP makes).
+    /// Incremental mapping into `models` (one folder per model COLMAP makes); `short_baseline`
+    /// lets it start from a pair seen at a smaller angle (see [`SHORT_BASELINE_INIT_ANGLE`]).
     pub fn map(
         &self,
         database: &Path,
         images: &Path,
         models: &Path,
         fix_focal: bool,
+        short_baseline: bool,
     ) -> Result<()> {
         std::fs::create_dir_all(models)
             .with_context(|| format!("creating {}", models.display()))?;
@@ -94,6 +102,10 @@ impl Colmap {
         args.extend(options.either(&["Mapper.num_threads"], &self.threads.to_string()));
         if fix_focal {
             args.extend(options.either(&["Mapper.ba_refine_focal_length"], "0"));
+        }
+        if short_baseline {
+            let angle = SHORT_BASELINE_INIT_ANGLE.to_string();
+            args.extend(options.either(&["Mapper.init_min_tri_angle"], &angle));
         }
         self.run(command, &args)
     }

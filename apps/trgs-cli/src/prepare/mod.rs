@@ -97,15 +97,31 @@ pub fn prepare(options: &PrepareOptions, say: &mut dyn FnMut(String)) -> Result<
         Matching::Sequential => "sequential matching",
     };
     stage(matcher, say, &|| program.match_features(&database, options.matching))?;
-    let models = work.join("sparse");
-    let mapped =
-        stage("mapping", say, &|| program.map(&database, &images, &models, options.fix_focal));
-    // COLMAP's mapper fails when it finds no pair to start from: that is no model, said as such.
-    let kept = model::keep_largest(&models, &out.join("sparse").join("0"), copied);
-    let kept = match (mapped, kept) {
-        (Err(e), Err(none)) => return Err(e.context(none.to_string())),
-        (Err(e), Ok(_)) => return Err(e),
-        (Ok(()), kept) => kept?,
+    let target = out.join("sparse").join("0");
+    let map = |short_baseline: bool, say: &mut dyn FnMut(String)| {
+        let models = work.join(if short_baseline { "sparse-short-baseline" } else { "sparse" });
+        let mapped = stage("mapping", say, &|| {
+            program.map(&database, &images, &models, options.fix_focal, short_baseline)
+        });
+        // The mapper fails when it finds no pair to start from: that is no model, said as such.
+        let kept = model::keep_largest(&models, &target, copied);
+        match (mapped, kept) {
+            (Err(e), Err(none)) => Err(e.context(none.to_string())),
+            (Err(e), Ok(_)) => Err(e),
+            (Ok(()), kept) => kept,
+        }
+    };
+    let kept = match map(false, say) {
+        Ok(kept) => kept,
+        Err(first) => {
+            // A capture that only pans: start from a pair seen at a smaller angle.
+            say(format!(
+                "colmap: {first}; mapping again from a pair seen at {}° or more (a \
+                 short-baseline capture)",
+                colmap::SHORT_BASELINE_INIT_ANGLE
+            ));
+            map(true, say).map_err(|again| again.context(format!("first mapping: {first}")))?
+        }
     };
     for line in kept.notes() {
         say(line);
