@@ -24,8 +24,8 @@ struct Args {
     /// Keep every N-th image in file-name order (a video's frames overlap more than needed)
     #[arg(long, value_name = "N", default_value_t = 1)]
     every: usize,
-    /// COLMAP's camera model, one camera for every image (trgs undistorts SIMPLE_RADIAL,
-    /// RADIAL, OPENCV, the fisheye models and the pinholes)
+    /// COLMAP's camera model, one camera for all photos when they share one size, else one
+    /// each (trgs undistorts SIMPLE_RADIAL, RADIAL, OPENCV, the fisheye models and the pinholes)
     #[arg(long, value_name = "MODEL", default_value = "SIMPLE_RADIAL")]
     camera_model: String,
     /// Keep the first focal length estimate: a capture that only pans (a video along a facade)

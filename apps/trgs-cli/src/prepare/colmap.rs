@@ -50,14 +50,21 @@ impl Colmap {
         &self.version
     }
 
-    /// SIFT features of every image in `images` into `database`, one camera of `model` for all.
-    pub fn extract_features(&self, database: &Path, images: &Path, model: &str) -> Result<()> {
+    /// SIFT features of every image in `images` into `database`, with cameras of `model`: one
+    /// for all when `single_camera`, else one per image.
+    pub fn extract_features(
+        &self,
+        database: &Path,
+        images: &Path,
+        model: &str,
+        single_camera: bool,
+    ) -> Result<()> {
         let command = "feature_extractor";
         let options = self.options(command)?;
         let mut args = vec![
             ("database_path".to_string(), path(database)),
             ("image_path".to_string(), path(images)),
-            ("ImageReader.single_camera".to_string(), "1".to_string()),
+            ("ImageReader.single_camera".to_string(), u8::from(single_camera).to_string()),
             ("ImageReader.camera_model".to_string(), model.to_string()),
         ];
         args.extend(options.either(&["FeatureExtraction.use_gpu", "SiftExtraction.use_gpu"], "0"));

@@ -35,7 +35,7 @@ pub struct PrepareOptions {
     pub matching: Matching,
     /// Keep every n-th image, in file-name order.
     pub every: usize,
-    /// COLMAP's camera model (one camera for all images).
+    /// COLMAP's camera model (one camera for all photos when they share one size).
     pub camera_model: String,
     /// Keep the focal length of the first estimate: short baselines (a video panning along a
     /// facade) give COLMAP too little parallax to refine it.
@@ -77,7 +77,20 @@ pub fn prepare(options: &PrepareOptions, say: &mut dyn FnMut(String)) -> Result<
         options.every
     ));
     let images = out.join("images");
-    let copied = photos::write_upright(&chosen.kept, &images, say)?;
+    let sizes = photos::write_upright(&chosen.kept, &images, say)?;
+    let copied = sizes.len();
+    // One camera shared by every photo constrains COLMAP best, but a camera has one size: photos
+    // of several sizes (a phone's portrait and landscape shots) get a camera each, or COLMAP
+    // registers only those of the first one's size.
+    let single_camera = sizes.windows(2).all(|w| w[0] == w[1]);
+    if !single_camera {
+        let portrait = sizes.iter().filter(|(w, h)| h > w).count();
+        say(format!(
+            "photos: of several sizes ({portrait} portrait, {} landscape or square): a camera for \
+             each photo",
+            copied - portrait
+        ));
+    }
     say(format!("photos: checked and written to {} ({:.0} s)", images.display(), secs(t0)));
     let work = out.join("colmap");
     std::fs::create_dir_all(&work).with_context(|| format!("creating {}", work.display()))?;
@@ -90,7 +103,7 @@ pub fn prepare(options: &PrepareOptions, say: &mut dyn FnMut(String)) -> Result<
         Ok::<(), anyhow::Error>(())
     };
     stage("feature extraction", say, &|| {
-        program.extract_features(&database, &images, &options.camera_model)
+        program.extract_features(&database, &images, &options.camera_model, single_camera)
     })?;
     let matcher = match options.matching {
         Matching::Exhaustive => "exhaustive matching",

@@ -57,14 +57,15 @@ pub fn image_files(dir: &Path) -> Result<Vec<PathBuf>> {
     Ok(files)
 }
 
-/// Write `photos` upright into `images` under their own names; returns how many.
+/// Write `photos` upright into `images` under their own names; returns each one's upright size.
 pub fn write_upright(
     photos: &[PathBuf],
     images: &Path,
     say: &mut dyn FnMut(String),
-) -> Result<usize> {
+) -> Result<Vec<(u32, u32)>> {
     std::fs::create_dir_all(images).with_context(|| format!("creating {}", images.display()))?;
     let mut turned = 0;
+    let mut sizes = Vec::with_capacity(photos.len());
     for photo in photos {
         let name = photo.file_name().context("a photo without a file name")?;
         let target = images.join(name);
@@ -75,6 +76,7 @@ pub fn write_upright(
                 std::fs::copy(photo, &target).with_context(|| {
                     format!("copying {} to {}", photo.display(), target.display())
                 })?;
+                sizes.push((pixels.width, pixels.height));
             }
             o => {
                 let rgb = RgbImage::from_raw(pixels.width, pixels.height, pixels.data)
@@ -83,6 +85,7 @@ pub fn write_upright(
                 upright.apply_orientation(o);
                 let target = target.with_extension("jpg");
                 write_atomic(&target, &encode_jpeg(&upright.to_rgb8())?)?;
+                sizes.push((upright.width(), upright.height()));
                 turned += 1;
             }
         }
@@ -93,7 +96,7 @@ pub fn write_upright(
              quality {UPRIGHT_JPEG_QUALITY})"
         ));
     }
-    Ok(photos.len())
+    Ok(sizes)
 }
 
 /// A photo's EXIF orientation (none: as stored).
@@ -158,7 +161,8 @@ mod tests {
         std::fs::write(input.join("b.jpg"), &plain).expect("plain");
         let mut lines = Vec::new();
         let photos = [input.join("a.jpg"), input.join("b.jpg")];
-        assert_eq!(write_upright(&photos, &images, &mut |l| lines.push(l)).expect("write"), 2);
+        let sizes = write_upright(&photos, &images, &mut |l| lines.push(l)).expect("write");
+        assert_eq!(sizes, [(24, 40), (40, 24)]);
         let turned = read_rgb8_image(&images.join("a.jpg")).expect("turned photo");
         assert_eq!((turned.width, turned.height), (24, 40), "stored landscape, shown portrait");
         assert_eq!(orientation(&images.join("a.jpg")).expect("tag"), Orientation::NoTransforms);
