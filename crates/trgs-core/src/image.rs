@@ -92,6 +92,20 @@ impl<F: Copy + Default> Image<F> {
         self
     }
 
+    /// The columns `x0..x1` (clamped to the image) as an image of their own.
+    pub fn columns(&self, x0: u32, x1: u32) -> Self {
+        let (x0, x1) = (x0.min(self.width), x1.min(self.width).max(x0.min(self.width)));
+        let ch = self.channels as usize;
+        let row = self.width as usize * ch;
+        let data = self
+            .data
+            .chunks(row.max(1))
+            .flat_map(|r| &r[x0 as usize * ch..x1 as usize * ch])
+            .copied()
+            .collect();
+        Image { width: x1 - x0, height: self.height, channels: self.channels, data }
+    }
+
     /// Resampled to `w x h` by nearest sample (labels stay labels); a copy at the same size.
     pub fn resized_nearest(&self, w: u32, h: u32) -> Self {
         if (self.width, self.height) == (w, h) {

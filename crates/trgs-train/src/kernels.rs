@@ -11,6 +11,8 @@ trgs_render::kernel_registry! {
         photometric_loss_grad_rows: "training/photometric_loss_grad_rows.wgsl" => no_defines,
         photometric_loss_grad: "training/photometric_loss_grad.wgsl" => no_defines,
         regularisers: "training/regularisers.wgsl" => no_defines,
+        exposure: "training/exposure.wgsl" => no_defines,
+        exposure_bwd: "training/exposure_bwd.wgsl" => no_defines,
         loss_sums: "training/loss_sums.wgsl" => no_defines,
         adam: "training/adam.wgsl" => no_defines,
         densify_stats: "training/densify_stats.wgsl" => no_defines,

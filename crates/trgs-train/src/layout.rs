@@ -110,6 +110,21 @@ gpu_struct! {
 }
 
 gpu_struct! {
+    /// Parameters of `exposure` and `exposure_bwd` over one `width` x `height` frame: the view's
+    /// affine colour map `C' = A C + b`, row `i` being `[A_i0, A_i1, A_i2, b_i]`
+    /// ([`trgs_core::pipeline::ExposureMatrix`]).
+    pub struct ExposureParams {
+        pub row0: [f32; 4],
+        pub row1: [f32; 4],
+        pub row2: [f32; 4],
+        pub width: u32,
+        pub height: u32,
+        pub pad0: u32,
+        pub pad1: u32,
+    }
+}
+
+gpu_struct! {
     /// Parameters of `step_guard`: `count` vec4s of loss sums to check.
     pub struct StepGuardParams {
         pub count: u32,
@@ -232,6 +247,7 @@ pub fn all_structs() -> Vec<StructInfo> {
         struct_info::<PerturbPlane>(),
         struct_info::<PerturbParams>(),
         struct_info::<StepGuardParams>(),
+        struct_info::<ExposureParams>(),
     ]
 }
 

@@ -18,10 +18,12 @@
 //! Inside, one folder per concern (docs/ARCHITECTURE.md, "trgs-train"): `run/` (a whole run),
 //! `trainer/` (one step), `gaussians/` (the set and its Adam moments), `densify/` (strategies,
 //! each with its GPU stages), `planes/` (initialisation, seeds, plane Adam, perturbation),
-//! `losses/`, `data/`; `kernels` and `layout` hold the crate's kernel table and GPU structs.
+//! `losses/`, `exposure/` (per-view exposure compensation), `data/`; `kernels` and `layout` hold
+//! the crate's kernel table and GPU structs.
 mod data;
 pub mod densify;
 pub mod eval;
+mod exposure;
 mod gaussians;
 mod kernels;
 mod layout;

@@ -1,5 +1,6 @@
 //! Every setting of a training run, with the paper's and 3DGS's values as defaults. Lengths are
 //! given for the paper's 30k iterations and scale with `iterations`.
+use crate::exposure::ExposureRates;
 use trgs_core::pipeline::{AdamRate, DSSIM_LAMBDA, ReflectionModel};
 use trgs_core::scene::{Attribute, PerAttribute};
 
@@ -109,6 +110,8 @@ pub struct TrainSettings {
     pub perturb: Option<PerturbSchedule>,
     /// The reflection model (ablations switch Schlick or the intensity map off).
     pub reflection: ReflectionModel,
+    /// Per-view exposure compensation and its learning rates (None: off).
+    pub exposure: Option<ExposureRates>,
 }
 
 /// The paper's opacity perturbation noise: uniform in [-0.4, 0.4] on the opacity (not its
@@ -163,6 +166,7 @@ impl TrainSettings {
             lambda_mask: 0.5,
             perturb: Some(PerturbSchedule::scaled(iterations)),
             reflection: ReflectionModel::default(),
+            exposure: None,
         }
     }
 

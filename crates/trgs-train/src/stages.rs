@@ -8,6 +8,8 @@ pub use crate::densify::classic::{
     opacity_reset_logits,
 };
 pub use crate::densify::mcmc::{GpuMcmcRelocate, McmcKernels, McmcRelocateOutput};
+pub use crate::exposure::stage::{ExposureKernels, PendingExposureGrad};
+pub use crate::exposure::{ExposureRates, ViewExposure, ViewExposures};
 pub use crate::gaussians::adam::{Adam, AdamMoments};
 pub use crate::gaussians::gather_rows::{GatherSources, GpuRowGather};
 pub use crate::gaussians::plan::{Geometry, RowPlan, TrainState};

@@ -146,6 +146,7 @@ fn trainers(ctx: &GpuContext) -> (Trainer, Trainer, Checkpoint) {
         state: s,
         planes,
         plane_moments: Vec::new(),
+        exposures: Default::default(),
         densify_stats: Some(stats),
         rng_state: 0x1234_5678,
         extra: serde_json::Value::Null,

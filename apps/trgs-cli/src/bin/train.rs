@@ -249,7 +249,7 @@ fn train(start: Start, feed: Option<&LiveFeed>) -> Result<()> {
             RunEvent::CheckpointWritten { .. } => {}
             RunEvent::Finished(summary) => {
                 bar.finish();
-                report(&summary);
+                report(&summary, run.config().exposure.is_on());
                 if let Some(feed) = feed {
                     // The final model, whatever the snapshot interval left the viewer with.
                     let status = format!("training finished: results in {}", summary.out.display());
@@ -272,8 +272,9 @@ fn snapshot(run: &TrainingRun, status: String) -> Result<Snapshot> {
     })
 }
 
-/// The closing lines: the ground truth's verdict, the phases of a step, the result.
-fn report(s: &RunSummary) {
+/// The closing lines: the ground truth's verdict, the phases of a step, the result (with the
+/// exposure protocol's score when the run learnt exposures).
+fn report(s: &RunSummary, exposure: bool) {
     if let (Some(t), Some(dir)) = (&s.truth, &s.truth_dir) {
         println!("against the ground truth in {}: {t}", dir.display());
     }
@@ -289,4 +290,11 @@ fn report(s: &RunSummary) {
         s.last.ssim,
         s.out.display()
     );
+    if let Some(h) = s.last.right_half.filter(|_| exposure) {
+        println!(
+            "test views' right halves: PSNR {:.2} dB through the exposure fitted on each photo's \
+             left half ({:.2} dB as rendered)",
+            h.psnr_exposure_fitted, h.psnr
+        );
+    }
 }

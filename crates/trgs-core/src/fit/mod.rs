@@ -1,5 +1,5 @@
-//! Plane fitting for initialising reflection planes (appendix A of the paper;
-//! docs/ARCHITECTURE.md, "Plane initialisation").
+//! Fitting: reflection planes for their initialisation (appendix A of the paper;
+//! docs/ARCHITECTURE.md, "Plane initialisation"), and a test view's exposure ([`fit_exposure`]).
 //!
 //! The pipeline: the Gaussians in a band around the annotated glass outline are fitted with
 //! [`ransac_plane`] (3-point hypotheses, least-squares refinement), the normal is turned toward
@@ -8,11 +8,13 @@
 //! [`fit_rectangle`] does all but the orientation. [`refine_to_masks`] then moves the rectangle
 //! from the pane's frame onto the glass the masks outline, and [`sample_rectangle`] places the
 //! glass Gaussians uniformly on it.
+mod exposure;
 mod hull;
 mod ransac;
 mod rectangle;
 mod silhouette;
 
+pub use exposure::fit_exposure;
 pub use hull::{OrientedBox, convex_hull, min_area_box};
 pub use ransac::{PlaneFit, orient_towards, ransac_plane, symmetric_eigen};
 pub use rectangle::{RectangleFit, fit_rectangle, sample_rectangle};

@@ -10,6 +10,7 @@
 //! `depth_key`, ...) stay in [`crate::reference`], the test oracle.
 mod adam;
 mod display;
+mod exposure;
 mod guard;
 mod keys;
 mod losses;
@@ -21,6 +22,7 @@ mod tiles;
 
 pub use adam::{AdamRate, AdamSettings};
 pub use display::DisplayMapping;
+pub use exposure::{EXPOSURE_IDENTITY, ExposureMatrix};
 pub use guard::{GUARD_KEYS_DROPPED, GUARD_LOSS_NOT_FINITE};
 pub use keys::{DEPTH_KEY_BITS, DEPTH_KEY_FLOOR, depth_key_base};
 pub use losses::{DSSIM_LAMBDA, RegulariserWeights};

@@ -1,6 +1,6 @@
 //! The CPU reference renderer: one module per GPU stage, named as the WGSL stage it mirrors
 //! (`project`, `tile_counts`, `depth_order`, `prefix_sum`, `emit_keys`, `sort`, `tile_ranges`, `footprint`,
-//! `rasterize`, `rasterize_reflection`, `compose`, `display`) and its adjoint (`*_bwd`). It runs in f64 so
+//! `rasterize`, `rasterize_reflection`, `compose`, `display`, and training's `exposure`) and its adjoint (`*_bwd`). It runs in f64 so
 //! that its gradients can be checked against central finite differences, and it is the oracle of
 //! every GPU stage.
 //!
@@ -19,6 +19,7 @@ mod compose_bwd;
 mod depth_order;
 mod display;
 mod emit_keys;
+mod exposure;
 mod footprint;
 mod frame;
 mod mcmc;
@@ -45,6 +46,7 @@ pub use compose_bwd::{ComposeGrads, compose_bwd};
 pub use depth_order::{depth_key, depth_order};
 pub use display::{display, display_pixel, pack4x8unorm};
 pub use emit_keys::emit_keys;
+pub use exposure::{ExposureGrads, exposure, exposure_bwd, exposure_pixel};
 pub use footprint::footprint;
 pub use frame::{Frame, FrameGrads, PlaneLayerGrads, PlaneLayers, ViewPass};
 pub use mcmc::{draw_below, mcmc_noise, mcmc_regularise, noise_normal, noise_offset, pcg_hash};

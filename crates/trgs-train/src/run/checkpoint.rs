@@ -6,6 +6,7 @@
 //! the arrays that follow: name, element type, length), then the arrays, little-endian, in manifest
 //! order. The manifest makes a truncated or mismatched file an error that says which array.
 use crate::densify::DensifyStats;
+use crate::exposure::ViewExposures;
 use crate::gaussians::plan::TrainState;
 use crate::planes::adam::OffsetLimit;
 use glam::DVec3;
@@ -47,6 +48,8 @@ pub struct Checkpoint {
     pub state: TrainState,
     pub planes: Vec<ReflectionPlane>,
     pub plane_moments: Vec<PlaneMoments>,
+    /// The training views' exposures and their Adam state (empty when compensation is off).
+    pub exposures: ViewExposures,
     /// Classic densification's statistics since its last run (None when it is off).
     pub densify_stats: Option<DensifyStats>,
     /// The trainer's random state (densification draws).
@@ -74,6 +77,9 @@ struct Header {
     sh_degree: u32,
     planes: Vec<PlaneRecord>,
     plane_moments: Vec<PlaneMoments>,
+    /// Absent from checkpoints that predate exposure compensation.
+    #[serde(default)]
+    exposures: ViewExposures,
     densify: bool,
     rng_state: u64,
     extra: serde_json::Value,
@@ -177,7 +183,12 @@ pub fn check_state(state: &TrainState) -> Result<(), String> {
 /// not be resumed from ([`check_state`]) is refused and the file keeps what it held: a diverged
 /// run never overwrites its last good checkpoint.
 pub fn write_checkpoint(path: &Path, ck: &Checkpoint) -> Result<(), FormatError> {
-    check_state(&ck.state).map_err(|problem| {
+    let exposures = if ck.exposures.is_finite() {
+        Ok(())
+    } else {
+        Err("a view's exposure is not finite".to_string())
+    };
+    exposures.and_then(|()| check_state(&ck.state)).map_err(|problem| {
         FormatError::new(
             path,
             format!(
@@ -228,6 +239,7 @@ pub fn write_checkpoint(path: &Path, ck: &Checkpoint) -> Result<(), FormatError>
             })
             .collect(),
         plane_moments: ck.plane_moments.clone(),
+        exposures: ck.exposures.clone(),
         densify: ck.densify_stats.is_some(),
         rng_state: ck.rng_state,
         extra: ck.extra.clone(),
@@ -267,6 +279,7 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, FormatError> {
         state: TrainState { gaussians, m, v },
         planes,
         plane_moments: header.plane_moments,
+        exposures: header.exposures,
         densify_stats,
         rng_state: header.rng_state,
         extra: header.extra,
@@ -510,6 +523,12 @@ mod tests {
                 steps: 17,
                 offset_limit: Some(OffsetLimit { anchor: [0.5, -1.0, 2.0], tolerance: 0.03 }),
             }],
+            exposures: {
+                let mut e = ViewExposures::default();
+                e.step("view_003", &[[0.5, -0.25, 0.0, 1.0]; 3], 0.01);
+                e.step("view_004", &[[-0.5, 0.25, 0.0, 1.0]; 3], 0.01);
+                e
+            },
             densify_stats: Some(DensifyStats {
                 grad_sum: vec![1.0, 2.0, 3.0, 4.0, 5.0],
                 count: vec![1, 2, 3, 4, 5],
@@ -539,6 +558,7 @@ mod tests {
         assert_eq!(back.state.v, ck.state.v);
         assert_eq!(back.planes, ck.planes);
         assert_eq!(back.plane_moments, ck.plane_moments);
+        assert_eq!(back.exposures, ck.exposures);
         assert_eq!(back.densify_stats, ck.densify_stats);
         assert_eq!(back.rng_state, ck.rng_state);
         assert_eq!(back.extra, ck.extra);

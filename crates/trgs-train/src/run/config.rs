@@ -4,6 +4,7 @@
 //! parses an empty command line.
 use crate::data::Resolution;
 use crate::densify::{ClassicSettings, Densification, McmcSettings};
+use crate::exposure::ExposureRates;
 use crate::settings::TrainSettings;
 use anyhow::{Result, bail};
 use serde::{Deserialize, Serialize};
@@ -101,6 +102,13 @@ pub struct RunConfig {
     #[arg(long, conflicts_with = "no_planes")]
     #[serde(default)]
     pub no_mask_refinement: bool,
+    /// Per-view exposure compensation: learn an affine colour map per training photo (its
+    /// exposure and white balance), which the loss applies to the render; the model stays one
+    /// exposure. Test views' maps are fitted on the photo's left half and scored on its right
+    /// (metrics.json's `right_half`)
+    #[arg(long, value_enum, value_name = "ON|OFF", default_value = "off")]
+    #[serde(default)]
+    pub exposure: ExposureMode,
     /// GPU memory for the training views' photos, in MiB; beyond it views are streamed, each
     /// uploaded a step ahead of its use [default: 64 on a CPU adapter such as lavapipe, whose
     /// "GPU memory" is the RAM that already holds the photos; 4096 on a GPU]
@@ -296,6 +304,20 @@ impl RunConfig {
     }
 }
 
+/// Whether training learns a per-view exposure.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, Serialize, Deserialize)]
+pub enum ExposureMode {
+    On,
+    #[default]
+    Off,
+}
+
+impl ExposureMode {
+    pub fn is_on(self) -> bool {
+        self == Self::On
+    }
+}
+
 /// How the Gaussian count changes during training.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize, Deserialize)]
 pub enum DensifyMode {
@@ -416,6 +438,9 @@ impl RunConfig {
         s.reflection.fresnel = !ab.no_fresnel;
         if self.densify == DensifyMode::Mcmc {
             s.rates.opacity = crate::densify::mcmc::OPACITY_LEARNING_RATE;
+        }
+        if self.exposure.is_on() {
+            s.exposure = Some(ExposureRates::default());
         }
         s
     }

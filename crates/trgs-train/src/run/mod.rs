@@ -37,7 +37,7 @@ mod state;
 mod steps;
 
 pub use config::{
-    Ablations, DEFAULT_MCMC_CAP, DemoScene, DensifyMode, RunConfig, parse_image_size,
+    Ablations, DEFAULT_MCMC_CAP, DemoScene, DensifyMode, ExposureMode, RunConfig, parse_image_size,
     parse_positive, upgrade_config_record,
 };
 pub use events::{RunEvent, StepEvent, StepMemory};

@@ -105,6 +105,8 @@ fn metrics_json(s: &RunSummary, data: &TrainingData, state: &RunState) -> serde_
     serde_json::json!({
         "psnr": last.psnr,
         "ssim": last.ssim,
+        "right_half": last.right_half,
+        "exposure": config.exposure,
         "eval_views": data.eval_views_name(),
         "views": views,
         "train_seconds": s.train_seconds,

@@ -4,6 +4,8 @@
 //! The whole run (stages, plane initialisation, evaluation, checkpoints) is
 //! [`crate::run::TrainingRun`]; this is the step it repeats.
 use crate::densify::{Densification, DensifyEvent, DensifyStrategy, NoDensification};
+use crate::exposure::ViewExposures;
+use crate::exposure::stage::ExposureKernels;
 use crate::gaussians::adam::Adam;
 use crate::gaussians::plan::{Geometry, RowPlan, TrainState};
 use crate::gaussians::state::GaussianState;
@@ -76,6 +78,10 @@ pub struct Trainer {
     gaussians: GaussianState,
     adam: Adam,
     plane_moments: Vec<PlaneMoments>,
+    /// The training views' exposures (identity and never stepped when compensation is off).
+    exposures: ViewExposures,
+    /// Stages `exposure` and `exposure_bwd`, built when the settings turn compensation on.
+    exposure_kernels: Option<ExposureKernels>,
     frame: Frame,
     losses: LossKernels,
     /// The training views' images and glass labels on the GPU, under a memory budget.
@@ -141,6 +147,8 @@ impl Trainer {
             renderer: Renderer::new(ctx),
             adam: Adam::new(ctx, AdamSettings::default()),
             plane_moments: vec![PlaneMoments::default(); gaussians.scene().planes().len()],
+            exposures: ViewExposures::default(),
+            exposure_kernels: settings.exposure.map(|_| ExposureKernels::new(ctx)),
             gaussians,
             frame: Frame::default(),
             losses: LossKernels::new(ctx),
@@ -175,6 +183,7 @@ impl Trainer {
             let state = GaussianState::from_state(ctx, &ck.state, &ck.planes)?;
             let mut t = Self::with_state(ctx, state, settings, extent);
             t.plane_moments = ck.plane_moments.clone();
+            t.exposures = ck.exposures.clone();
             t.step = ck.step;
             t.rng = Rng::from_state(ck.rng_state);
             let n = ck.state.gaussians.len();
@@ -197,6 +206,7 @@ impl Trainer {
             state: self.read_state()?,
             planes: self.planes().to_vec(),
             plane_moments: self.plane_moments.clone(),
+            exposures: self.exposures.clone(),
             densify_stats: self.densification.statistics()?,
             rng_state: self.rng.state(),
             extra,
@@ -341,6 +351,12 @@ impl Trainer {
 
     pub fn planes(&self) -> &[ReflectionPlane] {
         self.gaussians.scene().planes()
+    }
+
+    /// The exposure the loss applies to training view `view` (the identity when compensation is
+    /// off or the view has not been trained on).
+    pub fn exposure(&self, view: &str) -> trgs_core::pipeline::ExposureMatrix {
+        self.exposures.matrix(view)
     }
 
     /// The options a render of the current state uses (the SH degree of the last step included).

@@ -7,6 +7,7 @@ use super::phase_clock::PhaseClock;
 use super::{StepStats, StepTimes, Trainer, psnr_of};
 use crate::data::View;
 use crate::densify::{DensifyEvent, StepView};
+use crate::exposure::stage::PendingExposureGrad;
 use crate::losses::{LossLayers, LossSettings, PendingLoss};
 use crate::settings::Stage;
 use anyhow::{Context, Result};
@@ -26,9 +27,10 @@ pub struct StepInFlight {
     /// The step's number, from 1.
     step: u32,
     view: String,
-    /// The guard word (16 bytes), then the loss strips' sums.
+    /// The guard word (16 bytes), the loss strips' sums, then the exposure's (when on).
     readback: PendingRead,
     loss: PendingLoss,
+    exposure: Option<PendingExposureGrad>,
     keys: StepKeys,
     planes: PlaneGradsRead,
     times: StepTimes,
@@ -39,6 +41,10 @@ pub struct StepInFlight {
 
 /// Milliseconds of each GPU stage of a phase, with `--profile`.
 type StageTimes = Vec<(&'static str, f64)>;
+
+/// What phase loss leaves in flight: the loss, the exposure's gradient sums (when on), their
+/// readback (guard word, loss sums, exposure sums) and the phase's stage times.
+type RecordedLoss = (PendingLoss, Option<PendingExposureGrad>, PendingRead, StageTimes);
 
 /// The key totals of a step's frame: known when it was sized exactly, else on their way back.
 #[derive(Debug)]
@@ -172,7 +178,7 @@ impl Trainer {
         let mut clock = PhaseClock::start(self.waits_between_phases());
         let keys = self.record_render(view)?;
         times.render = clock.lap(&self.ctx)?;
-        let (loss, readback, loss_stages) = self.record_loss(view)?;
+        let (loss, exposure, readback, loss_stages) = self.record_loss(view)?;
         times.loss = clock.lap(&self.ctx)?;
         let mut grads = self.record_backward(stage)?;
         times.backward = clock.lap(&self.ctx)?;
@@ -194,6 +200,7 @@ impl Trainer {
             view: view.camera.name.clone(),
             readback,
             loss,
+            exposure,
             keys,
             planes: std::mem::take(&mut grads.planes),
             times,
@@ -232,9 +239,10 @@ impl Trainer {
         })
     }
 
-    /// Phase loss: the losses against `view`'s photo into the layer gradients, the guard word
-    /// from the loss sums and the frame's key overflow, and their readback, submitted.
-    fn record_loss(&mut self, view: &View) -> Result<(PendingLoss, PendingRead, StageTimes)> {
+    /// Phase loss: the losses against `view`'s photo into the layer gradients (through the
+    /// view's exposure, when compensation is on), the guard word from the loss sums and the
+    /// frame's key overflow, and their readback, submitted.
+    fn record_loss(&mut self, view: &View) -> Result<RecordedLoss> {
         let ctx = &self.ctx;
         let target = self
             .targets
@@ -258,21 +266,47 @@ impl Trainer {
             ),
         };
         let mut rec = Recorder::new(ctx, "trgs.train.loss", self.profile);
-        let layers = LossLayers::of_frame(&self.frame)?;
+        let mut layers = LossLayers::of_frame(&self.frame)?;
+        let size = (layers.width, layers.height);
+        let rendered = layers.color.clone();
+        let exposure = self.exposure_kernels.as_mut().map(|kernels| {
+            let m = self.exposures.matrix(&view.camera.name);
+            (kernels.record_exposure(ctx, &mut rec, &rendered, size, &m), m)
+        });
+        if let Some((exposed, _)) = &exposure {
+            layers.color = exposed;
+        }
         let loss = self
             .losses
             .record(ctx, &mut rec, &layers, target, layer_grads, &loss_settings)
             .with_context(|| format!("loss of view {}", view.camera.name))?;
+        let exposure = match (exposure, self.exposure_kernels.as_mut()) {
+            (Some((_, m)), Some(kernels)) => Some(kernels.record_exposure_bwd(
+                ctx,
+                &mut rec,
+                &rendered,
+                &layer_grads.color,
+                size,
+                &m,
+            )),
+            _ => None,
+        };
         #[allow(clippy::expect_used)]
         let kept = self.frame.key_overflow_flag().expect("the frame was rendered above");
         let (sums, vec4s) = (loss.partials(), loss.partial_vec4s());
         self.guard.record(ctx, &mut rec, sums, vec4s, kept);
-        let staging = gpu::staging(ctx, "trgs.train.step_readback", 16 + u64::from(vec4s) * 16);
+        let exposure_vec4s = exposure.as_ref().map_or(0, PendingExposureGrad::vec4s);
+        let bytes = 16 + u64::from(vec4s + exposure_vec4s) * 16;
+        let staging = gpu::staging(ctx, "trgs.train.step_readback", bytes);
         rec.encoder.copy_buffer_to_buffer(self.guard.word(), 0, &staging, 0, 16);
         rec.encoder.copy_buffer_to_buffer(sums, 0, &staging, 16, u64::from(vec4s) * 16);
+        if let Some(e) = &exposure {
+            let at = 16 + u64::from(vec4s) * 16;
+            rec.encoder.copy_buffer_to_buffer(e.partials(), 0, &staging, at, bytes - at);
+        }
         let submission = rec.submit(ctx)?;
         let readback = PendingRead::after(staging, submission);
-        Ok((loss, readback, rec.stage_times().unwrap_or_default()))
+        Ok((loss, exposure, readback, rec.stage_times().unwrap_or_default()))
     }
 
     /// Phase backward: every gradient from the layer gradients the losses wrote; in stage 2 the
@@ -331,15 +365,19 @@ impl Trainer {
             view,
             readback,
             loss,
+            exposure,
             keys,
             planes,
             mut times,
             gpu_stages,
             record_waits,
         } = in_flight;
-        let words: Vec<u32> = readback.read(ctx, 16 * (1 + loss.partial_vec4s() as usize))?;
+        let (loss_vec4s, exposure_vec4s) =
+            (loss.partial_vec4s() as usize, exposure.as_ref().map_or(0, |e| e.vec4s() as usize));
+        let words: Vec<u32> = readback.read(ctx, 16 * (1 + loss_vec4s + exposure_vec4s))?;
         let guard = words[0];
-        let values = loss.values_of(bytemuck::cast_slice(&words[4..]));
+        let loss_words = &words[4..4 + 4 * loss_vec4s];
+        let values = loss.values_of(bytemuck::cast_slice(loss_words));
         let keys = match keys {
             StepKeys::Pending(p) => Some(self.frame.settle_pending_keys(ctx, p)?),
             StepKeys::Known(k) => k,
@@ -356,6 +394,11 @@ impl Trainer {
             self.exact_keys_next = true;
         } else {
             self.step_planes(&planes, step)?;
+            if let (Some(e), Some(rates)) = (&exposure, self.settings.exposure) {
+                let grad = e.gradient_of(bytemuck::cast_slice(&words[4 + 4 * loss_vec4s..]));
+                let lr = rates.at(step - 1, self.settings.iterations);
+                self.exposures.step(&view, &grad, lr);
+            }
         }
         times.readback = clock.elapsed(ctx)?;
         Ok(StepStats {

@@ -85,6 +85,7 @@ pub fn bench_host(reps: usize) -> Result<()> {
         state: TrainState { gaussians, m: moments.clone(), v: moments },
         planes: scene.planes,
         plane_moments: vec![Default::default()],
+        exposures: Default::default(),
         densify_stats: None,
         rng_state: 1,
         extra: serde_json::Value::Null,
