@@ -73,7 +73,13 @@ fn every_command_has_generated_help() {
     }
     let help = Command::new(commands[0]).arg("--help").output().expect("run");
     let help = String::from_utf8_lossy(&help.stdout);
-    for flag in ["--data <DIR>", "--resume", "--no-fresnel", "[default: 1000]"] {
+    for flag in [
+        "--data <DIR>",
+        "--resume",
+        "--no-fresnel",
+        "[default: 1000 on the built-in",
+        "30000 with --data",
+    ] {
         assert!(help.contains(flag), "train --help lacks {flag}: {help}");
     }
 }

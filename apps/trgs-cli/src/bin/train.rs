@@ -54,8 +54,11 @@ fn parse() -> Result<(Start, bool)> {
         Err(e) => e.exit(),
     };
     if !cli.resume {
-        cli.config.check()?;
-        return Ok((Start::New(cli.config), cli.viewer));
+        let mut config = cli.config;
+        let steps_given = matches.value_source("iterations") == Some(ValueSource::CommandLine);
+        config.default_iterations_unless(steps_given);
+        config.check()?;
+        return Ok((Start::New(config), cli.viewer));
     }
     let given: Vec<String> = command
         .get_arguments()

@@ -37,8 +37,8 @@ mod state;
 mod steps;
 
 pub use config::{
-    Ablations, DEFAULT_MCMC_CAP, DemoScene, DensifyMode, ExposureMode, RunConfig, parse_image_size,
-    parse_positive, upgrade_config_record,
+    Ablations, CAPTURE_ITERATIONS, DEFAULT_MCMC_CAP, DEMO_ITERATIONS, DemoScene, DensifyMode,
+    ExposureMode, RunConfig, parse_image_size, parse_positive, upgrade_config_record,
 };
 pub use events::{RunEvent, StepEvent, StepMemory};
 pub use folder::LOCK_FILE;
