@@ -406,8 +406,7 @@ mod tests {
         for (i, v) in render.data.iter_mut().enumerate() {
             *v = ((i * 37) % 101) as f32 / 101.0;
         }
-        let photo = render.map(|v| v * 0.7);
-        let mut photo = photo;
+        let mut photo = render.map(|v| v * 0.7);
         for px in photo.data.chunks_mut(3) {
             px[0] += 0.05;
         }
