@@ -1,17 +1,18 @@
-// Stage `photometric_loss`, pass 2 of 4 (twin: trgs_core::reference::photometric_loss), for one
-// colour channel: the column blur of pass 1's rows gives the five moments; from them SSIM and
-// its derivatives with respect to the blurred moments m_x, m_xx, m_xy, already scaled by
+// Stage `photometric_loss`, pass 2 of 4 (twin: trgs_core::reference::photometric_loss), for the
+// run's colour channels: the column blur of pass 1's rows gives the five moments; from them SSIM
+// and its derivatives with respect to the blurred moments m_x, m_xx, m_xy, already scaled by
 // dL/dSSIM = -lambda / samples, for passes 3 and 4 to blur back (the zero-padded window is its
-// own adjoint). Also each pixel's |x - y|, SSIM and (x - y)^2, summed over the channels (the
-// first channel writes, the others add), for `loss_sums`.
+// own adjoint). Also each pixel's |x - y|, SSIM and (x - y)^2, summed over the channels (a run
+// from channel 0 writes, a later one adds), for `loss_sums`.
 #include "shared/common.wgsl"
+#include "shared/loss_channels.wgsl"
 
 @group(0) @binding(0) var<storage, read> params: LossParams;
 @group(0) @binding(1) var<storage, read> rendered: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read> target_image: array<u32>;
-// Pass 1's five row-blurred moments per pixel.
+// Pass 1's five row-blurred moments per pixel and channel.
 @group(0) @binding(3) var<storage, read> rows: array<f32>;
-// Per pixel: dL/dm_x, dL/dm_xx, dL/dm_xy of the channel.
+// Per pixel and channel: dL/dm_x, dL/dm_xx, dL/dm_xy.
 @group(0) @binding(4) var<storage, read_write> terms: array<f32>;
 // Per pixel: (|x - y|, SSIM, (x - y)^2, 0) summed over channels; regularisers at 2 p + 1.
 @group(0) @binding(5) var<storage, read_write> stats: array<vec4<f32>>;
@@ -22,35 +23,39 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     var w = SSIM_WEIGHTS;
-    var m = array<f32, 5>();
+    var m = array<f32, LOSS_MOMENTS>();
     for (var t = 0u; t < 11u; t++) {
         let qy = i32(gid.y + t) - i32(SSIM_RADIUS);
         if qy < 0 || qy >= i32(params.height) {
             continue;
         }
         let j = u32(qy) * params.width + gid.x;
-        for (var k = 0u; k < 5u; k++) {
-            m[k] += w[t] * rows[5u * j + k];
+        for (var k = 0u; k < LOSS_MOMENTS; k++) {
+            m[k] += w[t] * rows[LOSS_MOMENTS * j + k];
         }
     }
-    let mx = m[0];
-    let my = m[1];
-    let a1 = 2.0 * mx * my + SSIM_C1;
-    let a2 = 2.0 * (m[4] - mx * my) + SSIM_C2;
-    let b1 = mx * mx + my * my + SSIM_C1;
-    let b2 = (m[2] - mx * mx) + (m[3] - my * my) + SSIM_C2;
-    let s = a1 * a2 / (b1 * b2);
-    let g_s = -params.lambda_dssim * params.inv_samples;
     let p = gid.y * params.width + gid.x;
-    // S/A1 = A2/(B1 B2) and S/A2 = A1/(B1 B2), as in the twin: A2 can be exactly zero.
-    let inv_b = 1.0 / (b1 * b2);
-    let g_mx = g_s * (2.0 * my * (a2 - a1) * inv_b - 2.0 * mx * s / b1 + 2.0 * mx * s / b2);
-    terms[3u * p] = g_mx;
-    terms[3u * p + 1u] = -g_s * s / b2;
-    terms[3u * p + 2u] = g_s * 2.0 * a1 * inv_b;
-    let y = unpack4x8unorm(target_image[p]);
-    let d = (rendered[p][params.channel] - y[params.channel]) * y.w;
-    let here = vec4<f32>(abs(d), s, d * d, 0.0);
+    let photo = unpack4x8unorm(target_image[p]);
+    let colour = rendered[p];
+    let g_s = -params.lambda_dssim * params.inv_samples;
+    var here = vec4<f32>(0.0);
+    for (var c = 0u; c < LOSS_CHANNELS; c++) {
+        let mx = m[5u * c];
+        let my = m[5u * c + 1u];
+        let a1 = 2.0 * mx * my + SSIM_C1;
+        let a2 = 2.0 * (m[5u * c + 4u] - mx * my) + SSIM_C2;
+        let b1 = mx * mx + my * my + SSIM_C1;
+        let b2 = (m[5u * c + 2u] - mx * mx) + (m[5u * c + 3u] - my * my) + SSIM_C2;
+        let s = a1 * a2 / (b1 * b2);
+        // S/A1 = A2/(B1 B2) and S/A2 = A1/(B1 B2), as in the twin: A2 can be exactly zero.
+        let inv_b = 1.0 / (b1 * b2);
+        let g_mx = g_s * (2.0 * my * (a2 - a1) * inv_b - 2.0 * mx * s / b1 + 2.0 * mx * s / b2);
+        terms[LOSS_TERMS * p + 3u * c] = g_mx;
+        terms[LOSS_TERMS * p + 3u * c + 1u] = -g_s * s / b2;
+        terms[LOSS_TERMS * p + 3u * c + 2u] = g_s * 2.0 * a1 * inv_b;
+        let d = (colour[loss_channel(c)] - photo[loss_channel(c)]) * photo.w;
+        here += vec4<f32>(abs(d), s, d * d, 0.0);
+    }
     if params.channel == 0u {
         stats[2u * p] = here;
     } else {

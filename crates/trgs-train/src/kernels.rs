@@ -1,6 +1,13 @@
 //! The training stages' kernel table: each stage builds its kernel from its entry here
 //! (`TRAINING_KERNELS.adam.build(ctx)`), and the naga test validates every entry's variants.
+use trgs_render::Capabilities;
 use trgs_render::toolkit::registry::no_defines;
+
+/// The photometric loss's passes over all three colour channels at once
+/// (`shaders/shared/loss_channels.wgsl`).
+fn rgb(_: &Capabilities) -> Vec<&'static str> {
+    vec!["RGB"]
+}
 
 trgs_render::kernel_registry! {
     /// Every kernel of the training stages.
@@ -10,6 +17,10 @@ trgs_render::kernel_registry! {
         photometric_loss: "training/photometric_loss.wgsl" => no_defines,
         photometric_loss_grad_rows: "training/photometric_loss_grad_rows.wgsl" => no_defines,
         photometric_loss_grad: "training/photometric_loss_grad.wgsl" => no_defines,
+        photometric_loss_rows_rgb: "training/photometric_loss_rows.wgsl" => rgb,
+        photometric_loss_rgb: "training/photometric_loss.wgsl" => rgb,
+        photometric_loss_grad_rows_rgb: "training/photometric_loss_grad_rows.wgsl" => rgb,
+        photometric_loss_grad_rgb: "training/photometric_loss_grad.wgsl" => rgb,
         regularisers: "training/regularisers.wgsl" => no_defines,
         exposure: "training/exposure.wgsl" => no_defines,
         exposure_bwd: "training/exposure_bwd.wgsl" => no_defines,

@@ -51,8 +51,8 @@ gpu_struct! {
         pub weight_conflict: f32,
         /// Zero on views without a glass annotation.
         pub weight_mask: f32,
-        /// The colour channel `photometric_loss`'s passes work on (they run once per channel,
-        /// so that their scratch buffers hold one channel: SSIM is a mean of per-channel maps).
+        /// The first colour channel of this run of `photometric_loss`'s passes (0 for an RGB
+        /// run; the one channel of a per-channel run: `losses::ChannelPasses`).
         pub channel: u32,
         /// 1 when `regularisers` ran and wrote its statistics, which `loss_sums` then sums;
         /// 0 leaves their sums zero (the statistics then hold nothing of this frame).

@@ -17,8 +17,8 @@ pub use crate::gaussians::state::GaussianState;
 pub use crate::kernels::TRAINING_KERNELS;
 pub use crate::losses::step_guard;
 pub use crate::losses::{
-    GpuTarget, LossError, LossKernels, LossLayers, LossSettings, LossValues, PendingLoss,
-    check_frame_size,
+    ChannelPasses, GpuTarget, LossError, LossKernels, LossLayers, LossSettings, LossValues,
+    PendingLoss, check_frame_size,
 };
 pub use crate::planes::perturb;
 pub use crate::trainer::targets;

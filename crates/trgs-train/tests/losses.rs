@@ -10,7 +10,7 @@ use trgs_core::rng::Rng;
 use trgs_render::toolkit::gpu::{self, Recorder};
 use trgs_render::{DeviceOptions, GpuContext, LayerGrads};
 use trgs_train::stages::{
-    GpuTarget, LossKernels, LossLayers, LossSettings, LossValues, check_frame_size,
+    ChannelPasses, GpuTarget, LossKernels, LossLayers, LossSettings, LossValues, check_frame_size,
 };
 
 const WEIGHTS: RegulariserWeights = RegulariserWeights { depth: 0.3, conflict: 0.7, mask: 0.5 };
@@ -320,17 +320,32 @@ fn poisoned_context() -> GpuContext {
 #[test]
 fn gpu_losses_match_twins() {
     let ctx = poisoned_context();
-    let mut kernels = LossKernels::new(&ctx);
-    let mut rng = Rng::new(5);
-    // 150x61 has 143 strips of LOSS_STRIP pixels: `loss_sums` runs more than one workgroup of
-    // 64 strips, the last one partly full, and its last strip is partial too.
-    for (w, h) in [(37, 29), (16, 16), (1, 1), (70, 3), (64, 48), (150, 61)] {
-        let l = layers(w, h, &mut rng);
-        check(&ctx, &mut kernels, &l, true, true, false);
-        check(&ctx, &mut kernels, &l, false, true, false);
-        check(&ctx, &mut kernels, &l, false, false, false);
-        check(&ctx, &mut kernels, &l, true, true, true);
+    // Both ways of covering the channels: the per-channel passes are what a frame too large for
+    // the RGB scratch gets.
+    for passes in [ChannelPasses::Rgb, ChannelPasses::PerChannel] {
+        let mut kernels = LossKernels::with_channel_passes(&ctx, Some(passes));
+        let mut rng = Rng::new(5);
+        // 150x61 has 143 strips of LOSS_STRIP pixels: `loss_sums` runs more than one workgroup
+        // of 64 strips, the last one partly full, and its last strip is partial too.
+        for (w, h) in [(37, 29), (16, 16), (1, 1), (70, 3), (64, 48), (150, 61)] {
+            let l = layers(w, h, &mut rng);
+            check(&ctx, &mut kernels, &l, true, true, false);
+            check(&ctx, &mut kernels, &l, false, true, false);
+            check(&ctx, &mut kernels, &l, false, false, false);
+            check(&ctx, &mut kernels, &l, true, true, true);
+        }
     }
+}
+
+#[test]
+fn frames_whose_rgb_scratch_fits_one_binding_take_the_rgb_passes() {
+    let ctx = GpuContext::new().expect("adapter");
+    let limit = ctx.binding_limit();
+    // The RGB rows buffer (five moments of three channels, 60 bytes a pixel) is the bound.
+    let fits = (limit / 60) as u32;
+    assert_eq!(ChannelPasses::for_frame(&ctx, fits, 1), ChannelPasses::Rgb);
+    assert_eq!(ChannelPasses::for_frame(&ctx, 640, 480), ChannelPasses::Rgb);
+    assert_eq!(ChannelPasses::for_frame(&ctx, fits + 1, 1), ChannelPasses::PerChannel);
 }
 
 #[test]

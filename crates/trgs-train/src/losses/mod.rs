@@ -1,9 +1,9 @@
 //! The training losses on the GPU, writing dL/d(layer) where the backward pass reads it:
 //! - stage `photometric_loss`: 3DGS's `(1 - lambda) L1 + lambda (1 - SSIM)` with the 11x11
 //!   window, into dL/dC, as four separable passes (`photometric_loss_rows`, `photometric_loss`,
-//!   `photometric_loss_grad_rows`, `photometric_loss_grad`), run once per colour channel so that
-//!   their scratch buffers hold one channel (a 1600x1200 view's five moments would not fit one
-//!   128 MiB binding as RGB);
+//!   `photometric_loss_grad_rows`, `photometric_loss_grad`), over the three colour channels at
+//!   once where their scratch buffers fit one binding ([`ChannelPasses`]), else once per
+//!   channel;
 //! - stage `regularisers`: the paper's L_d, L_c and L_m, into dL/d(C_t, alpha) and
 //!   dL/d(D_t, V, M);
 //! - stage `loss_sums`: their per-pixel values summed over strips of pixels.
@@ -48,11 +48,44 @@ pub enum LossError {
     TooLarge { width: u32, height: u32, buffer: &'static str, bytes: u64, limit: u64 },
 }
 
-/// Bytes per pixel of the loss's scratch buffers: `rows` (one channel's five moments: the
-/// photometric passes run once per channel), `terms` (three derivatives) and `stats` (two vec4).
-const ROWS_BYTES_PER_PIXEL: u64 = 20;
-const TERMS_BYTES_PER_PIXEL: u64 = 12;
+/// Bytes per pixel and channel of a run of the photometric passes of the loss's scratch
+/// buffers `rows` (five moments) and `terms` (three derivatives), and per pixel of `stats` (two
+/// vec4).
+const ROWS_BYTES_PER_CHANNEL: u64 = 20;
+const TERMS_BYTES_PER_CHANNEL: u64 = 12;
 const STATS_BYTES_PER_PIXEL: u64 = 32;
+
+/// How the photometric loss's four passes cover the colour channels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ChannelPasses {
+    /// One run over R, G and B: each tap's pixel is read once for the three, a third of the
+    /// dispatches (`bench --train-step` times the loss phase). Its scratch needs 60 bytes a
+    /// pixel in one binding.
+    Rgb,
+    /// One run per channel, a third of the scratch: for frames whose RGB scratch would not fit
+    /// one binding (about 2.2 million pixels under a 128 MiB limit).
+    PerChannel,
+}
+
+impl ChannelPasses {
+    /// RGB where its scratch fits the device's binding limit, else one channel at a time.
+    pub fn for_frame(ctx: &GpuContext, width: u32, height: u32) -> Self {
+        let pixels = u64::from(width) * u64::from(height);
+        if pixels * 3 * ROWS_BYTES_PER_CHANNEL <= ctx.binding_limit() {
+            Self::Rgb
+        } else {
+            Self::PerChannel
+        }
+    }
+
+    /// Channels per run.
+    fn channels(self) -> u32 {
+        match self {
+            Self::Rgb => 3,
+            Self::PerChannel => 1,
+        }
+    }
+}
 
 /// A view's target image and glass labels on the GPU. The image is stored as 8-bit RGBA (4 bytes
 /// a pixel, a quarter of f32 RGBA), as 3DGS keeps its 8-bit images: a dataset of a few hundred
@@ -153,8 +186,8 @@ pub fn check_frame_size(ctx: &GpuContext, width: u32, height: u32) -> Result<(),
     let pixels = u64::from(width) * u64::from(height);
     let limit = ctx.binding_limit();
     for (buffer, per_pixel) in [
-        ("row", ROWS_BYTES_PER_PIXEL),
-        ("derivative", TERMS_BYTES_PER_PIXEL),
+        ("row", ROWS_BYTES_PER_CHANNEL),
+        ("derivative", TERMS_BYTES_PER_CHANNEL),
         ("statistics", STATS_BYTES_PER_PIXEL),
     ] {
         let bytes = pixels * per_pixel;
@@ -270,13 +303,42 @@ impl<'a> LossLayers<'a> {
     }
 }
 
-/// The loss pipelines, compiled once.
+/// The four passes of stage `photometric_loss` in one variant (RGB or one channel).
+#[derive(Debug)]
+struct PhotometricPasses {
+    rows: Kernel,
+    loss: Kernel,
+    grad_rows: Kernel,
+    grad: Kernel,
+}
+
+impl PhotometricPasses {
+    fn build(ctx: &GpuContext, passes: ChannelPasses) -> Self {
+        let k = &TRAINING_KERNELS;
+        match passes {
+            ChannelPasses::Rgb => Self {
+                rows: k.photometric_loss_rows_rgb.build(ctx),
+                loss: k.photometric_loss_rgb.build(ctx),
+                grad_rows: k.photometric_loss_grad_rows_rgb.build(ctx),
+                grad: k.photometric_loss_grad_rgb.build(ctx),
+            },
+            ChannelPasses::PerChannel => Self {
+                rows: k.photometric_loss_rows.build(ctx),
+                loss: k.photometric_loss.build(ctx),
+                grad_rows: k.photometric_loss_grad_rows.build(ctx),
+                grad: k.photometric_loss_grad.build(ctx),
+            },
+        }
+    }
+}
+
+/// The loss pipelines, compiled once (each photometric variant when first used).
 #[derive(Debug)]
 pub struct LossKernels {
-    photometric_loss_rows: Kernel,
-    photometric_loss: Kernel,
-    photometric_loss_grad_rows: Kernel,
-    photometric_loss_grad: Kernel,
+    rgb: Option<PhotometricPasses>,
+    per_channel: Option<PhotometricPasses>,
+    /// Set: every frame uses these passes (tests); None: [`ChannelPasses::for_frame`].
+    forced: Option<ChannelPasses>,
     regularisers: Kernel,
     loss_sums: Kernel,
     scratch: BufferPool,
@@ -284,16 +346,29 @@ pub struct LossKernels {
 
 impl LossKernels {
     pub fn new(ctx: &GpuContext) -> Self {
+        Self::with_channel_passes(ctx, None)
+    }
+
+    /// Kernels whose photometric passes are `forced` on every frame (None: chosen per frame).
+    pub fn with_channel_passes(ctx: &GpuContext, forced: Option<ChannelPasses>) -> Self {
         let k = &TRAINING_KERNELS;
         Self {
-            photometric_loss_rows: k.photometric_loss_rows.build(ctx),
-            photometric_loss: k.photometric_loss.build(ctx),
-            photometric_loss_grad_rows: k.photometric_loss_grad_rows.build(ctx),
-            photometric_loss_grad: k.photometric_loss_grad.build(ctx),
+            rgb: None,
+            per_channel: None,
+            forced,
             regularisers: k.regularisers.build(ctx),
             loss_sums: k.loss_sums.build(ctx),
             scratch: BufferPool::default(),
         }
+    }
+
+    /// The passes of `variant`, built on first use.
+    fn photometric(&mut self, ctx: &GpuContext, variant: ChannelPasses) -> &PhotometricPasses {
+        let slot = match variant {
+            ChannelPasses::Rgb => &mut self.rgb,
+            ChannelPasses::PerChannel => &mut self.per_channel,
+        };
+        slot.get_or_insert_with(|| PhotometricPasses::build(ctx, variant))
     }
 
     /// Bytes of the scratch buffers (kept from step to step).
@@ -344,39 +419,32 @@ impl LossKernels {
         let block = gpu::params(ctx, "trgs.photometric_loss.params", &params);
         let (rendered, image) = (layers.color, &target.image);
         check_frame_size(ctx, w, h)?;
-        let rows =
-            self.scratch.get(ctx, "trgs.photometric_loss.rows", pixels * ROWS_BYTES_PER_PIXEL);
-        let terms =
-            self.scratch.get(ctx, "trgs.photometric_loss.terms", pixels * TERMS_BYTES_PER_PIXEL);
+        let variant = self.forced.unwrap_or_else(|| ChannelPasses::for_frame(ctx, w, h));
+        let per_run = u64::from(variant.channels());
+        let rows = self.scratch.get(
+            ctx,
+            "trgs.photometric_loss.rows",
+            pixels * per_run * ROWS_BYTES_PER_CHANNEL,
+        );
+        let terms = self.scratch.get(
+            ctx,
+            "trgs.photometric_loss.terms",
+            pixels * per_run * TERMS_BYTES_PER_CHANNEL,
+        );
         let stats = self.scratch.get(ctx, "trgs.loss_sums.stats", pixels * STATS_BYTES_PER_PIXEL);
         let partials = self.scratch.get(ctx, "trgs.loss_sums.partials", u64::from(strips) * 32);
-        for channel in 0..3 {
+        let passes = self.photometric(ctx, variant);
+        for channel in (0..3).step_by(variant.channels() as usize) {
             let block = gpu::params(
                 ctx,
                 "trgs.photometric_loss.channel_params",
                 &LossParams { channel, ..params },
             );
             let passes: [(&'static str, &Kernel, Vec<&wgpu::Buffer>); 4] = [
-                (
-                    "photometric_loss_rows",
-                    &self.photometric_loss_rows,
-                    vec![rendered, image, &rows],
-                ),
-                (
-                    "photometric_loss",
-                    &self.photometric_loss,
-                    vec![rendered, image, &rows, &terms, &stats],
-                ),
-                (
-                    "photometric_loss_grad_rows",
-                    &self.photometric_loss_grad_rows,
-                    vec![&terms, &rows],
-                ),
-                (
-                    "photometric_loss_grad",
-                    &self.photometric_loss_grad,
-                    vec![rendered, image, &rows, &grads.color],
-                ),
+                ("photometric_loss_rows", &passes.rows, vec![rendered, image, &rows]),
+                ("photometric_loss", &passes.loss, vec![rendered, image, &rows, &terms, &stats]),
+                ("photometric_loss_grad_rows", &passes.grad_rows, vec![&terms, &rows]),
+                ("photometric_loss_grad", &passes.grad, vec![rendered, image, &rows, &grads.color]),
             ];
             for (stage, kernel, buffers) in passes {
                 let mut entries = vec![block.as_entire_binding()];
