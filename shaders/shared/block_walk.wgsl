@@ -9,46 +9,71 @@
 // ahead (`next_entry`), the backward ones back (`entry_before`).
 #ifdef BLOCK_WALK
 
-// Which blocks of a tile one Gaussian can reach (twin: reference::rasterize::block_reach): the
-// tile is split row by row into blocks of `block` pixels (x, y), and bit k (block k) is clear only
-// when o G < MIN_ALPHA at all of the block's pixels, so that alpha_at returns -1 there and the walk
-// may skip the entry for the block. `corner` is the tile's first pixel centre. The test is the
-// bounding box of the ellipse o G = MIN_ALPHA, half-extents sqrt(r C_xx) and sqrt(r C_yy) with C
-// the conic's inverse and r = 2 ln(o / MIN_ALPHA), widened by 2% and 0.05 px plus 1e-6 of the
-// coordinates: with the conic's condition number under 1e4 the f32 rounding of an evaluation
-// moves its exponent by well under 1% of r, which the widening covers. Any other conic
-// (ill-conditioned, not positive definite, not finite) reaches every block.
+// Which blocks of a tile one Gaussian can reach (twin: reference::block_reach, where the
+// reasoning is set out): the tile is split row by row into blocks of `block` pixels (x, y), and
+// bit k (block k) is clear only when o G < MIN_ALPHA at all of the block's pixels, so that
+// alpha_at returns -1 there and the walk may skip the entry for the block. `corner` is the tile's
+// first pixel centre. The test is the ellipse o G = MIN_ALPHA itself (r = 2 ln(o / MIN_ALPHA)),
+// widened by 2% and 0.05 px plus 1e-6 of the coordinates: per row of blocks, its x-range over the
+// row's band of pixel centres (the leftmost or rightmost point where it lies in the band, else an
+// end of the band). Any conic that is ill-conditioned, not positive definite or not finite
+// reaches every block.
 fn block_reach(conic: vec4<f32>, mean: vec2<f32>, corner: vec2<f32>, block: vec2<u32>) -> u32 {
     let per_row = TILE_SIZE / block.x;
-    let blocks = per_row * (TILE_SIZE / block.y);
-    let all = (1u << blocks) - 1u;
+    let rows = TILE_SIZE / block.y;
+    let all = (1u << (per_row * rows)) - 1u;
     let a = conic.x;
     let b = conic.y;
     let c = conic.z;
     let det = a * c - b * b;
-    let r = 2.0 * log(conic.w / MIN_ALPHA);
+    let r = 2.0 * log(conic.w / MIN_ALPHA) * 1.0404;
     let trace = a + c;
     if !(det > 0.0) || !(a > 0.0) || !(r > 0.0) || !(trace * trace <= 1e4 * det)
         || !(abs(mean.x) + abs(mean.y) <= 1e7) {
         return all;
     }
     let slack = 0.05 + 1e-6 * (abs(mean.x) + abs(mean.y) + abs(corner.x) + abs(corner.y));
-    let half = vec2<f32>(sqrt(r * c / det), sqrt(r * a / det)) * 1.02 + slack;
-    if !(half.x < 1e30) || !(half.y < 1e30) {
+    // Half-extents, and the y of the leftmost point (the rightmost one's is its negative).
+    let half = vec2<f32>(sqrt(r * c / det), sqrt(r * a / det));
+    let y_left = b * sqrt(r / (c * det));
+    if !(half.x < 1e30) || !(half.y < 1e30) || !(abs(y_left) < 1e30) {
         return all;
     }
-    let lo = mean - half;
-    let hi = mean + half;
     // A block's pixel centres span block - 1 px from its first.
     let span = vec2<f32>(block - vec2<u32>(1u));
     var bits = 0u;
-    for (var k = 0u; k < blocks; k++) {
-        let first = corner + vec2<f32>(f32((k % per_row) * block.x), f32((k / per_row) * block.y));
-        if hi.x >= first.x && lo.x <= first.x + span.x && hi.y >= first.y && lo.y <= first.y + span.y {
-            bits |= 1u << k;
+    for (var row = 0u; row < rows; row++) {
+        // The row's band of pixel centres, relative to the mean, within the ellipse's extent.
+        let top = corner.y + f32(row * block.y) - mean.y;
+        let y0 = max(top - slack, -half.y);
+        let y1 = min(top + span.y + slack, half.y);
+        if !(y0 <= y1) {
+            continue;
+        }
+        var left = -half.x;
+        if !(y0 <= y_left && y_left <= y1) {
+            left = min(ellipse_edge(a, b, det, r, y0, -1.0), ellipse_edge(a, b, det, r, y1, -1.0));
+        }
+        var right = half.x;
+        if !(y0 <= -y_left && -y_left <= y1) {
+            right = max(ellipse_edge(a, b, det, r, y0, 1.0), ellipse_edge(a, b, det, r, y1, 1.0));
+        }
+        let lo = mean.x + left - slack;
+        let hi = mean.x + right + slack;
+        for (var column = 0u; column < per_row; column++) {
+            let first = corner.x + f32(column * block.x);
+            if hi >= first && lo <= first + span.x {
+                bits |= 1u << (row * per_row + column);
+            }
         }
     }
     return bits;
+}
+
+// The x of the ellipse a x^2 + 2 b x y + c y^2 = r (det = a c - b^2) at height y, relative to its
+// centre: the left edge for side -1, the right for 1.
+fn ellipse_edge(a: f32, b: f32, det: f32, r: f32, y: f32, side: f32) -> f32 {
+    return (-b * y + side * sqrt(max(a * r - det * y * y, 0.0))) / a;
 }
 
 // The first set bit at or after j of the 64-bit mask (lo, hi), or 64.

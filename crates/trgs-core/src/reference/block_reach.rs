@@ -7,13 +7,25 @@ use crate::pipeline::{MAX_ALPHA, MIN_ALPHA, TILE_SIZE};
 
 /// Bit k set when the Gaussian (conic a, b, c and opacity; mean in pixels) may reach block k of
 /// the tile whose first pixel centre is `corner`, blocks of `block` pixels numbered row by row.
+///
+/// The test is the ellipse o G = MIN_ALPHA itself, not its bounding box: a bounding box keeps
+/// every block of its corners, which for a round Gaussian is a fifth of the box and for a thin
+/// diagonal one most of it, and the rasterize passes evaluate every pixel of a kept block. Per row
+/// of blocks, the ellipse's x-range over the row's band of pixel centres: the ellipse's left edge
+/// `L(y) = (-b y - sqrt(a r - det y^2)) / a` is convex in y, so its least value over the band is
+/// the ellipse's leftmost point where that lies in the band and else at an end of the band (the
+/// right edge likewise). The ellipse is widened by 2% about its centre (r times 1.02^2) and the
+/// band and the range by 0.05 px plus 1e-6 of the coordinates: with the conic's condition number
+/// under 1e4 the f32 rounding of an evaluation moves its exponent by well under 1% of r, which
+/// the widening covers. Any other conic (ill-conditioned, not positive definite, not finite)
+/// reaches every block.
 pub fn block_reach(conic: [f32; 4], mean: [f32; 2], corner: [f32; 2], block: [u32; 2]) -> u32 {
     let per_row = TILE_SIZE / block[0];
-    let blocks = per_row * (TILE_SIZE / block[1]);
-    let all = (1u32 << blocks) - 1;
+    let rows = TILE_SIZE / block[1];
+    let all = (1u32 << (per_row * rows)) - 1;
     let [a, b, c, o] = conic;
     let det = a * c - b * b;
-    let r = 2.0 * (o / MIN_ALPHA as f32).ln();
+    let r = 2.0 * (o / MIN_ALPHA as f32).ln() * 1.0404;
     let trace = a + c;
     let coords = mean[0].abs() + mean[1].abs();
     if !(det > 0.0) || !(a > 0.0) || !(r > 0.0) || !(trace * trace <= 1e4 * det) || !(coords <= 1e7)
@@ -21,21 +33,39 @@ pub fn block_reach(conic: [f32; 4], mean: [f32; 2], corner: [f32; 2], block: [u3
         return all;
     }
     let slack = 0.05 + 1e-6 * (coords + corner[0].abs() + corner[1].abs());
-    let half = [(r * c / det).sqrt() * 1.02 + slack, (r * a / det).sqrt() * 1.02 + slack];
-    if !(half[0] < 1e30) || !(half[1] < 1e30) {
+    // Half-extents, and the y of the leftmost point (the rightmost one's is its negative).
+    let half = [(r * c / det).sqrt(), (r * a / det).sqrt()];
+    let y_left = b * (r / (c * det)).sqrt();
+    if !(half[0] < 1e30) || !(half[1] < 1e30) || !y_left.is_finite() {
         return all;
     }
+    let edge = |y: f32, side: f32| (-b * y + side * (a * r - det * y * y).max(0.0).sqrt()) / a;
     let span = [(block[0] - 1) as f32, (block[1] - 1) as f32];
     let mut bits = 0;
-    for k in 0..blocks {
-        let first = [
-            corner[0] + ((k % per_row) * block[0]) as f32,
-            corner[1] + ((k / per_row) * block[1]) as f32,
-        ];
-        let x = mean[0] + half[0] >= first[0] && mean[0] - half[0] <= first[0] + span[0];
-        let y = mean[1] + half[1] >= first[1] && mean[1] - half[1] <= first[1] + span[1];
-        if x && y {
-            bits |= 1 << k;
+    for row in 0..rows {
+        // The row's band of pixel centres, relative to the mean, within the ellipse's extent.
+        let top = corner[1] + (row * block[1]) as f32 - mean[1];
+        let y0 = (top - slack).max(-half[1]);
+        let y1 = (top + span[1] + slack).min(half[1]);
+        if !(y0 <= y1) {
+            continue;
+        }
+        let left = if y0 <= y_left && y_left <= y1 {
+            -half[0]
+        } else {
+            edge(y0, -1.0).min(edge(y1, -1.0))
+        };
+        let right = if y0 <= -y_left && -y_left <= y1 {
+            half[0]
+        } else {
+            edge(y0, 1.0).max(edge(y1, 1.0))
+        };
+        let (lo, hi) = (mean[0] + left - slack, mean[0] + right + slack);
+        for column in 0..per_row {
+            let first = corner[0] + (column * block[0]) as f32;
+            if hi >= first && lo <= first + span[0] {
+                bits |= 1 << (row * per_row + column);
+            }
         }
     }
     bits
@@ -121,6 +151,32 @@ mod tests {
         }
         // The test exercised both sides: pixels that pass and blocks skipped.
         assert!(passing > 100_000 && cleared > 100_000, "passing {passing}, cleared {cleared}");
+    }
+
+    #[test]
+    fn blocks_in_the_bounding_box_but_off_the_ellipse_are_cleared() {
+        let corner = [8.5, 16.5];
+        let centre = TILE_SIZE as f32 / 2.0 - 0.5;
+        // Long and thin along the tile's diagonal (positive correlation: top left to bottom
+        // right): its bounding box is the whole tile, but it passes several pixels from the
+        // top-right and bottom-left corners.
+        let thin = conic(40.0, 0.5, std::f64::consts::FRAC_PI_4, 0.9);
+        let mean = [corner[0] + centre, corner[1] + centre];
+        let (per_row, rows) = (TILE_SIZE / 2, TILE_SIZE / 2);
+        let bits = block_reach(thin, mean, corner, [2, 2]);
+        assert!(check(thin, mean, corner, [2, 2]) >= TILE_SIZE as usize, "the diagonal passes");
+        for k in [0, rows * per_row - 1] {
+            assert!(bits & (1 << k) != 0, "block {k} on the diagonal: {bits:#b}");
+        }
+        for k in [per_row - 1, (rows - 1) * per_row] {
+            assert!(bits & (1 << k) == 0, "corner block {k} off the diagonal: {bits:#b}");
+        }
+        // A disc of radius ~10 px centred 8 px up and left of the tile's first pixel: its box
+        // reaches over the first block, the disc itself stops 1 px short of it.
+        let round = conic(3.0, 3.0, 0.0, 0.9);
+        let mean = [corner[0] - 8.0, corner[1] - 8.0];
+        assert_eq!(check(round, mean, corner, [4, 2]), 0);
+        assert_eq!(block_reach(round, mean, corner, [4, 2]), 0);
     }
 
     #[test]
