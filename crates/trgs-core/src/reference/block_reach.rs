@@ -55,11 +55,8 @@ pub fn block_reach(conic: [f32; 4], mean: [f32; 2], corner: [f32; 2], block: [u3
         } else {
             edge(y0, -1.0).min(edge(y1, -1.0))
         };
-        let right = if y0 <= -y_left && -y_left <= y1 {
-            half[0]
-        } else {
-            edge(y0, 1.0).max(edge(y1, 1.0))
-        };
+        let right =
+            if y0 <= -y_left && -y_left <= y1 { half[0] } else { edge(y0, 1.0).max(edge(y1, 1.0)) };
         let (lo, hi) = (mean[0] + left - slack, mean[0] + right + slack);
         for column in 0..per_row {
             let first = corner[0] + (column * block[0]) as f32;
