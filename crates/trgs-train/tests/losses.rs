@@ -1,6 +1,6 @@
 //! The GPU loss stages (`photometric_loss`, `regularisers`) against their f64 twins in
 //! `trgs_core::reference`, on random layers of sizes that do and do not fill the 16x16 workgroups
-//! (one pixel included), with and without glass labels, with every pixel covered by the photo
+//! and the blurs' runs of LOSS_BLUR_RUN pixels (one pixel included), with and without glass labels, with every pixel covered by the photo
 //! and with a ragged uncovered border (an undistorted photo's). Every gradient buffer starts
 //! poison-filled, so a pixel a kernel forgets to write fails the comparison.
 use trgs_core::Image;
@@ -326,8 +326,9 @@ fn gpu_losses_match_twins() {
         let mut kernels = LossKernels::with_channel_passes(&ctx, Some(passes));
         let mut rng = Rng::new(5);
         // 150x61 has 143 strips of LOSS_STRIP pixels: `loss_sums` runs more than one workgroup
-        // of 64 strips, the last one partly full, and its last strip is partial too.
-        for (w, h) in [(37, 29), (16, 16), (1, 1), (70, 3), (64, 48), (150, 61)] {
+        // of 64 strips, the last one partly full, and its last strip is partial too. 150 wide
+        // and 141 high, the blurs take more than one workgroup of runs along x and y.
+        for (w, h) in [(37, 29), (16, 16), (1, 1), (70, 3), (64, 48), (150, 61), (5, 141)] {
             let l = layers(w, h, &mut rng);
             check(&ctx, &mut kernels, &l, true, true, false);
             check(&ctx, &mut kernels, &l, false, true, false);

@@ -18,7 +18,7 @@
 pub mod step_guard;
 
 use crate::kernels::TRAINING_KERNELS;
-use crate::layout::{LOSS_STRIP, LossParams, UNCOVERED_LABEL};
+use crate::layout::{LOSS_BLUR_RUN, LOSS_STRIP, LossParams, UNCOVERED_LABEL};
 use trgs_core::Image;
 use trgs_core::pipeline::RegulariserWeights;
 use trgs_render::toolkit::FrameStages;
@@ -440,13 +440,27 @@ impl LossKernels {
                 "trgs.photometric_loss.channel_params",
                 &LossParams { channel, ..params },
             );
-            let passes: [(&'static str, &Kernel, Vec<&wgpu::Buffer>); 4] = [
-                ("photometric_loss_rows", &passes.rows, vec![rendered, image, &rows]),
-                ("photometric_loss", &passes.loss, vec![rendered, image, &rows, &terms, &stats]),
-                ("photometric_loss_grad_rows", &passes.grad_rows, vec![&terms, &rows]),
-                ("photometric_loss_grad", &passes.grad, vec![rendered, image, &rows, &grads.color]),
+            // Pass 1 takes a pixel a thread; the others a run of LOSS_BLUR_RUN pixels along x
+            // (row blur) or y (column blur).
+            let along_rows = [w.div_ceil(BLOCK * LOSS_BLUR_RUN), h.div_ceil(BLOCK), 1];
+            let along_columns = [w.div_ceil(BLOCK), h.div_ceil(BLOCK * LOSS_BLUR_RUN), 1];
+            let passes: [(&'static str, &Kernel, Vec<&wgpu::Buffer>, [u32; 3]); 4] = [
+                ("photometric_loss_rows", &passes.rows, vec![rendered, image, &rows], groups),
+                (
+                    "photometric_loss",
+                    &passes.loss,
+                    vec![rendered, image, &rows, &terms, &stats],
+                    along_columns,
+                ),
+                ("photometric_loss_grad_rows", &passes.grad_rows, vec![&terms, &rows], along_rows),
+                (
+                    "photometric_loss_grad",
+                    &passes.grad,
+                    vec![rendered, image, &rows, &grads.color],
+                    along_columns,
+                ),
             ];
-            for (stage, kernel, buffers) in passes {
+            for (stage, kernel, buffers, groups) in passes {
                 let mut entries = vec![block.as_entire_binding()];
                 entries.extend(buffers.iter().map(|b| b.as_entire_binding()));
                 rec.dispatch(stage, kernel, &kernel.bind(ctx, &entries), groups);
