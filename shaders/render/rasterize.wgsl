@@ -1,6 +1,7 @@
 // Stage `rasterize`, pass 1 (twin: trgs_core::reference::rasterize): one workgroup per tile
-// (TILE_SIZE x TILE_SIZE threads), one thread per pixel, the tile's depth-sorted Gaussians streamed through workgroup memory
-// in batches of TILE_PIXELS. Two transmittances: primary Gaussians advance T_t (C_t, D_t, alpha) and T_m
+// (TILE_PIXELS threads), one thread per pixel, the tile's depth-sorted Gaussians streamed through
+// workgroup memory in batches of TILE_PIXELS; with BLOCK_WALK each subgroup walks a batch in
+// chunks of its lanes, by broadcasts (`walk_batch`). Two transmittances: primary Gaussians advance T_t (C_t, D_t, alpha) and T_m
 // (the glass mask M, which they occlude but never paint); glass Gaussians advance only T_m and
 // paint M. A primary Gaussian that would bring T_t below 1e-4 ends the pixel; one that would bring
 // T_m below it ends M only. With DEPTH_VARIANCE, a second walk over the blended Gaussians gives
@@ -39,6 +40,19 @@ var<workgroup> num_done: atomic<u32>;
 var<workgroup> max_last: atomic<u32>;
 var<workgroup> num_walked: atomic<u32>;
 
+// The pixel's state through the first walk (private, so that `blend_entry` can step it).
+var<private> pixel: vec2<f32>;
+var<private> t: f32;
+var<private> tm: f32;
+var<private> m_active: bool;
+var<private> color: vec3<f32>;
+var<private> wsum: f32;
+var<private> zsum: f32;
+var<private> mask: f32;
+var<private> last_t: u32;
+var<private> last_m: u32;
+var<private> done: bool;
+
 fn load_batch(start: u32, end: u32, round: u32, lid: u32, corner: vec2<f32>) {
     let idx = start + round * TILE_PIXELS + lid;
     if idx < end {
@@ -52,8 +66,117 @@ fn load_batch(start: u32, end: u32, round: u32, lid: u32, corner: vec2<f32>) {
     }
 }
 
-@compute @workgroup_size(TILE_SIZE, TILE_SIZE)
-fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+// List entry `li` (mean, conic, colour as load_batch keeps them) at this pixel, by pass 1's rules.
+fn blend_entry(mean: vec4<f32>, conic: vec4<f32>, c: vec4<f32>, li: u32) {
+    if done {
+        return;
+    }
+    let alpha = alpha_at(conic, pixel - mean.xy);
+    if alpha < 0.0 {
+        return;
+    }
+    if mean.w == 0.0 {
+        let next_t = t * (1.0 - alpha);
+        if next_t < MIN_TRANSMITTANCE {
+            last_t = li;
+            if m_active {
+                last_m = li;
+            }
+            done = true;
+            atomicAdd(&num_done, 1u);
+            return;
+        }
+        let wgt = alpha * t;
+        color += c.xyz * wgt;
+        wsum += wgt;
+        zsum += c.w * wgt;
+        t = next_t;
+    }
+    if m_active {
+        let next_m = tm * (1.0 - alpha);
+        if next_m < MIN_TRANSMITTANCE {
+            m_active = false;
+            last_m = li;
+        } else {
+            mask += mean.z * alpha * tm;
+            tm = next_m;
+        }
+    }
+}
+
+#ifdef BLOCK_WALK
+// The batch's entries [0, batch) (round r) at this pixel, walked by the subgroup in chunks of
+// its size: lane l reads entry first + l from workgroup memory, and the chunk's entries that
+// reach the subgroup's block are then stepped through in order, each broadcast from its lane.
+// On lavapipe every read of workgroup memory is a loop over the vector's lanes, and one read a
+// lane per chunk replaces the three reads a step of a walk through workgroup memory made. A lane
+// id is a constant of each broadcast (WGSL asks for a constant), so the chunk's steps are
+// written out for subgroups of up to 8 lanes, which BLOCK_WALK's adapters have.
+fn walk_batch(batch: u32, r: u32, block: u32, one_block: bool, lane: u32, size: u32) {
+    for (var first = 0u; first < batch; first += size) {
+        if subgroupAll(done) {
+            break;
+        }
+        let e = first + lane;
+        var mean = vec4<f32>(0.0);
+        var conic = vec4<f32>(0.0);
+        var c = vec4<f32>(0.0);
+        var reaches = false;
+        if e < batch {
+            mean = s_mean[e];
+            conic = s_conic[e];
+            c = s_color[e];
+            reaches = !one_block || ((s_blocks[e] >> block) & 1u) != 0u;
+        }
+        let reach = subgroupBallot(reaches).x;
+        let li = r * TILE_PIXELS + first;
+        if (reach & 1u) != 0u {
+            blend_entry(subgroupBroadcast(mean, 0u), subgroupBroadcast(conic, 0u), subgroupBroadcast(c, 0u), li);
+        }
+        if (reach & 2u) != 0u {
+            blend_entry(subgroupBroadcast(mean, 1u), subgroupBroadcast(conic, 1u), subgroupBroadcast(c, 1u), li + 1u);
+        }
+        if (reach & 4u) != 0u {
+            blend_entry(subgroupBroadcast(mean, 2u), subgroupBroadcast(conic, 2u), subgroupBroadcast(c, 2u), li + 2u);
+        }
+        if (reach & 8u) != 0u {
+            blend_entry(subgroupBroadcast(mean, 3u), subgroupBroadcast(conic, 3u), subgroupBroadcast(c, 3u), li + 3u);
+        }
+        if (reach & 16u) != 0u {
+            blend_entry(subgroupBroadcast(mean, 4u), subgroupBroadcast(conic, 4u), subgroupBroadcast(c, 4u), li + 4u);
+        }
+        if (reach & 32u) != 0u {
+            blend_entry(subgroupBroadcast(mean, 5u), subgroupBroadcast(conic, 5u), subgroupBroadcast(c, 5u), li + 5u);
+        }
+        if (reach & 64u) != 0u {
+            blend_entry(subgroupBroadcast(mean, 6u), subgroupBroadcast(conic, 6u), subgroupBroadcast(c, 6u), li + 6u);
+        }
+        if (reach & 128u) != 0u {
+            blend_entry(subgroupBroadcast(mean, 7u), subgroupBroadcast(conic, 7u), subgroupBroadcast(c, 7u), li + 7u);
+        }
+    }
+}
+#else
+// The batch's entries [0, batch) (round r) at this pixel, one after another from workgroup
+// memory.
+fn walk_batch(batch: u32, r: u32) {
+    for (var j = 0u; j < batch && !done; j++) {
+        blend_entry(s_mean[j], s_conic[j], s_color[j], r * TILE_PIXELS + j);
+    }
+}
+#endif
+
+// One workgroup per tile; its invocations are numbered as the tile's pixels are in `main`.
+// (One-dimensional: a subgroup's lane id needs it.)
+@compute @workgroup_size(TILE_PIXELS)
+fn main(
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+#ifdef BLOCK_WALK
+    @builtin(subgroup_invocation_id) sg_lane: u32,
+    @builtin(subgroup_size) sg_size: u32,
+#endif
+) {
     let tx = wid.x + params.tile_x0;
     let ty = wid.y + params.tile_y0;
     // Eight consecutive threads take a block of 4 x 2 pixels, not a row of 8: on a CPU adapter
@@ -75,26 +198,26 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         atomicStore(&max_last, 0u);
     }
     workgroupBarrier();
-    var done = !inside;
+    done = !inside;
     if done {
         atomicAdd(&num_done, 1u);
     }
-    let pixel = vec2<f32>(f32(x) + 0.5, f32(y) + 0.5);
+    pixel = vec2<f32>(f32(x) + 0.5, f32(y) + 0.5);
     let corner = vec2<f32>(f32(tx * TILE_SIZE) + 0.5, f32(ty * TILE_SIZE) + 0.5);
 #ifdef BLOCK_WALK
     // Whether this subgroup lies in one block (it does on lavapipe, where it is the block's SIMD
     // vector): only then may it skip the entries its block does not reach, all lanes together.
     let one_block = in_one_block(block);
 #endif
-    var t = 1.0;
-    var tm = 1.0;
-    var m_active = true;
-    var color = vec3<f32>(0.0);
-    var wsum = 0.0;
-    var zsum = 0.0;
-    var mask = 0.0;
-    var last_t = n;
-    var last_m = n;
+    t = 1.0;
+    tm = 1.0;
+    m_active = true;
+    color = vec3<f32>(0.0);
+    wsum = 0.0;
+    zsum = 0.0;
+    mask = 0.0;
+    last_t = n;
+    last_m = n;
     for (var r = 0u; r < rounds; r++) {
         if workgroupUniformLoad(&num_done) == TILE_PIXELS {
             break;
@@ -103,57 +226,10 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         workgroupBarrier();
         let batch = min(TILE_PIXELS, n - r * TILE_PIXELS);
 #ifdef BLOCK_WALK
-        // The batch's entries that reach this block; the walk steps from one to the next.
-        let reach = reaching(batch, block, one_block);
-        var j = next_entry(reach, 0u);
+        walk_batch(batch, r, block, one_block, sg_lane, sg_size);
 #else
-        var j = 0u;
+        walk_batch(batch, r);
 #endif
-        loop {
-            if j >= batch || done {
-                break;
-            }
-            let mean = s_mean[j];
-            let alpha = alpha_at(s_conic[j], pixel - mean.xy);
-            if alpha < 0.0 {
-                continue;
-            }
-            let li = r * TILE_PIXELS + j;
-            if mean.w == 0.0 {
-                let next_t = t * (1.0 - alpha);
-                if next_t < MIN_TRANSMITTANCE {
-                    last_t = li;
-                    if m_active {
-                        last_m = li;
-                    }
-                    done = true;
-                    atomicAdd(&num_done, 1u);
-                    break;
-                }
-                let wgt = alpha * t;
-                color += s_color[j].xyz * wgt;
-                wsum += wgt;
-                zsum += s_color[j].w * wgt;
-                t = next_t;
-            }
-            if m_active {
-                let next_m = tm * (1.0 - alpha);
-                if next_m < MIN_TRANSMITTANCE {
-                    m_active = false;
-                    last_m = li;
-                } else {
-                    mask += mean.z * alpha * tm;
-                    tm = next_m;
-                }
-            }
-            continuing {
-#ifdef BLOCK_WALK
-                j = next_entry(reach, j + 1u);
-#else
-                j++;
-#endif
-            }
-        }
     }
     var depth = 0.0;
     if wsum > 0.0 {
