@@ -10,7 +10,7 @@
 // With one pixel per thread on a CPU adapter those reductions and atomics take most of the
 // kernel's time; with four rows per thread one of them serves 32 pixels instead of 8.
 // With BLOCK_WALK a subgroup steps back only through the entries that can reach its block
-// (shared/block_walk.wgsl).
+// (shared/block_walk.wgsl), by chunks of its lanes (`replay_batch`).
 #include "shared/common.wgsl"
 #include "shared/raster_pages.wgsl"
 #include "shared/splat.wgsl"
@@ -109,8 +109,142 @@ fn start_pixel(x: u32, y: u32) -> Pixel {
     return px;
 }
 
-@compute @workgroup_size(TILE_SIZE, TILE_SIZE / ROWS)
-fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+// This thread's pixels (start_pixel), carried through the replay.
+var<private> px: array<Pixel, ROWS>;
+
+// Replays list entry `li` (Gaussian gi; mean, conic, colour as the batch keeps them) at this
+// thread's pixels, and adds the subgroup's gradients to the Gaussian's record. In uniform control
+// flow: it ends with subgroup reductions.
+fn replay_entry(mean: vec4<f32>, conic: vec4<f32>, color: vec4<f32>, gi: u32, li: u32) {
+    let glass = mean.w != 0.0;
+    var g: array<vec4<f32>, 3>;
+    var blended = false;
+    for (var k = 0u; k < ROWS; k++) {
+        if !px[k].inside || li >= px[k].last_t {
+            continue;
+        }
+        let dd = px[k].at - mean.xy;
+        let terms = alpha_terms(conic, dd);
+        let alpha = terms.x;
+        if alpha < 0.0 {
+            continue;
+        }
+        blended = true;
+        // 1 / (1 - alpha) recovers each transmittance before this Gaussian.
+        let ra = 1.0 / (1.0 - alpha);
+        var g_alpha = 0.0;
+        if !glass {
+            let tj = px[k].t * ra;
+            let wgt = alpha * tj;
+            let z = color.w;
+            let dz = z - px[k].d;
+            let phi = dot(px[k].gc, color.xyz) + px[k].g_zsum * z + px[k].g_wsum
+                + px[k].g_v * abs(dz);
+            g[2] += vec4<f32>(px[k].gc * wgt, 0.0);
+            g[0].w += px[k].g_zsum * wgt + px[k].g_v * wgt * sign(dz);
+            g_alpha += phi * tj - px[k].acc_t * ra;
+            px[k].acc_t += phi * wgt;
+            px[k].t = tj;
+        }
+        if li < px[k].last_m {
+            let tmj = px[k].tm * ra;
+            var psi = 0.0;
+            if glass {
+                psi = px[k].g_m * mean.z;
+                g[1].w += px[k].g_m * alpha * tmj;
+            }
+            g_alpha += psi * tmj - px[k].acc_m * ra;
+            px[k].acc_m += psi * alpha * tmj;
+            px[k].tm = tmj;
+        }
+        let ga = alpha_bwd(conic, dd, terms, g_alpha);
+        g[0] += vec4<f32>(ga[0].xyz, 0.0);
+        g[1] += vec4<f32>(ga[1].xyz, 0.0);
+    }
+    if subgroup_any(blended) {
+        accumulate_subgroup12(PROJECTED_GRAD_FLOATS * gi, g);
+    }
+}
+
+#ifdef BLOCK_WALK
+// The batch's entries [0, mine) (round r), back to front, by chunks of the subgroup's lanes:
+// lane l reads chunk entry l from workgroup memory, a ballot gives the chunk's entries that reach
+// the subgroup's block, and each is replayed with its values broadcast from its lane (lavapipe
+// reads memory one lane at a time; rasterize.wgsl's walk_batch does the same forward). Written
+// out for subgroups of up to 8 lanes, which BLOCK_WALK's adapters have: a broadcast's lane is a
+// constant.
+fn replay_batch(mine: u32, r: u32, block: u32, one_block: bool, lane: u32, size: u32) {
+    if mine == 0u {
+        return;
+    }
+    var first = ((mine - 1u) / size) * size;
+    loop {
+        let e = first + lane;
+        var mean = vec4<f32>(0.0);
+        var conic = vec4<f32>(0.0);
+        var c = vec4<f32>(0.0);
+        var gi = 0u;
+        var reaches = false;
+        if e < mine {
+            mean = s_mean[e];
+            conic = s_conic[e];
+            c = s_color[e];
+            gi = s_index[e];
+            reaches = !one_block || ((s_blocks[e] >> block) & 1u) != 0u;
+        }
+        let reach = subgroupBallot(reaches).x;
+        let li = r * TILE_PIXELS + first;
+        if (reach & 128u) != 0u {
+            replay_entry(subgroupBroadcast(mean, 7u), subgroupBroadcast(conic, 7u), subgroupBroadcast(c, 7u), subgroupBroadcast(gi, 7u), li + 7u);
+        }
+        if (reach & 64u) != 0u {
+            replay_entry(subgroupBroadcast(mean, 6u), subgroupBroadcast(conic, 6u), subgroupBroadcast(c, 6u), subgroupBroadcast(gi, 6u), li + 6u);
+        }
+        if (reach & 32u) != 0u {
+            replay_entry(subgroupBroadcast(mean, 5u), subgroupBroadcast(conic, 5u), subgroupBroadcast(c, 5u), subgroupBroadcast(gi, 5u), li + 5u);
+        }
+        if (reach & 16u) != 0u {
+            replay_entry(subgroupBroadcast(mean, 4u), subgroupBroadcast(conic, 4u), subgroupBroadcast(c, 4u), subgroupBroadcast(gi, 4u), li + 4u);
+        }
+        if (reach & 8u) != 0u {
+            replay_entry(subgroupBroadcast(mean, 3u), subgroupBroadcast(conic, 3u), subgroupBroadcast(c, 3u), subgroupBroadcast(gi, 3u), li + 3u);
+        }
+        if (reach & 4u) != 0u {
+            replay_entry(subgroupBroadcast(mean, 2u), subgroupBroadcast(conic, 2u), subgroupBroadcast(c, 2u), subgroupBroadcast(gi, 2u), li + 2u);
+        }
+        if (reach & 2u) != 0u {
+            replay_entry(subgroupBroadcast(mean, 1u), subgroupBroadcast(conic, 1u), subgroupBroadcast(c, 1u), subgroupBroadcast(gi, 1u), li + 1u);
+        }
+        if (reach & 1u) != 0u {
+            replay_entry(subgroupBroadcast(mean, 0u), subgroupBroadcast(conic, 0u), subgroupBroadcast(c, 0u), subgroupBroadcast(gi, 0u), li);
+        }
+        if first == 0u {
+            break;
+        }
+        first -= size;
+    }
+}
+#else
+// The batch's entries [0, mine) (round r), back to front, from workgroup memory.
+fn replay_batch(mine: u32, r: u32) {
+    for (var j = mine; j > 0u; j--) {
+        let e = j - 1u;
+        replay_entry(s_mean[e], s_conic[e], s_color[e], s_index[e], r * TILE_PIXELS + e);
+    }
+}
+#endif
+
+// One workgroup per tile, TILE_SIZE x TILE_SIZE / ROWS threads numbered row by row (one-
+// dimensional: a subgroup's lane id needs it).
+@compute @workgroup_size(TILE_PIXELS / ROWS)
+fn main(
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+#ifdef BLOCK_WALK
+    @builtin(subgroup_invocation_id) sg_lane: u32,
+    @builtin(subgroup_size) sg_size: u32,
+#endif
+) {
     let x = wid.x * TILE_SIZE + lid % TILE_SIZE;
     let y0 = wid.y * TILE_SIZE + (lid / TILE_SIZE) * ROWS;
     let tile = wid.y * params.tiles_x + wid.x;
@@ -120,7 +254,6 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         atomicStore(&max_last, 0u);
     }
     workgroupBarrier();
-    var px: array<Pixel, ROWS>;
     var my_last = 0u;
     for (var k = 0u; k < ROWS; k++) {
         px[k] = start_pixel(x, y0 + k);
@@ -161,68 +294,9 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         // Entries [0, mine) of this batch come before the subgroup's last.
         let mine = min(batch, sg_last - min(sg_last, r * TILE_PIXELS));
 #ifdef BLOCK_WALK
-        let reach = reaching(batch, block, one_block);
+        replay_batch(mine, r, block, one_block, sg_lane, sg_size);
 #else
-        let reach = vec2<u32>(0u);
+        replay_batch(mine, r);
 #endif
-        var j = entry_before(reach, mine);
-        loop {
-            if j >= batch {
-                break;
-            }
-            let li = r * TILE_PIXELS + j;
-            let mean = s_mean[j];
-            let conic = s_conic[j];
-            let color = s_color[j];
-            let glass = mean.w != 0.0;
-            var g: array<vec4<f32>, 3>;
-            var blended = false;
-            for (var k = 0u; k < ROWS; k++) {
-                if !px[k].inside || li >= px[k].last_t {
-                    continue;
-                }
-                let dd = px[k].at - mean.xy;
-                let terms = alpha_terms(conic, dd);
-                let alpha = terms.x;
-                if alpha < 0.0 {
-                    continue;
-                }
-                blended = true;
-                // 1 / (1 - alpha) recovers each transmittance before this Gaussian.
-                let ra = 1.0 / (1.0 - alpha);
-                var g_alpha = 0.0;
-                if !glass {
-                    let tj = px[k].t * ra;
-                    let wgt = alpha * tj;
-                    let z = color.w;
-                    let dz = z - px[k].d;
-                    let phi = dot(px[k].gc, color.xyz) + px[k].g_zsum * z + px[k].g_wsum
-                        + px[k].g_v * abs(dz);
-                    g[2] += vec4<f32>(px[k].gc * wgt, 0.0);
-                    g[0].w += px[k].g_zsum * wgt + px[k].g_v * wgt * sign(dz);
-                    g_alpha += phi * tj - px[k].acc_t * ra;
-                    px[k].acc_t += phi * wgt;
-                    px[k].t = tj;
-                }
-                if li < px[k].last_m {
-                    let tmj = px[k].tm * ra;
-                    var psi = 0.0;
-                    if glass {
-                        psi = px[k].g_m * mean.z;
-                        g[1].w += px[k].g_m * alpha * tmj;
-                    }
-                    g_alpha += psi * tmj - px[k].acc_m * ra;
-                    px[k].acc_m += psi * alpha * tmj;
-                    px[k].tm = tmj;
-                }
-                let ga = alpha_bwd(conic, dd, terms, g_alpha);
-                g[0] += vec4<f32>(ga[0].xyz, 0.0);
-                g[1] += vec4<f32>(ga[1].xyz, 0.0);
-            }
-            if subgroup_any(blended) {
-                accumulate_subgroup12(PROJECTED_GRAD_FLOATS * s_index[j], g);
-            }
-            j = entry_before(reach, j);
-        }
     }
 }
