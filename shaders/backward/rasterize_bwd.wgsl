@@ -16,7 +16,7 @@
 #include "shared/splat.wgsl"
 #include "shared/accumulate.wgsl"
 #include "shared/tile_rows.wgsl"
-#include "shared/block_walk.wgsl"
+#include "shared/chunk_replay.wgsl"
 
 @group(0) @binding(0) var<storage, read> params: RasterParams;
 @group(0) @binding(1) var<storage, read> projected: array<ProjectedGaussian>;
@@ -112,10 +112,13 @@ fn start_pixel(x: u32, y: u32) -> Pixel {
 // This thread's pixels (start_pixel), carried through the replay.
 var<private> px: array<Pixel, ROWS>;
 
-// Replays list entry `li` (Gaussian gi; mean, conic, colour as the batch keeps them) at this
-// thread's pixels, and adds the subgroup's gradients to the Gaussian's record. In uniform control
-// flow: it ends with subgroup reductions.
-fn replay_entry(mean: vec4<f32>, conic: vec4<f32>, color: vec4<f32>, gi: u32, li: u32) {
+// Replays list entry `li` (as the batch keeps it) at this thread's pixels, and adds the
+// subgroup's gradients to the Gaussian's record. In uniform control flow: it ends with subgroup
+// reductions.
+fn replay_entry(entry: ChunkEntry, li: u32) {
+    let mean = entry.mean;
+    let conic = entry.conic;
+    let color = entry.color;
     let glass = mean.w != 0.0;
     var g: array<vec4<f32>, 3>;
     var blended = false;
@@ -162,77 +165,14 @@ fn replay_entry(mean: vec4<f32>, conic: vec4<f32>, color: vec4<f32>, gi: u32, li
         g[1] += vec4<f32>(ga[1].xyz, 0.0);
     }
     if subgroup_any(blended) {
-        accumulate_subgroup12(PROJECTED_GRAD_FLOATS * gi, g);
+        accumulate_subgroup12(PROJECTED_GRAD_FLOATS * entry.index, g);
     }
 }
 
-#ifdef BLOCK_WALK
-// The batch's entries [0, mine) (round r), back to front, by chunks of the subgroup's lanes:
-// lane l reads chunk entry l from workgroup memory, a ballot gives the chunk's entries that reach
-// the subgroup's block, and each is replayed with its values broadcast from its lane (lavapipe
-// reads memory one lane at a time; rasterize.wgsl's walk_batch does the same forward). Written
-// out for subgroups of up to 8 lanes, which BLOCK_WALK's adapters have: a broadcast's lane is a
-// constant.
-fn replay_batch(mine: u32, r: u32, block: u32, one_block: bool, lane: u32, size: u32) {
-    if mine == 0u {
-        return;
-    }
-    var first = ((mine - 1u) / size) * size;
-    loop {
-        let e = first + lane;
-        var mean = vec4<f32>(0.0);
-        var conic = vec4<f32>(0.0);
-        var c = vec4<f32>(0.0);
-        var gi = 0u;
-        var reaches = false;
-        if e < mine {
-            mean = s_mean[e];
-            conic = s_conic[e];
-            c = s_color[e];
-            gi = s_index[e];
-            reaches = !one_block || ((s_blocks[e] >> block) & 1u) != 0u;
-        }
-        let reach = subgroupBallot(reaches).x;
-        let li = r * TILE_PIXELS + first;
-        if (reach & 128u) != 0u {
-            replay_entry(subgroupBroadcast(mean, 7u), subgroupBroadcast(conic, 7u), subgroupBroadcast(c, 7u), subgroupBroadcast(gi, 7u), li + 7u);
-        }
-        if (reach & 64u) != 0u {
-            replay_entry(subgroupBroadcast(mean, 6u), subgroupBroadcast(conic, 6u), subgroupBroadcast(c, 6u), subgroupBroadcast(gi, 6u), li + 6u);
-        }
-        if (reach & 32u) != 0u {
-            replay_entry(subgroupBroadcast(mean, 5u), subgroupBroadcast(conic, 5u), subgroupBroadcast(c, 5u), subgroupBroadcast(gi, 5u), li + 5u);
-        }
-        if (reach & 16u) != 0u {
-            replay_entry(subgroupBroadcast(mean, 4u), subgroupBroadcast(conic, 4u), subgroupBroadcast(c, 4u), subgroupBroadcast(gi, 4u), li + 4u);
-        }
-        if (reach & 8u) != 0u {
-            replay_entry(subgroupBroadcast(mean, 3u), subgroupBroadcast(conic, 3u), subgroupBroadcast(c, 3u), subgroupBroadcast(gi, 3u), li + 3u);
-        }
-        if (reach & 4u) != 0u {
-            replay_entry(subgroupBroadcast(mean, 2u), subgroupBroadcast(conic, 2u), subgroupBroadcast(c, 2u), subgroupBroadcast(gi, 2u), li + 2u);
-        }
-        if (reach & 2u) != 0u {
-            replay_entry(subgroupBroadcast(mean, 1u), subgroupBroadcast(conic, 1u), subgroupBroadcast(c, 1u), subgroupBroadcast(gi, 1u), li + 1u);
-        }
-        if (reach & 1u) != 0u {
-            replay_entry(subgroupBroadcast(mean, 0u), subgroupBroadcast(conic, 0u), subgroupBroadcast(c, 0u), subgroupBroadcast(gi, 0u), li);
-        }
-        if first == 0u {
-            break;
-        }
-        first -= size;
-    }
+// For shared/chunk_replay.wgsl: batch entry e.
+fn batch_entry(e: u32) -> ChunkEntry {
+    return ChunkEntry(s_mean[e], s_conic[e], s_color[e], s_index[e]);
 }
-#else
-// The batch's entries [0, mine) (round r), back to front, from workgroup memory.
-fn replay_batch(mine: u32, r: u32) {
-    for (var j = mine; j > 0u; j--) {
-        let e = j - 1u;
-        replay_entry(s_mean[e], s_conic[e], s_color[e], s_index[e], r * TILE_PIXELS + e);
-    }
-}
-#endif
 
 // One workgroup per tile, TILE_SIZE x TILE_SIZE / ROWS threads numbered row by row (one-
 // dimensional: a subgroup's lane id needs it).

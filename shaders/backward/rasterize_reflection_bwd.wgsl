@@ -7,13 +7,13 @@
 // reflection-intensity, opacity, 2D mean and conic gradients into `grads`
 // (PROJECTED_GRAD_FLOATS per Gaussian), summed over the thread's pixels and then the subgroup,
 // once per subgroup that touched it. With BLOCK_WALK a subgroup steps back only through the
-// entries that can reach its block (shared/block_walk.wgsl).
+// entries that can reach its block, by chunks of its lanes (shared/chunk_replay.wgsl).
 #include "shared/common.wgsl"
 #include "shared/raster_pages.wgsl"
 #include "shared/splat.wgsl"
 #include "shared/accumulate.wgsl"
 #include "shared/tile_rows.wgsl"
-#include "shared/block_walk.wgsl"
+#include "shared/chunk_replay.wgsl"
 
 @group(0) @binding(0) var<storage, read> params: RasterParams;
 @group(0) @binding(1) var<storage, read> projected: array<ProjectedGaussian>;
@@ -77,8 +77,62 @@ fn start_pixel(x: u32, y: u32) -> Pixel {
     return px;
 }
 
-@compute @workgroup_size(TILE_SIZE, TILE_SIZE / ROWS)
-fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+// This thread's pixels (start_pixel), carried through the replay.
+var<private> px: array<Pixel, ROWS>;
+
+// For shared/chunk_replay.wgsl: batch entry e.
+fn batch_entry(e: u32) -> ChunkEntry {
+    return ChunkEntry(vec4<f32>(s_mean[e], 0.0, 0.0), s_conic[e], s_color[e], s_index[e]);
+}
+
+// Replays list entry `li` (as the batch keeps it: colour with the reflection intensity) at this
+// thread's pixels, and adds the subgroup's gradients to the mirrored Gaussian's record. In
+// uniform control flow: it ends with subgroup reductions.
+fn replay_entry(entry: ChunkEntry, li: u32) {
+    let mean = entry.mean.xy;
+    let conic = entry.conic;
+    let color = entry.color;
+    var g: array<vec4<f32>, 3>;
+    var blended = false;
+    for (var k = 0u; k < ROWS; k++) {
+        if li >= px[k].last {
+            continue;
+        }
+        let dd = px[k].at - mean;
+        let terms = alpha_terms(conic, dd);
+        let alpha = terms.x;
+        if alpha < 0.0 {
+            continue;
+        }
+        blended = true;
+        let ra = 1.0 / (1.0 - alpha);
+        let tj = px[k].t * ra;
+        let wgt = alpha * tj;
+        let phi = dot(px[k].gr, color);
+        g[2] += px[k].gr * wgt;
+        let g_alpha = phi * tj - px[k].acc * ra;
+        px[k].acc += phi * wgt;
+        px[k].t = tj;
+        let ga = alpha_bwd(conic, dd, terms, g_alpha);
+        g[0] += ga[0];
+        g[1] += ga[1];
+    }
+    if subgroup_any(blended) {
+        accumulate_subgroup12(PROJECTED_GRAD_FLOATS * entry.index, g);
+    }
+}
+
+// One workgroup per footprint tile, TILE_SIZE x TILE_SIZE / ROWS threads numbered row by row
+// (one-dimensional: a subgroup's lane id needs it).
+@compute @workgroup_size(TILE_PIXELS / ROWS)
+fn main(
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+#ifdef BLOCK_WALK
+    @builtin(subgroup_invocation_id) sg_lane: u32,
+    @builtin(subgroup_size) sg_size: u32,
+#endif
+) {
     let x = (wid.x + params.tile_x0) * TILE_SIZE + lid % TILE_SIZE;
     let y0 = (wid.y + params.tile_y0) * TILE_SIZE + (lid / TILE_SIZE) * ROWS;
     let tile = params.tile_base + wid.y * params.tiles_w + wid.x;
@@ -88,7 +142,6 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         atomicStore(&max_last, 0u);
     }
     workgroupBarrier();
-    var px: array<Pixel, ROWS>;
     var my_last = 0u;
     for (var k = 0u; k < ROWS; k++) {
         px[k] = start_pixel(x, y0 + k);
@@ -130,48 +183,9 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         // Entries [0, mine) of this batch come before the subgroup's last.
         let mine = min(batch, sg_last - min(sg_last, r * TILE_PIXELS));
 #ifdef BLOCK_WALK
-        let reach = reaching(batch, block, one_block);
+        replay_batch(mine, r, block, one_block, sg_lane, sg_size);
 #else
-        let reach = vec2<u32>(0u);
+        replay_batch(mine, r);
 #endif
-        var j = entry_before(reach, mine);
-        loop {
-            if j >= batch {
-                break;
-            }
-            let li = r * TILE_PIXELS + j;
-            let conic = s_conic[j];
-            let mean = s_mean[j];
-            let color = s_color[j];
-            var g: array<vec4<f32>, 3>;
-            var blended = false;
-            for (var k = 0u; k < ROWS; k++) {
-                if li >= px[k].last {
-                    continue;
-                }
-                let dd = px[k].at - mean;
-                let terms = alpha_terms(conic, dd);
-                let alpha = terms.x;
-                if alpha < 0.0 {
-                    continue;
-                }
-                blended = true;
-                let ra = 1.0 / (1.0 - alpha);
-                let tj = px[k].t * ra;
-                let wgt = alpha * tj;
-                let phi = dot(px[k].gr, color);
-                g[2] += px[k].gr * wgt;
-                let g_alpha = phi * tj - px[k].acc * ra;
-                px[k].acc += phi * wgt;
-                px[k].t = tj;
-                let ga = alpha_bwd(conic, dd, terms, g_alpha);
-                g[0] += ga[0];
-                g[1] += ga[1];
-            }
-            if subgroup_any(blended) {
-                accumulate_subgroup12(PROJECTED_GRAD_FLOATS * s_index[j], g);
-            }
-            j = entry_before(reach, j);
-        }
     }
 }

@@ -1,7 +1,7 @@
 // Stage `rasterize`, pass 1 (twin: trgs_core::reference::rasterize): one workgroup per tile
 // (TILE_PIXELS threads), one thread per pixel, the tile's depth-sorted Gaussians streamed through
-// workgroup memory in batches of TILE_PIXELS; with BLOCK_WALK each subgroup walks a batch in
-// chunks of its lanes, by broadcasts (`walk_batch`). Two transmittances: primary Gaussians advance T_t (C_t, D_t, alpha) and T_m
+// workgroup memory in batches of TILE_PIXELS (walked by shared/chunk_walk.wgsl). Two
+// transmittances: primary Gaussians advance T_t (C_t, D_t, alpha) and T_m
 // (the glass mask M, which they occlude but never paint); glass Gaussians advance only T_m and
 // paint M. A primary Gaussian that would bring T_t below 1e-4 ends the pixel; one that would bring
 // T_m below it ends M only. With DEPTH_VARIANCE, a second walk over the blended Gaussians gives
@@ -9,7 +9,7 @@
 #include "shared/common.wgsl"
 #include "shared/raster_pages.wgsl"
 #include "shared/splat.wgsl"
-#include "shared/block_walk.wgsl"
+#include "shared/chunk_walk.wgsl"
 
 @group(0) @binding(0) var<storage, read> params: RasterParams;
 @group(0) @binding(1) var<storage, read> projected: array<ProjectedGaussian>;
@@ -40,7 +40,7 @@ var<workgroup> num_done: atomic<u32>;
 var<workgroup> max_last: atomic<u32>;
 var<workgroup> num_walked: atomic<u32>;
 
-// The pixel's state through the first walk (private, so that `blend_entry` can step it).
+// The pixel's state through the first walk (private, so that `step_entry` can step it).
 var<private> pixel: vec2<f32>;
 var<private> t: f32;
 var<private> tm: f32;
@@ -66,12 +66,14 @@ fn load_batch(start: u32, end: u32, round: u32, lid: u32, corner: vec2<f32>) {
     }
 }
 
-// List entry `li` (mean, conic, colour as load_batch keeps them) at this pixel, by pass 1's rules.
-fn blend_entry(mean: vec4<f32>, conic: vec4<f32>, c: vec4<f32>, li: u32) {
+// List entry `li` (as load_batch keeps it) at this pixel, by pass 1's rules.
+fn step_entry(g: ChunkEntry, li: u32) {
     if done {
         return;
     }
-    let alpha = alpha_at(conic, pixel - mean.xy);
+    let mean = g.mean;
+    let c = g.color;
+    let alpha = alpha_at(g.conic, pixel - mean.xy);
     if alpha < 0.0 {
         return;
     }
@@ -104,67 +106,14 @@ fn blend_entry(mean: vec4<f32>, conic: vec4<f32>, c: vec4<f32>, li: u32) {
     }
 }
 
-#ifdef BLOCK_WALK
-// The batch's entries [0, batch) (round r) at this pixel, walked by the subgroup in chunks of
-// its size: lane l reads entry first + l from workgroup memory, and the chunk's entries that
-// reach the subgroup's block are then stepped through in order, each broadcast from its lane.
-// On lavapipe every read of workgroup memory is a loop over the vector's lanes, and one read a
-// lane per chunk replaces the three reads a step of a walk through workgroup memory made. A lane
-// id is a constant of each broadcast (WGSL asks for a constant), so the chunk's steps are
-// written out for subgroups of up to 8 lanes, which BLOCK_WALK's adapters have.
-fn walk_batch(batch: u32, r: u32, block: u32, one_block: bool, lane: u32, size: u32) {
-    for (var first = 0u; first < batch; first += size) {
-        if subgroupAll(done) {
-            break;
-        }
-        let e = first + lane;
-        var mean = vec4<f32>(0.0);
-        var conic = vec4<f32>(0.0);
-        var c = vec4<f32>(0.0);
-        var reaches = false;
-        if e < batch {
-            mean = s_mean[e];
-            conic = s_conic[e];
-            c = s_color[e];
-            reaches = !one_block || ((s_blocks[e] >> block) & 1u) != 0u;
-        }
-        let reach = subgroupBallot(reaches).x;
-        let li = r * TILE_PIXELS + first;
-        if (reach & 1u) != 0u {
-            blend_entry(subgroupBroadcast(mean, 0u), subgroupBroadcast(conic, 0u), subgroupBroadcast(c, 0u), li);
-        }
-        if (reach & 2u) != 0u {
-            blend_entry(subgroupBroadcast(mean, 1u), subgroupBroadcast(conic, 1u), subgroupBroadcast(c, 1u), li + 1u);
-        }
-        if (reach & 4u) != 0u {
-            blend_entry(subgroupBroadcast(mean, 2u), subgroupBroadcast(conic, 2u), subgroupBroadcast(c, 2u), li + 2u);
-        }
-        if (reach & 8u) != 0u {
-            blend_entry(subgroupBroadcast(mean, 3u), subgroupBroadcast(conic, 3u), subgroupBroadcast(c, 3u), li + 3u);
-        }
-        if (reach & 16u) != 0u {
-            blend_entry(subgroupBroadcast(mean, 4u), subgroupBroadcast(conic, 4u), subgroupBroadcast(c, 4u), li + 4u);
-        }
-        if (reach & 32u) != 0u {
-            blend_entry(subgroupBroadcast(mean, 5u), subgroupBroadcast(conic, 5u), subgroupBroadcast(c, 5u), li + 5u);
-        }
-        if (reach & 64u) != 0u {
-            blend_entry(subgroupBroadcast(mean, 6u), subgroupBroadcast(conic, 6u), subgroupBroadcast(c, 6u), li + 6u);
-        }
-        if (reach & 128u) != 0u {
-            blend_entry(subgroupBroadcast(mean, 7u), subgroupBroadcast(conic, 7u), subgroupBroadcast(c, 7u), li + 7u);
-        }
-    }
+// For shared/chunk_walk.wgsl: batch entry e, and whether this pixel has stopped.
+fn batch_entry(e: u32) -> ChunkEntry {
+    return ChunkEntry(s_mean[e], s_conic[e], s_color[e], 0u);
 }
-#else
-// The batch's entries [0, batch) (round r) at this pixel, one after another from workgroup
-// memory.
-fn walk_batch(batch: u32, r: u32) {
-    for (var j = 0u; j < batch && !done; j++) {
-        blend_entry(s_mean[j], s_conic[j], s_color[j], r * TILE_PIXELS + j);
-    }
+
+fn walk_over() -> bool {
+    return done;
 }
-#endif
 
 // One workgroup per tile; its invocations are numbered as the tile's pixels are in `main`.
 // (One-dimensional: a subgroup's lane id needs it.)

@@ -10,7 +10,7 @@
 #include "shared/plane_hit.wgsl"
 // ROWS pixels per thread (four rows on CPU adapters, where they are faster: `bench`).
 #include "shared/tile_rows.wgsl"
-#include "shared/block_walk.wgsl"
+#include "shared/chunk_walk.wgsl"
 
 @group(0) @binding(0) var<storage, read> params: RasterParams;
 @group(0) @binding(1) var<storage, read> projected: array<ProjectedGaussian>;
@@ -50,8 +50,60 @@ struct Pixel {
     last: u32,
 }
 
-@compute @workgroup_size(TILE_SIZE, TILE_SIZE / ROWS)
-fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+// This thread's pixels through the walk, and how many of them still blend (`active` is a
+// reserved word in WGSL).
+var<private> px: array<Pixel, ROWS>;
+var<private> awake: u32;
+
+// List entry `li` (as the batch keeps it: colour with the reflection intensity) at this
+// thread's pixels.
+fn step_entry(g: ChunkEntry, li: u32) {
+    let mean = g.mean.xy;
+    let conic = g.conic;
+    let c = g.color;
+    for (var k = 0u; k < ROWS; k++) {
+        if px[k].done {
+            continue;
+        }
+        let alpha = alpha_at(conic, px[k].at - mean);
+        if alpha < 0.0 {
+            continue;
+        }
+        let next_t = px[k].t * (1.0 - alpha);
+        if next_t < MIN_TRANSMITTANCE {
+            px[k].last = li;
+            px[k].done = true;
+            awake -= 1u;
+            atomicAdd(&num_done, 1u);
+            continue;
+        }
+        let wgt = alpha * px[k].t;
+        px[k].color += c.xyz * wgt;
+        px[k].intensity += c.w * wgt;
+        px[k].t = next_t;
+    }
+}
+
+// For shared/chunk_walk.wgsl: batch entry e, and whether this thread's pixels have stopped.
+fn batch_entry(e: u32) -> ChunkEntry {
+    return ChunkEntry(vec4<f32>(s_mean[e], 0.0, 0.0), s_conic[e], s_color[e], 0u);
+}
+
+fn walk_over() -> bool {
+    return awake == 0u;
+}
+
+// One workgroup per footprint tile, TILE_SIZE x TILE_SIZE / ROWS threads numbered row by row
+// (one-dimensional: a subgroup's lane id needs it).
+@compute @workgroup_size(TILE_PIXELS / ROWS)
+fn main(
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+#ifdef BLOCK_WALK
+    @builtin(subgroup_invocation_id) sg_lane: u32,
+    @builtin(subgroup_size) sg_size: u32,
+#endif
+) {
     let tx = wid.x + params.tile_x0;
     let ty = wid.y + params.tile_y0;
     let x = tx * TILE_SIZE + lid % TILE_SIZE;
@@ -65,9 +117,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         atomicStore(&num_done, 0u);
     }
     workgroupBarrier();
-    var px: array<Pixel, ROWS>;
-    // Pixels of this thread still blending (`active` is a reserved word in WGSL).
-    var awake = 0u;
+    awake = 0u;
     for (var k = 0u; k < ROWS; k++) {
         let y = y0 + k;
         px[k].inside = x < params.width && y < params.height
@@ -107,47 +157,10 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         workgroupBarrier();
         let batch = min(TILE_PIXELS, n - r * TILE_PIXELS);
 #ifdef BLOCK_WALK
-        let reach = reaching(batch, block, one_block);
-        var j = next_entry(reach, 0u);
+        walk_batch(batch, r, block, one_block, sg_lane, sg_size);
 #else
-        var j = 0u;
+        walk_batch(batch, r);
 #endif
-        loop {
-            if j >= batch || awake == 0u {
-                break;
-            }
-            let mean = s_mean[j];
-            let conic = s_conic[j];
-            let c = s_color[j];
-            for (var k = 0u; k < ROWS; k++) {
-                if px[k].done {
-                    continue;
-                }
-                let alpha = alpha_at(conic, px[k].at - mean);
-                if alpha < 0.0 {
-                    continue;
-                }
-                let next_t = px[k].t * (1.0 - alpha);
-                if next_t < MIN_TRANSMITTANCE {
-                    px[k].last = r * TILE_PIXELS + j;
-                    px[k].done = true;
-                    awake -= 1u;
-                    atomicAdd(&num_done, 1u);
-                    continue;
-                }
-                let wgt = alpha * px[k].t;
-                px[k].color += c.xyz * wgt;
-                px[k].intensity += c.w * wgt;
-                px[k].t = next_t;
-            }
-            continuing {
-#ifdef BLOCK_WALK
-                j = next_entry(reach, j + 1u);
-#else
-                j++;
-#endif
-            }
-        }
     }
     for (var k = 0u; k < ROWS; k++) {
         if px[k].inside {

@@ -1,14 +1,23 @@
 // The walk by pixel blocks of the rasterize passes on devices whose subgroups hold at most 8 lanes
 // (the define BLOCK_WALK; trgs_render::Capabilities::block_walk): a tile's pixels are split into
 // blocks of 8 threads' pixels, an entry's mask says which blocks it can reach, and a subgroup
-// lying in one block steps from one reaching entry to the next. On a CPU adapter a subgroup is a
-// SIMD vector, which leaves a loop together but runs a skipped branch's body anyway, so without
-// this it pays for every entry of the tile's list whether it reaches its pixels or not. Without
-// BLOCK_WALK only `entry_before` is left, stepping to the previous entry; with it the including
-// shader declares `s_blocks` (an entry's block mask per batch slot). The forward passes step
-// ahead (`next_entry`), the backward ones back (`entry_before`).
-#ifdef BLOCK_WALK
+// lying in one block steps only through the entries that reach it (the chunk walks,
+// shared/chunk_walk.wgsl and shared/chunk_replay.wgsl). On a CPU adapter a subgroup is a SIMD
+// vector, which leaves a loop together but runs a skipped branch's body anyway, so without this
+// it pays for every entry of the tile's list whether it reaches its pixels or not. The including
+// shader declares `s_blocks` (an entry's block mask per batch slot).
 
+// One list entry as the chunk walks take it from a batch (with BLOCK_WALK, from lane to lane:
+// `lane_entry`): the 2D mean and what the pass keeps beside it, the conic with the opacity, the
+// colour with the depth or the reflection intensity, and the Gaussian's index.
+struct ChunkEntry {
+    mean: vec4<f32>,
+    conic: vec4<f32>,
+    color: vec4<f32>,
+    index: u32,
+}
+
+#ifdef BLOCK_WALK
 // Which blocks of a tile one Gaussian can reach (twin: reference::block_reach, where the
 // reasoning is set out): the tile is split row by row into blocks of `block` pixels (x, y), and
 // bit k (block k) is clear only when o G < MIN_ALPHA at all of the block's pixels, so that
@@ -76,20 +85,39 @@ fn ellipse_edge(a: f32, b: f32, det: f32, r: f32, y: f32, side: f32) -> f32 {
     return (-b * y + side * sqrt(max(a * r - det * y * y, 0.0))) / a;
 }
 
-// The first set bit at or after j of the 64-bit mask (lo, hi), or 64.
-fn next_in(lo: u32, hi: u32, j: u32) -> u32 {
-    let m_lo = select(0u, lo & (0xffffffffu << min(j, 31u)), j < 32u);
-    let m_hi = select(0u, hi & (0xffffffffu << (max(j, 32u) - 32u)), j < 64u);
-    let in_hi = select(64u, 32u + firstTrailingBit(m_hi), m_hi != 0u);
-    return select(in_hi, firstTrailingBit(m_lo), m_lo != 0u);
-}
-
-// The last set bit at or before j (j < 64) of the 64-bit mask (lo, hi), or 64 when there is none.
-fn prev_in(lo: u32, hi: u32, j: u32) -> u32 {
-    let m_hi = select(0u, hi & (0xffffffffu >> (63u - max(j, 32u))), j >= 32u);
-    let m_lo = lo & select(0xffffffffu >> (31u - min(j, 31u)), 0xffffffffu, j >= 32u);
-    let in_lo = select(64u, firstLeadingBit(m_lo), m_lo != 0u);
-    return select(in_lo, 32u + firstLeadingBit(m_hi), m_hi != 0u);
+// Lane k's `e` on every lane of the subgroup (k < 8, the same on every lane). The chunk walks
+// (shared/chunk_walk.wgsl, shared/chunk_replay.wgsl) have lane l read chunk entry l from
+// workgroup memory and step through the chunk's entries with their values broadcast from their
+// lane. Lavapipe (Mesa 22) reads workgroup memory one lane at a time, in a loop over the SIMD
+// vector, so a read a lane per chunk costs far less than reads a step; a broadcast is a
+// register move. WGSL takes a broadcast's lane as a constant, hence the switch.
+fn lane_entry(e: ChunkEntry, k: u32) -> ChunkEntry {
+    switch k {
+        case 0u: {
+            return ChunkEntry(subgroupBroadcast(e.mean, 0u), subgroupBroadcast(e.conic, 0u), subgroupBroadcast(e.color, 0u), subgroupBroadcast(e.index, 0u));
+        }
+        case 1u: {
+            return ChunkEntry(subgroupBroadcast(e.mean, 1u), subgroupBroadcast(e.conic, 1u), subgroupBroadcast(e.color, 1u), subgroupBroadcast(e.index, 1u));
+        }
+        case 2u: {
+            return ChunkEntry(subgroupBroadcast(e.mean, 2u), subgroupBroadcast(e.conic, 2u), subgroupBroadcast(e.color, 2u), subgroupBroadcast(e.index, 2u));
+        }
+        case 3u: {
+            return ChunkEntry(subgroupBroadcast(e.mean, 3u), subgroupBroadcast(e.conic, 3u), subgroupBroadcast(e.color, 3u), subgroupBroadcast(e.index, 3u));
+        }
+        case 4u: {
+            return ChunkEntry(subgroupBroadcast(e.mean, 4u), subgroupBroadcast(e.conic, 4u), subgroupBroadcast(e.color, 4u), subgroupBroadcast(e.index, 4u));
+        }
+        case 5u: {
+            return ChunkEntry(subgroupBroadcast(e.mean, 5u), subgroupBroadcast(e.conic, 5u), subgroupBroadcast(e.color, 5u), subgroupBroadcast(e.index, 5u));
+        }
+        case 6u: {
+            return ChunkEntry(subgroupBroadcast(e.mean, 6u), subgroupBroadcast(e.conic, 6u), subgroupBroadcast(e.color, 6u), subgroupBroadcast(e.index, 6u));
+        }
+        default: {
+            return ChunkEntry(subgroupBroadcast(e.mean, 7u), subgroupBroadcast(e.conic, 7u), subgroupBroadcast(e.color, 7u), subgroupBroadcast(e.index, 7u));
+        }
+    }
 }
 
 // Whether this invocation's subgroup lies in one block (the walk may skip only then).
@@ -97,47 +125,4 @@ fn in_one_block(block: u32) -> bool {
     return subgroupAll(subgroupBroadcastFirst(block) == block);
 }
 
-// The walk's next entry at or after j in `reach` (from `reaching`), or 64. Broadcast from the
-// subgroup's first lane (every lane has the same one) so that the compiler sees a uniform index:
-// the loads of the entry stay single loads instead of one per lane.
-fn next_entry(reach: vec2<u32>, j: u32) -> u32 {
-    return subgroupBroadcastFirst(next_in(reach.x, reach.y, j));
-}
-
-// The walk's previous entry at or before j in `reach`, or 64: the backward replays a batch from
-// its last entry to its first (uniform as `next_entry` is).
-fn prev_entry(reach: vec2<u32>, j: u32) -> u32 {
-    return subgroupBroadcastFirst(prev_in(reach.x, reach.y, j));
-}
-
-// The mask of the batch's entries (the first `batch` of `masks`) whose bit `block` is set, as
-// (lo, hi); every entry when `one_block` is false (the subgroup spans several blocks).
-fn reaching(batch: u32, block: u32, one_block: bool) -> vec2<u32> {
-    if !one_block {
-        return vec2<u32>(0xffffffffu);
-    }
-    var m = vec2<u32>(0u);
-    for (var e = 0u; e < min(batch, 32u); e++) {
-        m.x |= ((s_blocks[e] >> block) & 1u) << e;
-    }
-    for (var e = 32u; e < batch; e++) {
-        m.y |= ((s_blocks[e] >> block) & 1u) << (e - 32u);
-    }
-    return m;
-}
 #endif
-
-// The batch entry a subgroup of a backward pass replays before entry j (TILE_PIXELS when there is
-// none): with the block walk the previous one that can reach the subgroup's block (the others
-// have alpha -1 at all its pixels, so replaying them changes nothing), else j - 1. `reach` is
-// `reaching`'s mask (any value without BLOCK_WALK).
-fn entry_before(reach: vec2<u32>, j: u32) -> u32 {
-    if j == 0u {
-        return TILE_PIXELS;
-    }
-#ifdef BLOCK_WALK
-    return prev_entry(reach, j - 1u);
-#else
-    return j - 1u;
-#endif
-}

@@ -121,11 +121,12 @@ pub struct Capabilities {
     pub tile_layout: TileLayout,
     /// Values per workgroup of the prefix sum and the radix sort ([`BlockWidth`]).
     pub block_width: BlockWidth,
-    /// `rasterize` (pass 1) walks each 4 x 2 pixel block's entries only
-    /// (shaders/render/rasterize.wgsl, the define `BLOCK_WALK`): needs subgroups of at most 8
-    /// lanes, so that a subgroup lies in one block and skips together. On a CPU adapter a
-    /// subgroup is one SIMD vector, which otherwise pays for every entry of its tile's list,
-    /// reaching its pixels or not.
+    /// The rasterize passes walk each pixel block's entries only, by chunks of the subgroup's
+    /// lanes with broadcasts (shaders/shared/block_walk.wgsl, the define `BLOCK_WALK`): on by
+    /// default where subgroups hold at most 8 lanes, so that a subgroup lies in one block and
+    /// skips together. On a CPU adapter a subgroup is one SIMD vector, which otherwise pays for
+    /// every entry of its tile's list, reaching its pixels or not, and for every read of
+    /// workgroup memory lane by lane.
     pub block_walk: bool,
     /// Workgroups of a strided dispatch at most ([`crate::gpu::strided_grid`]).
     pub strided_groups: u32,
@@ -154,8 +155,9 @@ pub struct DeviceOptions {
     /// The width of the scan and sort blocks; None: the faster one for the adapter
     /// ([`BlockWidth::for_adapter`]). Tests on a CPU adapter set it to check the GPU's too.
     pub block_width: Option<BlockWidth>,
-    /// Whether pass 1 walks by 4 x 2 blocks ([`Capabilities::block_walk`]); None: where the
-    /// adapter's subgroups allow it. Some(true) still needs subgroups (without them it is off).
+    /// Whether the rasterize passes walk by pixel blocks ([`Capabilities::block_walk`]); None:
+    /// where the adapter's subgroups hold at most 8 lanes. Some(true) still needs subgroups
+    /// (without them it is off); with wider ones the chunks take 8 of their lanes.
     pub block_walk: Option<bool>,
     /// Workgroups of a strided dispatch at most; None: the adapter's
     /// ([`crate::gpu::strided_groups_for`]). Tests set a few, so that each workgroup takes
