@@ -303,6 +303,16 @@ impl<'a> LossLayers<'a> {
     }
 }
 
+/// The buffers the four passes of stage `photometric_loss` read and write.
+struct PhotometricBuffers<'a> {
+    rendered: &'a wgpu::Buffer,
+    image: &'a wgpu::Buffer,
+    rows: &'a wgpu::Buffer,
+    terms: &'a wgpu::Buffer,
+    stats: &'a wgpu::Buffer,
+    grad_color: &'a wgpu::Buffer,
+}
+
 /// The four passes of stage `photometric_loss` in one variant (RGB or one channel).
 #[derive(Debug)]
 struct PhotometricPasses {
@@ -328,6 +338,43 @@ impl PhotometricPasses {
                 grad_rows: k.photometric_loss_grad_rows.build(ctx),
                 grad: k.photometric_loss_grad.build(ctx),
             },
+        }
+    }
+
+    /// Record one run of the four passes over a `w x h` frame (`block`: the run's parameters).
+    /// Pass 1 takes a pixel a thread; the others a run of LOSS_BLUR_RUN pixels along x (row
+    /// blur) or y (column blur).
+    fn record(
+        &self,
+        ctx: &GpuContext,
+        rec: &mut Recorder,
+        block: &wgpu::Buffer,
+        (w, h): (u32, u32),
+        b: &PhotometricBuffers<'_>,
+    ) {
+        let per_pixel = [w.div_ceil(BLOCK), h.div_ceil(BLOCK), 1];
+        let along_rows = [w.div_ceil(BLOCK * LOSS_BLUR_RUN), h.div_ceil(BLOCK), 1];
+        let along_columns = [w.div_ceil(BLOCK), h.div_ceil(BLOCK * LOSS_BLUR_RUN), 1];
+        let passes: [(&'static str, &Kernel, Vec<&wgpu::Buffer>, [u32; 3]); 4] = [
+            ("photometric_loss_rows", &self.rows, vec![b.rendered, b.image, b.rows], per_pixel),
+            (
+                "photometric_loss",
+                &self.loss,
+                vec![b.rendered, b.image, b.rows, b.terms, b.stats],
+                along_columns,
+            ),
+            ("photometric_loss_grad_rows", &self.grad_rows, vec![b.terms, b.rows], along_rows),
+            (
+                "photometric_loss_grad",
+                &self.grad,
+                vec![b.rendered, b.image, b.rows, b.grad_color],
+                along_columns,
+            ),
+        ];
+        for (stage, kernel, buffers, groups) in passes {
+            let mut entries = vec![block.as_entire_binding()];
+            entries.extend(buffers.iter().map(|b| b.as_entire_binding()));
+            rec.dispatch(stage, kernel, &kernel.bind(ctx, &entries), groups);
         }
     }
 }
@@ -440,31 +487,15 @@ impl LossKernels {
                 "trgs.photometric_loss.channel_params",
                 &LossParams { channel, ..params },
             );
-            // Pass 1 takes a pixel a thread; the others a run of LOSS_BLUR_RUN pixels along x
-            // (row blur) or y (column blur).
-            let along_rows = [w.div_ceil(BLOCK * LOSS_BLUR_RUN), h.div_ceil(BLOCK), 1];
-            let along_columns = [w.div_ceil(BLOCK), h.div_ceil(BLOCK * LOSS_BLUR_RUN), 1];
-            let passes: [(&'static str, &Kernel, Vec<&wgpu::Buffer>, [u32; 3]); 4] = [
-                ("photometric_loss_rows", &passes.rows, vec![rendered, image, &rows], groups),
-                (
-                    "photometric_loss",
-                    &passes.loss,
-                    vec![rendered, image, &rows, &terms, &stats],
-                    along_columns,
-                ),
-                ("photometric_loss_grad_rows", &passes.grad_rows, vec![&terms, &rows], along_rows),
-                (
-                    "photometric_loss_grad",
-                    &passes.grad,
-                    vec![rendered, image, &rows, &grads.color],
-                    along_columns,
-                ),
-            ];
-            for (stage, kernel, buffers, groups) in passes {
-                let mut entries = vec![block.as_entire_binding()];
-                entries.extend(buffers.iter().map(|b| b.as_entire_binding()));
-                rec.dispatch(stage, kernel, &kernel.bind(ctx, &entries), groups);
-            }
+            let buffers = PhotometricBuffers {
+                rendered,
+                image,
+                rows: &rows,
+                terms: &terms,
+                stats: &stats,
+                grad_color: &grads.color,
+            };
+            passes.record(ctx, rec, &block, (w, h), &buffers);
         }
         if settings.regularisers.is_some() {
             // Bound but never read when the view has no labels.
