@@ -18,14 +18,9 @@ fn replay_batch(mine: u32, r: u32, block: u32, one_block: bool, lane: u32, size:
     let chunk = min(size, 8u);
     var first = ((mine - 1u) / chunk) * chunk;
     loop {
-        let e = first + lane;
-        var entry = ChunkEntry();
-        var reaches = false;
-        if lane < chunk && e < mine {
-            entry = batch_entry(e);
-            reaches = !one_block || ((s_blocks[e] >> block) & 1u) != 0u;
-        }
-        let reach = subgroupBallot(reaches).x;
+        let read = read_chunk(first, mine, chunk, lane, block, one_block);
+        let entry = read.entry;
+        let reach = read.reach;
         // Written out: each call's lane is then a constant (a loop left dynamic was slower).
         let li = r * TILE_PIXELS + first;
         if (reach & 128u) != 0u {

@@ -16,14 +16,9 @@ fn walk_batch(batch: u32, r: u32, block: u32, one_block: bool, lane: u32, size: 
         if subgroupAll(walk_over()) {
             break;
         }
-        let e = first + lane;
-        var mine = ChunkEntry();
-        var reaches = false;
-        if lane < chunk && e < batch {
-            mine = batch_entry(e);
-            reaches = !one_block || ((s_blocks[e] >> block) & 1u) != 0u;
-        }
-        let reach = subgroupBallot(reaches).x;
+        let read = read_chunk(first, batch, chunk, lane, block, one_block);
+        let mine = read.entry;
+        let reach = read.reach;
         // Written out: each call's lane is then a constant (a loop left dynamic was slower).
         let li = r * TILE_PIXELS + first;
         if (reach & 1u) != 0u {
