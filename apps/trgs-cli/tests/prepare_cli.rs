@@ -78,3 +78,41 @@ fn photos_that_share_nothing_and_a_missing_colmap_are_named() {
     let said = text(&refused);
     assert!(said.contains("registered none of the 3 images") || said.contains("only"), "{said}");
 }
+
+/// A capture whose mapping can only start from a pair seen at 2° or less (a video that only
+/// pans, where COLMAP's RANSAC may miss the 4° pair it found in another run): `prepare` steps the
+/// initial pair's angle down until a model registers. A wrapper around `colmap` plays the
+/// mapper that finds no initial pair above 2°.
+#[cfg(unix)]
+#[test]
+fn a_mapping_that_starts_only_from_a_small_angle_is_found() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = ScratchDir::new("prepare-cli-small-angle");
+    let demo = RunConfig::default().demo_config();
+    trgs_synthetic::write_generated(&demo, &dir.join("demo")).expect("the built-in scene");
+    let wrapper = dir.join("colmap-pans");
+    std::fs::write(
+        &wrapper,
+        "#!/bin/sh\n\
+         if [ \"$1\" = mapper ] && [ \"$2\" != -h ]; then\n\
+         \x20 case \" $* \" in\n\
+         \x20   *' --Mapper.init_min_tri_angle 2 '*|*' --Mapper.init_min_tri_angle 1 '*) ;;\n\
+         \x20   *) echo 'No good initial image pair found.'; exit 1 ;;\n\
+         \x20 esac\n\
+         fi\n\
+         exec colmap \"$@\"\n",
+    )
+    .expect("wrapper");
+    std::fs::set_permissions(&wrapper, std::fs::Permissions::from_mode(0o755)).expect("chmod");
+    let scene = dir.join("scene");
+    let photos = dir.join("demo").join("images");
+    let wrapper = wrapper.to_str().expect("a UTF-8 scratch path");
+    let made = prepare(&photos, &scene, &["--every", "2", "--colmap", wrapper]);
+    let said = text(&made);
+    assert!(made.status.success(), "{said}");
+    for angle in ["4°", "2°"] {
+        assert!(said.contains(&format!("mapping again from a pair seen at {angle}")), "{said}");
+    }
+    assert!(!said.contains("seen at 1°"), "stops at the first angle that maps: {said}");
+    SceneFolder::open(&scene).expect("trgs opens the scene folder");
+}

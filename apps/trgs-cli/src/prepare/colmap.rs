@@ -8,11 +8,14 @@ use anyhow::{Context, Result, bail};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
-/// The smallest triangulation angle (degrees) of the pair a second mapping starts from, when the
-/// first found no pair at COLMAP's default (16): a video panning along a facade moves the camera
-/// little between frames, so no pair reaches 16 degrees, while 4 still triangulates the pair's
-/// points well enough for the model to grow from it.
-pub const SHORT_BASELINE_INIT_ANGLE: f64 = 4.0;
+/// The smallest triangulation angles (degrees) of the pair a mapping starts from, tried in turn
+/// when the one before found no pair, after COLMAP's default (16): a video panning along a
+/// facade moves the camera little between frames, so no pair reaches 16 degrees, while a pair
+/// seen at a few degrees still triangulates enough points for the model to grow from it. COLMAP
+/// draws its initial pair with RANSAC: the same frames that start at 4 degrees in one run may
+/// need 2 in the next (DSC_0050 of the facade captures, docs/captures.md), so one retry is not
+/// enough; each costs one mapping, only when the one before failed.
+pub const RETRY_INIT_ANGLES: [f64; 3] = [4.0, 2.0, 1.0];
 
 /// The `colmap` program found on this machine, with the threads it may use.
 #[derive(Debug)]
@@ -87,15 +90,16 @@ impl Colmap {
         self.run(command, &args)
     }
 
-    /// Incremental mapping into `models` (one folder per model COLMAP makes); `short_baseline`
-    /// lets it start from a pair seen at a smaller angle (see [`SHORT_BASELINE_INIT_ANGLE`]).
+    /// Incremental mapping into `models` (one folder per model COLMAP makes), starting from a
+    /// pair seen at `init_angle` degrees or more (None: COLMAP's default; see
+    /// [`RETRY_INIT_ANGLES`]).
     pub fn map(
         &self,
         database: &Path,
         images: &Path,
         models: &Path,
         fix_focal: bool,
-        short_baseline: bool,
+        init_angle: Option<f64>,
     ) -> Result<()> {
         std::fs::create_dir_all(models)
             .with_context(|| format!("creating {}", models.display()))?;
@@ -110,9 +114,8 @@ impl Colmap {
         if fix_focal {
             args.extend(options.either(&["Mapper.ba_refine_focal_length"], "0"));
         }
-        if short_baseline {
-            let angle = SHORT_BASELINE_INIT_ANGLE.to_string();
-            args.extend(options.either(&["Mapper.init_min_tri_angle"], &angle));
+        if let Some(angle) = init_angle {
+            args.extend(options.either(&["Mapper.init_min_tri_angle"], &angle.to_string()));
         }
         self.run(command, &args)
     }

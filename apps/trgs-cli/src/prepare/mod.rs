@@ -111,10 +111,13 @@ pub fn prepare(options: &PrepareOptions, say: &mut dyn FnMut(String)) -> Result<
     };
     stage(matcher, say, &|| program.match_features(&database, options.matching))?;
     let target = out.join("sparse").join("0");
-    let map = |short_baseline: bool, say: &mut dyn FnMut(String)| {
-        let models = work.join(if short_baseline { "sparse-short-baseline" } else { "sparse" });
+    let map = |init_angle: Option<f64>, say: &mut dyn FnMut(String)| {
+        let models = match init_angle {
+            None => work.join("sparse"),
+            Some(angle) => work.join(format!("sparse-from-{angle}deg")),
+        };
         let mapped = stage("mapping", say, &|| {
-            program.map(&database, &images, &models, options.fix_focal, short_baseline)
+            program.map(&database, &images, &models, options.fix_focal, init_angle)
         });
         // The mapper fails when it finds no pair to start from: that is no model, said as such.
         let kept = model::keep_largest(&models, &target, copied);
@@ -124,18 +127,29 @@ pub fn prepare(options: &PrepareOptions, say: &mut dyn FnMut(String)) -> Result<
             (Ok(()), kept) => kept,
         }
     };
-    let kept = match map(false, say) {
-        Ok(kept) => kept,
-        Err(first) => {
-            // A capture that only pans: start from a pair seen at a smaller angle.
-            say(format!(
-                "colmap: {first}; mapping again from a pair seen at {}° or more (a \
-                 short-baseline capture)",
-                colmap::SHORT_BASELINE_INIT_ANGLE
-            ));
-            map(true, say).map_err(|again| again.context(format!("first mapping: {first}")))?
-        }
-    };
+    let mut kept = map(None, say);
+    // A capture that only pans: start from pairs seen at ever smaller angles.
+    let mut said_before = String::new();
+    for angle in colmap::RETRY_INIT_ANGLES {
+        let Err(failed) = &kept else { break };
+        let why = failed.to_string();
+        let said = if why == said_before { "the same again" } else { why.as_str() };
+        say(format!(
+            "colmap: {said}; mapping again from a pair seen at {angle}° or more (a short-baseline \
+             capture)"
+        ));
+        said_before = why;
+        kept = map(Some(angle), say);
+    }
+    let kept = kept.with_context(|| {
+        let angles: Vec<String> =
+            colmap::RETRY_INIT_ANGLES.iter().map(|a| format!("{a}°")).collect();
+        format!(
+            "mapping failed from COLMAP's default initial pair and from pairs seen at {}{}",
+            angles.join(", "),
+            if options.fix_focal { "" } else { "; for a video that only pans try --fix-focal" }
+        )
+    })?;
     for line in kept.notes() {
         say(line);
     }
