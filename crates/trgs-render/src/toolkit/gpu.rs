@@ -4,6 +4,7 @@
 //! timestamp queries.
 mod grid;
 mod profiler;
+mod wait_clock;
 
 use crate::GpuContext;
 pub use crate::gpu_error::{ErrorScopes, GpuError, scoped};
@@ -14,6 +15,8 @@ pub use grid::{
 pub use profiler::KernelTime;
 use profiler::Profiler;
 use std::collections::HashMap;
+pub use wait_clock::WAIT_SLICE;
+use wait_clock::WaitClock;
 
 /// The byte pattern fresh buffers get in poison mode: NaN as f32, 0xffffffff as u32.
 pub const POISON_BYTE: u8 = 0xff;
@@ -173,6 +176,12 @@ pub fn wait_for_gpu(ctx: &GpuContext, what: &str) -> Result<(), GpuError> {
 /// [`wait_for_gpu`] for `submission` and what was submitted before it (everything when None):
 /// work submitted after it may still be running when this returns. Counted in
 /// [`GpuContext::waits`].
+///
+/// The limit is of time the process ran: the wait is made of slices of at most [`WAIT_SLICE`],
+/// and a slice counts for no more than its length however long it took on the clock. A run
+/// stopped by job control (Ctrl-Z, SIGSTOP) or a machine put to sleep in the middle of a step
+/// otherwise finds, when it goes on, that the limit passed while nothing ran, and ends in a
+/// hung-kernel error.
 pub fn wait_for_submission(
     ctx: &GpuContext,
     what: &str,
@@ -180,26 +189,30 @@ pub fn wait_for_submission(
 ) -> Result<(), GpuError> {
     ctx.count_wait();
     let limit = gpu_wait_limit();
-    let wait = wgpu::PollType::Wait { submission_index: submission, timeout: Some(limit) };
-    let polled = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| ctx.device.poll(wait)));
-    let lost = |detail: String| {
-        crate::gpu_error::lost(&format!("waiting for {what}"), ctx.lost().unwrap_or(detail))
-    };
-    match polled {
-        Ok(Ok(_)) => Ok(()),
-        Ok(Err(wgpu::PollError::Timeout)) => {
-            Err(GpuError::Timeout { what: what.to_string(), seconds: limit.as_secs() })
-        }
-        Ok(Err(e)) => Err(lost(e.to_string())),
-        Err(panic) => {
-            let message = panic
-                .downcast_ref::<String>()
-                .cloned()
-                .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
-                .unwrap_or_else(|| "wgpu stopped while polling the device".to_string());
-            Err(lost(message))
+    let mut waited = WaitClock::new(limit);
+    while let Some(slice) = waited.next_slice() {
+        let wait =
+            wgpu::PollType::Wait { submission_index: submission.clone(), timeout: Some(slice) };
+        let polled =
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| ctx.device.poll(wait)));
+        let lost = |detail: String| {
+            crate::gpu_error::lost(&format!("waiting for {what}"), ctx.lost().unwrap_or(detail))
+        };
+        match polled {
+            Ok(Ok(_)) => return Ok(()),
+            Ok(Err(wgpu::PollError::Timeout)) => waited.add(slice),
+            Ok(Err(e)) => return Err(lost(e.to_string())),
+            Err(panic) => {
+                let message = panic
+                    .downcast_ref::<String>()
+                    .cloned()
+                    .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+                    .unwrap_or_else(|| "wgpu stopped while polling the device".to_string());
+                return Err(lost(message));
+            }
         }
     }
+    Err(GpuError::Timeout { what: what.to_string(), seconds: limit.as_secs() })
 }
 
 const READBACK: &str = "reading back a buffer";

@@ -28,7 +28,7 @@ pub use crate::kernels::{BENCH_KERNELS, BenchKernelSpecs, BenchKernels, RENDER_K
 pub use crate::kernels::{Kernels as RenderKernels, RenderKernelSpecs};
 pub use crate::stages::prefix_sum::PrefixSum;
 pub use gpu::{
-    BufferPool, ErrorScopes, GPU_WAIT_LIMIT, Kernel, KernelTime, PendingRead, Recorder,
+    BufferPool, ErrorScopes, GPU_WAIT_LIMIT, Kernel, KernelTime, PendingRead, Recorder, WAIT_SLICE,
     gpu_wait_limit, grid_1d, map_and_read, params, range, read_buffer, scoped, spread_block,
     spread_step, storage, storage_init, wait_for_gpu,
 };
