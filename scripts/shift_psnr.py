@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The PSNR of a photo against itself moved by a fraction of a pixel: what a camera pose that is
-off by that much costs a test view, whatever the model (docs/captures.md, "Camera-pose
-refinement").
+off by that much costs a test view, whatever the model (docs/captures.md, the paragraph
+"Camera-pose refinement is not built").
 
 usage: shift_psnr.py SHIFT_PX WIDTH PHOTO...   (pip install pillow)
 
@@ -16,7 +16,10 @@ from PIL import Image
 
 
 def shift_psnr(path, shift, width):
-    image = Image.open(path).convert("RGB")
+    try:
+        image = Image.open(path).convert("RGB")
+    except OSError as e:
+        sys.exit(f"{path}: expected a photo Pillow can read ({e})")
     height = round(image.height * width / image.width)
     pixels = image.resize((width, height), Image.BOX).load()
     total, count = 0.0, 0
@@ -26,14 +29,20 @@ def shift_psnr(path, shift, width):
             for c in range(3):
                 total += ((right[c] - here[c]) ** 2 + (below[c] - here[c]) ** 2) / 2
                 count += 1
-    mse = shift * shift * total / count / (255.0 * 255.0)
-    return 10.0 * math.log10(1.0 / mse)
+    mse = shift * shift * total / max(count, 1) / (255.0 * 255.0)
+    # A flat photo (or no shift) looks the same moved: no error at all.
+    return math.inf if mse == 0.0 else 10.0 * math.log10(1.0 / mse)
 
 
 def main():
     if len(sys.argv) < 4:
         sys.exit(__doc__)
-    shift, width = float(sys.argv[1]), int(sys.argv[2])
+    try:
+        shift, width = float(sys.argv[1]), int(sys.argv[2])
+    except ValueError:
+        sys.exit(f"expected a shift in pixels and a whole width, got {sys.argv[1]!r} {sys.argv[2]!r}")
+    if width < 2:
+        sys.exit(f"expected a width of 2 pixels or more, got {width}")
     for path in sys.argv[3:]:
         print(f"{path}: moved by {shift} px at {width} px wide, {shift_psnr(path, shift, width):.2f} dB")
 

@@ -189,15 +189,15 @@ pub fn wait_for_submission(
 ) -> Result<(), GpuError> {
     ctx.count_wait();
     let limit = gpu_wait_limit();
+    let lost = |detail: String| {
+        crate::gpu_error::lost(&format!("waiting for {what}"), ctx.lost().unwrap_or(detail))
+    };
     let mut waited = WaitClock::new(limit);
     while let Some(slice) = waited.next_slice() {
         let wait =
             wgpu::PollType::Wait { submission_index: submission.clone(), timeout: Some(slice) };
         let polled =
             std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| ctx.device.poll(wait)));
-        let lost = |detail: String| {
-            crate::gpu_error::lost(&format!("waiting for {what}"), ctx.lost().unwrap_or(detail))
-        };
         match polled {
             Ok(Ok(_)) => return Ok(()),
             Ok(Err(wgpu::PollError::Timeout)) => waited.add(slice),
