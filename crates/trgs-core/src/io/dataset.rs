@@ -131,7 +131,9 @@ impl SceneFolder {
                 root,
                 "not a scene folder: found neither a COLMAP model (sparse/0/cameras.bin or \
                  sparse/0/cameras.txt, with images/) nor transforms.json (or Blender's \
-                 transforms_train.json and transforms_test.json)",
+                 transforms_train.json and transforms_test.json); to make one from a folder of \
+                 photos or video frames: `prepare PHOTOS --out SCENE` (COLMAP), then \
+                 `train --data SCENE`",
             ));
         };
         if cameras.is_empty() {
