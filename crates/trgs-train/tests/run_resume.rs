@@ -2,11 +2,12 @@
 //! with [`TrainingRun::resume`]: it goes on from the checkpoint's step with the settings it
 //! started with and the plane that stage 1 initialised, finishes at its planned step count, and
 //! logs every step once; resuming the finished run writes its results again without training.
+//! With exposure compensation on, its learned exposures are in the checkpoint and exposures.json.
 //! And a run reports every densification it applies, those it pipelines a step late included.
 use std::path::Path;
 use trgs_core::scratch::ScratchDir;
 use trgs_synthetic::{SyntheticConfig, generate, write_dataset};
-use trgs_train::run::LOG_FILE;
+use trgs_train::run::{ExposureMode, LOG_FILE};
 use trgs_train::{RunConfig, RunEvent, RunOptions, TrainingRun};
 
 fn logged_steps(log: &Path) -> Vec<u64> {
@@ -31,6 +32,7 @@ fn a_stopped_run_resumes_through_the_library() {
         checkpoint_every: Some(5),
         eval_every: Some(20),
         sh_degree: 1,
+        exposure: ExposureMode::On,
         ..RunConfig::default()
     };
     let mut run = TrainingRun::start(config.clone(), RunOptions::default()).expect("a new run");
@@ -70,6 +72,12 @@ fn a_stopped_run_resumes_through_the_library() {
     assert_eq!((summary.steps, summary.planes), (40, 1));
     assert!(summary.last.psnr.is_finite());
     assert!(out.join("metrics.json").is_file() && out.join("model.ply").is_file());
+    let exposures = std::fs::read_to_string(out.join("exposures.json")).expect("exposures.json");
+    let exposures: serde_json::Value = serde_json::from_str(&exposures).expect("JSON");
+    let views = exposures["views"].as_object().expect("a matrix per training view");
+    let trained = resumed.data().train.len();
+    assert_eq!(views.len(), trained);
+    assert!(views.values().all(|m| m.as_array().is_some_and(|rows| rows.len() == 3)));
     let logged = logged_steps(&out.join(LOG_FILE));
     assert_eq!(logged, (1..=40).collect::<Vec<u64>>(), "every step logged once");
     // Every step line says what the step held: the frame's keys, GPU bytes and peak RAM.

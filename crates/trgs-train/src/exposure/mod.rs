@@ -106,7 +106,7 @@ impl ViewExposures {
         }
     }
 
-    /// Every view's exposure, by name (for the run's outputs).
+    /// The exposure of every view trained on so far, by name.
     pub fn matrices(&self) -> Vec<(String, ExposureMatrix)> {
         let mut all: Vec<_> = self.views.iter().map(|(k, e)| (k.clone(), e.matrix)).collect();
         all.sort_by(|a, b| a.0.cmp(&b.0));

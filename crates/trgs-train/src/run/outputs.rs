@@ -1,5 +1,6 @@
 //! What a finished run writes into its folder: model.ply, planes.json, the test renders and
-//! their layers, and metrics.json; each file written to a temporary name and renamed into place.
+//! their layers, metrics.json, and with `--exposure on` exposures.json (each training view's
+//! learned affine colour); each file written to a temporary name and renamed into place.
 use super::state::RunState;
 use crate::data::TrainingData;
 use crate::eval::{Evaluation, Renderable, TruthComparison, compare_with_truth};
@@ -79,6 +80,21 @@ pub fn write_outputs(
         truth,
         gpu_memory: trainer.gpu_memory(),
     };
+    if config.exposure.is_on() {
+        // Every training view, those never drawn with the identity they start from.
+        let views: serde_json::Map<_, _> = data
+            .train
+            .iter()
+            .map(|v| &v.camera.name)
+            .map(|name| (name.clone(), serde_json::json!(trainer.exposures().matrix(name))))
+            .collect();
+        let exposures = serde_json::json!({
+            "what": "per training view: C' = M [r g b 1]^T, a 3x4 matrix applied to the render",
+            "views": views,
+        });
+        let text = serde_json::to_string_pretty(&exposures)?;
+        write_atomic(&out.join("exposures.json"), text.as_bytes())?;
+    }
     let metrics = metrics_json(&summary, data, state);
     write_atomic(&out.join("metrics.json"), serde_json::to_string_pretty(&metrics)?.as_bytes())?;
     Ok(summary)

@@ -241,6 +241,11 @@ impl Trainer {
         self.camera_centres = cameras.iter().map(|c| c.pose.centre()).collect();
     }
 
+    /// The training views' exposures (identity when compensation is off).
+    pub fn exposures(&self) -> &ViewExposures {
+        &self.exposures
+    }
+
     /// Bytes of the GPU buffers this trainer holds, by what they hold.
     pub fn gpu_memory(&self) -> memory::GpuMemory {
         use trgs_core::scene::Attribute;
