@@ -1,7 +1,8 @@
 //! PSNR and SSIM against scikit-image and a numpy/scipy mirror of 3DGS's SSIM.
 use trgs_core::Image;
 use trgs_core::metrics::{
-    Border, MetricsError, gaussian_filter, mse, psnr, ssim, ssim_map, ssim_skimage,
+    Border, MetricsError, gaussian_filter, mse, psnr, psnr_covered, ssim, ssim_covered, ssim_map,
+    ssim_skimage,
 };
 
 fn base(x: i64, y: i64, c: i64) -> i64 {
@@ -147,6 +148,49 @@ fn psnr_of_a_constant_offset() {
     let d = f64::from(0.35f32) - f64::from(0.25f32);
     assert_eq!(mse(&a, &b), Ok(d * d));
     assert!((psnr(&a, &b).expect("same size") - 20.0).abs() < 1e-5);
+}
+
+/// Uncovered pixels (an undistorted photo's empty corners, zero in render and photo alike) do
+/// not count: the score is that of the covered ones alone, not raised by the matching zeros.
+#[test]
+fn only_covered_pixels_are_scored() {
+    let (w, h) = (40u32, 30u32);
+    let (a, b) = pair("textured_rgb", w, h, 3);
+    // The left quarter uncovered, zero in both images.
+    let mask = |w: u32, h: u32, on: &dyn Fn(u32) -> bool| {
+        let mut m = Image::<u8>::new(w, h, 1);
+        for y in 0..h {
+            for x in 0..w {
+                m.set(x, y, 0, u8::from(on(x)));
+            }
+        }
+        m
+    };
+    let covered = mask(w, h, &|x| x >= w / 4);
+    let (a, b) = (a.zero_uncovered(&covered), b.zero_uncovered(&covered));
+    let right = |im: &Image<f32>| im.columns(w / 4, w);
+    let expected = psnr(&right(&a), &right(&b)).expect("same size");
+    let scored = psnr_covered(&a, &b, Some(&covered)).expect("covered");
+    assert!((scored - expected).abs() < 1e-9, "{scored} vs {expected}");
+    // Counting the zeros as matches raises the PSNR by 10 log10(4/3).
+    let all = psnr(&a, &b).expect("same size");
+    assert!((all - scored - 10.0 * (4.0f64 / 3.0).log10()).abs() < 1e-9);
+    assert_eq!(psnr_covered(&a, &b, None), psnr(&a, &b));
+    assert_eq!(ssim_covered(&a, &b, None), ssim(&a, &b));
+    // SSIM: the mean of 3DGS's map over the covered pixels' samples.
+    let map = ssim_map(&a, &b, Border::Zero).expect("same size");
+    let kept: Vec<f64> = (0..h)
+        .flat_map(|y| (w / 4..w).flat_map(move |x| (0..3).map(move |c| (x, y, c))))
+        .map(|(x, y, c)| map.get(x, y, c))
+        .collect();
+    let expected = kept.iter().sum::<f64>() / kept.len() as f64;
+    let scored = ssim_covered(&a, &b, Some(&covered)).expect("covered");
+    assert!((scored - expected).abs() < 1e-12, "{scored} vs {expected}");
+    assert!(scored < ssim(&a, &b).expect("ssim"), "the zeroed corner's perfect SSIM left out");
+    let nothing = mask(w, h, &|_| false);
+    assert_eq!(psnr_covered(&a, &b, Some(&nothing)), Err(MetricsError::NothingCovered));
+    let small = mask(w - 1, h, &|_| true);
+    assert!(matches!(ssim_covered(&a, &b, Some(&small)), Err(MetricsError::CoverageSize { .. })));
 }
 
 #[test]

@@ -8,7 +8,7 @@ use std::time::Instant;
 use trgs_core::Image;
 use trgs_core::fit::fit_exposure;
 use trgs_core::io::{read_planes_json, read_rgb8_image};
-use trgs_core::metrics::{psnr, ssim};
+use trgs_core::metrics::{psnr, psnr_covered, ssim_covered};
 use trgs_core::scene::ReflectionPlane;
 use trgs_render::{Frame, GpuContext, GpuScene, Layer, RenderError, RenderOptions, Renderer};
 
@@ -80,8 +80,10 @@ pub fn right_half_psnr(
         None => exposed,
     };
     let right = |im: &Image<f32>| im.columns(half, im.width);
+    let right_covered = covered.map(|c| c.columns(half, c.width));
     let photo = right(photo);
-    Ok((psnr(&right(render), &photo)?, psnr(&right(&exposed), &photo)?))
+    let score = |im: &Image<f32>| psnr_covered(&right(im), &photo, right_covered.as_ref());
+    Ok((score(render)?, score(&exposed)?))
 }
 
 /// Evaluate `model` on `data`'s evaluation views.
@@ -101,7 +103,11 @@ pub fn evaluate(
             None => color,
         };
         let image = v.image.to_f32();
-        rows.push((v.camera.name.clone(), psnr(&color, &image)?, ssim(&color, &image)?));
+        // Scored over the pixels the photo covers: the zeroed rest would count as matches.
+        let covered = v.covered.as_ref();
+        let scores =
+            (psnr_covered(&color, &image, covered)?, ssim_covered(&color, &image, covered)?);
+        rows.push((v.camera.name.clone(), scores.0, scores.1));
         halves.push(right_half_psnr(&color, &image, v.covered.as_ref())?);
     }
     let n = rows.len().max(1) as f64;

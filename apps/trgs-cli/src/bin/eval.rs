@@ -93,6 +93,13 @@ fn main() -> Result<()> {
         model.gaussians.len(),
         model.planes.len()
     );
+    if let Some(h) = &e.right_half {
+        println!(
+            "right halves (the exposure protocol): PSNR {:.2} dB as rendered, {:.2} dB through \
+             the exposure fitted on each left half",
+            h.psnr, h.psnr_exposure_fitted
+        );
+    }
     let truth = compare_with_truth(&subject, &model.planes, &data, &data_dir)?;
     if let Some(t) = &truth {
         println!("against the ground truth: {t}");
@@ -104,6 +111,7 @@ fn main() -> Result<()> {
         "psnr": e.psnr,
         "ssim": e.ssim,
         "views": e.views.iter().map(|(n, p, s)| serde_json::json!({"name": n, "psnr": p, "ssim": s})).collect::<Vec<_>>(),
+        "right_half": e.right_half,
         "gaussians": model.gaussians.len(),
         "planes": model.planes.len(),
         "render_fps": fps,

@@ -45,6 +45,10 @@ pub enum MetricsError {
     Empty { width: u32, height: u32, channels: u32 },
     #[error("image {width}x{height} is smaller than the {window}x{window} SSIM window")]
     TooSmall { width: u32, height: u32, window: usize },
+    #[error("the coverage mask is {width}x{height}, the images {image_width}x{image_height}")]
+    CoverageSize { width: u32, height: u32, image_width: u32, image_height: u32 },
+    #[error("no pixel is covered: nothing to score")]
+    NothingCovered,
 }
 
 /// How [`gaussian_filter`] treats samples outside the image.
@@ -85,6 +89,65 @@ pub fn mse(a: &Image<f32>, b: &Image<f32>) -> Result<f64, MetricsError> {
 pub fn ssim(a: &Image<f32>, b: &Image<f32>) -> Result<f64, MetricsError> {
     let map = ssim_map(a, b, Border::Zero)?;
     Ok(map.data.iter().sum::<f64>() / map.data.len() as f64)
+}
+
+/// [`psnr`] over the pixels `covered` marks (nonzero; every pixel when None): a photo
+/// undistorted into a pinhole view has corners no source pixel reaches, and counted as matches
+/// they would raise the score by their share of the image.
+pub fn psnr_covered(
+    a: &Image<f32>,
+    b: &Image<f32>,
+    covered: Option<&Image<u8>>,
+) -> Result<f64, MetricsError> {
+    let Some(covered) = covered else { return psnr(a, b) };
+    check_pair(a, b)?;
+    let squared: Vec<f64> =
+        a.data.iter().zip(&b.data).map(|(&x, &y)| (f64::from(x) - f64::from(y)).powi(2)).collect();
+    let mse = mean_over_covered(&squared, a, covered)?;
+    Ok(if mse == 0.0 { f64::INFINITY } else { 10.0 * (1.0 / mse).log10() })
+}
+
+/// [`ssim`]'s map averaged over the pixels `covered` marks (every pixel when None).
+pub fn ssim_covered(
+    a: &Image<f32>,
+    b: &Image<f32>,
+    covered: Option<&Image<u8>>,
+) -> Result<f64, MetricsError> {
+    let Some(covered) = covered else { return ssim(a, b) };
+    let map = ssim_map(a, b, Border::Zero)?;
+    mean_over_covered(&map.data, a, covered)
+}
+
+/// The mean of `samples` (laid out as `image`'s) over the pixels `covered` marks.
+fn mean_over_covered(
+    samples: &[f64],
+    image: &Image<f32>,
+    covered: &Image<u8>,
+) -> Result<f64, MetricsError> {
+    let keep = covered_pixels(image, covered)?;
+    let ch = image.channels.max(1) as usize;
+    let kept: Vec<f64> =
+        samples.iter().enumerate().filter(|(i, _)| keep[i / ch]).map(|(_, v)| *v).collect();
+    Ok(kept.iter().sum::<f64>() / kept.len() as f64)
+}
+
+/// Per pixel of `image`, whether `covered` marks it; an error when the sizes differ or nothing
+/// is covered.
+fn covered_pixels(image: &Image<f32>, covered: &Image<u8>) -> Result<Vec<bool>, MetricsError> {
+    if (covered.width, covered.height) != (image.width, image.height) {
+        return Err(MetricsError::CoverageSize {
+            width: covered.width,
+            height: covered.height,
+            image_width: image.width,
+            image_height: image.height,
+        });
+    }
+    let cc = covered.channels.max(1) as usize;
+    let keep: Vec<bool> = covered.data.chunks(cc).map(|c| c[0] != 0).collect();
+    if !keep.iter().any(|&k| k) {
+        return Err(MetricsError::NothingCovered);
+    }
+    Ok(keep)
 }
 
 /// SSIM with scikit-image's conventions (reflect border, 5-pixel crop, mean of per-channel means).
