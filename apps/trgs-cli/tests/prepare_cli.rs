@@ -54,7 +54,15 @@ fn the_built_in_scenes_photos_become_a_scene_folder() {
     assert!(said.contains(&format!("of {given} images registered")), "{said}");
     // A second prepare into the same folder is refused rather than mixed with the first.
     let again = prepare(&photos, &scene, &[]);
-    assert!(!again.status.success() && text(&again).contains("already holds"), "{}", text(&again));
+    let said = text(&again);
+    assert!(!again.status.success() && said.contains("already a scene folder"), "{said}");
+    // So is a folder of someone else's images/, and photos where prepare writes.
+    let foreign = dir.join("foreign");
+    std::fs::create_dir_all(foreign.join("images")).expect("folder");
+    let refused = prepare(&photos, &foreign, &[]);
+    assert!(text(&refused).contains("that prepare did not write"), "{}", text(&refused));
+    let inside = prepare(&photos, &dir.join("demo"), &[]);
+    assert!(text(&inside).contains("which prepare writes"), "{}", text(&inside));
 }
 
 #[test]
@@ -76,7 +84,70 @@ fn photos_that_share_nothing_and_a_missing_colmap_are_named() {
     let refused = prepare(&photos, &dir.join("b"), &[]);
     assert!(!refused.status.success());
     let said = text(&refused);
-    assert!(said.contains("registered none of the 3 images") || said.contains("only"), "{said}");
+    assert!(
+        said.contains("registered none of the 3 images") || said.contains("registered only"),
+        "{said}"
+    );
+}
+
+/// Write `script` to `path` as an executable (a stand-in for `colmap`).
+#[cfg(unix)]
+fn write_executable(path: &Path, script: &str) {
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::write(path, script).expect("wrapper");
+    std::fs::set_permissions(path, std::fs::Permissions::from_mode(0o755)).expect("chmod");
+}
+
+/// A `colmap` wrapper at `dir/colmap-logged` that appends each command it runs (not the help
+/// queries) to `dir/calls`, and whose mapper fails while `dir/fail-mapping` exists.
+#[cfg(unix)]
+fn logged_colmap(dir: &Path) -> String {
+    let wrapper = dir.join("colmap-logged");
+    let (calls, fail) = (dir.join("calls"), dir.join("fail-mapping"));
+    let script = format!(
+        "#!/bin/sh\n\
+         if [ \"$2\" != -h ]; then echo \"$1\" >> '{}'; fi\n\
+         if [ \"$1\" = mapper ] && [ \"$2\" != -h ] && [ -e '{}' ]; then\n\
+         \x20 echo 'No good initial image pair found.'; exit 1\n\
+         fi\n\
+         exec colmap \"$@\"\n",
+        calls.display(),
+        fail.display()
+    );
+    write_executable(&wrapper, &script);
+    wrapper.to_str().expect("a UTF-8 scratch path").to_string()
+}
+
+/// A prepare whose mapping failed is run again into the same folder with another --matching:
+/// the photos and features of the first run are kept, only the matching and mapping run again.
+#[cfg(unix)]
+#[test]
+fn a_failed_prepare_is_resumed_without_extracting_features_again() {
+    let dir = ScratchDir::new("prepare-cli-resume");
+    let demo = RunConfig::default().demo_config();
+    trgs_synthetic::write_generated(&demo, &dir.join("demo")).expect("the built-in scene");
+    let colmap = logged_colmap(&dir);
+    let (photos, scene) = (dir.join("demo").join("images"), dir.join("scene"));
+    std::fs::write(dir.join("fail-mapping"), b"").expect("flag");
+    let failed = prepare(&photos, &scene, &["--every", "2", "--colmap", &colmap]);
+    let said = text(&failed);
+    assert!(!failed.status.success(), "{said}");
+    assert!(said.contains("a rerun into the same --out keeps the photos and features"), "{said}");
+    assert!(scene.join("colmap").join("mapper.log").is_file(), "COLMAP's output is kept");
+    std::fs::remove_file(dir.join("fail-mapping")).expect("flag");
+    let args = ["--every", "2", "--colmap", &colmap, "--matching", "sequential"];
+    let resumed = prepare(&photos, &scene, &args);
+    let said = text(&resumed);
+    assert!(resumed.status.success(), "{said}");
+    assert!(said.contains("resuming the unfinished prepare"), "{said}");
+    assert!(said.contains("photos: written by the earlier run"), "{said}");
+    assert!(said.contains("feature extraction done by the earlier run"), "{said}");
+    assert!(said.contains("sequential matching done ("), "{said}");
+    let calls = std::fs::read_to_string(dir.join("calls")).expect("calls");
+    let count = |c: &str| calls.lines().filter(|l| *l == c).count();
+    assert_eq!(count("feature_extractor"), 1, "{calls}");
+    assert_eq!((count("exhaustive_matcher"), count("sequential_matcher")), (1, 1), "{calls}");
+    SceneFolder::open(&scene).expect("trgs opens the scene folder");
 }
 
 /// A capture whose mapping can only start from a pair seen at 2° or less (a video that only
@@ -86,12 +157,11 @@ fn photos_that_share_nothing_and_a_missing_colmap_are_named() {
 #[cfg(unix)]
 #[test]
 fn a_mapping_that_starts_only_from_a_small_angle_is_found() {
-    use std::os::unix::fs::PermissionsExt;
     let dir = ScratchDir::new("prepare-cli-small-angle");
     let demo = RunConfig::default().demo_config();
     trgs_synthetic::write_generated(&demo, &dir.join("demo")).expect("the built-in scene");
     let wrapper = dir.join("colmap-pans");
-    std::fs::write(
+    write_executable(
         &wrapper,
         "#!/bin/sh\n\
          if [ \"$1\" = mapper ] && [ \"$2\" != -h ]; then\n\
@@ -101,9 +171,7 @@ fn a_mapping_that_starts_only_from_a_small_angle_is_found() {
          \x20 esac\n\
          fi\n\
          exec colmap \"$@\"\n",
-    )
-    .expect("wrapper");
-    std::fs::set_permissions(&wrapper, std::fs::Permissions::from_mode(0o755)).expect("chmod");
+    );
     let scene = dir.join("scene");
     let photos = dir.join("demo").join("images");
     let wrapper = wrapper.to_str().expect("a UTF-8 scratch path");

@@ -9,7 +9,9 @@ use trgs_cli::prepare::{Matching, PrepareOptions, prepare};
 /// the largest model kept as sparse/0, the photos checked and turned upright into images/.
 ///
 /// Photos taken around a room or an object: the default exhaustive matching. A video's frames
-/// (named in order): --matching sequential, with --every to thin them.
+/// (named in order, numbers zero-padded): --matching sequential, with --every to thin them.
+/// A run that failed or was stopped is picked up by running it again with the same --out: the
+/// photos and features are kept unless the flags they depend on changed.
 #[derive(Debug, Parser)]
 #[command(name = "prepare", version, after_help = "Then: train --data OUT")]
 struct Args {
@@ -28,10 +30,16 @@ struct Args {
     /// each (trgs undistorts SIMPLE_RADIAL, RADIAL, OPENCV, the fisheye models and the pinholes)
     #[arg(long, value_name = "MODEL", default_value = "SIMPLE_RADIAL")]
     camera_model: String,
-    /// Keep the first focal length estimate: a capture that only pans (a video along a facade)
-    /// has too little parallax for COLMAP to refine it
+    /// Keep the focal length COLMAP starts from, unrefined: the photos' EXIF focal length, or
+    /// without EXIF (a video's frames) COLMAP's guess of 1.2 x the larger image side, wrong for
+    /// most lenses. Only for a capture that only pans (a video along a facade), whose parallax
+    /// is too small to refine it, and only once mapping without it has failed
     #[arg(long)]
     fix_focal: bool,
+    /// When COLMAP splits the images into several models, keep the largest alone (without it,
+    /// a split is an error that says how the images split)
+    #[arg(long)]
+    keep_largest: bool,
     /// The COLMAP program
     #[arg(long, value_name = "PATH", default_value = "colmap")]
     colmap: PathBuf,
@@ -49,6 +57,7 @@ fn main() -> Result<()> {
         every: a.every,
         camera_model: a.camera_model,
         fix_focal: a.fix_focal,
+        keep_largest: a.keep_largest,
         colmap: a.colmap,
         threads: a.threads,
     };

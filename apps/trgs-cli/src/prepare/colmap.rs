@@ -23,6 +23,8 @@ pub struct Colmap {
     program: PathBuf,
     version: String,
     threads: i32,
+    /// Where each command's output goes (`<command>.log`, appended), if anywhere.
+    logs: Option<PathBuf>,
 }
 
 impl Colmap {
@@ -45,7 +47,12 @@ impl Colmap {
         if version.is_empty() {
             bail!("{} does not answer `help` as COLMAP does: is it COLMAP?", program.display());
         }
-        Ok(Self { program: program.to_path_buf(), version, threads })
+        Ok(Self { program: program.to_path_buf(), version, threads, logs: None })
+    }
+
+    /// Append each command's output to `<dir>/<command>.log`.
+    pub fn logging_to(self, dir: &Path) -> Self {
+        Self { logs: Some(dir.to_path_buf()), ..self }
     }
 
     /// The version line COLMAP prints.
@@ -112,10 +119,14 @@ impl Colmap {
         ];
         args.extend(options.either(&["Mapper.num_threads"], &self.threads.to_string()));
         if fix_focal {
-            args.extend(options.either(&["Mapper.ba_refine_focal_length"], "0"));
+            args.push(options.required(command, "Mapper.ba_refine_focal_length", "0")?);
         }
         if let Some(angle) = init_angle {
-            args.extend(options.either(&["Mapper.init_min_tri_angle"], &angle.to_string()));
+            args.push(options.required(
+                command,
+                "Mapper.init_min_tri_angle",
+                &angle.to_string(),
+            )?);
         }
         self.run(command, &args)
     }
@@ -130,8 +141,8 @@ impl Colmap {
         Ok(Options(String::from_utf8_lossy(&output.stdout).into_owned()))
     }
 
-    /// Run `command` with `args`; its output goes to the scene's log, and a failure quotes its
-    /// last lines.
+    /// Run `command` with `args`; its output goes to the log (see [`Colmap::logging_to`]), and a
+    /// failure quotes its last lines.
     fn run(&self, command: &str, args: &[(String, String)]) -> Result<()> {
         let mut c = Command::new(&self.program);
         c.arg(command).stdin(Stdio::null());
@@ -140,16 +151,51 @@ impl Colmap {
         }
         // COLMAP's Qt part wants a display it does not use for CPU work.
         c.env("QT_QPA_PLATFORM", "offscreen");
-        let output = c.output().with_context(|| format!("running colmap {command}"))?;
-        if !output.status.success() {
+        let Some(dir) = &self.logs else {
+            let output = c.output().with_context(|| format!("running colmap {command}"))?;
             let text = [output.stdout, output.stderr].concat();
-            let text = String::from_utf8_lossy(&text);
-            let tail: Vec<&str> = text.lines().rev().take(12).collect();
-            let tail: Vec<&str> = tail.into_iter().rev().collect();
-            bail!("colmap {command} failed ({}):\n{}", output.status, tail.join("\n"));
-        }
-        Ok(())
+            return check(command, output.status, &String::from_utf8_lossy(&text), None);
+        };
+        // Straight into the log as it comes: a stage stopped or hung halfway has its output there.
+        let log = dir.join(format!("{command}.log"));
+        let open = || {
+            std::fs::OpenOptions::new()
+                .create(true)
+                .append(true)
+                .open(&log)
+                .with_context(|| format!("opening {}", log.display()))
+        };
+        let mut file = open()?;
+        let args: Vec<String> = args.iter().map(|(k, v)| format!("--{k} {v}")).collect();
+        let head = format!("\n$ colmap {command} {}\n", args.join(" "));
+        std::io::Write::write_all(&mut file, head.as_bytes())
+            .with_context(|| format!("writing {}", log.display()))?;
+        let start = file.metadata().map(|m| m.len()).unwrap_or(0);
+        let status = c
+            .stdout(Stdio::from(open()?))
+            .stderr(Stdio::from(open()?))
+            .status()
+            .with_context(|| format!("running colmap {command}"))?;
+        let text = std::fs::read(&log).with_context(|| format!("reading {}", log.display()))?;
+        let this_run = text.get(start as usize..).unwrap_or_default();
+        check(command, status, &String::from_utf8_lossy(this_run), Some(&log))
     }
+}
+
+/// A failed command is an error quoting the last lines of its output (all of it in `log`).
+fn check(
+    command: &str,
+    status: std::process::ExitStatus,
+    output: &str,
+    log: Option<&Path>,
+) -> Result<()> {
+    if status.success() {
+        return Ok(());
+    }
+    let tail: Vec<&str> = output.lines().rev().take(12).collect();
+    let tail: Vec<&str> = tail.into_iter().rev().collect();
+    let whole = log.map(|l| format!(", all of its output in {}", l.display())).unwrap_or_default();
+    bail!("colmap {command} failed ({status}{whole}):\n{}", tail.join("\n"))
 }
 
 /// The help text of one COLMAP command.
@@ -163,6 +209,18 @@ impl Options {
             .iter()
             .find(|n| self.0.contains(&format!("--{n} ")))
             .map(|n| (n.to_string(), value.to_string()))
+    }
+
+    /// `(name, value)` for an option the user asked for: an error when this version of
+    /// `command` does not list it, rather than a run without it.
+    fn required(&self, command: &str, name: &str, value: &str) -> Result<(String, String)> {
+        match self.either(&[name], value) {
+            Some(option) => Ok(option),
+            None => bail!(
+                "this COLMAP's {command} does not list --{name}, which this run needs (every \
+                 COLMAP 3 release does: is --colmap a COLMAP?)"
+            ),
+        }
     }
 }
 
@@ -189,5 +247,7 @@ mod tests {
         assert_eq!(old.either(&names, "0"), Some(("SiftExtraction.use_gpu".into(), "0".into())));
         assert_eq!(new.either(&names, "0").map(|o| o.0), Some("FeatureExtraction.use_gpu".into()));
         assert_eq!(Options(String::new()).either(&names, "0"), None);
+        let err = Options(String::new()).required("mapper", "Mapper.init_min_tri_angle", "2");
+        assert!(err.expect_err("not listed").to_string().contains("--Mapper.init_min_tri_angle"));
     }
 }

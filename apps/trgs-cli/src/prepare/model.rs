@@ -1,7 +1,8 @@
 //! The model a scene keeps: COLMAP's mapper makes one model per group of images it could join
 //! (`0/`, `1/`, ...); the largest is the scene, written as `sparse/0/` in COLMAP's binary
-//! layout. Fewer than half of the images in it is an error that says what to try; the images
-//! in the other models are named in a note, as they are not trained on.
+//! layout. Fewer than half of the images in it is an error that says what to try; so is a split
+//! into several models, unless the user keeps the largest alone (`--keep-largest`): the other
+//! models' images would silently not be trained on.
 use anyhow::{Context, Result, bail};
 use std::path::Path;
 use trgs_core::io::ColmapModel;
@@ -41,9 +42,53 @@ impl Kept {
     }
 }
 
-/// Keep the largest model under `models` as `target` (binary); `images` is how many images
-/// COLMAP was given.
-pub fn keep_largest(models: &Path, target: &Path, images: usize) -> Result<Kept> {
+/// The largest model COLMAP made, checked, and what was left out.
+#[derive(Debug)]
+pub struct Picked {
+    model: ColmapModel,
+    pub kept: Kept,
+}
+
+impl Picked {
+    /// An error when COLMAP split the images into several models: it says how, and what to try.
+    pub fn refuse_split(&self) -> Result<()> {
+        let k = &self.kept;
+        if k.dropped.is_empty() {
+            return Ok(());
+        }
+        let sizes: Vec<String> = k.dropped.iter().map(usize::to_string).collect();
+        bail!(
+            "COLMAP split the images into {} models: the largest holds {} of the {} images, the \
+             others {} (their images would not be trained on). Try --matching exhaustive (photos) \
+             or a smaller --every (a video) to join them, or pass --keep-largest to keep the \
+             largest alone",
+            k.dropped.len() + 1,
+            k.registered,
+            k.images,
+            sizes.join(", ")
+        );
+    }
+
+    /// Write the model as `target` (binary): beside its place, then renamed into it, so that a
+    /// scene folder holds all three files or none. Its parent must exist or be creatable.
+    pub fn write(self, target: &Path) -> Result<Kept> {
+        let partial = target.with_extension("partial");
+        if partial.exists() {
+            std::fs::remove_dir_all(&partial)
+                .with_context(|| format!("removing {}", partial.display()))?;
+        }
+        std::fs::create_dir_all(&partial)
+            .with_context(|| format!("creating {}", partial.display()))?;
+        self.model.write_binary(&partial)?;
+        std::fs::rename(&partial, target)
+            .with_context(|| format!("renaming {} to {}", partial.display(), target.display()))?;
+        Ok(self.kept)
+    }
+}
+
+/// The largest model under `models` (one folder per model); `images` is how many images COLMAP
+/// was given. Fewer than half of them in it is an error that says what to try.
+pub fn pick_largest(models: &Path, images: usize) -> Result<Picked> {
     let mut found: Vec<ColmapModel> = Vec::new();
     let entries =
         std::fs::read_dir(models).with_context(|| format!("listing {}", models.display()))?;
@@ -54,24 +99,25 @@ pub fn keep_largest(models: &Path, target: &Path, images: usize) -> Result<Kept>
         }
     }
     found.sort_by_key(|m| std::cmp::Reverse(m.images.len()));
-    let Some(largest) = found.first() else {
+    if found.is_empty() {
         bail!(
             "COLMAP registered none of the {images} images (no model): the images may not \
              overlap enough, or be too blurred or alike; for a video try --matching sequential \
              and a smaller --every, for photos more overlap between neighbouring shots"
         );
-    };
+    }
+    let largest = found.remove(0);
     let kept = Kept {
         images,
         registered: largest.images.len(),
         points: largest.points.len(),
-        dropped: found[1..].iter().map(|m| m.images.len()).collect(),
+        dropped: found.iter().map(|m| m.images.len()).collect(),
     };
     if 2 * kept.registered < images {
         let split = if kept.dropped.is_empty() {
             String::new()
         } else {
-            format!(" (it split them into {} models)", found.len())
+            format!(" (it split them into {} models)", kept.dropped.len() + 1)
         };
         bail!(
             "COLMAP registered only {} of the {images} images in its largest model{split}: \
@@ -81,7 +127,69 @@ pub fn keep_largest(models: &Path, target: &Path, images: usize) -> Result<Kept>
             kept.registered
         );
     }
-    std::fs::create_dir_all(target).with_context(|| format!("creating {}", target.display()))?;
-    largest.write_binary(target)?;
-    Ok(kept)
+    Ok(Picked { model: largest, kept })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use trgs_core::io::{ColmapCamera, ColmapImage};
+    use trgs_core::scratch::ScratchDir;
+
+    /// A model of `n` images (names `prefix_i.jpg`) and no points, in `dir`.
+    fn model(dir: &Path, prefix: &str, n: u32) {
+        let camera = ColmapCamera {
+            id: 1,
+            model: "PINHOLE".into(),
+            width: 64,
+            height: 48,
+            params: vec![50.0, 50.0, 32.0, 24.0],
+        };
+        let images = (1..=n)
+            .map(|id| ColmapImage {
+                id,
+                qvec: [1.0, 0.0, 0.0, 0.0],
+                tvec: [0.0, 0.0, f64::from(id)],
+                camera_id: 1,
+                name: format!("{prefix}_{id}.jpg"),
+                points2d: Vec::new(),
+            })
+            .collect();
+        let m = ColmapModel { cameras: vec![camera], images, points: Vec::new() };
+        std::fs::create_dir_all(dir).expect("folder");
+        m.write_binary(dir).expect("model");
+    }
+
+    #[test]
+    fn the_largest_model_is_kept_and_a_split_is_named() {
+        let dir = ScratchDir::new("prepare-models");
+        let models = dir.join("sparse");
+        model(&models.join("0"), "a", 3);
+        model(&models.join("1"), "b", 7);
+        let picked = pick_largest(&models, 12).expect("7 of 12");
+        assert_eq!((picked.kept.registered, picked.kept.dropped.clone()), (7, vec![3]));
+        let split = picked.refuse_split().expect_err("a split").to_string();
+        assert!(split.contains("into 2 models") && split.contains("--keep-largest"), "{split}");
+        let target = dir.join("scene").join("0");
+        std::fs::create_dir_all(dir.join("scene")).expect("folder");
+        let kept = picked.write(&target).expect("written");
+        assert_eq!(kept.registered, 7);
+        let written = ColmapModel::read(&target).expect("sparse/0");
+        assert!(written.images.iter().all(|i| i.name.starts_with("b_")));
+        assert!(!target.with_extension("partial").exists(), "renamed into place");
+    }
+
+    #[test]
+    fn fewer_than_half_or_no_model_is_an_error_that_says_what_to_try() {
+        let dir = ScratchDir::new("prepare-models-few");
+        let models = dir.join("sparse");
+        std::fs::create_dir_all(&models).expect("folder");
+        let none = pick_largest(&models, 5).expect_err("no model").to_string();
+        assert!(none.contains("registered none of the 5 images"), "{none}");
+        model(&models.join("0"), "a", 2);
+        let few = pick_largest(&models, 5).expect_err("2 of 5").to_string();
+        assert!(few.contains("registered only 2 of the 5") && few.contains("--matching"), "{few}");
+        let whole = pick_largest(&models, 2).expect("2 of 2");
+        assert!(whole.refuse_split().is_ok());
+    }
 }
