@@ -188,7 +188,7 @@ pub fn prepare(options: &PrepareOptions, say: &mut dyn FnMut(String)) -> Result<
         });
         // The mapper fails when it finds no pair to start from: that is no model, said as such.
         // A failed mapping keeps nothing, whatever models it left.
-        let picked = model::pick_largest(&models, copied);
+        let picked = model::pick_largest(&models, copied, options.matching);
         match (mapped, picked) {
             (Err(e), Err(none)) => Err(e.context(none.to_string())),
             (Err(e), Ok(_)) => Err(e),

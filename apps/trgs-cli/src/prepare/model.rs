@@ -3,6 +3,7 @@
 //! layout. Fewer than half of the images in it is an error that says what to try; so is a split
 //! into several models, unless the user keeps the largest alone (`--keep-largest`): the other
 //! models' images would silently not be trained on.
+use super::Matching;
 use anyhow::{Context, Result, bail};
 use std::path::Path;
 use trgs_core::io::ColmapModel;
@@ -86,9 +87,25 @@ impl Picked {
     }
 }
 
+/// What to try when too few images register, after matching by `matching`: never the matching
+/// the run already used.
+fn what_to_try(matching: Matching) -> &'static str {
+    match matching {
+        Matching::Exhaustive => {
+            "for a video try --matching sequential and a smaller --every; for photos, more \
+             overlap between neighbouring shots"
+        }
+        Matching::Sequential => {
+            "try a smaller --every, --matching exhaustive for photos taken in no order, or \
+             retake with more overlap between neighbouring shots"
+        }
+    }
+}
+
 /// The largest model under `models` (one folder per model); `images` is how many images COLMAP
-/// was given. Fewer than half of them in it is an error that says what to try.
-pub fn pick_largest(models: &Path, images: usize) -> Result<Picked> {
+/// was given, matched by `matching`. Fewer than half of them in it is an error that says what to
+/// try.
+pub fn pick_largest(models: &Path, images: usize, matching: Matching) -> Result<Picked> {
     let mut found: Vec<ColmapModel> = Vec::new();
     let entries =
         std::fs::read_dir(models).with_context(|| format!("listing {}", models.display()))?;
@@ -102,8 +119,8 @@ pub fn pick_largest(models: &Path, images: usize) -> Result<Picked> {
     if found.is_empty() {
         bail!(
             "COLMAP registered none of the {images} images (no model): the images may not \
-             overlap enough, or be too blurred or alike; for a video try --matching sequential \
-             and a smaller --every, for photos more overlap between neighbouring shots"
+             overlap enough, or be too blurred or alike; {}",
+            what_to_try(matching)
         );
     }
     let largest = found.remove(0);
@@ -121,10 +138,9 @@ pub fn pick_largest(models: &Path, images: usize) -> Result<Picked> {
         };
         bail!(
             "COLMAP registered only {} of the {images} images in its largest model{split}: \
-             fewer than half. Try --matching exhaustive for photos taken in no order, \
-             --matching sequential with a smaller --every for a video, --fix-focal for a \
-             capture that only pans; or retake with more overlap between neighbouring shots",
-            kept.registered
+             fewer than half; {}, or --fix-focal for a capture that only pans",
+            kept.registered,
+            what_to_try(matching)
         );
     }
     Ok(Picked { model: largest, kept })
@@ -166,7 +182,7 @@ mod tests {
         let models = dir.join("sparse");
         model(&models.join("0"), "a", 3);
         model(&models.join("1"), "b", 7);
-        let picked = pick_largest(&models, 12).expect("7 of 12");
+        let picked = pick_largest(&models, 12, Matching::Exhaustive).expect("7 of 12");
         assert_eq!((picked.kept.registered, picked.kept.dropped.clone()), (7, vec![3]));
         let split = picked.refuse_split().expect_err("a split").to_string();
         assert!(split.contains("into 2 models") && split.contains("--keep-largest"), "{split}");
@@ -184,12 +200,16 @@ mod tests {
         let dir = ScratchDir::new("prepare-models-few");
         let models = dir.join("sparse");
         std::fs::create_dir_all(&models).expect("folder");
-        let none = pick_largest(&models, 5).expect_err("no model").to_string();
+        let none = pick_largest(&models, 5, Matching::Exhaustive).expect_err("none").to_string();
         assert!(none.contains("registered none of the 5 images"), "{none}");
+        assert!(none.contains("--matching sequential"), "{none}");
         model(&models.join("0"), "a", 2);
-        let few = pick_largest(&models, 5).expect_err("2 of 5").to_string();
-        assert!(few.contains("registered only 2 of the 5") && few.contains("--matching"), "{few}");
-        let whole = pick_largest(&models, 2).expect("2 of 2");
+        let few = pick_largest(&models, 5, Matching::Sequential).expect_err("2 of 5").to_string();
+        assert!(few.contains("registered only 2 of the 5"), "{few}");
+        // A sequential run is not told to match sequentially.
+        assert!(few.contains("--matching exhaustive") && few.contains("--every"), "{few}");
+        assert!(!few.contains("--matching sequential"), "{few}");
+        let whole = pick_largest(&models, 2, Matching::Exhaustive).expect("2 of 2");
         assert!(whole.refuse_split().is_ok());
     }
 }
