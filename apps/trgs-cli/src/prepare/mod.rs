@@ -88,22 +88,7 @@ pub fn prepare(options: &PrepareOptions, say: &mut dyn FnMut(String)) -> Result<
             options.input.display()
         );
     }
-    let mut progress = match Progress::load(&work)? {
-        Some(p) => {
-            say(format!(
-                "{}: resuming the unfinished prepare there (stages whose flags did not change \
-                 are kept)",
-                out.display()
-            ));
-            p
-        }
-        None if images.exists() || out.join("sparse").exists() || work.exists() => bail!(
-            "{} already holds images/, sparse/ or colmap/ that prepare did not write: choose \
-             another --out or remove them",
-            out.display()
-        ),
-        None => Progress::start(&work)?,
-    };
+    let mut progress = open_progress(out, &work, &images, say)?;
     say(format!("colmap: {}", program.version()));
     let t0 = Instant::now();
     say(format!(
@@ -141,17 +126,83 @@ pub fn prepare(options: &PrepareOptions, say: &mut dyn FnMut(String)) -> Result<
             copied - portrait
         ));
     }
+    let database =
+        extract_and_match(options, &program, &mut progress, &photos_key, single_camera, say)?;
+    let picked = map_with_retries(options, &program, &database, copied, say)?;
+    if !options.keep_largest {
+        picked.refuse_split()?;
+    }
+    let kept = picked.write(&target)?;
+    for line in kept.notes() {
+        say(line);
+    }
+    // The matched database stays for COLMAP's own tools; the features-only copy was for reruns.
+    remove_if_present(&work.join("features.db"))?;
+    say(format!(
+        "scene folder {} written ({:.0} s): train --data {}",
+        out.display(),
+        secs(t0),
+        out.display()
+    ));
+    Ok(Prepared {
+        images: copied,
+        registered: kept.registered,
+        points: kept.points,
+        dropped_models: kept.dropped,
+    })
+}
+
+/// The progress of an unfinished run into `out`, or a new one; folders there that no run of
+/// prepare wrote are refused.
+fn open_progress(
+    out: &Path,
+    work: &Path,
+    images: &Path,
+    say: &mut dyn FnMut(String),
+) -> Result<Progress> {
+    Ok(match Progress::load(work)? {
+        Some(p) => {
+            say(format!(
+                "{}: resuming the unfinished prepare there (stages whose flags did not change \
+                 are kept)",
+                out.display()
+            ));
+            p
+        }
+        None if images.exists() || out.join("sparse").exists() || work.exists() => bail!(
+            "{} already holds images/, sparse/ or colmap/ that prepare did not write: choose \
+             another --out or remove them",
+            out.display()
+        ),
+        None => Progress::start(work)?,
+    })
+}
+
+/// Run one COLMAP stage, saying when it starts and how long it took.
+fn stage(name: &str, say: &mut dyn FnMut(String), run: &dyn Fn() -> Result<()>) -> Result<()> {
+    let t = Instant::now();
+    say(format!("colmap: {name} ..."));
+    run()?;
+    say(format!("colmap: {name} done ({:.0} s)", secs(t)));
+    Ok(())
+}
+
+/// Extract features and match them (each stage kept from an earlier run whose inputs were the
+/// same); returns the matched database.
+fn extract_and_match(
+    options: &PrepareOptions,
+    program: &colmap::Colmap,
+    progress: &mut Progress,
+    photos_key: &str,
+    single_camera: bool,
+    say: &mut dyn FnMut(String),
+) -> Result<PathBuf> {
+    let work = options.out.join("colmap");
+    let images = options.out.join("images");
     let features = work.join("features.db");
     let database = work.join("database.db");
-    let stage = |name: &str, say: &mut dyn FnMut(String), run: &dyn Fn() -> Result<()>| {
-        let t = Instant::now();
-        say(format!("colmap: {name} ..."));
-        run()?;
-        say(format!("colmap: {name} done ({:.0} s)", secs(t)));
-        Ok::<(), anyhow::Error>(())
-    };
     let features_key =
-        key(&[&photos_key, &options.camera_model, &format!("single camera {single_camera}")]);
+        key(&[photos_key, &options.camera_model, &format!("single camera {single_camera}")]);
     if progress.is_done("features", &features_key) && features.is_file() {
         say("colmap: feature extraction done by the earlier run".to_string());
     } else {
@@ -177,6 +228,20 @@ pub fn prepare(options: &PrepareOptions, say: &mut dyn FnMut(String)) -> Result<
         stage(matcher, say, &|| program.match_features(&database, options.matching))?;
         progress.record("matching", &matching_key)?;
     }
+    Ok(database)
+}
+
+/// Map from COLMAP's default initial pair, then, for a capture that only pans, from pairs seen
+/// at ever smaller angles; the largest model of the first mapping that registers enough.
+fn map_with_retries(
+    options: &PrepareOptions,
+    program: &colmap::Colmap,
+    database: &Path,
+    copied: usize,
+    say: &mut dyn FnMut(String),
+) -> Result<model::Picked> {
+    let work = options.out.join("colmap");
+    let images = options.out.join("images");
     clear_models(&work)?;
     let map = |init_angle: Option<f64>, say: &mut dyn FnMut(String)| {
         let models = match init_angle {
@@ -184,7 +249,7 @@ pub fn prepare(options: &PrepareOptions, say: &mut dyn FnMut(String)) -> Result<
             Some(angle) => work.join(format!("sparse-from-{angle}deg")),
         };
         let mapped = stage("mapping", say, &|| {
-            program.map(&database, &images, &models, options.fix_focal, init_angle)
+            program.map(database, &images, &models, options.fix_focal, init_angle)
         });
         // The mapper fails when it finds no pair to start from: that is no model, said as such.
         // A failed mapping keeps nothing, whatever models it left.
@@ -209,7 +274,7 @@ pub fn prepare(options: &PrepareOptions, say: &mut dyn FnMut(String)) -> Result<
         said_before = why;
         kept = map(Some(angle), say);
     }
-    let picked = kept.with_context(|| {
+    kept.with_context(|| {
         let angles: Vec<String> =
             colmap::RETRY_INIT_ANGLES.iter().map(|a| format!("{a}°")).collect();
         format!(
@@ -219,27 +284,6 @@ pub fn prepare(options: &PrepareOptions, say: &mut dyn FnMut(String)) -> Result<
             if options.fix_focal { "" } else { "; for a video that only pans try --fix-focal" },
             work.display()
         )
-    })?;
-    if !options.keep_largest {
-        picked.refuse_split()?;
-    }
-    let kept = picked.write(&target)?;
-    for line in kept.notes() {
-        say(line);
-    }
-    // The matched database stays for COLMAP's own tools; the features-only copy was for reruns.
-    remove_if_present(&features)?;
-    say(format!(
-        "scene folder {} written ({:.0} s): train --data {}",
-        out.display(),
-        secs(t0),
-        out.display()
-    ));
-    Ok(Prepared {
-        images: copied,
-        registered: kept.registered,
-        points: kept.points,
-        dropped_models: kept.dropped,
     })
 }
 
