@@ -63,11 +63,12 @@ pub enum Border {
 /// Peak signal-to-noise ratio for data range 1: `10 log10(1 / MSE)` over all samples of all
 /// channels. Identical images have zero error and give `f64::INFINITY`.
 pub fn psnr(a: &Image<f32>, b: &Image<f32>) -> Result<f64, MetricsError> {
-    let mse = mse(a, b)?;
-    if mse == 0.0 {
-        return Ok(f64::INFINITY);
-    }
-    Ok(10.0 * (1.0 / mse).log10())
+    Ok(psnr_of_mse(mse(a, b)?))
+}
+
+/// `10 log10(1 / mse)`, infinite for no error.
+fn psnr_of_mse(mse: f64) -> f64 {
+    if mse == 0.0 { f64::INFINITY } else { 10.0 * (1.0 / mse).log10() }
 }
 
 /// Mean squared difference over all samples, accumulated in f64.
@@ -103,8 +104,7 @@ pub fn psnr_covered(
     check_pair(a, b)?;
     let squared: Vec<f64> =
         a.data.iter().zip(&b.data).map(|(&x, &y)| (f64::from(x) - f64::from(y)).powi(2)).collect();
-    let mse = mean_over_covered(&squared, a, covered)?;
-    Ok(if mse == 0.0 { f64::INFINITY } else { 10.0 * (1.0 / mse).log10() })
+    Ok(psnr_of_mse(mean_over_covered(&squared, a, covered)?))
 }
 
 /// [`ssim`]'s map averaged over the pixels `covered` marks (every pixel when None).
@@ -126,9 +126,12 @@ fn mean_over_covered(
 ) -> Result<f64, MetricsError> {
     let keep = covered_pixels(image, covered)?;
     let ch = image.channels.max(1) as usize;
-    let kept: Vec<f64> =
-        samples.iter().enumerate().filter(|(i, _)| keep[i / ch]).map(|(_, v)| *v).collect();
-    Ok(kept.iter().sum::<f64>() / kept.len() as f64)
+    let (sum, count) = samples
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| keep[i / ch])
+        .fold((0.0, 0usize), |(sum, count), (_, v)| (sum + v, count + 1));
+    Ok(sum / count as f64)
 }
 
 /// Per pixel of `image`, whether `covered` marks it; an error when the sizes differ or nothing
