@@ -1,5 +1,4 @@
-//! 2D convex hull (Andrew's monotone chain) and the minimum-area enclosing rectangle (rotating
-//! calipers).
+//! 2D convex hull (Andrew's monotone chain) and the minimum-area enclosing rectangle.
 use glam::DVec2;
 
 /// The convex hull of `points`, counter-clockwise, starting at the point with the smallest x
@@ -82,10 +81,8 @@ impl OrientedBox {
     }
 }
 
-/// The minimum-area rectangle enclosing `points`, by rotating calipers over the convex hull: the
-/// optimal rectangle has a side collinear with a hull edge, and as the edge advances
-/// counter-clockwise the extreme vertices in the edge direction, its normal and the opposite
-/// direction advance monotonically too, so all edges are scored in linear time.
+/// The minimum-area rectangle enclosing `points`: the optimal rectangle has a side collinear
+/// with an edge of the convex hull, so each hull edge is tried.
 ///
 /// Returns `None` when there is no finite point. Degenerate input is answered with a degenerate
 /// box rather than `None`, so that callers can decide what is too thin: a single distinct point
@@ -104,41 +101,23 @@ pub fn min_area_box(points: &[DVec2]) -> Option<OrientedBox> {
         }
         _ => {}
     }
-    let n = hull.len();
-    let next = |i: usize| (i + 1) % n;
-    // Caliper indices: `right` maximises the projection on the edge direction, `top` the distance
-    // from the edge, `left` minimises the projection. They are only ever advanced.
-    let (mut right, mut top, mut left) = (1usize, 1usize, 1usize);
+    // Every hull edge is scored against every hull vertex: quadratic in the hull's size, which
+    // stays at tens of vertices for the point sets fitted here. Rotating calipers (linear) once
+    // stood here and returned a box leaving vertices outside on a real hull (the test
+    // `min_area_box_of_a_pane_crossings_hull`).
     let mut best: Option<(f64, OrientedBox)> = None;
-    for i in 0..n {
-        let origin = hull[i];
-        let e = (hull[next(i)] - origin).normalize();
+    for (i, &origin) in hull.iter().enumerate() {
+        let e = (hull[(i + 1) % hull.len()] - origin).normalize();
         let nrm = e.perp();
-        let along = |k: usize| (hull[k] - origin).dot(e);
-        let up = |k: usize| (hull[k] - origin).dot(nrm);
-        if i == 0 {
-            right = next(i);
+        let (mut lo, mut hi, mut down, mut up) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+        for &q in &hull {
+            let (a, b) = ((q - origin).dot(e), (q - origin).dot(nrm));
+            (lo, hi, down, up) = (lo.min(a), hi.max(a), down.min(b), up.max(b));
         }
-        while along(next(right)) > along(right) {
-            right = next(right);
-        }
-        if i == 0 {
-            top = right;
-        }
-        while up(next(top)) > up(top) {
-            top = next(top);
-        }
-        if i == 0 {
-            left = top;
-        }
-        while along(next(left)) < along(left) {
-            left = next(left);
-        }
-        let (lo, hi, h) = (along(left), along(right), up(top));
-        let area = (hi - lo) * h;
+        let area = (hi - lo) * (up - down);
         if best.as_ref().is_none_or(|(a, _)| area < *a) {
-            let centre = origin + e * (0.5 * (lo + hi)) + nrm * (0.5 * h);
-            best = Some((area, OrientedBox { centre, axis: e, width: hi - lo, height: h }));
+            let centre = origin + e * (0.5 * (lo + hi)) + nrm * (0.5 * (down + up));
+            best = Some((area, OrientedBox { centre, axis: e, width: hi - lo, height: up - down }));
         }
     }
     let (_, b) = best?;

@@ -4,7 +4,7 @@
 //! The pipeline: the Gaussians in a band around the annotated glass outline are fitted with
 //! [`ransac_plane`] (3-point hypotheses, least-squares refinement), the normal is turned toward
 //! the annotated cameras with [`orient_towards`], the inliers are projected into the plane and
-//! enclosed by the minimum-area box ([`convex_hull`] + rotating calipers in [`min_area_box`]);
+//! enclosed by the minimum-area box ([`convex_hull`], each hull edge tried in [`min_area_box`]);
 //! [`fit_rectangle`] does all but the orientation. [`refine_to_masks`] then moves the rectangle
 //! from the pane's frame onto the glass the masks outline, and [`sample_rectangle`] places the
 //! glass Gaussians uniformly on it.
