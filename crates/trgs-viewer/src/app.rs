@@ -38,6 +38,8 @@ const PLANE_COLOURS: [Color32; 4] = [
     Color32::from_rgb(255, 90, 200),
     Color32::from_rgb(140, 255, 110),
 ];
+/// The outline of a candidate plane the run dropped.
+const DROPPED: Color32 = Color32::from_rgb(150, 150, 150);
 /// Frames rendered before a scripted screenshot or benchmark starts (first-use compilation).
 const WARMUP_FRAMES: u32 = 3;
 
@@ -46,6 +48,8 @@ struct Shown {
     scene: GpuScene,
     planes: Vec<ReflectionPlane>,
     enabled: Vec<bool>,
+    /// Candidate planes the run tried and dropped: outlines only.
+    dropped: Vec<ReflectionPlane>,
     reflection: ReflectionModel,
     cameras: Vec<Camera>,
     extent: Extent,
@@ -165,6 +169,7 @@ impl ViewerApp {
                     scene,
                     planes: model.planes,
                     enabled: vec![true; n],
+                    dropped: model.dropped,
                     reflection: model.reflection,
                     cameras: model.cameras,
                     extent,
@@ -218,6 +223,7 @@ impl ViewerApp {
             planes: snap.planes,
             reflection: snap.reflection,
             cameras: feed.cameras(),
+            dropped: Vec::new(),
             name: "training".into(),
         };
         let Some(s) = &mut self.shown else {
@@ -315,6 +321,12 @@ impl ViewerApp {
                     plane.r0_logit = (r / (1.0 - r)).ln();
                     planes_changed = true;
                 }
+            }
+            if !s.dropped.is_empty() {
+                ui.colored_label(
+                    DROPPED,
+                    format!("{} candidate planes tried and dropped (outlines)", s.dropped.len()),
+                );
             }
             if planes_changed {
                 if let Err(e) = s.scene.set_planes(&s.planes) {
@@ -491,6 +503,11 @@ impl ViewerApp {
                         to_screen(b) - to_screen(a),
                         Stroke::new(2.0, colour),
                     );
+                }
+            }
+            for plane in &s.dropped {
+                for (a, b) in plane_overlay(camera, plane).edges {
+                    painter.line_segment([to_screen(a), to_screen(b)], Stroke::new(1.0, DROPPED));
                 }
             }
         }

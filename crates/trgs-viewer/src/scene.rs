@@ -6,7 +6,7 @@ use glam::DVec3;
 use std::path::{Path, PathBuf};
 use trgs_core::io::{load_model, read_cameras_json};
 use trgs_core::pipeline::ReflectionModel;
-use trgs_core::scene::{Camera, Gaussians, ReflectionPlane};
+use trgs_core::scene::{Camera, Gaussians, Material, ReflectionPlane};
 
 /// A model read from disk.
 #[derive(Debug)]
@@ -17,6 +17,9 @@ pub struct LoadedModel {
     pub reflection: ReflectionModel,
     /// The views of `cameras.json` in the run folder or beside the model file (none without).
     pub cameras: Vec<Camera>,
+    /// The candidate planes a `--planes auto` run tried and dropped (its metrics.json's
+    /// `candidates`), drawn as outlines only.
+    pub dropped: Vec<ReflectionPlane>,
     /// What the title bar says.
     pub name: String,
 }
@@ -34,8 +37,35 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
         planes: model.planes,
         reflection: model.reflection,
         cameras,
+        dropped: dropped_candidates(&folder.join("metrics.json")),
         name,
     })
+}
+
+/// The candidate planes that the run whose metrics are at `path` tried and dropped; none when
+/// the file is missing or holds no candidates (the outline is a help, not the model: an
+/// unreadable record does not stop the viewer).
+pub fn dropped_candidates(path: &Path) -> Vec<ReflectionPlane> {
+    let Ok(text) = std::fs::read_to_string(path) else { return Vec::new() };
+    let Ok(metrics) = serde_json::from_str::<serde_json::Value>(&text) else { return Vec::new() };
+    let Some(records) = metrics.get("candidates").and_then(|c| c.as_array()) else {
+        return Vec::new();
+    };
+    let vec3 = |v: &serde_json::Value| -> Option<DVec3> {
+        let a = v.as_array()?;
+        Some(DVec3::new(a.first()?.as_f64()?, a.get(1)?.as_f64()?, a.get(2)?.as_f64()?))
+    };
+    records
+        .iter()
+        .filter(|r| r["proposed"] == true && r["kept"] == false)
+        .filter_map(|r| {
+            let size = r["size"].as_array()?;
+            let (w, h) = (size.first()?.as_f64()?, size.get(1)?.as_f64()?);
+            let (c, n, t) = (vec3(&r["centre"])?, vec3(&r["normal"])?, vec3(&r["axis"])?);
+            let plane = ReflectionPlane::new(c, n, t, w, h, Material::Glass);
+            plane.validate(0).is_ok().then_some(plane)
+        })
+        .collect()
 }
 
 fn parent(p: &Path) -> PathBuf {
@@ -122,6 +152,23 @@ mod tests {
         let [near, far] = depth_range(&means, &camera);
         assert!((2.0..=4.0).contains(&near) && (97.0..=99.0).contains(&far), "{near} {far}");
         assert_eq!(depth_range(&[], &camera), [0.2, 100.0]);
+    }
+
+    #[test]
+    fn dropped_candidates_come_from_the_metrics() {
+        let dir = trgs_core::scratch::ScratchDir::new("viewer-dropped");
+        let path = dir.join("metrics.json");
+        let record = |proposed: bool, kept: bool| {
+            serde_json::json!({"proposed": proposed, "kept": kept, "centre": [0.0, 1.0, 0.0],
+                "normal": [0.0, 0.0, 1.0], "axis": [1.0, 0.0, 0.0], "size": [2.0, 1.0]})
+        };
+        let metrics = serde_json::json!({"candidates":
+            [record(true, false), record(true, true), record(false, false)]});
+        std::fs::write(&path, metrics.to_string()).expect("write");
+        let dropped = dropped_candidates(&path);
+        assert_eq!(dropped.len(), 1, "only the one tried and dropped");
+        assert_eq!((dropped[0].width, dropped[0].height), (2.0, 1.0));
+        assert!(dropped_candidates(&dir.join("none.json")).is_empty());
     }
 
     #[test]

@@ -10,12 +10,18 @@
 //! glass Gaussians uniformly on it.
 mod exposure;
 mod hull;
+mod propose;
 mod ransac;
 mod rectangle;
+mod see_through;
 mod silhouette;
+mod structures;
 
 pub use exposure::fit_exposure;
 pub use hull::{OrientedBox, convex_hull, min_area_box};
+pub use propose::{PlaneCandidate, Proposal, ProposalSettings, depth_scale, propose_planes};
 pub use ransac::{PlaneFit, orient_towards, ransac_plane, symmetric_eigen};
 pub use rectangle::{RectangleFit, fit_rectangle, sample_rectangle};
+pub use see_through::{SeeThrough, see_through};
 pub use silhouette::{SilhouetteFit, SilhouetteSettings, refine_to_masks};
+pub use structures::{Structure, StructureSettings, find_structures, inside_convex};

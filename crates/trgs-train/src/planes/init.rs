@@ -207,7 +207,7 @@ pub fn initialise_planes(
 }
 
 /// Glass Gaussians on `plane`: flat discs of about the sample spacing, thin along the normal.
-fn append_glass(
+pub fn append_glass(
     glass: &mut Gaussians<f32>,
     plane: &ReflectionPlane,
     settings: &PlaneInitSettings,

@@ -89,9 +89,17 @@ pub struct RunConfig {
     /// The most Gaussians of --densify mcmc [default: 300000]
     #[arg(long, value_name = "N")]
     pub cap: Option<usize>,
-    /// Ignore the glass masks: plain 3DGS (the baseline of the comparisons)
+    /// Ignore the glass masks: plain 3DGS (the baseline of the comparisons); the same as
+    /// `--planes none`
     #[arg(long)]
     pub no_planes: bool,
+    /// Where the reflection planes come from: `masks` fits them to glass_masks/ (the paper's
+    /// annotation), `auto` proposes them from the scene after stage 1 and keeps those that
+    /// pay (masks ignored), `none` trains plain 3DGS [default: masks when the scene folder has
+    /// glass_masks/, none otherwise]
+    #[arg(long, value_enum, value_name = "SOURCE", conflicts_with = "no_planes")]
+    #[serde(default)]
+    pub planes: Option<PlaneSource>,
     /// Do not mirror what stage 1 learnt behind each plane to its front at plane
     /// initialisation (`trgs_train::reflection_seed`): the reflection layer then starts empty
     #[arg(long, conflicts_with = "no_planes")]
@@ -240,6 +248,18 @@ impl DemoScene {
             Self::NoGlass => window.without_glass(),
         }
     }
+}
+
+/// Where a run's reflection planes come from (`--planes`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PlaneSource {
+    /// Proposed from the scene after stage 1, each kept only if it pays
+    Auto,
+    /// Fitted to the glass masks after stage 1
+    Masks,
+    /// No planes: plain 3DGS
+    None,
 }
 
 /// The lens of the built-in scene's photos (`--demo-camera`).
@@ -395,10 +415,11 @@ impl RunConfig {
         if self.cap == Some(0) {
             bail!("--cap 0: MCMC keeps at most --cap Gaussians, so it must be at least 1");
         }
-        if self.no_planes && !self.ablations.names().is_empty() {
+        let plain = self.no_planes || self.planes == Some(PlaneSource::None);
+        if plain && !self.ablations.names().is_empty() {
             bail!(
-                "--no-planes trains plain 3DGS, which has none of TR-Gaussians' components to \
-                 switch off: drop the ablation flags ({})",
+                "--no-planes (--planes none) trains plain 3DGS, which has none of TR-Gaussians' \
+                 components to switch off: drop the ablation flags ({})",
                 self.ablations.names().join(", ")
             );
         }
@@ -412,6 +433,14 @@ impl RunConfig {
             self.iterations =
                 if self.data.is_some() { CAPTURE_ITERATIONS } else { DEMO_ITERATIONS };
         }
+    }
+
+    /// Where the planes come from for a dataset with (`has_masks`) or without glass masks.
+    pub fn plane_source(&self, has_masks: bool) -> PlaneSource {
+        if self.no_planes {
+            return PlaneSource::None;
+        }
+        self.planes.unwrap_or(if has_masks { PlaneSource::Masks } else { PlaneSource::None })
     }
 
     /// The training resolution.

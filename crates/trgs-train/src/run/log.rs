@@ -1,6 +1,7 @@
 //! The run's JSONL log: one line per step and one per evaluation, appended as the run goes and
 //! cut back to the checkpoint's step when a run resumes (so that every step is logged once).
 use super::StepEvent;
+use super::candidates::CandidateRecord;
 use crate::eval::Evaluation;
 use anyhow::{Context, Result};
 use std::io::Write as _;
@@ -63,6 +64,12 @@ impl RunLog {
     /// One evaluation's line.
     pub fn evaluation(&mut self, e: &Evaluation) -> Result<()> {
         self.line(&serde_json::json!({"eval": e}))
+    }
+
+    /// The candidate planes of `--planes auto` as they stand after step `step` (proposed, then
+    /// decided).
+    pub fn candidates(&mut self, step: u32, records: &[CandidateRecord]) -> Result<()> {
+        self.line(&serde_json::json!({"step": step, "candidates": records}))
     }
 
     fn line(&mut self, v: &serde_json::Value) -> Result<()> {

@@ -25,6 +25,7 @@
 //! assert_eq!((run.trainer().planes().len(), image.width), (1, 64));
 //! # Ok::<(), anyhow::Error>(())
 //! ```
+mod candidates;
 pub mod checkpoint;
 mod config;
 mod events;
@@ -32,13 +33,15 @@ mod folder;
 mod log;
 mod options;
 mod outputs;
+mod plane_trial;
 mod scene;
 mod state;
 mod steps;
 
+pub use candidates::{CandidateRecord, PlaneTrial};
 pub use config::{
     Ablations, CAPTURE_ITERATIONS, DEFAULT_MCMC_CAP, DEMO_ITERATIONS, DemoScene, DensifyMode,
-    ExposureMode, RunConfig, parse_image_size, parse_positive, upgrade_config_record,
+    ExposureMode, PlaneSource, RunConfig, parse_image_size, parse_positive, upgrade_config_record,
 };
 pub use events::{RunEvent, StepEvent, StepMemory};
 pub use folder::LOCK_FILE;
@@ -50,6 +53,7 @@ pub use state::RunState;
 
 use crate::data::{LoadProgress, TrainingData};
 use crate::gaussians::init::{gaussians_from_points, seed_points};
+use crate::planes::adam::OffsetLimit;
 use crate::planes::init::{PlaneInitSettings, initialise_planes};
 use crate::planes::reflection_seed::{ReflectedSpaceSeeds, mirrored_seeds, reflected_space_seeds};
 use crate::trainer::{StepTimes, Trainer};
@@ -65,7 +69,7 @@ use trgs_core::io::{
     write_unfinished_run,
 };
 use trgs_core::rng::Rng;
-use trgs_core::scene::Camera;
+use trgs_core::scene::{Camera, Gaussians, ReflectionPlane};
 use trgs_render::GpuContext;
 
 /// A training run from its start or from a checkpoint (see the module docs).
@@ -307,10 +311,13 @@ impl TrainingRun {
         train.chain(self.data.test.iter().map(|v| v.camera.clone())).collect()
     }
 
-    /// A new epoch's view order (a shuffle of the training views) once the last one is used up.
+    /// A new epoch's view order (a shuffle of the training views, less those a plane trial
+    /// holds out) once the last one is used up.
     fn draw_epoch_if_done(&mut self) {
         if self.state.order.is_empty() {
-            self.state.order = (0..self.data.train.len()).collect();
+            let held_out = self.state.trial.as_ref().map_or(&[][..], |t| &t.held_out[..]);
+            self.state.order =
+                (0..self.data.train.len()).filter(|i| !held_out.contains(i)).collect();
             for i in (1..self.state.order.len()).rev() {
                 self.state.order.swap(i, self.rng.below(i + 1));
             }
@@ -378,25 +385,46 @@ impl TrainingRun {
         for (&label, text) in init.labels.iter().zip(&init.refined) {
             self.events.push_back(RunEvent::Note(format!("plane {label}: {text}")));
         }
-        let mut added = init.glass;
+        let names: Vec<String> = init.labels.iter().map(|l| format!("plane {l}")).collect();
+        self.add_planes_with_seeds(
+            &gaussians,
+            &init.planes,
+            &names,
+            &init.offset_limits,
+            init.glass,
+        )
+    }
+
+    /// Add `planes` (named in notes by `names`), their offset limits and glass Gaussians to the
+    /// trainer, with the reflection seeds of each unless switched off: the stage-1 Gaussians
+    /// `gaussians` seen through a plane mirrored to its front, and seeds in the space it
+    /// reflects.
+    fn add_planes_with_seeds(
+        &mut self,
+        gaussians: &Gaussians<f32>,
+        planes: &[ReflectionPlane],
+        names: &[String],
+        limits: &[Option<OffsetLimit>],
+        mut added: Gaussians<f32>,
+    ) -> Result<()> {
         if !self.config().no_reflection_seeds {
             let cameras: Vec<_> = self.data.train.iter().map(|v| v.camera.clone()).collect();
             // One margin for both seed sources.
             let space_settings = ReflectedSpaceSeeds::default();
-            let seeds = mirrored_seeds(&gaussians, &init.planes, &cameras, space_settings.margin);
+            let seeds = mirrored_seeds(gaussians, planes, &cameras, space_settings.margin);
             let views: Vec<_> = self.data.train.iter().map(|v| (&v.camera, &v.image)).collect();
             let space = reflected_space_seeds(
                 &views,
-                &init.planes,
+                planes,
                 self.data.extent,
                 &space_settings,
                 gaussians.sh_degree,
                 &mut self.rng,
             );
-            for ((&label, s), r) in init.labels.iter().zip(&seeds).zip(&space) {
+            for ((name, s), r) in names.iter().zip(&seeds).zip(&space) {
                 self.events.push_back(RunEvent::Note(format!(
-                    "plane {label}: {} Gaussians seen through it mirrored to its front, {} \
-                     seeded in the space it reflects",
+                    "{name}: {} Gaussians seen through it mirrored to its front, {} seeded in \
+                     the space it reflects",
                     s.len(),
                     r.len()
                 )));
@@ -405,7 +433,7 @@ impl TrainingRun {
             }
         }
         let added_count = added.len();
-        let dropped = self.trainer.add_planes(&init.planes, &init.offset_limits, &added)?;
+        let dropped = self.trainer.add_planes(planes, limits, &added)?;
         if dropped > 0 {
             self.events.push_back(RunEvent::Note(format!(
                 "the planes' {added_count} Gaussians would pass --cap: the {dropped} least opaque \
@@ -454,6 +482,9 @@ fn new_run_state(
         train_views: view_names(data),
         peak_gpu_bytes: 0,
         skipped_steps: 0,
+        candidates: Vec::new(),
+        trial: None,
+        candidate_seconds: 0.0,
     };
     Ok((trainer, state, log::RunLog::create(out)?))
 }

@@ -136,7 +136,10 @@ fn metrics_json(s: &RunSummary, data: &TrainingData, state: &RunState) -> serde_
         "ablations": ab.names(),
         "reflection_model": {"fresnel": !ab.no_fresnel, "intensity": !ab.no_intensity},
         "data": config.data,
-        "no_planes": config.no_planes,
+        "no_planes": config.no_planes || config.planes == Some(super::PlaneSource::None),
+        "plane_source": config.planes,
+        "candidates": state.candidates,
+        "candidate_seconds": state.candidate_seconds,
         "truth": s.truth,
         "psnr_over_time": over_time,
         "memory": {

@@ -1,6 +1,6 @@
 //! The folder a run trains on (the user's, or the built-in synthetic scene written into the run
 //! folder once) and its loading, checked against the device first.
-use super::config::RunConfig;
+use super::config::{PlaneSource, RunConfig};
 use crate::data::{self, LoadOptions, LoadProgress, TrainingData};
 use anyhow::{Context, Result, bail};
 use std::path::{Path, PathBuf};
@@ -93,8 +93,21 @@ pub(super) fn load_data(
         LoadOptions { resolution: config.resolution(), evaluate: None, progress: Some(loading) };
     let mut data = TrainingData::load(&folder, &options)?;
     let seconds = started.elapsed().as_secs_f64();
-    if config.no_planes {
+    let source = config.plane_source(!data.materials.is_empty());
+    if source == PlaneSource::Masks && data.materials.is_empty() {
+        bail!(
+            "--planes masks: {} has no glass masks (glass_masks/ beside images/); paint them, or \
+             let --planes auto propose the planes from the scene",
+            data_dir.display()
+        );
+    }
+    let had_masks = !data.materials.is_empty();
+    if source != PlaneSource::Masks {
+        // Auto must not learn from the masks it ignores (the mask loss reads them).
         data.materials.clear();
+        for view in data.train.iter_mut().chain(data.test.iter_mut()) {
+            view.mask = None;
+        }
     }
     let (w, h) = data.size();
     note(format!(
@@ -109,16 +122,23 @@ pub(super) fn load_data(
     for line in &data.notes {
         note(line.clone());
     }
-    if config.no_planes {
-        note("--no-planes: training plain 3DGS".into());
-    } else if data.materials.is_empty() {
-        note("no glass masks: no reflection planes, training plain 3DGS".into());
-    } else {
-        note(format!(
+    let ignored = if had_masks { " (its glass masks are ignored)" } else { "" };
+    note(match source {
+        PlaneSource::None if config.no_planes || config.planes.is_some() => {
+            format!("--planes none: training plain 3DGS{ignored}")
+        }
+        PlaneSource::None => "no glass masks: no reflection planes, training plain 3DGS \
+                              (--planes auto proposes them from the scene)"
+            .into(),
+        PlaneSource::Masks => format!(
             "glass masks with labels {:?}: planes are initialised after stage 1",
             data.materials
-        ));
-    }
+        ),
+        PlaneSource::Auto => format!(
+            "--planes auto: planes are proposed from the scene after stage 1 and kept where \
+             they pay{ignored}"
+        ),
+    });
     let ablations = config.ablations.names();
     if !ablations.is_empty() {
         note(format!("ablations: {}", ablations.join(", ")));

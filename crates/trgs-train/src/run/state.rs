@@ -1,5 +1,6 @@
 //! What a run keeps in its checkpoint besides the trainer's state: its settings, random state,
 //! the views still to visit in this epoch, evaluations and clocks.
+use super::candidates::{CandidateRecord, PlaneTrial};
 use super::checkpoint::Checkpoint;
 use super::config::{RunConfig, upgrade_config_record};
 use crate::data::TrainingData;
@@ -37,6 +38,17 @@ pub struct RunState {
     /// changed nothing (`StepStats::skipped`).
     #[serde(default)]
     pub skipped_steps: u32,
+    /// `--planes auto`: the candidate planes proposed at the end of stage 1 and what became of
+    /// them (empty before, and in other runs).
+    #[serde(default)]
+    pub candidates: Vec<CandidateRecord>,
+    /// `--planes auto`: the candidates on trial until they are decided.
+    #[serde(default)]
+    pub trial: Option<PlaneTrial>,
+    /// `--planes auto`: seconds spent proposing and deciding the candidates (part of
+    /// `train_seconds`).
+    #[serde(default)]
+    pub candidate_seconds: f64,
 }
 
 impl RunState {

@@ -1,6 +1,6 @@
 //! The run's steps: each recorded, then the one before it finished and reported, with the
 //! plane initialisation, evaluation and checkpoint that fall on them.
-use super::{CHECKPOINT_FILE, RunEvent, StepEvent, StepMemory, TrainingRun, outputs};
+use super::{CHECKPOINT_FILE, PlaneSource, RunEvent, StepEvent, StepMemory, TrainingRun, outputs};
 use crate::eval::evaluate;
 use crate::trainer::StepStats;
 use anyhow::{Context, Result, bail};
@@ -26,14 +26,15 @@ impl TrainingRun {
     /// maintenance decides at once (as the planes' initialisation does first).
     pub(super) fn advance(&mut self) -> Result<()> {
         let iterations = self.config().iterations;
-        self.draw_epoch_if_done();
-        let Some(vi) = self.state.order.pop() else {
-            bail!("{}: no training views", self.data_dir.display())
-        };
         let t = &self.trainer;
-        if t.step == t.settings.stage1 && !self.data.materials.is_empty() && t.planes().is_empty() {
-            // The planes start from the set with any densification still pending applied,
-            // reported with the step in flight (whose maintenance decided it).
+        let auto = self.config().planes == Some(PlaneSource::Auto);
+        let at_stage1_end = t.step == t.settings.stage1 && t.planes().is_empty();
+        let masks = at_stage1_end && !self.data.materials.is_empty();
+        let propose = at_stage1_end && auto && self.state.candidates.is_empty();
+        let decide = self.state.trial.as_ref().is_some_and(|trial| t.step >= trial.decide_after);
+        if masks || propose || decide {
+            // The planes start (or change) from the set with any densification still pending
+            // applied, reported with the step in flight (whose maintenance decided it).
             let settled = self.trainer.settle()?;
             if let Some(f) = self.in_flight.as_mut() {
                 f.maintained.0.extend(settled.0);
@@ -42,9 +43,23 @@ impl TrainingRun {
             self.finish_in_flight()?;
             // Part of training: it counts in the time that PSNR is reported against.
             let ti = Instant::now();
-            self.init_planes()?;
+            if masks {
+                self.init_planes()?;
+            } else {
+                if propose {
+                    self.propose_planes()?;
+                } else {
+                    self.decide_trial()?;
+                }
+                self.state.candidate_seconds += ti.elapsed().as_secs_f64();
+            }
             self.state.train_seconds += ti.elapsed().as_secs_f64();
         }
+        // After the planes' start: a trial holds views out of the order.
+        self.draw_epoch_if_done();
+        let Some(vi) = self.state.order.pop() else {
+            bail!("{}: no training views", self.data_dir.display())
+        };
         let next = self.trainer.step + 1;
         let eval_now = next.is_multiple_of(self.eval_every) || next == iterations;
         let checkpoint_now = next.is_multiple_of(self.checkpoint_every) && next < iterations;

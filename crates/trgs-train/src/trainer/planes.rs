@@ -7,7 +7,10 @@ use crate::run::checkpoint::PlaneMoments;
 use crate::settings::Stage;
 use anyhow::{Context, Result};
 use trgs_core::plane_grad::PlaneGrad;
-use trgs_core::scene::{Attribute, Gaussians, Population, ReflectionPlane, attribute_widths};
+use trgs_core::scene::{
+    Attribute, Camera, Gaussians, Population, ReflectionPlane, attribute_widths,
+};
+use trgs_render::FrameImages;
 use trgs_render::toolkit::gpu::PendingRead;
 
 impl Trainer {
@@ -63,6 +66,52 @@ impl Trainer {
         }));
         self.set_state(&state)?;
         Ok(dropped)
+    }
+
+    /// Remove the planes whose `keep` flag is false, with their moments, and the Gaussians of
+    /// rows `rows` (ascending; read after [`Trainer::settle`], which this applies first, so
+    /// that they are the rows it removes).
+    pub fn remove_planes(&mut self, keep: &[bool], rows: &[usize]) -> Result<()> {
+        self.settle_unreported()?;
+        let state = self.read_state()?;
+        let kept_rows: Vec<(usize, bool)> = (0..state.gaussians.len())
+            .filter(|i| rows.binary_search(i).is_err())
+            .map(|i| (i, true))
+            .collect();
+        let state = gather(&state, &kept_rows);
+        let kept: Vec<ReflectionPlane> =
+            self.planes().iter().zip(keep).filter(|(_, k)| **k).map(|(p, _)| *p).collect();
+        self.gaussians.scene_mut().set_planes(&kept).context("the planes kept")?;
+        let mut flags = keep.iter();
+        self.plane_moments.retain(|_| flags.next().copied().unwrap_or(true));
+        self.set_state(&state)?;
+        Ok(())
+    }
+
+    /// Replace the planes' geometry (as many planes, in the same order: their moments stay).
+    pub fn move_planes(&mut self, planes: &[ReflectionPlane]) -> Result<()> {
+        anyhow::ensure!(
+            planes.len() == self.planes().len(),
+            "moving {} planes onto {} new ones",
+            self.planes().len(),
+            planes.len()
+        );
+        self.gaussians.scene_mut().set_planes(planes).context("moved planes")?;
+        Ok(())
+    }
+
+    /// Every layer of `camera`'s render as if the planes were `planes` (the trainer's own are
+    /// back when it returns): what a plane adds to a view.
+    pub fn render_with_planes(
+        &mut self,
+        planes: &[ReflectionPlane],
+        camera: &Camera,
+    ) -> Result<FrameImages> {
+        let own = self.planes().to_vec();
+        self.gaussians.scene_mut().set_planes(planes).context("planes for a render")?;
+        let images = self.render(camera).and_then(|f| Ok(f.read_images(&self.ctx)?));
+        self.gaussians.scene_mut().set_planes(&own).context("restoring the planes")?;
+        images
     }
 
     /// Adam on the planes' offset along the normal, normal and R0 logit ([`plane_adam`]).

@@ -1,0 +1,389 @@
+//! Reflection planes proposed from the scene, without masks: the planar structures of the points
+//! ([`find_structures`]), each scored by the points the cameras see through it ([`see_through`]).
+//! A structure most cameras face, through which enough points are seen, becomes a candidate: a
+//! glass plane over its see-through region. The trainer then tries each candidate and keeps
+//! those that pay; this module only proposes.
+//!
+//! Candidates are taken greedily, the best-evidenced first, and a point seen through a taken
+//! candidate no longer counts for the others: the virtual room a window reflects also lies behind
+//! the far wall of the room behind the window, and must not make that wall a candidate too.
+use glam::DVec3;
+
+use super::see_through::{SeeThrough, see_through};
+use super::structures::{Structure, StructureSettings, find_structures, hulls_touch};
+use crate::rng::Rng;
+use crate::scene::{Camera, Material, ReflectionPlane};
+
+/// Settings of the proposal; distances are fractions of the scene's depth scale (the median
+/// distance from the points to the nearest camera): triangulation and splat noise grow with
+/// depth, and a video's camera spread (3DGS's extent) can be a small fraction of it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ProposalSettings {
+    /// At most this many candidates.
+    pub max_candidates: usize,
+    /// Inlier distance of a structure.
+    pub threshold: f64,
+    pub ransac_iterations: usize,
+    /// At most this many RANSAC planes are searched.
+    pub max_structures: usize,
+    /// A structure holds at least this fraction of the points (and at least 30 points).
+    pub min_support: f64,
+    /// Grid cell of the connected pieces and of the see-through region.
+    pub cell: f64,
+    /// Structures whose normals differ by less than this (degrees) may be merged.
+    pub merge_angle_deg: f64,
+    /// A structure parallel to a candidate, this close to its plane and touching it is part of
+    /// its reflector (the frame, the wall around the glass), not a candidate of its own.
+    pub duplicate_offset: f64,
+    /// Of the cameras that see a structure, at least this fraction stand in front of it.
+    pub min_cameras_in_front: f64,
+    /// At least this many points are seen through a candidate...
+    pub min_seen_through: usize,
+    /// ...and at least this fraction of its points and those seen through it are seen through.
+    pub min_seen_fraction: f64,
+    /// At most this many cameras (an even subsample) test the sight lines.
+    pub max_cameras: usize,
+    /// A candidate's [`PlaneCandidate::planarity`] is at least this.
+    pub min_planarity: f64,
+}
+
+impl Default for ProposalSettings {
+    fn default() -> Self {
+        Self {
+            max_candidates: 4,
+            threshold: 0.01,
+            ransac_iterations: 1000,
+            max_structures: 12,
+            min_support: 0.01,
+            cell: 0.04,
+            merge_angle_deg: 2.0,
+            duplicate_offset: 0.08,
+            min_cameras_in_front: 0.75,
+            min_seen_through: 30,
+            min_seen_fraction: 0.05,
+            max_cameras: 48,
+            min_planarity: 0.5,
+        }
+    }
+}
+
+/// A planar structure considered for a plane, with its evidence.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlaneCandidate {
+    /// The glass plane over the see-through region, its normal toward the cameras (None when no
+    /// region was found).
+    pub plane: Option<ReflectionPlane>,
+    /// Points on the structure.
+    pub support: usize,
+    /// Points seen through it, not already seen through a candidate taken before it.
+    pub seen_through: usize,
+    /// `seen_through / (seen_through + support)`.
+    pub seen_fraction: f64,
+    /// Of the cameras that see the structure, the fraction in front of it.
+    pub cameras_in_front: f64,
+    /// The structure's size (its inliers' minimum-area box), width x height.
+    pub structure_size: (f64, f64),
+    /// Of the points within [`PLANARITY_SLAB`] thresholds of its plane inside its hull, the
+    /// fraction within one: near 1 for a surface, low for a slice through a cloud.
+    pub planarity: f64,
+    /// `None` for a proposed candidate; otherwise why it was not proposed.
+    pub rejected: Option<String>,
+}
+
+/// The proposal: the scene's depth scale and the candidates.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Proposal {
+    /// The median distance from a point to the nearest camera (of an even sample of both).
+    pub scale: f64,
+    /// The proposed candidates first, best evidence first, then the rejected structures with why.
+    pub candidates: Vec<PlaneCandidate>,
+}
+
+/// Candidates from `points` (Gaussian centres and sparse points) seen by `cameras`.
+pub fn propose_planes(
+    points: &[DVec3],
+    cameras: &[Camera],
+    settings: &ProposalSettings,
+    rng: &mut Rng,
+) -> Proposal {
+    let stride = cameras.len().div_ceil(settings.max_cameras.max(1)).max(1);
+    let cameras: Vec<&Camera> = cameras.iter().step_by(stride).collect();
+    let scale = depth_scale(points, &cameras);
+    let candidates = if scale > 0.0 {
+        propose_at_scale(points, &cameras, scale, settings, rng)
+    } else {
+        Vec::new()
+    };
+    Proposal { scale, candidates }
+}
+
+/// The median distance from a point to its nearest camera centre, over up to 4096 points taken
+/// evenly; 0 without points or cameras (or when every distance is not finite).
+pub fn depth_scale(points: &[DVec3], cameras: &[&Camera]) -> f64 {
+    let centres: Vec<DVec3> = cameras.iter().map(|c| c.pose.centre()).collect();
+    let stride = points.len().div_ceil(4096).max(1);
+    let mut d: Vec<f64> = points
+        .iter()
+        .step_by(stride)
+        .map(|p| centres.iter().map(|c| c.distance(*p)).fold(f64::INFINITY, f64::min))
+        .filter(|d| d.is_finite())
+        .collect();
+    if d.is_empty() {
+        return 0.0;
+    }
+    let mid = d.len() / 2;
+    *d.select_nth_unstable_by(mid, f64::total_cmp).1
+}
+
+fn propose_at_scale(
+    points: &[DVec3],
+    cameras: &[&Camera],
+    scale: f64,
+    settings: &ProposalSettings,
+    rng: &mut Rng,
+) -> Vec<PlaneCandidate> {
+    let threshold = settings.threshold * scale;
+    let cell = settings.cell * scale;
+    let structure_settings = StructureSettings {
+        threshold,
+        ransac_iterations: settings.ransac_iterations,
+        ransac_sample: 20_000,
+        max_planes: settings.max_structures,
+        min_support: ((settings.min_support * points.len() as f64).ceil() as usize).max(30),
+        cell,
+        merge_angle_deg: settings.merge_angle_deg,
+        merge_offset: 2.0 * threshold,
+    };
+    let structures = find_structures(points, &structure_settings, rng);
+    let facing: Vec<(DVec3, f64)> =
+        structures.iter().map(|s| facing_side(s, points, cameras)).collect();
+    let flatness: Vec<f64> = structures.iter().map(|s| planarity(s, points, threshold)).collect();
+
+    let mut unexplained = vec![true; points.len()];
+    let mut open: Vec<usize> = (0..structures.len()).collect();
+    let (mut proposed, mut parts) = (Vec::new(), Vec::new());
+    while proposed.len() < settings.max_candidates {
+        let candidates: Vec<usize> = (0..points.len()).filter(|&i| unexplained[i]).collect();
+        let scored: Vec<(usize, SeeThrough, PlaneCandidate)> = open
+            .iter()
+            .map(|&k| {
+                let (front, in_front) = facing[k];
+                let seen =
+                    see_through(&structures[k], front, points, &candidates, cameras, threshold);
+                let mut c = assess(&structures[k], points, front, in_front, &seen, cell, settings);
+                c.planarity = flatness[k];
+                if c.rejected.is_none() && c.planarity < settings.min_planarity {
+                    c.rejected = Some(format!(
+                        "not a surface: {:.0}% of the points near its plane lie on it (at least \
+                         {:.0}% needed)",
+                        100.0 * c.planarity,
+                        100.0 * settings.min_planarity
+                    ));
+                }
+                (k, seen, c)
+            })
+            .collect();
+        let best = scored
+            .iter()
+            .filter(|(_, _, c)| c.rejected.is_none())
+            .max_by_key(|(k, _, c)| (c.seen_through, std::cmp::Reverse(*k)));
+        let Some((k, seen, c)) = best.cloned() else {
+            let mut rejected: Vec<PlaneCandidate> = scored.into_iter().map(|(_, _, c)| c).collect();
+            rejected.sort_by_key(|c| std::cmp::Reverse(c.seen_through));
+            proposed.extend(rejected);
+            break;
+        };
+        for &i in &seen.points {
+            unexplained[i] = false;
+        }
+        // The frame and the wall around a pane are planes of their own a few centimetres from
+        // the glass, with the same see-through evidence: parts of this candidate's reflector.
+        let index = proposed.len();
+        let duplicate_offset = settings.duplicate_offset * scale;
+        for (j, _, other) in &scored {
+            if *j != k
+                && same_reflector(&structures[k], &structures[*j], duplicate_offset, settings)
+            {
+                let apart = structures[k].signed_distance(structures[*j].point).abs();
+                let why = format!(
+                    "part of candidate {index}'s reflector ({apart:.3} in front or behind)"
+                );
+                parts.push(PlaneCandidate { rejected: Some(why), ..other.clone() });
+            }
+        }
+        open.retain(|&j| {
+            j != k && !same_reflector(&structures[k], &structures[j], duplicate_offset, settings)
+        });
+        proposed.push(c);
+    }
+    proposed.extend(parts);
+    proposed
+}
+
+/// Whether structure `b` is part of the reflector whose plane is `a`'s: parallel within the merge
+/// angle, within `offset` of `a`'s plane, and their hulls touching in it.
+fn same_reflector(a: &Structure, b: &Structure, offset: f64, settings: &ProposalSettings) -> bool {
+    let cos_max = settings.merge_angle_deg.to_radians().cos();
+    a.normal.dot(b.normal).abs() >= cos_max
+        && a.signed_distance(b.point).abs() <= offset
+        && hulls_touch(a, b, 0.0)
+}
+
+/// How many thresholds from a plane count as near it for [`PlaneCandidate::planarity`].
+pub const PLANARITY_SLAB: f64 = 4.0;
+
+/// [`PlaneCandidate::planarity`] of `s`.
+fn planarity(s: &Structure, points: &[DVec3], threshold: f64) -> f64 {
+    let (mut near, mut on) = (0usize, 0usize);
+    for &p in points {
+        let d = s.signed_distance(p).abs();
+        if d <= PLANARITY_SLAB * threshold && s.hull_contains(s.to_plane(p), 0.0) {
+            near += 1;
+            on += usize::from(d <= threshold);
+        }
+    }
+    if near == 0 { 0.0 } else { on as f64 / near as f64 }
+}
+
+/// The side of `s` that the cameras seeing it stand on (its normal or the negation), and the
+/// fraction of them on that side. A camera sees the structure when it sees any of up to 64 of its
+/// points, sampled evenly.
+fn facing_side(s: &Structure, points: &[DVec3], cameras: &[&Camera]) -> (DVec3, f64) {
+    let stride = s.inliers.len().div_ceil(64).max(1);
+    let sample: Vec<DVec3> = s.inliers.iter().step_by(stride).map(|&i| points[i]).collect();
+    let (mut front, mut back) = (0usize, 0usize);
+    for c in cameras {
+        if !sample.iter().any(|&p| c.sees(p)) {
+            continue;
+        }
+        if s.signed_distance(c.pose.centre()) >= 0.0 {
+            front += 1;
+        } else {
+            back += 1;
+        }
+    }
+    let seeing = (front + back).max(1) as f64;
+    if back > front { (-s.normal, back as f64 / seeing) } else { (s.normal, front as f64 / seeing) }
+}
+
+/// The candidate `s` makes, with `seen` the points seen through it from its `front`.
+fn assess(
+    s: &Structure,
+    points: &[DVec3],
+    front: DVec3,
+    cameras_in_front: f64,
+    seen: &SeeThrough,
+    cell: f64,
+    settings: &ProposalSettings,
+) -> PlaneCandidate {
+    let support = s.inliers.len();
+    let seen_through = seen.points.len();
+    let seen_fraction = seen_through as f64 / (seen_through + support).max(1) as f64;
+    let flat: Vec<_> = s.inliers.iter().map(|&i| s.to_plane(points[i])).collect();
+    let structure_size =
+        super::hull::min_area_box(&flat).map_or((0.0, 0.0), |b| (b.width, b.height));
+    let plane = seen.region(cell).map(|b| {
+        let axis = s.basis.0 * b.axis.x + s.basis.1 * b.axis.y;
+        ReflectionPlane::new(s.to_world(b.centre), front, axis, b.width, b.height, Material::Glass)
+    });
+    let rejected = if cameras_in_front < settings.min_cameras_in_front {
+        Some(format!(
+            "{:.0}% of the cameras that see it stand in front of it (at least {:.0}% needed)",
+            100.0 * cameras_in_front,
+            100.0 * settings.min_cameras_in_front
+        ))
+    } else if seen_through < settings.min_seen_through || seen_fraction < settings.min_seen_fraction
+    {
+        Some(format!(
+            "{seen_through} points seen through it, {:.1}% of its own and those (at least {} and \
+             {:.1}% needed)",
+            100.0 * seen_fraction,
+            settings.min_seen_through,
+            100.0 * settings.min_seen_fraction
+        ))
+    } else if plane.is_none() {
+        Some("the sight lines through it outline no region".into())
+    } else {
+        None
+    };
+    PlaneCandidate {
+        plane,
+        support,
+        seen_through,
+        seen_fraction,
+        cameras_in_front,
+        structure_size,
+        planarity: 0.0,
+        rejected,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{Intrinsics, Pose};
+
+    /// Points on a grid of `step` over `[x0, x1] x [y0, y1]`, mapped to 3D by `at`.
+    fn grid(x: (f64, f64), y: (f64, f64), step: f64, at: impl Fn(f64, f64) -> DVec3) -> Vec<DVec3> {
+        let (nx, ny) =
+            (((x.1 - x.0) / step).round() as usize, ((y.1 - y.0) / step).round() as usize);
+        (0..=ny)
+            .flat_map(|j| (0..=nx).map(move |i| (x.0 + i as f64 * step, y.0 + j as f64 * step)))
+            .map(|(a, b)| at(a, b))
+            .collect()
+    }
+
+    /// A room: a wall in z = 0 over [-3, 3] x [0, 2.8], a floor, and cameras at z = 3 looking at
+    /// the wall; with `window`, a hole [-0.5, 0.5] x [0.5, 1.5] in the wall and two layers of
+    /// points behind it, where the cameras see them through the hole.
+    fn room(window: bool) -> (Vec<DVec3>, Vec<Camera>) {
+        let hole = |x: f64, y: f64| window && x.abs() < 0.5 && (0.5..1.5).contains(&y);
+        let mut points: Vec<DVec3> =
+            grid((-3.0, 3.0), (0.0, 2.8), 0.05, |x, y| DVec3::new(x, y, 0.0))
+                .into_iter()
+                .filter(|p| !hole(p.x, p.y))
+                .collect();
+        points.extend(grid((-3.0, 3.0), (0.1, 3.0), 0.05, |x, z| DVec3::new(x, 0.0, z)));
+        if window {
+            for z in [-0.5, -1.5] {
+                points.extend(grid((-0.6, 0.6), (0.4, 1.6), 0.025, |x, y| DVec3::new(x, y, z)));
+            }
+        }
+        let k = Intrinsics::from_fov_x(1.2, 64, 48);
+        let cameras = [-0.5, 0.0, 0.5]
+            .iter()
+            .flat_map(|&x| [0.8, 1.2].map(|y| DVec3::new(x, y, 3.0)))
+            .map(|eye| Camera::new("c", k, Pose::look_at(eye, DVec3::new(0.0, 1.0, 0.0), DVec3::Y)))
+            .collect();
+        (points, cameras)
+    }
+
+    #[test]
+    fn a_window_in_a_wall_is_the_one_candidate_and_spans_the_hole() {
+        let (points, cameras) = room(true);
+        let found =
+            propose_planes(&points, &cameras, &ProposalSettings::default(), &mut Rng::new(1))
+                .candidates;
+        let proposed: Vec<_> = found.iter().filter(|c| c.rejected.is_none()).collect();
+        assert_eq!(proposed.len(), 1, "{found:#?}");
+        let plane = proposed[0].plane.expect("a plane");
+        assert!(plane.unit_normal().dot(DVec3::Z) > 0.9998, "normal toward the cameras: {plane:?}");
+        assert!(plane.centre.distance(DVec3::new(0.0, 1.0, 0.0)) < 0.1, "{plane:?}");
+        assert!(
+            (0.8..1.5).contains(&plane.width) && (0.8..1.5).contains(&plane.height),
+            "{plane:?}"
+        );
+        // The floor: no camera sees through it.
+        assert!(found.iter().any(|c| c.rejected.is_some() && c.seen_through == 0));
+    }
+
+    #[test]
+    fn a_closed_room_gives_no_candidate() {
+        let (points, cameras) = room(false);
+        let found =
+            propose_planes(&points, &cameras, &ProposalSettings::default(), &mut Rng::new(1))
+                .candidates;
+        assert!(!found.is_empty(), "the wall and floor are considered");
+        assert!(found.iter().all(|c| c.rejected.is_some()), "{found:#?}");
+    }
+}

@@ -1,0 +1,149 @@
+//! The evidence that a planar structure holds glass or a mirror: points that the cameras in front
+//! of it see *through* it. An opaque wall hides what lies behind it, so a point behind the plane
+//! whose sight lines cross the plane inside the structure is seen through an opening in it: the
+//! room behind a window (transmission) or the virtual geometry a reflector shows (a mirror image
+//! lies behind the mirror). Where those sight lines cross the plane outlines the see-through
+//! region: the initial extent of a candidate plane.
+use glam::{DVec2, DVec3};
+
+use super::hull::{OrientedBox, min_area_box};
+use super::structures::{Structure, grid_components};
+use crate::scene::Camera;
+
+/// The points seen through a structure and where their sight lines cross it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SeeThrough {
+    /// Indices of the points seen through the structure, ascending.
+    pub points: Vec<usize>,
+    /// Plane coordinates of the crossings of their sight lines inside the structure.
+    pub crossings: Vec<DVec2>,
+}
+
+impl SeeThrough {
+    /// The rectangle (plane coordinates) of the see-through region: the minimum-area box of the
+    /// crossings in the largest connected group of grid cells of size `cell`, so that a few stray
+    /// sight lines do not stretch it. `None` without crossings or for a region of no area.
+    pub fn region(&self, cell: f64) -> Option<OrientedBox> {
+        let groups = grid_components(&self.crossings, cell);
+        let largest = groups.first()?;
+        let inside: Vec<DVec2> = largest.iter().map(|&k| self.crossings[k]).collect();
+        min_area_box(&inside).filter(|b| b.width > 0.0 && b.height > 0.0)
+    }
+}
+
+/// The points among `candidates` that the `cameras` see through holes in `structure`
+/// ([`Structure::is_hole`]), whose `front` is the side the cameras stand on (`front` is the
+/// structure's normal or its negation): a point at least `threshold` behind the plane counts when
+/// the sight lines of at least two of the front cameras that have it in view (one, if only one
+/// does) cross the plane in a hole. A sight line that crosses where the structure has points is
+/// blocked there, and one that crosses outside the hull passes the structure by.
+pub fn see_through(
+    structure: &Structure,
+    front: DVec3,
+    points: &[DVec3],
+    candidates: &[usize],
+    cameras: &[&Camera],
+    threshold: f64,
+) -> SeeThrough {
+    let depth = |p: DVec3| (p - structure.point).dot(front);
+    let front_cameras: Vec<(&Camera, DVec3, f64)> = cameras
+        .iter()
+        .map(|c| (*c, c.pose.centre()))
+        .filter_map(|(c, o)| (depth(o) > threshold).then_some((c, o, depth(o))))
+        .collect();
+    let mut out = SeeThrough::default();
+    let mut crossings = Vec::new();
+    for &i in candidates {
+        let p = points[i];
+        let dp = depth(p);
+        if dp >= -threshold {
+            continue;
+        }
+        crossings.clear();
+        let mut in_view = 0usize;
+        for &(camera, o, dc) in &front_cameras {
+            if !camera.sees(p) {
+                continue;
+            }
+            in_view += 1;
+            // The sight line o -> p meets the plane where the depth falls to zero.
+            let q = structure.to_plane(o + (p - o) * (dc / (dc - dp)));
+            if structure.is_hole(q) {
+                crossings.push(q);
+            }
+        }
+        if in_view > 0 && crossings.len() >= in_view.min(2) {
+            out.points.push(i);
+            out.crossings.extend_from_slice(&crossings);
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{Intrinsics, Pose};
+
+    fn camera_at(eye: DVec3) -> Camera {
+        // A wide lens (103 degrees) so that the point past the wall's edge is in view.
+        let k = Intrinsics::from_fov_x(1.8, 64, 48);
+        Camera::new("c", k, Pose::look_at(eye, DVec3::ZERO, DVec3::Y))
+    }
+
+    /// A wall in z = 0 spanning [-2, 2]^2 in x and y with a 1 x 1 hole in the middle.
+    fn wall() -> (Vec<DVec3>, Structure) {
+        let mut points = Vec::new();
+        for iy in -20..=20 {
+            for ix in -20..=20 {
+                let (x, y) = (ix as f64 * 0.1, iy as f64 * 0.1);
+                if x.abs() > 0.45 || y.abs() > 0.45 {
+                    points.push(DVec3::new(x, y, 0.0));
+                }
+            }
+        }
+        let inliers = (0..points.len()).collect();
+        let s = Structure::from_inliers(&points, inliers).expect("a plane");
+        (points, s)
+    }
+
+    #[test]
+    fn points_seen_through_the_hole_count_and_those_behind_the_wall_or_past_it_do_not() {
+        let (mut points, s) = wall();
+        let front = if s.normal.z > 0.0 { s.normal } else { -s.normal };
+        let through = points.len();
+        points.push(DVec3::new(0.1, 0.2, -1.0));
+        // In front of the wall; behind its solid part; behind it but seen past its edge (x = 2).
+        points.push(DVec3::new(0.0, 0.0, 0.5));
+        let blocked = DVec3::new(1.5, 1.5, -1.0);
+        points.push(blocked);
+        let past_the_edge = DVec3::new(3.0, 0.0, -0.5);
+        points.push(past_the_edge);
+        let cams: Vec<Camera> =
+            [-0.5, 0.0, 0.5].iter().map(|&x| camera_at(DVec3::new(x, 0.0, 3.0))).collect();
+        let cams: Vec<&Camera> = cams.iter().collect();
+        assert!(cams.iter().all(|c| c.sees(past_the_edge) && c.sees(blocked)), "all in view");
+        let all: Vec<usize> = (0..points.len()).collect();
+        let seen = see_through(&s, front, &points, &all, &cams, 0.01);
+        assert_eq!(seen.points, vec![through]);
+        assert_eq!(seen.crossings.len(), 3, "one crossing per camera");
+        assert!(seen.crossings.iter().all(|q| q.x.abs() < 0.5 && q.y.abs() < 0.5));
+        // From behind the wall (its back side as front) nothing is behind it from those cameras.
+        let seen = see_through(&s, -front, &points, &all, &cams, 0.01);
+        assert!(seen.points.is_empty());
+    }
+
+    #[test]
+    fn the_region_is_the_box_of_the_crossings_without_strays() {
+        let mut crossings = Vec::new();
+        for iy in 0..10 {
+            for ix in 0..20 {
+                crossings.push(DVec2::new(ix as f64 * 0.05, iy as f64 * 0.05));
+            }
+        }
+        crossings.push(DVec2::new(5.0, 5.0));
+        let seen = SeeThrough { points: vec![0], crossings };
+        let b = seen.region(0.1).expect("a region");
+        assert!((b.width - 0.95).abs() < 1e-9 && (b.height - 0.45).abs() < 1e-9, "{b:?}");
+    }
+}

@@ -1,0 +1,91 @@
+//! The record of a `--planes auto` run's candidate planes and of the trial they are on (in the
+//! checkpoint, log.jsonl and metrics.json); `plane_trial` proposes and decides them.
+use serde::{Deserialize, Serialize};
+use trgs_core::fit::PlaneCandidate;
+
+/// What became of one candidate, for the log, metrics.json and the `train` output.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CandidateRecord {
+    /// The plane over the see-through region (None where none was found).
+    pub centre: Option<[f64; 3]>,
+    pub normal: Option<[f64; 3]>,
+    /// In-plane, along the width.
+    pub axis: Option<[f64; 3]>,
+    pub size: Option<[f64; 2]>,
+    /// Points on the structure and seen through it; their fraction; the cameras in front.
+    pub support: usize,
+    pub seen_through: usize,
+    pub seen_fraction: f64,
+    pub cameras_in_front: f64,
+    /// Put on trial (the proposal's evidence sufficed).
+    pub proposed: bool,
+    /// On trial: the relative rise of the held-out L1 when it is switched off, and its mean
+    /// reflection strength where it is hit.
+    pub held_out_l1_gain: Option<f64>,
+    pub strength: Option<f64>,
+    pub kept: bool,
+    /// Why it was not proposed, or why it was kept or dropped.
+    pub why: String,
+}
+
+impl CandidateRecord {
+    pub(super) fn of(c: &PlaneCandidate) -> Self {
+        Self {
+            centre: c.plane.map(|p| p.centre.to_array()),
+            normal: c.plane.map(|p| p.unit_normal().to_array()),
+            axis: c.plane.map(|p| p.axis.to_array()),
+            size: c.plane.map(|p| [p.width, p.height]),
+            support: c.support,
+            seen_through: c.seen_through,
+            seen_fraction: c.seen_fraction,
+            cameras_in_front: c.cameras_in_front,
+            proposed: c.rejected.is_none(),
+            held_out_l1_gain: None,
+            strength: None,
+            kept: false,
+            why: c.rejected.clone().unwrap_or_else(|| "on trial".into()),
+        }
+    }
+
+    /// One line for the `train` output.
+    pub fn line(&self, index: usize) -> String {
+        let at = match (self.centre, self.normal, self.size) {
+            (Some(c), Some(n), Some([w, h])) => format!(
+                " at ({:.2}, {:.2}, {:.2}) facing ({:.2}, {:.2}, {:.2}), {w:.2} x {h:.2}",
+                c[0], c[1], c[2], n[0], n[1], n[2]
+            ),
+            _ => String::new(),
+        };
+        let trial = match (self.held_out_l1_gain, self.strength) {
+            (Some(g), Some(r)) => {
+                format!("; off: held-out L1 {:+.2}%, strength {r:.3}", 100.0 * g)
+            }
+            _ => String::new(),
+        };
+        let verdict = match (self.proposed, self.held_out_l1_gain.is_some(), self.kept) {
+            (false, _, _) => format!("not proposed: {}", self.why),
+            (true, false, _) => "on trial".into(),
+            (true, true, true) => format!("kept: {}", self.why),
+            (true, true, false) => format!("dropped: {}", self.why),
+        };
+        format!(
+            "candidate plane {index}{at}: {} points on it, {} seen through ({:.1}%), {:.0}% of \
+             the cameras in front{trial}: {verdict}",
+            self.support,
+            self.seen_through,
+            100.0 * self.seen_fraction,
+            100.0 * self.cameras_in_front,
+        )
+    }
+}
+
+/// The candidates on trial, kept in the run's checkpoint.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PlaneTrial {
+    /// The step after which the candidates are decided.
+    pub decide_after: u32,
+    /// Training views left out of the steps until then (their indices).
+    pub held_out: Vec<usize>,
+    /// The candidate (its index in the run's records) of each of the trainer's planes.
+    pub planes: Vec<usize>,
+}

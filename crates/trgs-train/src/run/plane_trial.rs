@@ -1,0 +1,313 @@
+//! Planes without masks (`--planes auto`). At the end of stage 1 the scene's planar structures
+//! through which the cameras see points are proposed as candidate planes
+//! (`trgs_core::fit::propose_planes`) and added as the masks' planes are: glass Gaussians over
+//! each one's see-through region, reflection seeds, no offset limit. A fifth of the training
+//! views is held out of the steps while they are on trial. The trial runs through stage 2 (where
+//! the Gaussians get no gradient from the mirrored passes, so a plane cannot show yet what it
+//! explains) and a tenth of the run into stage 3; then each candidate is switched off in turn on
+//! the held-out views and kept only where that raises their L1 by at least [`MIN_L1_GAIN`] and
+//! its reflection strength `R` over the pixels it is hit at is at least [`MIN_STRENGTH`]. A
+//! dropped candidate's plane (so its mirrored pass) and its glass Gaussians are removed.
+use super::candidates::{CandidateRecord, PlaneTrial};
+use super::{RunEvent, TrainingRun};
+use crate::data::View;
+use crate::planes::init::{PlaneInitSettings, append_glass};
+use crate::planes::reflection_seed::UNSEEN_MARGIN;
+use anyhow::Result;
+use glam::DVec3;
+use trgs_core::Image;
+use trgs_core::fit::{ProposalSettings, SilhouetteSettings, propose_planes, refine_to_masks};
+use trgs_core::plane_math::{ray_rectangle_hit, reflect_point};
+use trgs_core::scene::{Camera, Gaussians, Population, ReflectionPlane};
+
+/// The least relative rise of the held-out views' L1 when a kept candidate is switched off.
+pub const MIN_L1_GAIN: f64 = 0.005;
+/// The least reflection strength `R = R_raw M` of a kept candidate: the 90th percentile over
+/// the held-out pixels it is hit at.
+pub const MIN_STRENGTH: f64 = 0.05;
+/// Every this many training views, one is held out during the trial (none with fewer).
+const HOLD_OUT_EVERY: usize = 5;
+/// Primary Gaussians at least this opaque stand for the scene's surfaces in the proposal.
+const OPAQUE: f32 = 0.5;
+
+impl TrainingRun {
+    /// Propose the candidate planes and put those with evidence on trial (the end of stage 1).
+    pub(super) fn propose_planes(&mut self) -> Result<()> {
+        let gaussians = self.trainer.gaussians()?;
+        let mut points = opaque_centres(&gaussians);
+        points.extend(self.data.points.iter().map(|(p, _)| *p));
+        let cameras: Vec<Camera> = self.data.train.iter().map(|v| v.camera.clone()).collect();
+        let proposal =
+            propose_planes(&points, &cameras, &ProposalSettings::default(), &mut self.rng);
+        let settings = PlaneInitSettings::default();
+        let mut glass = Gaussians::empty(gaussians.sh_degree);
+        let (mut planes, mut names, mut on_trial) = (Vec::new(), Vec::new(), Vec::new());
+        for c in &proposal.candidates {
+            let index = self.state.candidates.len();
+            let record = CandidateRecord::of(c);
+            self.events.push_back(RunEvent::Note(record.line(index)));
+            self.state.candidates.push(record);
+            if let (None, Some(plane)) = (&c.rejected, c.plane) {
+                append_glass(&mut glass, &plane, &settings, &mut self.rng);
+                planes.push(plane);
+                names.push(format!("candidate plane {index}"));
+                on_trial.push(index);
+            }
+        }
+        self.log.candidates(self.trainer.step, &self.state.candidates)?;
+        if planes.is_empty() {
+            self.events.push_back(RunEvent::Note(format!(
+                "no candidate plane (of {} planar structures, {} points, depth scale {:.3}): \
+                 training plain 3DGS",
+                proposal.candidates.len(),
+                points.len(),
+                proposal.scale
+            )));
+            return Ok(());
+        }
+        let limits = vec![None; planes.len()];
+        self.add_planes_with_seeds(&gaussians, &planes, &names, &limits, glass)?;
+        let n = self.data.train.len();
+        let held_out: Vec<usize> = if n >= HOLD_OUT_EVERY {
+            (0..n).filter(|i| i % HOLD_OUT_EVERY == HOLD_OUT_EVERY / 2).collect()
+        } else {
+            Vec::new()
+        };
+        self.state.order.retain(|i| !held_out.contains(i));
+        let s = &self.trainer.settings;
+        let iterations = self.config().iterations;
+        let decide_after =
+            (s.stage1 + s.stage2 + (iterations / 10).max(1)).min(iterations.saturating_sub(1));
+        self.events.push_back(RunEvent::Note(format!(
+            "{} candidate planes on trial until step {decide_after}, {} training views held out",
+            planes.len(),
+            held_out.len()
+        )));
+        self.state.trial = Some(PlaneTrial { decide_after, held_out, planes: on_trial });
+        Ok(())
+    }
+
+    /// Decide the candidates on trial: keep those that pay, remove the others.
+    pub(super) fn decide_trial(&mut self) -> Result<()> {
+        let Some(trial) = self.state.trial.take() else { return Ok(()) };
+        let planes = self.trainer.planes().to_vec();
+        let views: Vec<usize> = if trial.held_out.is_empty() {
+            (0..self.data.train.len()).collect()
+        } else {
+            trial.held_out.clone()
+        };
+        let mut base = 0.0;
+        let mut strengths: Vec<Vec<f32>> = vec![Vec::new(); planes.len()];
+        for &vi in &views {
+            let view = &self.data.train[vi];
+            let images = self.trainer.render_with_planes(&planes, &view.camera)?;
+            base += view_l1(&images.color, view);
+            for (&h, &r) in images.hit.data.iter().zip(&images.strength.data) {
+                if let Some(s) = (h as usize).checked_sub(1).and_then(|k| strengths.get_mut(k)) {
+                    s.push(r);
+                }
+            }
+        }
+        let mut keep = Vec::with_capacity(planes.len());
+        for k in 0..planes.len() {
+            let mut without = planes.clone();
+            without.remove(k);
+            let mut off = 0.0;
+            for &vi in &views {
+                let view = &self.data.train[vi];
+                off +=
+                    view_l1(&self.trainer.render_with_planes(&without, &view.camera)?.color, view);
+            }
+            let gain = if base > 0.0 { off / base - 1.0 } else { 0.0 };
+            let strength = upper_decile(&mut strengths[k]);
+            let kept = gain >= MIN_L1_GAIN && strength >= MIN_STRENGTH;
+            let why = verdict(gain, strength, views.len(), trial.held_out.is_empty());
+            let index = trial.planes.get(k).copied().unwrap_or(k);
+            if let Some(record) = self.state.candidates.get_mut(index) {
+                record.held_out_l1_gain = Some(gain);
+                record.strength = Some(strength);
+                record.kept = kept;
+                record.why = why;
+                self.events.push_back(RunEvent::Note(record.line(index)));
+            }
+            keep.push(kept);
+        }
+        let kept = keep.iter().filter(|&&k| k).count();
+        let mut removed = 0;
+        if kept < planes.len() {
+            // Settled by the caller: the rows read now are those the removal sees.
+            let g = self.trainer.gaussians()?;
+            let cameras: Vec<&Camera> = self.data.train.iter().map(|v| &v.camera).collect();
+            let rows = rows_of_dropped(&g, &planes, &keep, &cameras);
+            removed = rows.len();
+            self.trainer.remove_planes(&keep, &rows)?;
+        }
+        if kept > 0 {
+            self.fit_kept_to_their_glass()?;
+        }
+        self.log.candidates(self.trainer.step, &self.state.candidates)?;
+        self.events.push_back(RunEvent::Note(format!(
+            "{kept} of {} candidate planes kept ({removed} Gaussians that only the others showed \
+             removed)",
+            planes.len()
+        )));
+        Ok(())
+    }
+}
+
+/// The rows (ascending) that only the dropped planes (`keep` false) show: glass Gaussians on a
+/// dropped plane ([`owner`]), and primaries that no training camera nearly sees (so only mirrored
+/// passes train them: the reflection seeds and what grew from them) whose mirror image about a
+/// dropped plane a camera sees through its rectangle, and about no kept plane.
+fn rows_of_dropped(
+    g: &Gaussians<f32>,
+    planes: &[ReflectionPlane],
+    keep: &[bool],
+    cameras: &[&Camera],
+) -> Vec<usize> {
+    let shown_by = |k: usize, x: DVec3| {
+        let mirrored = reflect_point(&planes[k], x);
+        cameras.iter().any(|c| {
+            let o = c.pose.centre();
+            c.sees(mirrored)
+                && ray_rectangle_hit(&planes[k], o, (mirrored - o).normalize()).is_some()
+        })
+    };
+    (0..g.len())
+        .filter(|&i| {
+            let x = DVec3::from_array(g.means[i].map(f64::from));
+            match g.populations[i] {
+                Population::Glass => owner(planes, x).is_some_and(|k| !keep[k]),
+                Population::Primary => {
+                    !cameras.iter().any(|c| c.nearly_sees(x, UNSEEN_MARGIN))
+                        && (0..planes.len()).any(|k| !keep[k] && shown_by(k, x))
+                        && !(0..planes.len()).any(|k| keep[k] && shown_by(k, x))
+                }
+            }
+        })
+        .collect()
+}
+
+/// The index of the plane a point at `x` lies on: the nearest along the normal among the planes
+/// whose rectangle, grown by a tenth of its size, holds the point's projection.
+fn owner(planes: &[ReflectionPlane], x: DVec3) -> Option<usize> {
+    let holds = |p: &ReflectionPlane| {
+        let d = x - p.centre;
+        d.dot(p.axis).abs() <= 0.55 * p.width && d.dot(p.bitangent()).abs() <= 0.55 * p.height
+    };
+    (0..planes.len()).filter(|&k| holds(&planes[k])).min_by(|&a, &b| {
+        planes[a].signed_distance(x).abs().total_cmp(&planes[b].signed_distance(x).abs())
+    })
+}
+
+impl TrainingRun {
+    /// Move each kept plane's rectangle onto its glass: where the training views hit it and the
+    /// learned mask says glass (M >= 1/2), taken as each view's glass mask for the masks' own
+    /// refinement (`fit::refine_to_masks`). The first rectangle is the see-through region of
+    /// the proposal, which the frame and the sight lines past its edges widen.
+    fn fit_kept_to_their_glass(&mut self) -> Result<()> {
+        let mut planes = self.trainer.planes().to_vec();
+        let n = self.data.train.len();
+        let stride = n.div_ceil(REFIT_VIEWS).max(1);
+        let mut masks: Vec<Vec<(usize, Image<u8>)>> = vec![Vec::new(); planes.len()];
+        for vi in (0..n).step_by(stride) {
+            let view = &self.data.train[vi];
+            let images = self.trainer.render_with_planes(&planes, &view.camera)?;
+            for (k, list) in masks.iter_mut().enumerate() {
+                let mut m = Image::<u8>::new(images.hit.width, images.hit.height, 1);
+                for (p, out) in m.data.iter_mut().enumerate() {
+                    *out = u8::from(
+                        images.hit.data[p] as usize == k + 1 && images.mask.data[p] >= 0.5,
+                    );
+                }
+                if m.data.contains(&1) {
+                    list.push((vi, m));
+                }
+            }
+        }
+        for (k, list) in masks.iter().enumerate() {
+            let views: Vec<(&Camera, &Image<u8>)> =
+                list.iter().map(|(vi, m)| (&self.data.train[*vi].camera, m)).collect();
+            let before = planes[k];
+            let text = match refine_to_masks(&before, &views, 1, &SilhouetteSettings::default()) {
+                Some(fit) => {
+                    planes[k] = fit.plane;
+                    format!(
+                        "moved onto its glass (M >= 1/2 in {} views): {:.2} x {:.2} -> {:.2} x \
+                         {:.2}, centre moved {:.3}",
+                        views.len(),
+                        before.width,
+                        before.height,
+                        fit.plane.width,
+                        fit.plane.height,
+                        fit.plane.centre.distance(before.centre)
+                    )
+                }
+                None => format!(
+                    "kept as proposed (its glass in {} views pins no rectangle)",
+                    views.len()
+                ),
+            };
+            self.events.push_back(RunEvent::Note(format!("kept plane {k}: {text}")));
+        }
+        self.trainer.move_planes(&planes)
+    }
+}
+
+/// Training views (an even sample) whose learned mask refits the kept planes.
+const REFIT_VIEWS: usize = 16;
+
+/// The 90th percentile of `values` (0 for none): a candidate's strength where it reflects, which
+/// the mean would dilute by the wall around the glass that its first rectangle also covers.
+fn upper_decile(values: &mut [f32]) -> f64 {
+    if values.is_empty() {
+        return 0.0;
+    }
+    let k = (values.len() * 9 / 10).min(values.len() - 1);
+    f64::from(*values.select_nth_unstable_by(k, f32::total_cmp).1)
+}
+
+/// The centres of the primary Gaussians at least [`OPAQUE`].
+fn opaque_centres(g: &Gaussians<f32>) -> Vec<DVec3> {
+    let logit = (OPAQUE / (1.0 - OPAQUE)).ln();
+    (0..g.len())
+        .filter(|&i| g.populations[i] == Population::Primary && g.opacity_logits[i] >= logit)
+        .map(|i| DVec3::from_array(g.means[i].map(f64::from)))
+        .collect()
+}
+
+/// Why a candidate on trial was kept or dropped.
+fn verdict(gain: f64, strength: f64, views: usize, on_training_views: bool) -> String {
+    let on = if on_training_views { "training" } else { "held-out" };
+    let pays = gain >= MIN_L1_GAIN;
+    let strong = strength >= MIN_STRENGTH;
+    match (pays, strong) {
+        (true, true) => format!("switching it off costs {views} {on} views L1"),
+        (false, _) => format!(
+            "switching it off costs the {views} {on} views less than {:.1}% L1",
+            100.0 * MIN_L1_GAIN
+        ),
+        (true, false) => {
+            format!("its reflection is weaker than {MIN_STRENGTH} where the views hit it")
+        }
+    }
+}
+
+/// The mean absolute difference between a render and the view's photo over the pixels the photo
+/// covers.
+fn view_l1(render: &Image<f32>, view: &View) -> f64 {
+    let photo = &view.image;
+    let covered = |p: usize| view.covered.as_ref().is_none_or(|c| c.data[p] != 0);
+    let (mut sum, mut n) = (0.0f64, 0usize);
+    for p in 0..(photo.width as usize * photo.height as usize) {
+        if !covered(p) {
+            continue;
+        }
+        for c in 0..3 {
+            let photo = f64::from(photo.data[3 * p + c]) / 255.0;
+            sum += (f64::from(render.data[3 * p + c]) - photo).abs();
+        }
+        n += 3;
+    }
+    if n > 0 { sum / n as f64 } else { 0.0 }
+}
