@@ -89,3 +89,37 @@ pub struct PlaneTrial {
     /// The candidate (its index in the run's records) of each of the trainer's planes.
     pub planes: Vec<usize>,
 }
+
+/// The step the proposal is tried at next after a try at `step` found no candidate: one
+/// stage-1 length (`stage1`) later, while at least half the run is left for the planes' stages
+/// (None: no more tries, the run trains plain 3DGS). A short run's model at the end of its
+/// stage 1 has been densified once or twice, from sparse points alone on a real capture: too
+/// few surfaces to show a reflector that the grown model shows. A try that finds candidates
+/// ends stage 1 there, so that stages 2 and 3 keep their lengths.
+pub fn next_proposal_try(step: u32, stage1: u32, iterations: u32) -> Option<u32> {
+    let next = step.checked_add(stage1.max(1))?;
+    (next <= iterations / 2).then_some(next)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::next_proposal_try;
+
+    #[test]
+    fn the_proposal_is_tried_every_stage1_length_up_to_half_the_run() {
+        // 2000 steps: stage 1 ends at 200; tries at 200, 400, ..., 1000.
+        let (mut at, mut tries) = (200, vec![200]);
+        while let Some(next) = next_proposal_try(at, 200, 2000) {
+            tries.push(next);
+            at = next;
+        }
+        assert_eq!(tries, [200, 400, 600, 800, 1000]);
+        // The paper's 30000 steps: 3000, 6000, ..., 15000.
+        assert_eq!(next_proposal_try(12_000, 3000, 30_000), Some(15_000));
+        assert_eq!(next_proposal_try(15_000, 3000, 30_000), None);
+        // A degenerate stage 1 still moves on, and a short run tries once.
+        assert_eq!(next_proposal_try(0, 0, 10), Some(1));
+        assert_eq!(next_proposal_try(2, 2, 4), None);
+        assert_eq!(next_proposal_try(u32::MAX - 1, 5, u32::MAX), None);
+    }
+}

@@ -190,8 +190,11 @@ impl TrainingRun {
                     state.train_views = view_names(&data);
                 }
                 let log = log::RunLog::resume(&out, ck.step)?;
-                let trainer =
+                let mut trainer =
                     Trainer::from_checkpoint(&ctx, &ck, settings, data.extent, &densification)?;
+                if let Some(end) = state.stage1_end {
+                    trainer.settings.stage1 = end;
+                }
                 (trainer, state, log)
             }
             None => new_run_state(&ctx, &config, &data, &mut note)?,
@@ -483,6 +486,9 @@ fn new_run_state(
         peak_gpu_bytes: 0,
         skipped_steps: 0,
         candidates: Vec::new(),
+        next_proposal: (config.planes == Some(PlaneSource::Auto))
+            .then_some(trainer.settings.stage1),
+        stage1_end: None,
         trial: None,
         candidate_seconds: 0.0,
     };

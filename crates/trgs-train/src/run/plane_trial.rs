@@ -1,6 +1,8 @@
 //! Planes without masks (`--planes auto`). At the end of stage 1 the scene's planar structures
 //! through which the cameras see points are proposed as candidate planes
-//! (`trgs_core::fit::propose_planes`) and added as the masks' planes are: glass Gaussians over
+//! (`trgs_core::fit::propose_planes`); while none is found, the proposal is tried again on the
+//! growing model ([`next_proposal_try`]) and stage 1 goes on. Candidates are added as the masks'
+//! planes are: glass Gaussians over
 //! each one's see-through region, reflection seeds, no offset limit. A fifth of the training
 //! views is held out of the steps while they are on trial. The trial runs through stage 2 (where
 //! the Gaussians get no gradient from the mirrored passes, so a plane cannot show yet what it
@@ -8,7 +10,7 @@
 //! the held-out views and kept only where that raises their L1 by at least [`MIN_L1_GAIN`] and
 //! its reflection strength `R` over the pixels it is hit at is at least [`MIN_STRENGTH`]. A
 //! dropped candidate's plane (so its mirrored pass) and its glass Gaussians are removed.
-use super::candidates::{CandidateRecord, PlaneTrial};
+use super::candidates::{CandidateRecord, PlaneTrial, next_proposal_try};
 use super::{RunEvent, TrainingRun};
 use crate::data::View;
 use crate::planes::init::{PlaneInitSettings, append_glass};
@@ -27,13 +29,35 @@ pub const MIN_L1_GAIN: f64 = 0.005;
 pub const MIN_STRENGTH: f64 = 0.05;
 /// Every this many training views, one is held out during the trial (none with fewer).
 const HOLD_OUT_EVERY: usize = 5;
+/// The proposal waits (to its last try) for a model of at least this many times as many
+/// Gaussians as the capture has sparse points: a reflector shows as points seen through it, the
+/// reflected scene that densification grows behind the glass, which the sparse points of a real
+/// capture (surfaces matched across photos) seldom hold.
+const GROWN: usize = 2;
 /// Primary Gaussians at least this opaque stand for the scene's surfaces in the proposal.
 const OPAQUE: f32 = 0.5;
 
 impl TrainingRun {
-    /// Propose the candidate planes and put those with evidence on trial (the end of stage 1).
+    /// Propose the candidate planes and put those with evidence on trial (the end of stage 1, or
+    /// a later try: [`next_proposal_try`]).
     pub(super) fn propose_planes(&mut self) -> Result<()> {
         let gaussians = self.trainer.gaussians()?;
+        let step = self.trainer.step;
+        let iterations = self.config().iterations;
+        let stage1 = self.trainer.settings.stage1;
+        let sparse = self.data.points.len();
+        if gaussians.len() < GROWN * sparse
+            && let Some(next) = next_proposal_try(step, stage1, iterations)
+        {
+            self.state.next_proposal = Some(next);
+            self.events.push_back(RunEvent::Note(format!(
+                "no proposal at step {step}: the model holds {} Gaussians, under {GROWN} times \
+                 the {sparse} sparse points, so densification has not yet shown what the glass \
+                 reflects; trying again at step {next}",
+                gaussians.len()
+            )));
+            return Ok(());
+        }
         let mut points = opaque_centres(&gaussians);
         points.extend(self.data.points.iter().map(|(p, _)| *p));
         let cameras: Vec<Camera> = self.data.train.iter().map(|v| v.camera.clone()).collect();
@@ -42,11 +66,12 @@ impl TrainingRun {
         let settings = PlaneInitSettings::default();
         let mut glass = Gaussians::empty(gaussians.sh_degree);
         let (mut planes, mut names, mut on_trial) = (Vec::new(), Vec::new(), Vec::new());
+        // Each try's records replace the last's: those of the try that proposed (or of the
+        // last) are the run's; log.jsonl keeps every try.
+        self.state.candidates.clear();
         for c in &proposal.candidates {
             let index = self.state.candidates.len();
-            let record = CandidateRecord::of(c);
-            self.events.push_back(RunEvent::Note(record.line(index)));
-            self.state.candidates.push(record);
+            self.state.candidates.push(CandidateRecord::of(c));
             if let (None, Some(plane)) = (&c.rejected, c.plane) {
                 append_glass(&mut glass, &plane, &settings, &mut self.rng);
                 planes.push(plane);
@@ -54,16 +79,38 @@ impl TrainingRun {
                 on_trial.push(index);
             }
         }
-        self.log.candidates(self.trainer.step, &self.state.candidates)?;
-        if planes.is_empty() {
+        self.log.candidates(step, &self.state.candidates)?;
+        self.state.next_proposal =
+            if planes.is_empty() { next_proposal_try(step, stage1, iterations) } else { None };
+        let summary = format!(
+            "{} planar structures, {} points, depth scale {:.3}",
+            proposal.candidates.len(),
+            points.len(),
+            proposal.scale
+        );
+        if let Some(next) = self.state.next_proposal {
             self.events.push_back(RunEvent::Note(format!(
-                "no candidate plane (of {} planar structures, {} points, depth scale {:.3}): \
-                 training plain 3DGS",
-                proposal.candidates.len(),
-                points.len(),
-                proposal.scale
+                "no candidate plane at step {step} ({summary}): trying again at step {next}, \
+                 on the model grown by then"
             )));
             return Ok(());
+        }
+        for (index, record) in self.state.candidates.iter().enumerate() {
+            self.events.push_back(RunEvent::Note(record.line(index)));
+        }
+        if planes.is_empty() {
+            self.events.push_back(RunEvent::Note(format!(
+                "no candidate plane at step {step} ({summary}): training plain 3DGS"
+            )));
+            return Ok(());
+        }
+        if step != stage1 {
+            // Stages 2 and 3 start from the step the candidates were found at.
+            self.trainer.settings.stage1 = step;
+            self.state.stage1_end = Some(step);
+            self.events.push_back(RunEvent::Note(format!(
+                "stage 1 ends at step {step}, where the proposal found its candidates"
+            )));
         }
         let limits = vec![None; planes.len()];
         self.add_planes_with_seeds(&gaussians, &planes, &names, &limits, glass)?;
@@ -75,7 +122,6 @@ impl TrainingRun {
         };
         self.state.order.retain(|i| !held_out.contains(i));
         let s = &self.trainer.settings;
-        let iterations = self.config().iterations;
         let decide_after =
             (s.stage1 + s.stage2 + (iterations / 10).max(1)).min(iterations.saturating_sub(1));
         self.events.push_back(RunEvent::Note(format!(

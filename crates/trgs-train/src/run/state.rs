@@ -42,6 +42,13 @@ pub struct RunState {
     /// them (empty before, and in other runs).
     #[serde(default)]
     pub candidates: Vec<CandidateRecord>,
+    /// `--planes auto`: the step the proposal is tried at next (None: proposed, or given up).
+    #[serde(default)]
+    pub next_proposal: Option<u32>,
+    /// `--planes auto`: where stage 1 ended when a later try of the proposal found the
+    /// candidates (None: where the schedule ends it).
+    #[serde(default)]
+    pub stage1_end: Option<u32>,
     /// `--planes auto`: the candidates on trial until they are decided.
     #[serde(default)]
     pub trial: Option<PlaneTrial>,

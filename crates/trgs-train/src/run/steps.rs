@@ -30,7 +30,7 @@ impl TrainingRun {
         let auto = self.config().planes == Some(PlaneSource::Auto);
         let at_stage1_end = t.step == t.settings.stage1 && t.planes().is_empty();
         let masks = at_stage1_end && !self.data.materials.is_empty();
-        let propose = at_stage1_end && auto && self.state.candidates.is_empty();
+        let propose = auto && t.planes().is_empty() && self.state.next_proposal == Some(t.step);
         let decide = self.state.trial.as_ref().is_some_and(|trial| t.step >= trial.decide_after);
         if masks || propose || decide {
             // The planes start (or change) from the set with any densification still pending
