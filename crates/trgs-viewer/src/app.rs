@@ -7,12 +7,12 @@ use crate::browser::{Browser, is_model_file};
 use crate::camera::{ViewCamera, up_of};
 use crate::frame_times::FrameTimes;
 use crate::live::LiveFeed;
-use crate::overlay::plane_overlay;
+use crate::plane_outlines::{DROPPED, paint_plane_outlines, plane_colour};
 use crate::scene::{Extent, LoadedModel, depth_range, load_for_viewer};
 use crate::screenshot::{ShotInfo, save_screenshot};
 use crate::{Script, Source, ViewerOptions};
 use eframe::egui;
-use egui::{Color32, Pos2, Rect, Sense, Stroke, Vec2};
+use egui::{Color32, Pos2, Rect, Sense};
 use glam::DVec3;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
@@ -32,14 +32,6 @@ const LAYERS: [(Layer, &str); 8] = [
     (Layer::Depth, "depth"),
     (Layer::Alpha, "alpha"),
 ];
-const PLANE_COLOURS: [Color32; 4] = [
-    Color32::from_rgb(255, 200, 40),
-    Color32::from_rgb(80, 220, 255),
-    Color32::from_rgb(255, 90, 200),
-    Color32::from_rgb(140, 255, 110),
-];
-/// The outline of a candidate plane the run dropped.
-const DROPPED: Color32 = Color32::from_rgb(150, 150, 150);
 /// Frames rendered before a scripted screenshot or benchmark starts (first-use compilation).
 const WARMUP_FRAMES: u32 = 3;
 
@@ -310,7 +302,7 @@ impl ViewerApp {
         let mut planes_changed = false;
         if let Some(s) = &mut self.shown {
             for (k, plane) in s.planes.iter_mut().enumerate() {
-                let colour = PLANE_COLOURS[k % PLANE_COLOURS.len()];
+                let colour = plane_colour(k);
                 ui.horizontal(|ui| {
                     ui.colored_label(colour, format!("plane {}", k + 1));
                     planes_changed |= ui.checkbox(&mut s.enabled[k], "on").changed();
@@ -484,32 +476,8 @@ impl ViewerApp {
         if self.overlays
             && let Some((camera, _)) = &self.last_view
         {
-            // Render pixels to points (the render may be smaller than the area it fills).
-            let sx = shown_rect.width() / camera.width() as f32;
-            let sy = shown_rect.height() / camera.height() as f32;
-            let to_screen =
-                |p: glam::DVec2| shown_rect.min + Vec2::new(p.x as f32 * sx, p.y as f32 * sy);
-            let painter = ui.painter().with_clip_rect(shown_rect);
-            for (k, plane) in s.planes.iter().enumerate() {
-                let colour = PLANE_COLOURS[k % PLANE_COLOURS.len()];
-                let colour = if s.enabled[k] { colour } else { colour.gamma_multiply(0.35) };
-                let overlay = plane_overlay(camera, plane);
-                for (a, b) in overlay.edges {
-                    painter.line_segment([to_screen(a), to_screen(b)], Stroke::new(1.5, colour));
-                }
-                if let Some((a, b)) = overlay.normal {
-                    painter.arrow(
-                        to_screen(a),
-                        to_screen(b) - to_screen(a),
-                        Stroke::new(2.0, colour),
-                    );
-                }
-            }
-            for plane in &s.dropped {
-                for (a, b) in plane_overlay(camera, plane).edges {
-                    painter.line_segment([to_screen(a), to_screen(b)], Stroke::new(1.0, DROPPED));
-                }
-            }
+            let (planes, on, dropped) = (&s.planes, &s.enabled, &s.dropped);
+            paint_plane_outlines(ui.painter(), shown_rect, camera, planes, on, dropped);
         }
     }
 

@@ -10,6 +10,7 @@ pub mod camera;
 mod frame_times;
 pub mod live;
 pub mod overlay;
+mod plane_outlines;
 pub mod scene;
 pub mod screenshot;
 
