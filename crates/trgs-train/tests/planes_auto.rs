@@ -22,6 +22,29 @@ fn proposed(
     (kept, scene.planes)
 }
 
+/// A `--planes auto` run of 40 steps on the small synthetic scene with `sparse_points`, in a
+/// scratch folder named `name` (kept while the returned folder lives), writing to its `run/`.
+fn auto_run(
+    name: &str,
+    sparse_points: usize,
+    checkpoint_every: Option<u32>,
+) -> (ScratchDir, RunConfig) {
+    let dir = ScratchDir::new(name);
+    let data = dir.join("data");
+    let config = SyntheticConfig { sparse_points, ..SyntheticConfig::small() };
+    write_dataset(&generate(&config), &data).expect("dataset");
+    let config = RunConfig {
+        data: Some(data),
+        out: dir.join("run"),
+        iterations: 40,
+        checkpoint_every,
+        sh_degree: 1,
+        planes: Some(PlaneSource::Auto),
+        ..RunConfig::default()
+    };
+    (dir, config)
+}
+
 #[test]
 fn the_proposal_finds_the_pane_from_the_sparse_points() {
     let config = SyntheticConfig { sparse_points: 4000, ..SyntheticConfig::small() };
@@ -51,19 +74,8 @@ fn the_closed_room_gets_no_candidate() {
 
 #[test]
 fn an_auto_run_proposes_tries_and_decides() {
-    let dir = ScratchDir::new("planes-auto");
-    let data = dir.join("data");
-    let config = SyntheticConfig { sparse_points: 4000, ..SyntheticConfig::small() };
-    write_dataset(&generate(&config), &data).expect("dataset");
-    let out = dir.join("run");
-    let config = RunConfig {
-        data: Some(data),
-        out: out.clone(),
-        iterations: 40,
-        sh_degree: 1,
-        planes: Some(PlaneSource::Auto),
-        ..RunConfig::default()
-    };
+    let (_dir, config) = auto_run("planes-auto", 4000, None);
+    let out = config.out.clone();
     let mut run = TrainingRun::start(config, RunOptions::default()).expect("a run");
     let mut lines = Vec::new();
     let mut created = 0;
@@ -93,19 +105,8 @@ fn an_auto_run_proposes_tries_and_decides() {
 fn a_proposal_without_evidence_is_tried_again_then_given_up() {
     // Too few sparse points to show the pane, and no densification within the run to grow the
     // model: every try waits or finds nothing, each says when the next comes, the last gives up.
-    let dir = ScratchDir::new("planes-auto-retry");
-    let data = dir.join("data");
-    let config = SyntheticConfig { sparse_points: 40, ..SyntheticConfig::small() };
-    write_dataset(&generate(&config), &data).expect("dataset");
-    let out = dir.join("run");
-    let config = RunConfig {
-        data: Some(data),
-        out: out.clone(),
-        iterations: 40,
-        sh_degree: 1,
-        planes: Some(PlaneSource::Auto),
-        ..RunConfig::default()
-    };
+    let (_dir, config) = auto_run("planes-auto-retry", 40, None);
+    let out = config.out.clone();
     let mut run = TrainingRun::start(config, RunOptions::default()).expect("a run");
     let mut lines = Vec::new();
     run.run_to_end(|e| {
@@ -138,20 +139,8 @@ fn a_proposal_without_evidence_is_tried_again_then_given_up() {
 fn a_later_proposal_ends_stage1_there_and_a_resume_keeps_it() {
     // 4000 sparse points and no densification within 40 steps: the model never reaches twice
     // that, so the proposal waits to its last try (step 20), which proposes the pane.
-    let dir = ScratchDir::new("planes-auto-late");
-    let data = dir.join("data");
-    let config = SyntheticConfig { sparse_points: 4000, ..SyntheticConfig::small() };
-    write_dataset(&generate(&config), &data).expect("dataset");
-    let out = dir.join("run");
-    let config = RunConfig {
-        data: Some(data),
-        out: out.clone(),
-        iterations: 40,
-        checkpoint_every: Some(5),
-        sh_degree: 1,
-        planes: Some(PlaneSource::Auto),
-        ..RunConfig::default()
-    };
+    let (_dir, config) = auto_run("planes-auto-late", 4000, Some(5));
+    let out = config.out.clone();
     let mut run = TrainingRun::start(config, RunOptions::default()).expect("a run");
     let mut moved = Vec::new();
     loop {

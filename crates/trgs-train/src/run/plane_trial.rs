@@ -2,8 +2,8 @@
 //! through which the cameras see points are proposed as candidate planes
 //! (`trgs_core::fit::propose_planes`); while none is found, the proposal is tried again on the
 //! growing model ([`next_proposal_try`]) and stage 1 goes on. Candidates are added as the masks'
-//! planes are: glass Gaussians over
-//! each one's see-through region, reflection seeds, no offset limit. A fifth of the training
+//! planes are: glass Gaussians over each one's see-through region, reflection seeds, no offset
+//! limit. A fifth of the training
 //! views is held out of the steps while they are on trial. The trial runs through stage 2 (where
 //! the Gaussians get no gradient from the mirrored passes, so a plane cannot show yet what it
 //! explains) and a tenth of the run into stage 3; then each candidate is switched off in turn on
