@@ -118,11 +118,14 @@ pub struct TrainSettings {
 /// logit).
 pub const PERTURB_AMPLITUDE: f64 = 0.4;
 
-/// When the opacity perturbation runs: every `every` steps of stage 3 before `until`, skipping
-/// the steps of an opacity reset (the paper interleaves the two).
+/// When the opacity perturbation runs: every `every` steps of stage 3 from `from` and before
+/// `until`, skipping the steps of an opacity reset (the paper interleaves the two).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PerturbSchedule {
     pub every: u32,
+    /// The first step it may run at: `--planes auto` holds it back while candidate planes are on
+    /// trial, so that a dropped candidate has not shaken the model it leaves behind.
+    pub from: u32,
     pub until: u32,
     /// Half-width of the uniform noise on the opacity (paper: 0.4).
     pub amplitude: f64,
@@ -134,6 +137,7 @@ impl PerturbSchedule {
     pub fn scaled(iterations: u32) -> Self {
         Self {
             every: scale_len(1000, iterations).max(100),
+            from: 0,
             until: iterations - iterations / 10,
             amplitude: PERTURB_AMPLITUDE,
         }
@@ -181,6 +185,14 @@ impl TrainSettings {
         }
     }
 
+    /// Whether the opacity perturbation's schedule runs after step `t` (the trainer also skips
+    /// it without planes and at an opacity reset).
+    pub fn perturbs_at(&self, t: u32) -> bool {
+        self.perturb.is_some_and(|p| {
+            self.stage(t) == Stage::Joint && t >= p.from && t < p.until && t.is_multiple_of(p.every)
+        })
+    }
+
     /// The SH degree of the model after `steps` steps, which the step that brings the count to
     /// `steps` already trains with: 3DGS raises it at the start of iterations 1000, 2000 and 3000
     /// (counted from 1), so the step numbered 1000 renders with degree 1.
@@ -218,5 +230,17 @@ mod tests {
         assert_eq!(s.active_sh_degree(999), 0);
         assert_eq!(s.active_sh_degree(1000), 1);
         assert_eq!(s.active_sh_degree(3000), 3);
+    }
+
+    #[test]
+    fn the_perturbation_runs_in_stage3_from_its_first_step() {
+        // 2000 steps: stage 3 from 400, every 100 steps, none in the last tenth.
+        let mut s = TrainSettings::scaled(2000);
+        let at = |s: &TrainSettings| (0..2000).filter(|&t| s.perturbs_at(t)).collect::<Vec<_>>();
+        assert_eq!(at(&s), (4..18).map(|k| 100 * k).collect::<Vec<_>>());
+        s.perturb.as_mut().expect("on").from = 601;
+        assert_eq!(at(&s), (7..18).map(|k| 100 * k).collect::<Vec<_>>());
+        s.perturb = None;
+        assert!(at(&s).is_empty());
     }
 }

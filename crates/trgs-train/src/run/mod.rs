@@ -195,6 +195,9 @@ impl TrainingRun {
                 if let Some(end) = state.stage1_end {
                     trainer.settings.stage1 = end;
                 }
+                if let Some(trial) = &state.trial {
+                    plane_trial::hold_perturbation_for(&mut trainer.settings, trial);
+                }
                 (trainer, state, log)
             }
             None => new_run_state(&ctx, &config, &data, &mut note)?,

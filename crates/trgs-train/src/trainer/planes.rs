@@ -152,9 +152,7 @@ impl Trainer {
         let t = self.step;
         let Some(p) = self.settings.perturb else { return Ok(None) };
         if self.planes().is_empty()
-            || self.settings.stage(t) != Stage::Joint
-            || t >= p.until
-            || !t.is_multiple_of(p.every)
+            || !self.settings.perturbs_at(t)
             || self.densification.resets_opacity_at(t)
         {
             return Ok(None);
