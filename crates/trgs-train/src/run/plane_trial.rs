@@ -3,10 +3,10 @@
 //! (`trgs_core::fit::propose_planes`); while none is found, the proposal is tried again on the
 //! growing model ([`next_proposal_try`]) and stage 1 goes on. Candidates are added as the masks'
 //! planes are: glass Gaussians over each one's see-through region, reflection seeds, no offset
-//! limit. A fifth of the training
-//! views is held out of the steps while they are on trial. The trial runs through stage 2 (where
-//! the Gaussians get no gradient from the mirrored passes, so a plane cannot show yet what it
-//! explains) and a tenth of the run into stage 3; then each candidate is switched off in turn on
+//! limit. A fifth of the training views is held out of the steps while they are on trial, and
+//! the opacity perturbation waits ([`hold_perturbation_for`]). The trial runs through stage 2
+//! (where the Gaussians get no gradient from the mirrored passes, so a plane cannot show yet
+//! what it explains) and a tenth of the run into stage 3; then each candidate is switched off in turn on
 //! the held-out views and kept only where that raises their L1 by at least [`MIN_L1_GAIN`] and
 //! its reflection strength `R` over the pixels it is hit at is at least [`MIN_STRENGTH`]. A
 //! dropped candidate's plane (so its mirrored pass) and its glass Gaussians are removed.
