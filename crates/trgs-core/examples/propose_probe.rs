@@ -36,7 +36,14 @@ fn main() {
     println!("proposal took {:.2} s, scale {:.3}", t.elapsed().as_secs_f64(), found.scale);
     for c in &found.candidates {
         let p = c.plane.map(|p| {
-            format!("n {:.3} c {:.3} {:.2}x{:.2}", p.unit_normal(), p.centre, p.width, p.height)
+            format!(
+                "n {:.3} c {:.3} axis {:.3} {:.2}x{:.2}",
+                p.unit_normal(),
+                p.centre,
+                p.axis,
+                p.width,
+                p.height
+            )
         });
         println!(
             "support {:6} seen {:6} ({:5.1}%) front {:4.2} flat {:.2} size {:.2}x{:.2} {:?} -> {}",

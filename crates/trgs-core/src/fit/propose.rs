@@ -334,19 +334,22 @@ mod tests {
     }
 
     /// A room: a wall in z = 0 over [-3, 3] x [0, 2.8], a floor, and cameras at z = 3 looking at
-    /// the wall; with `window`, a hole [-0.5, 0.5] x [0.5, 1.5] in the wall and two layers of
-    /// points behind it, where the cameras see them through the hole.
-    fn room(window: bool) -> (Vec<DVec3>, Vec<Camera>) {
-        let hole = |x: f64, y: f64| window && x.abs() < 0.5 && (0.5..1.5).contains(&y);
+    /// the wall; the wall has holes (panes) over each x range of `panes` with y in [0.5, 1.5],
+    /// and two layers of points behind them, where the cameras see them through the holes.
+    fn room(panes: &[(f64, f64)]) -> (Vec<DVec3>, Vec<Camera>) {
+        let hole = |x: f64, y: f64| {
+            panes.iter().any(|&(a, b)| (a..b).contains(&x)) && (0.5..1.5).contains(&y)
+        };
         let mut points: Vec<DVec3> =
             grid((-3.0, 3.0), (0.0, 2.8), 0.05, |x, y| DVec3::new(x, y, 0.0))
                 .into_iter()
                 .filter(|p| !hole(p.x, p.y))
                 .collect();
         points.extend(grid((-3.0, 3.0), (0.1, 3.0), 0.05, |x, z| DVec3::new(x, 0.0, z)));
-        if window {
+        if let (Some(left), Some(right)) = (panes.first(), panes.last()) {
+            let x = (left.0 - 0.1, right.1 + 0.1);
             for z in [-0.5, -1.5] {
-                points.extend(grid((-0.6, 0.6), (0.4, 1.6), 0.025, |x, y| DVec3::new(x, y, z)));
+                points.extend(grid(x, (0.4, 1.6), 0.025, |x, y| DVec3::new(x, y, z)));
             }
         }
         let k = Intrinsics::from_fov_x(1.2, 64, 48);
@@ -360,7 +363,7 @@ mod tests {
 
     #[test]
     fn a_window_in_a_wall_is_the_one_candidate_and_spans_the_hole() {
-        let (points, cameras) = room(true);
+        let (points, cameras) = room(&[(-0.5, 0.5)]);
         let found =
             propose_planes(&points, &cameras, &ProposalSettings::default(), &mut Rng::new(1))
                 .candidates;
@@ -379,11 +382,34 @@ mod tests {
 
     #[test]
     fn a_closed_room_gives_no_candidate() {
-        let (points, cameras) = room(false);
+        let (points, cameras) = room(&[]);
         let found =
             propose_planes(&points, &cameras, &ProposalSettings::default(), &mut Rng::new(1))
                 .candidates;
         assert!(!found.is_empty(), "the wall and floor are considered");
         assert!(found.iter().all(|c| c.rejected.is_some()), "{found:#?}");
+    }
+
+    #[test]
+    fn a_facade_of_panes_between_mullions_is_one_candidate_over_all_of_them() {
+        // Three panes 0.85 to 0.7 wide, split by mullions 0.3 wide: wider than the grid cell
+        // that groups the sight lines' crossings, so each pane's crossings are a group of
+        // their own.
+        let panes = [(-1.5, -0.65), (-0.35, 0.35), (0.65, 1.5)];
+        let (points, cameras) = room(&panes);
+        let found =
+            propose_planes(&points, &cameras, &ProposalSettings::default(), &mut Rng::new(1))
+                .candidates;
+        let proposed: Vec<_> = found.iter().filter(|c| c.rejected.is_none()).collect();
+        assert_eq!(proposed.len(), 1, "{found:#?}");
+        let plane = proposed[0].plane.expect("a plane");
+        assert!(plane.unit_normal().dot(DVec3::Z) > 0.9998, "{plane:?}");
+        let (width, height) = if plane.axis.x.abs() > plane.axis.y.abs() {
+            (plane.width, plane.height)
+        } else {
+            (plane.height, plane.width)
+        };
+        assert!((2.7..3.3).contains(&width) && (0.8..1.3).contains(&height), "{plane:?}");
+        assert!(plane.centre.distance(DVec3::new(0.0, 1.0, 0.0)) < 0.15, "{plane:?}");
     }
 }

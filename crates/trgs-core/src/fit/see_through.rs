@@ -19,14 +19,25 @@ pub struct SeeThrough {
     pub crossings: Vec<DVec2>,
 }
 
+/// A connected group of crossings with at least this fraction of the largest group's crossings
+/// is part of a see-through region: the panes of a facade, which its mullions split into groups
+/// of their own, are one region, while a few stray sight lines are not.
+pub const REGION_GROUP_FRACTION: f64 = 0.2;
+
 impl SeeThrough {
     /// The rectangle (plane coordinates) of the see-through region: the minimum-area box of the
-    /// crossings in the largest connected group of grid cells of size `cell`, so that a few stray
-    /// sight lines do not stretch it. `None` without crossings or for a region of no area.
+    /// crossings in the connected groups of grid cells of size `cell` that hold at least
+    /// [`REGION_GROUP_FRACTION`] of the largest group's crossings. `None` without crossings or
+    /// for a region of no area.
     pub fn region(&self, cell: f64) -> Option<OrientedBox> {
         let groups = grid_components(&self.crossings, cell);
-        let largest = groups.first()?;
-        let inside: Vec<DVec2> = largest.iter().map(|&k| self.crossings[k]).collect();
+        let least = REGION_GROUP_FRACTION * groups.first()?.len() as f64;
+        let inside: Vec<DVec2> = groups
+            .iter()
+            .take_while(|g| g.len() as f64 >= least)
+            .flatten()
+            .map(|&k| self.crossings[k])
+            .collect();
         min_area_box(&inside).filter(|b| b.width > 0.0 && b.height > 0.0)
     }
 }
@@ -131,6 +142,23 @@ mod tests {
         // From behind the wall (its back side as front) nothing is behind it from those cameras.
         let seen = see_through(&s, -front, &points, &all, &cams, 0.01);
         assert!(seen.points.is_empty());
+    }
+
+    #[test]
+    fn the_region_spans_groups_of_like_size_and_leaves_small_ones_out() {
+        // Two panes of 200 crossings each, 1 apart, and a group of 30 beyond them.
+        let mut crossings = Vec::new();
+        for x0 in [0.0, 2.0] {
+            for iy in 0..10 {
+                for ix in 0..20 {
+                    crossings.push(DVec2::new(x0 + ix as f64 * 0.05, iy as f64 * 0.05));
+                }
+            }
+        }
+        crossings.extend((0..30).map(|k| DVec2::new(5.0 + 0.01 * k as f64, 0.0)));
+        let seen = SeeThrough { points: vec![0], crossings };
+        let b = seen.region(0.1).expect("a region");
+        assert!((b.width - 2.95).abs() < 1e-9 && (b.height - 0.45).abs() < 1e-9, "{b:?}");
     }
 
     #[test]
