@@ -364,12 +364,15 @@ mod tests {
         (points, cameras)
     }
 
+    /// The proposal's candidates with the default settings.
+    fn candidates(points: &[DVec3], cameras: &[Camera]) -> Vec<PlaneCandidate> {
+        propose_planes(points, cameras, &ProposalSettings::default(), &mut Rng::new(1)).candidates
+    }
+
     #[test]
     fn a_window_in_a_wall_is_the_one_candidate_and_spans_the_hole() {
         let (points, cameras) = room(&[(-0.5, 0.5)]);
-        let found =
-            propose_planes(&points, &cameras, &ProposalSettings::default(), &mut Rng::new(1))
-                .candidates;
+        let found = candidates(&points, &cameras);
         let proposed: Vec<_> = found.iter().filter(|c| c.rejected.is_none()).collect();
         assert_eq!(proposed.len(), 1, "{found:#?}");
         let plane = proposed[0].plane.expect("a plane");
@@ -386,23 +389,19 @@ mod tests {
     #[test]
     fn a_closed_room_gives_no_candidate() {
         let (points, cameras) = room(&[]);
-        let found =
-            propose_planes(&points, &cameras, &ProposalSettings::default(), &mut Rng::new(1))
-                .candidates;
+        let found = candidates(&points, &cameras);
         assert!(!found.is_empty(), "the wall and floor are considered");
         assert!(found.iter().all(|c| c.rejected.is_some()), "{found:#?}");
     }
 
     #[test]
     fn a_facade_of_panes_between_mullions_is_one_candidate_over_all_of_them() {
-        // Three panes 0.85 to 0.7 wide, split by mullions 0.3 wide: wider than the grid cell
+        // Three panes 0.7 to 0.85 wide, split by mullions 0.3 wide: wider than the grid cell
         // that groups the sight lines' crossings, so each pane's crossings are a group of
         // their own.
         let panes = [(-1.5, -0.65), (-0.35, 0.35), (0.65, 1.5)];
         let (points, cameras) = room(&panes);
-        let found =
-            propose_planes(&points, &cameras, &ProposalSettings::default(), &mut Rng::new(1))
-                .candidates;
+        let found = candidates(&points, &cameras);
         let proposed: Vec<_> = found.iter().filter(|c| c.rejected.is_none()).collect();
         assert_eq!(proposed.len(), 1, "{found:#?}");
         let plane = proposed[0].plane.expect("a plane");

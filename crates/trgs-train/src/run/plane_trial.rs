@@ -6,10 +6,11 @@
 //! limit. A fifth of the training views is held out of the steps while they are on trial, and
 //! the opacity perturbation waits ([`hold_perturbation_for`]). The trial runs through stage 2
 //! (where the Gaussians get no gradient from the mirrored passes, so a plane cannot show yet
-//! what it explains) and a tenth of the run into stage 3; then each candidate is switched off in turn on
-//! the held-out views and kept only where that raises their L1 by at least [`MIN_L1_GAIN`] and
-//! its reflection strength `R` over the pixels it is hit at is at least [`MIN_STRENGTH`]. A
-//! dropped candidate's plane (so its mirrored pass) and its glass Gaussians are removed.
+//! what it explains) and a tenth of the run into stage 3; then each candidate is switched off in
+//! turn on the held-out views and kept only where that raises their L1 by at least
+//! [`MIN_L1_GAIN`] and its reflection strength `R` over the pixels it is hit at is at least
+//! [`MIN_STRENGTH`]. A dropped candidate's plane (so its mirrored pass) and its glass Gaussians
+//! are removed.
 use super::candidates::{CandidateRecord, PlaneTrial, next_proposal_try};
 use super::{RunEvent, TrainingRun};
 use crate::data::View;
