@@ -23,6 +23,7 @@ use trgs_core::Image;
 use trgs_core::fit::{ProposalSettings, SilhouetteSettings, propose_planes, refine_to_masks};
 use trgs_core::plane_math::{ray_rectangle_hit, reflect_point};
 use trgs_core::scene::{Camera, Gaussians, Population, ReflectionPlane};
+use trgs_render::FrameImages;
 
 /// The least relative rise of the held-out views' L1 when a kept candidate is switched off.
 /// Switching a plane off measures how much the model leans on it, not what the model would be
@@ -267,8 +268,8 @@ fn owner(planes: &[ReflectionPlane], x: DVec3) -> Option<usize> {
 
 impl TrainingRun {
     /// Move each kept plane's rectangle onto its glass: where the training views hit it and the
-    /// learned mask says glass (M >= 1/2), taken as each view's glass mask for the masks' own
-    /// refinement (`fit::refine_to_masks`). The first rectangle is the see-through region of
+    /// trained layers say glass ([`glass_pixels`]), taken as each view's glass mask for the
+    /// masks' own refinement (`fit::refine_to_masks`). The first rectangle is the see-through region of
     /// the proposal, which the frame and the sight lines past its edges widen.
     fn fit_kept_to_their_glass(&mut self) -> Result<()> {
         let mut planes = self.trainer.planes().to_vec();
@@ -279,12 +280,7 @@ impl TrainingRun {
             let view = &self.data.train[vi];
             let images = self.trainer.render_with_planes(&planes, &view.camera)?;
             for (k, list) in masks.iter_mut().enumerate() {
-                let mut m = Image::<u8>::new(images.hit.width, images.hit.height, 1);
-                for (p, out) in m.data.iter_mut().enumerate() {
-                    *out = u8::from(
-                        images.hit.data[p] as usize == k + 1 && images.mask.data[p] >= 0.5,
-                    );
-                }
+                let m = glass_pixels(k, &planes[k], &view.camera, &images);
                 if m.data.contains(&1) {
                     list.push((vi, m));
                 }
@@ -298,7 +294,7 @@ impl TrainingRun {
                 Some(fit) => {
                     planes[k] = fit.plane;
                     format!(
-                        "moved onto its glass (M >= 1/2 in {} views): {:.2} x {:.2} -> {:.2} x \
+                        "moved onto its glass (seen in {} views): {:.2} x {:.2} -> {:.2} x \
                          {:.2}, centre moved {:.3}",
                         views.len(),
                         before.width,
@@ -321,6 +317,40 @@ impl TrainingRun {
 
 /// Training views (an even sample) whose learned mask refits the kept planes.
 const REFIT_VIEWS: usize = 16;
+
+/// A pixel sees through a plane when its transmission depth is at least this many times the
+/// plane's depth there: what it shows lies beyond the plane, not on it (a frame, a wall).
+const SEEN_THROUGH_DEPTH: f32 = 1.1;
+
+/// The pixels of a view where the trained layers say plane `k`'s glass is: plane `k` is hit
+/// there and either the learned mask says glass (M >= 1/2) or the view sees through the
+/// plane ([`SEEN_THROUGH_DEPTH`]). The mask alone leaves out glass whose reflection is faint
+/// (a dark floor seen through clear glass), where nothing in the loss holds M up, and a
+/// rectangle fitted to it shrinks off the pane; the depth alone leaves out a mirror, which
+/// nothing is seen through. A frame or a wall inside the first rectangle has neither.
+fn glass_pixels(
+    k: usize,
+    plane: &ReflectionPlane,
+    camera: &Camera,
+    images: &FrameImages,
+) -> Image<u8> {
+    let (w, h) = (images.hit.width, images.hit.height);
+    let origin = camera.pose.centre();
+    let mut out = Image::<u8>::new(w, h, 1);
+    for y in 0..h {
+        for x in 0..w {
+            let p = (y * w + x) as usize;
+            if images.hit.data[p] as usize != k + 1 {
+                continue;
+            }
+            // Along a ray of camera-space z = 1, the distance to the plane is its depth.
+            let seen_through = ray_rectangle_hit(plane, origin, camera.pixel_ray(x, y))
+                .is_some_and(|z| images.depth.data[p] >= SEEN_THROUGH_DEPTH * z as f32);
+            out.data[p] = u8::from(images.mask.data[p] >= 0.5 || seen_through);
+        }
+    }
+    out
+}
 
 /// The 90th percentile of `values` (0 for none): a candidate's strength where it reflects, which
 /// the mean would dilute by the wall around the glass that its first rectangle also covers.
@@ -392,5 +422,58 @@ mod tests {
         let earlier = PlaneTrial { decide_after: 400, ..trial };
         hold_perturbation_for(&mut s, &earlier);
         assert!(!s.perturbs_at(1000));
+    }
+
+    /// A camera 2 in front of a 1 x 1 pane that fills the middle of its 8 x 8 view.
+    fn pane_in_view() -> (ReflectionPlane, Camera, FrameImages) {
+        use trgs_core::scene::{Intrinsics, Material, Pose};
+        let plane =
+            ReflectionPlane::new(DVec3::ZERO, DVec3::Z, DVec3::X, 1.0, 1.0, Material::Glass);
+        let eye = DVec3::new(0.0, 0.0, 2.0);
+        let k = Intrinsics::from_fov_x(60f64.to_radians(), 8, 8);
+        let camera = Camera::new("c".to_string(), k, Pose::look_at(eye, DVec3::ZERO, DVec3::Y));
+        let f = |v: f32| Image::<f32>::filled(8, 8, 1, v);
+        let mut hit = Image::<u32>::new(8, 8, 1);
+        for y in 0..8 {
+            for x in 0..8 {
+                let ray = camera.pixel_ray(x, y);
+                let p = (y * 8 + x) as usize;
+                hit.data[p] = u32::from(ray_rectangle_hit(&plane, eye, ray).is_some());
+            }
+        }
+        let images = FrameImages {
+            color: Image::filled(8, 8, 3, 0.0),
+            transmission: Image::filled(8, 8, 3, 0.0),
+            depth: f(2.0),
+            depth_variance: f(0.0),
+            mask: f(0.0),
+            alpha: f(1.0),
+            hit,
+            strength_raw: f(0.0),
+            strength: f(0.0),
+            reflection: Image::filled(8, 8, 3, 0.0),
+            planes: Vec::new(),
+        };
+        (plane, camera, images)
+    }
+
+    #[test]
+    fn glass_is_where_the_mask_says_so_or_the_view_sees_through_the_plane() {
+        let (plane, camera, mut images) = pane_in_view();
+        let inside: Vec<usize> = (0..64).filter(|&p| images.hit.data[p] == 1).collect();
+        assert!(inside.len() >= 4 && inside.len() < 64, "{} pixels hit", inside.len());
+        // On the plane (a frame, a wall) with a low mask: not glass.
+        assert!(!glass_pixels(0, &plane, &camera, &images).data.contains(&1));
+        // Seen through with a low mask (faint reflection): glass, where the plane is hit only.
+        images.depth = Image::filled(8, 8, 1, 3.0);
+        let m = glass_pixels(0, &plane, &camera, &images);
+        assert!((0..64).all(|p| (m.data[p] == 1) == inside.contains(&p)));
+        // On the plane with a high mask (a mirror): glass.
+        images.depth = Image::filled(8, 8, 1, 2.0);
+        images.mask = Image::filled(8, 8, 1, 0.9);
+        let m = glass_pixels(0, &plane, &camera, &images);
+        assert!((0..64).all(|p| (m.data[p] == 1) == inside.contains(&p)));
+        // Another plane's pixels are not this one's.
+        assert!(!glass_pixels(1, &plane, &camera, &images).data.contains(&1));
     }
 }
