@@ -269,8 +269,10 @@ fn owner(planes: &[ReflectionPlane], x: DVec3) -> Option<usize> {
 impl TrainingRun {
     /// Move each kept plane's rectangle onto its glass: where the training views hit it and the
     /// trained layers say glass ([`glass_pixels`]), taken as each view's glass mask for the
-    /// masks' own refinement (`fit::refine_to_masks`). The first rectangle is the see-through region of
-    /// the proposal, which the frame and the sight lines past its edges widen.
+    /// masks' own refinement (`fit::refine_to_masks`). The first rectangle is the see-through
+    /// region of the proposal, which the frame and the sight lines past its edges widen. Where
+    /// the glass so found pins no rectangle within the refinement's limits, the learned mask
+    /// alone is tried.
     fn fit_kept_to_their_glass(&mut self) -> Result<()> {
         let mut planes = self.trainer.planes().to_vec();
         let n = self.data.train.len();
@@ -281,22 +283,36 @@ impl TrainingRun {
             let images = self.trainer.render_with_planes(&planes, &view.camera)?;
             for (k, list) in masks.iter_mut().enumerate() {
                 let m = glass_pixels(k, &planes[k], &view.camera, &images);
-                if m.data.contains(&1) {
+                if m.data.iter().any(|&v| v != NOT_GLASS) {
                     list.push((vi, m));
                 }
             }
         }
+        let settings = SilhouetteSettings::default();
         for (k, list) in masks.iter().enumerate() {
-            let views: Vec<(&Camera, &Image<u8>)> =
-                list.iter().map(|(vi, m)| (&self.data.train[*vi].camera, m)).collect();
             let before = planes[k];
-            let text = match refine_to_masks(&before, &views, 1, &SilhouetteSettings::default()) {
-                Some(fit) => {
+            let refit = |glass: &dyn Fn(u8) -> bool| {
+                let binary: Vec<(usize, Image<u8>)> = list
+                    .iter()
+                    .map(|(vi, m)| {
+                        let data = m.data.iter().map(|&v| u8::from(glass(v))).collect();
+                        (*vi, Image { data, ..*m })
+                    })
+                    .filter(|(_, m)| m.data.contains(&1))
+                    .collect();
+                let views: Vec<(&Camera, &Image<u8>)> =
+                    binary.iter().map(|(vi, m)| (&self.data.train[*vi].camera, m)).collect();
+                refine_to_masks(&before, &views, 1, &settings).map(|fit| (fit, views.len()))
+            };
+            let text = match refit(&|v| v != NOT_GLASS)
+                .map(|r| (r, "seen"))
+                .or_else(|| refit(&|v| v == MASKED_GLASS).map(|r| (r, "its mask alone")))
+            {
+                Some(((fit, views), by)) => {
                     planes[k] = fit.plane;
                     format!(
-                        "moved onto its glass (seen in {} views): {:.2} x {:.2} -> {:.2} x \
+                        "moved onto its glass ({by} in {views} views): {:.2} x {:.2} -> {:.2} x \
                          {:.2}, centre moved {:.3}",
-                        views.len(),
                         before.width,
                         before.height,
                         fit.plane.width,
@@ -306,7 +322,7 @@ impl TrainingRun {
                 }
                 None => format!(
                     "kept as proposed (its glass in {} views pins no rectangle)",
-                    views.len()
+                    list.len()
                 ),
             };
             self.events.push_back(RunEvent::Note(format!("kept plane {k}: {text}")));
@@ -322,12 +338,19 @@ const REFIT_VIEWS: usize = 16;
 /// plane's depth there: what it shows lies beyond the plane, not on it (a frame, a wall).
 const SEEN_THROUGH_DEPTH: f32 = 1.1;
 
-/// The pixels of a view where the trained layers say plane `k`'s glass is: plane `k` is hit
-/// there and either the learned mask says glass (M >= 1/2) or the view sees through the
-/// plane ([`SEEN_THROUGH_DEPTH`]). The mask alone leaves out glass whose reflection is faint
-/// (a dark floor seen through clear glass), where nothing in the loss holds M up, and a
-/// rectangle fitted to it shrinks off the pane; the depth alone leaves out a mirror, which
-/// nothing is seen through. A frame or a wall inside the first rectangle has neither.
+/// [`glass_pixels`]' labels.
+const NOT_GLASS: u8 = 0;
+/// The learned mask says glass (M >= 1/2).
+const MASKED_GLASS: u8 = 1;
+/// The mask does not, but the view sees through the plane ([`SEEN_THROUGH_DEPTH`]).
+const SEEN_GLASS: u8 = 2;
+
+/// Where a view's trained layers say plane `k`'s glass is: plane `k` is hit there and either
+/// the learned mask says glass ([`MASKED_GLASS`]) or the view sees through the plane
+/// ([`SEEN_GLASS`]). The mask alone leaves out glass whose reflection is faint (a dark floor
+/// seen through clear glass), where nothing in the loss holds M up, and a rectangle fitted to it
+/// shrinks off the pane; the depth alone leaves out a mirror, which nothing is seen through once
+/// trained. A frame or a wall inside the first rectangle has neither.
 fn glass_pixels(
     k: usize,
     plane: &ReflectionPlane,
@@ -346,7 +369,13 @@ fn glass_pixels(
             // Along a ray of camera-space z = 1, the distance to the plane is its depth.
             let seen_through = ray_rectangle_hit(plane, origin, camera.pixel_ray(x, y))
                 .is_some_and(|z| images.depth.data[p] >= SEEN_THROUGH_DEPTH * z as f32);
-            out.data[p] = u8::from(images.mask.data[p] >= 0.5 || seen_through);
+            out.data[p] = if images.mask.data[p] >= 0.5 {
+                MASKED_GLASS
+            } else if seen_through {
+                SEEN_GLASS
+            } else {
+                NOT_GLASS
+            };
         }
     }
     out
@@ -462,18 +491,20 @@ mod tests {
         let (plane, camera, mut images) = pane_in_view();
         let inside: Vec<usize> = (0..64).filter(|&p| images.hit.data[p] == 1).collect();
         assert!(inside.len() >= 4 && inside.len() < 64, "{} pixels hit", inside.len());
+        let glass = |images: &FrameImages, k: usize, label: u8| -> Vec<usize> {
+            let m = glass_pixels(k, &plane, &camera, images);
+            (0..64).filter(|&p| m.data[p] == label).collect()
+        };
         // On the plane (a frame, a wall) with a low mask: not glass.
-        assert!(!glass_pixels(0, &plane, &camera, &images).data.contains(&1));
+        assert_eq!(glass(&images, 0, NOT_GLASS).len(), 64);
         // Seen through with a low mask (faint reflection): glass, where the plane is hit only.
         images.depth = Image::filled(8, 8, 1, 3.0);
-        let m = glass_pixels(0, &plane, &camera, &images);
-        assert!((0..64).all(|p| (m.data[p] == 1) == inside.contains(&p)));
-        // On the plane with a high mask (a mirror): glass.
+        assert_eq!(glass(&images, 0, SEEN_GLASS), inside);
+        // On the plane with a high mask (a mirror): glass by the mask.
         images.depth = Image::filled(8, 8, 1, 2.0);
         images.mask = Image::filled(8, 8, 1, 0.9);
-        let m = glass_pixels(0, &plane, &camera, &images);
-        assert!((0..64).all(|p| (m.data[p] == 1) == inside.contains(&p)));
+        assert_eq!(glass(&images, 0, MASKED_GLASS), inside);
         // Another plane's pixels are not this one's.
-        assert!(!glass_pixels(1, &plane, &camera, &images).data.contains(&1));
+        assert_eq!(glass(&images, 1, NOT_GLASS).len(), 64);
     }
 }
