@@ -305,7 +305,7 @@ impl TrainingRun {
                 refine_to_masks(&before, &views, 1, &settings).map(|fit| (fit, views.len()))
             };
             let text = match refit(&|v| v != NOT_GLASS)
-                .map(|r| (r, "seen"))
+                .map(|r| (r, "its mask or seen through it"))
                 .or_else(|| refit(&|v| v == MASKED_GLASS).map(|r| (r, "its mask alone")))
             {
                 Some(((fit, views), by)) => {
