@@ -46,7 +46,7 @@ fn main() {
             )
         });
         println!(
-            "support {:6} seen {:6} ({:5.1}%) front {:4.2} flat {:.2} size {:.2}x{:.2} {:?} -> {}",
+            "support {:6} seen {:6} ({:5.1}%) front {:4.2} flat {:.2} size {:.2}x{:.2} {:?} opening of {:?} -> {}",
             c.support,
             c.seen_through,
             100.0 * c.seen_fraction,
@@ -55,6 +55,7 @@ fn main() {
             c.structure_size.0,
             c.structure_size.1,
             p,
+            c.opening_of,
             c.rejected.clone().unwrap_or("PROPOSED".into())
         );
     }

@@ -10,6 +10,7 @@
 //! glass Gaussians uniformly on it.
 mod exposure;
 mod hull;
+mod openings;
 mod propose;
 mod ransac;
 mod rectangle;

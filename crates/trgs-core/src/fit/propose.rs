@@ -9,6 +9,7 @@
 //! the far wall of the room behind the window, and must not make that wall a candidate too.
 use glam::DVec3;
 
+use super::openings::{hand_over, opening_holding};
 use super::see_through::{SeeThrough, see_through};
 use super::structures::{Structure, StructureSettings, find_structures, hulls_touch};
 use crate::rng::Rng;
@@ -90,6 +91,9 @@ pub struct PlaneCandidate {
     /// Of the points within [`PLANARITY_SLAB`] thresholds of its plane inside its hull, the
     /// fraction within one: near 1 for a surface, low for a slice through a cloud.
     pub planarity: f64,
+    /// The candidate (its index here) in an opening of which this one is turned, and whose sight
+    /// lines through that opening it took (`super::openings`).
+    pub opening_of: Option<usize>,
     /// `None` for a proposed candidate; otherwise why it was not proposed.
     pub rejected: Option<String>,
 }
@@ -163,27 +167,40 @@ fn propose_at_scale(
         structures.iter().map(|s| facing_side(s, points, cameras)).collect();
     let flatness: Vec<f64> = structures.iter().map(|s| planarity(s, points, threshold)).collect();
 
+    let judge = |k: usize, seen: &SeeThrough| {
+        let (front, in_front) = facing[k];
+        let mut c = assess(&structures[k], points, front, in_front, seen, cell, settings);
+        c.planarity = flatness[k];
+        if c.rejected.is_none() && c.planarity < settings.min_planarity {
+            c.rejected = Some(format!(
+                "not a surface: {:.0}% of the points near its plane lie on it (at least {:.0}% \
+                 needed)",
+                100.0 * c.planarity,
+                100.0 * settings.min_planarity
+            ));
+        }
+        c
+    };
+
     let mut unexplained = vec![true; points.len()];
     let mut open: Vec<usize> = (0..structures.len()).collect();
     let (mut proposed, mut parts) = (Vec::new(), Vec::new());
+    // The structure and sight lines of each of `proposed` (those taken, then those left).
+    let mut considered: Vec<(usize, SeeThrough)> = Vec::new();
     while proposed.len() < settings.max_candidates {
         let candidates: Vec<usize> = (0..points.len()).filter(|&i| unexplained[i]).collect();
         let scored: Vec<(usize, SeeThrough, PlaneCandidate)> = open
             .iter()
             .map(|&k| {
-                let (front, in_front) = facing[k];
-                let seen =
-                    see_through(&structures[k], front, points, &candidates, cameras, threshold);
-                let mut c = assess(&structures[k], points, front, in_front, &seen, cell, settings);
-                c.planarity = flatness[k];
-                if c.rejected.is_none() && c.planarity < settings.min_planarity {
-                    c.rejected = Some(format!(
-                        "not a surface: {:.0}% of the points near its plane lie on it (at least \
-                         {:.0}% needed)",
-                        100.0 * c.planarity,
-                        100.0 * settings.min_planarity
-                    ));
-                }
+                let seen = see_through(
+                    &structures[k],
+                    facing[k].0,
+                    points,
+                    &candidates,
+                    cameras,
+                    threshold,
+                );
+                let c = judge(k, &seen);
                 (k, seen, c)
             })
             .collect();
@@ -192,9 +209,12 @@ fn propose_at_scale(
             .filter(|(_, _, c)| c.rejected.is_none())
             .max_by_key(|(k, _, c)| (c.seen_through, std::cmp::Reverse(*k)));
         let Some((k, seen, c)) = best.cloned() else {
-            let mut rejected: Vec<PlaneCandidate> = scored.into_iter().map(|(_, _, c)| c).collect();
-            rejected.sort_by_key(|c| std::cmp::Reverse(c.seen_through));
-            proposed.extend(rejected);
+            let mut rejected = scored;
+            rejected.sort_by_key(|(_, _, c)| std::cmp::Reverse(c.seen_through));
+            for (k, seen, c) in rejected {
+                proposed.push(c);
+                considered.push((k, seen));
+            }
             break;
         };
         for &i in &seen.points {
@@ -219,6 +239,46 @@ fn propose_at_scale(
             j != k && !same_reflector(&structures[k], &structures[j], duplicate_offset, settings)
         });
         proposed.push(c);
+        considered.push((k, seen));
+    }
+    // An opening is handed over once, to the best-evidenced structure turned in it (taken or
+    // not: the wall took the sight lines it would have shown): one that took an opening neither
+    // takes another nor hands it on.
+    for a in 0..considered.len() {
+        for b in 0..considered.len() {
+            let room =
+                proposed.iter().filter(|c| c.rejected.is_none()).count() < settings.max_candidates;
+            if b == a
+                || proposed[a].rejected.is_some()
+                || proposed[a].opening_of.is_some()
+                || proposed[b].opening_of.is_some()
+                || (proposed[b].rejected.is_some() && !room)
+            {
+                continue;
+            }
+            let (wall, pane) = (&structures[considered[a].0], &structures[considered[b].0]);
+            let opening = opening_holding(
+                wall,
+                &considered[a].1,
+                pane,
+                points,
+                cell,
+                settings.merge_angle_deg,
+            );
+            let Some(opening) = opening else { continue };
+            let (mut from, mut to) = (considered[a].1.clone(), considered[b].1.clone());
+            let front = facing[considered[b].0].0;
+            hand_over(wall, &mut from, &opening, &mut to, pane, front, points, cameras, threshold);
+            // What takes an opening is a pane: it is itself a candidate once it has it.
+            let pane_candidate = judge(considered[b].0, &to);
+            if pane_candidate.rejected.is_some() {
+                continue;
+            }
+            let wall_candidate = judge(considered[a].0, &from);
+            (considered[a].1, considered[b].1) = (from, to);
+            proposed[a] = PlaneCandidate { opening_of: proposed[a].opening_of, ..wall_candidate };
+            proposed[b] = PlaneCandidate { opening_of: Some(a), ..pane_candidate };
+        }
     }
     proposed.extend(parts);
     proposed
@@ -318,6 +378,7 @@ fn assess(
         cameras_in_front,
         structure_size,
         planarity: 0.0,
+        opening_of: None,
         rejected,
     }
 }
@@ -414,5 +475,31 @@ mod tests {
         };
         assert!((2.7..3.3).contains(&width) && (0.8..1.3).contains(&height), "{plane:?}");
         assert!(plane.centre.distance(DVec3::new(0.0, 1.0, 0.0)) < 0.15, "{plane:?}");
+    }
+    #[test]
+    fn a_pane_turned_in_its_opening_takes_that_opening_from_the_wall() {
+        // Two openings; in the right one a pane turned 20 degrees about the opening's vertical
+        // centre line, of which the cameras see the frame's left stile and the rails' left part.
+        let (mut points, cameras) = room(&[(-1.5, -0.5), (0.5, 1.5)]);
+        let (s, c) = (20f64.to_radians().sin(), 20f64.to_radians().cos());
+        let turned = |u: f64, y: f64| DVec3::new(1.0 + u * c, y, -u * s);
+        points.extend(grid((-0.5, -0.4), (0.5, 1.5), 0.02, turned));
+        for y in [(0.5, 0.54), (1.46, 1.5)] {
+            points.extend(grid((-0.38, 0.2), y, 0.02, turned));
+        }
+        let found = candidates(&points, &cameras);
+        let proposed: Vec<_> = found.iter().filter(|c| c.rejected.is_none()).collect();
+        let wall = proposed.iter().position(|c| c.opening_of.is_none());
+        let wall = wall.unwrap_or_else(|| panic!("no wall: {found:#?}"));
+        let pane = proposed.iter().find(|c| c.opening_of == Some(wall));
+        let pane = pane.unwrap_or_else(|| panic!("no pane turned in an opening: {found:#?}"));
+        let left = proposed[wall].plane.expect("a plane");
+        assert!(left.unit_normal().dot(DVec3::Z) > 0.9998, "{left:?}");
+        assert!(left.centre.distance(DVec3::new(-1.0, 1.0, 0.0)) < 0.1, "only its own: {left:?}");
+        let right = pane.plane.expect("a plane");
+        let normal = DVec3::new(s, 0.0, c);
+        assert!(right.unit_normal().dot(normal) > 0.9998, "{right:?}");
+        assert!(right.centre.distance(DVec3::new(1.0, 1.0, 0.0)) < 0.2, "{right:?}");
+        assert!((0.9..1.4).contains(&right.width.max(right.height)), "{right:?}");
     }
 }

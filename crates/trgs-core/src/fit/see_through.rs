@@ -17,6 +17,9 @@ pub struct SeeThrough {
     pub points: Vec<usize>,
     /// Plane coordinates of the crossings of their sight lines inside the structure.
     pub crossings: Vec<DVec2>,
+    /// The sight line of each crossing: the point's index and the camera's (in the slice the
+    /// cameras were given in).
+    pub sight_lines: Vec<(usize, usize)>,
 }
 
 /// A connected group of crossings with at least this fraction of the largest group's crossings
@@ -57,10 +60,11 @@ pub fn see_through(
     threshold: f64,
 ) -> SeeThrough {
     let depth = |p: DVec3| (p - structure.point).dot(front);
-    let front_cameras: Vec<(&Camera, DVec3, f64)> = cameras
+    let front_cameras: Vec<(usize, &Camera, DVec3, f64)> = cameras
         .iter()
-        .map(|c| (*c, c.pose.centre()))
-        .filter_map(|(c, o)| (depth(o) > threshold).then_some((c, o, depth(o))))
+        .enumerate()
+        .map(|(j, c)| (j, *c, c.pose.centre()))
+        .filter_map(|(j, c, o)| (depth(o) > threshold).then_some((j, c, o, depth(o))))
         .collect();
     let mut out = SeeThrough::default();
     let mut crossings = Vec::new();
@@ -72,23 +76,29 @@ pub fn see_through(
         }
         crossings.clear();
         let mut in_view = 0usize;
-        for &(camera, o, dc) in &front_cameras {
+        for &(j, camera, o, dc) in &front_cameras {
             if !camera.sees(p) {
                 continue;
             }
             in_view += 1;
-            // The sight line o -> p meets the plane where the depth falls to zero.
-            let q = structure.to_plane(o + (p - o) * (dc / (dc - dp)));
+            let q = structure.to_plane(crossing(o, dc, p, dp));
             if structure.is_hole(q) {
-                crossings.push(q);
+                crossings.push((q, (i, j)));
             }
         }
         if in_view > 0 && crossings.len() >= in_view.min(2) {
             out.points.push(i);
-            out.crossings.extend_from_slice(&crossings);
+            out.crossings.extend(crossings.iter().map(|c| c.0));
+            out.sight_lines.extend(crossings.iter().map(|c| c.1));
         }
     }
     out
+}
+
+/// Where the sight line from a camera at `o`, `dc` in front of a plane, to a point `p`, `dp`
+/// in front of it (negative: behind), meets the plane: where the depth falls to zero.
+pub(super) fn crossing(o: DVec3, dc: f64, p: DVec3, dp: f64) -> DVec3 {
+    o + (p - o) * (dc / (dc - dp))
 }
 
 #[cfg(test)]
@@ -156,7 +166,7 @@ mod tests {
             }
         }
         crossings.extend((0..30).map(|k| DVec2::new(5.0 + 0.01 * k as f64, 0.0)));
-        let seen = SeeThrough { points: vec![0], crossings };
+        let seen = SeeThrough { points: vec![0], crossings, sight_lines: Vec::new() };
         let b = seen.region(0.1).expect("a region");
         assert!((b.width - 2.95).abs() < 1e-9 && (b.height - 0.45).abs() < 1e-9, "{b:?}");
     }
@@ -170,7 +180,7 @@ mod tests {
             }
         }
         crossings.push(DVec2::new(5.0, 5.0));
-        let seen = SeeThrough { points: vec![0], crossings };
+        let seen = SeeThrough { points: vec![0], crossings, sight_lines: Vec::new() };
         let b = seen.region(0.1).expect("a region");
         assert!((b.width - 0.95).abs() < 1e-9 && (b.height - 0.45).abs() < 1e-9, "{b:?}");
     }

@@ -75,6 +75,12 @@ impl Structure {
             && !self.occupied.contains(&self.cell_of(q))
     }
 
+    /// Whether plane coordinates `q` fall on the structure: in an occupancy cell that holds some
+    /// of its points, where a sight line is blocked.
+    pub fn blocks(&self, q: DVec2) -> bool {
+        self.occupancy_cell > 0.0 && self.occupied.contains(&self.cell_of(q))
+    }
+
     /// Plane coordinates of `p` (its projection onto the plane).
     pub fn to_plane(&self, p: DVec3) -> DVec2 {
         let d = p - self.point;
@@ -250,7 +256,7 @@ pub(super) fn hulls_touch(a: &Structure, b: &Structure, gap: f64) -> bool {
 }
 
 /// The area of a counter-clockwise polygon (0 for fewer than 3 vertices).
-fn polygon_area(p: &[DVec2]) -> f64 {
+pub(super) fn polygon_area(p: &[DVec2]) -> f64 {
     if p.len() < 3 {
         return 0.0;
     }

@@ -43,7 +43,14 @@ impl CandidateRecord {
             held_out_l1_gain: None,
             strength: None,
             kept: false,
-            why: c.rejected.clone().unwrap_or_else(|| "on trial".into()),
+            why: match (&c.rejected, c.opening_of) {
+                (Some(why), _) => why.clone(),
+                (None, Some(wall)) => format!(
+                    "on trial, over the opening of candidate {wall} it is turned in (the sight \
+                     lines through that opening are its)"
+                ),
+                (None, None) => "on trial".into(),
+            },
         }
     }
 
@@ -64,7 +71,7 @@ impl CandidateRecord {
         };
         let verdict = match (self.proposed, self.held_out_l1_gain.is_some(), self.kept) {
             (false, _, _) => format!("not proposed: {}", self.why),
-            (true, false, _) => "on trial".into(),
+            (true, false, _) => self.why.clone(),
             (true, true, true) => format!("kept: {}", self.why),
             (true, true, false) => format!("dropped: {}", self.why),
         };
