@@ -63,12 +63,13 @@ impl Opening {
 
 /// The opening of `wall` that `pane` is turned in: a connected group of the wall's crossings
 /// (grid cell `cell`) that is a hole in the wall ([`MAX_OPENING_SHARE`]), across which the
-/// pane's plane meets the wall's ([`Opening::pivots_in`]), and whose box, grown by a cell, holds at least [`PANE_IN_OPENING`] of the pane's points
-/// projected onto the wall's plane, those points lying within half the box's longer side of that
-/// plane (a pane turned in its opening stays there; the room seen through it lies farther).
-/// None where there is none, where the two are parallel within `parallel_deg` (a structure
-/// parallel to the wall in its opening is the pane's frame, part of the wall's reflector), and
-/// where they meet at more than [`MAX_TURN_DEG`].
+/// pane's plane meets the wall's ([`Opening::pivots_in`]), and whose box, grown by a cell, holds
+/// at least [`PANE_IN_OPENING`] of the pane's points projected onto the wall's plane, those
+/// points lying within half the box's longer side of that plane (a pane turned in its opening
+/// stays there; the room seen through it lies farther) and some of them where it meets the wall
+/// ([`PANE_MEETS_WALL`]). None where there is none, where the two are parallel within
+/// `parallel_deg` (a structure parallel to the wall in its opening is the pane's frame, part of
+/// the wall's reflector), and where they meet at more than [`MAX_TURN_DEG`].
 pub(super) fn opening_holding(
     wall: &Structure,
     wall_seen: &SeeThrough,
@@ -116,10 +117,9 @@ pub(super) fn opening_holding(
 /// is `pane` seen from `front`: each of their sight lines crosses the pane's plane instead,
 /// where the camera stands more than `threshold` in front of it and the point more than
 /// `threshold` behind it, and that crossing counts where it lies in the opening's space
-/// ([`Opening::holds`]; a sight line nearly along the pane's plane crosses it far away) and
-/// not on the pane's frame ([`Structure::blocks`]). A point
-/// stays seen through `from` while any of its crossings remains there. `cameras` is the slice
-/// `from`'s sight lines index.
+/// ([`Opening::holds`]; a sight line nearly along the pane's plane crosses it far away) and not
+/// on the pane's frame ([`Structure::blocks`]). A point stays seen through `from` while any of
+/// its crossings remains there. `cameras` is the slice `from`'s sight lines index.
 pub(super) fn hand_over(
     wall: &Structure,
     from: &mut SeeThrough,
@@ -132,9 +132,8 @@ pub(super) fn hand_over(
     threshold: f64,
 ) {
     let depth = |p: DVec3| (p - pane.point).dot(front);
-    let opening_crossings = &opening.crossings;
-    let mut moved = Vec::with_capacity(opening_crossings.len());
-    for &k in opening_crossings {
+    let mut moved = Vec::with_capacity(opening.crossings.len());
+    for &k in &opening.crossings {
         let (i, j) = from.sight_lines[k];
         let (o, p) = (cameras[j].pose.centre(), points[i]);
         let (dc, dp) = (depth(o), depth(p));
@@ -148,16 +147,16 @@ pub(super) fn hand_over(
             }
         }
     }
-    let opening = opening_crossings;
+    let kept = |k: usize| opening.crossings.binary_search(&k).is_err();
     let mut k = 0;
     from.crossings.retain(|_| {
         k += 1;
-        opening.binary_search(&(k - 1)).is_err()
+        kept(k - 1)
     });
     let mut k = 0;
     from.sight_lines.retain(|_| {
         k += 1;
-        opening.binary_search(&(k - 1)).is_err()
+        kept(k - 1)
     });
     let mut still: Vec<usize> = from.sight_lines.iter().map(|s| s.0).collect();
     still.sort_unstable();
