@@ -241,9 +241,40 @@ fn propose_at_scale(
         proposed.push(c);
         considered.push((k, seen));
     }
-    // An opening is handed over once, to the best-evidenced structure turned in it (taken or
-    // not: the wall took the sight lines it would have shown): one that took an opening neither
-    // takes another nor hands it on.
+    let fronts: Vec<DVec3> = facing.iter().map(|f| f.0).collect();
+    hand_over_openings(
+        &structures,
+        &fronts,
+        &mut considered,
+        &mut proposed,
+        &judge,
+        points,
+        cameras,
+        cell,
+        threshold,
+        settings,
+    );
+    proposed.extend(parts);
+    proposed
+}
+
+/// Hand each opening of a candidate that a structure is turned in over to that structure
+/// (`super::openings`). An opening is handed over once, to the best-evidenced structure turned
+/// in it (taken or not: the wall took the sight lines it would have shown): one that took an
+/// opening neither takes another nor hands it on. `considered` holds the structure index and
+/// sight lines of each of `proposed`; `judge` makes a candidate of them.
+fn hand_over_openings(
+    structures: &[Structure],
+    fronts: &[DVec3],
+    considered: &mut [(usize, SeeThrough)],
+    proposed: &mut [PlaneCandidate],
+    judge: &dyn Fn(usize, &SeeThrough) -> PlaneCandidate,
+    points: &[DVec3],
+    cameras: &[&Camera],
+    cell: f64,
+    threshold: f64,
+    settings: &ProposalSettings,
+) {
     for a in 0..considered.len() {
         for b in 0..considered.len() {
             let room =
@@ -267,7 +298,7 @@ fn propose_at_scale(
             );
             let Some(opening) = opening else { continue };
             let (mut from, mut to) = (considered[a].1.clone(), considered[b].1.clone());
-            let front = facing[considered[b].0].0;
+            let front = fronts[considered[b].0];
             hand_over(wall, &mut from, &opening, &mut to, pane, front, points, cameras, threshold);
             // What takes an opening is a pane: it is itself a candidate once it has it.
             let pane_candidate = judge(considered[b].0, &to);
@@ -280,8 +311,6 @@ fn propose_at_scale(
             proposed[b] = PlaneCandidate { opening_of: Some(a), ..pane_candidate };
         }
     }
-    proposed.extend(parts);
-    proposed
 }
 
 /// Whether structure `b` is part of the reflector whose plane is `a`'s: parallel within the merge
