@@ -26,6 +26,10 @@ pub struct CandidateRecord {
     pub kept: bool,
     /// Why it was not proposed, or why it was kept or dropped.
     pub why: String,
+    /// The candidate in an opening of which it is turned, whose sight lines there it took
+    /// (`trgs_core::fit::PlaneCandidate::opening_of`); absent in records from before.
+    #[serde(default)]
+    pub opening_of: Option<usize>,
 }
 
 impl CandidateRecord {
@@ -51,6 +55,7 @@ impl CandidateRecord {
                 ),
                 (None, None) => "on trial".into(),
             },
+            opening_of: c.opening_of,
         }
     }
 
@@ -110,7 +115,17 @@ pub fn next_proposal_try(step: u32, stage1: u32, iterations: u32) -> Option<u32>
 
 #[cfg(test)]
 mod tests {
-    use super::next_proposal_try;
+    use super::{CandidateRecord, next_proposal_try};
+
+    #[test]
+    fn a_record_from_before_the_openings_reads_as_turned_in_none() {
+        let old = r#"{"centre": null, "normal": null, "axis": null, "size": null, "support": 3,
+            "seen_through": 0, "seen_fraction": 0.0, "cameras_in_front": 1.0, "proposed": false,
+            "held_out_l1_gain": null, "strength": null, "kept": false, "why": "too few"}"#;
+        let record: CandidateRecord = serde_json::from_str(old).expect("an older record");
+        assert_eq!(record.opening_of, None);
+        assert_eq!(record.why, "too few");
+    }
 
     #[test]
     fn the_proposal_is_tried_every_stage1_length_up_to_half_the_run() {
