@@ -147,17 +147,14 @@ pub(super) fn hand_over(
             }
         }
     }
-    let kept = |k: usize| opening.crossings.binary_search(&k).is_err();
-    let mut k = 0;
-    from.crossings.retain(|_| {
-        k += 1;
-        kept(k - 1)
-    });
-    let mut k = 0;
-    from.sight_lines.retain(|_| {
-        k += 1;
-        kept(k - 1)
-    });
+    (from.crossings, from.sight_lines) = from
+        .crossings
+        .iter()
+        .zip(&from.sight_lines)
+        .enumerate()
+        .filter(|(k, _)| opening.crossings.binary_search(k).is_err())
+        .map(|(_, (&q, &s))| (q, s))
+        .unzip();
     let mut still: Vec<usize> = from.sight_lines.iter().map(|s| s.0).collect();
     still.sort_unstable();
     from.points.retain(|i| still.binary_search(i).is_ok());

@@ -241,10 +241,9 @@ fn propose_at_scale(
         proposed.push(c);
         considered.push((k, seen));
     }
-    let fronts: Vec<DVec3> = facing.iter().map(|f| f.0).collect();
     hand_over_openings(
         &structures,
-        &fronts,
+        &facing,
         &mut considered,
         &mut proposed,
         &judge,
@@ -262,10 +261,11 @@ fn propose_at_scale(
 /// (`super::openings`). An opening is handed over once, to the best-evidenced structure turned
 /// in it (taken or not: the wall took the sight lines it would have shown): one that took an
 /// opening neither takes another nor hands it on. `considered` holds the structure index and
-/// sight lines of each of `proposed`; `judge` makes a candidate of them.
+/// sight lines of each of `proposed`; `judge` makes a candidate of them; `facing` is each
+/// structure's front side (and the fraction of its cameras there).
 fn hand_over_openings(
     structures: &[Structure],
-    fronts: &[DVec3],
+    facing: &[(DVec3, f64)],
     considered: &mut [(usize, SeeThrough)],
     proposed: &mut [PlaneCandidate],
     judge: &dyn Fn(usize, &SeeThrough) -> PlaneCandidate,
@@ -298,7 +298,7 @@ fn hand_over_openings(
             );
             let Some(opening) = opening else { continue };
             let (mut from, mut to) = (considered[a].1.clone(), considered[b].1.clone());
-            let front = fronts[considered[b].0];
+            let front = facing[considered[b].0].0;
             hand_over(wall, &mut from, &opening, &mut to, pane, front, points, cameras, threshold);
             // What takes an opening is a pane: it is itself a candidate once it has it.
             let pane_candidate = judge(considered[b].0, &to);
