@@ -14,7 +14,7 @@ use trgs_core::fit::{
     SilhouetteSettings, fit_rectangle, orient_towards, refine_to_masks, sample_rectangle,
 };
 use trgs_core::rng::Rng;
-use trgs_core::scene::{Gaussians, Material, Population, ReflectionPlane};
+use trgs_core::scene::{Camera, Gaussians, Material, Population, ReflectionPlane};
 
 /// Settings of the initialisation.
 #[derive(Clone, Debug, PartialEq)]
@@ -120,56 +120,19 @@ pub fn initialise_planes(
         offset_limits: Vec::new(),
     };
     let annotated: Vec<&View> = views.iter().filter(|v| v.mask.is_some()).collect();
-    let means: Vec<DVec3> = g.means.iter().map(|m| DVec3::from_array(m.map(f64::from))).collect();
+    let masks: Vec<(&Camera, &Image<u8>)> =
+        annotated.iter().filter_map(|v| Some((&v.camera, v.mask.as_ref()?))).collect();
     for &(label, material) in labels {
         let Ok(label8) = u8::try_from(label) else { continue };
-        // Votes: views where the centre falls in the band / views where it falls in the image.
-        let mut in_band = vec![0u32; means.len()];
-        let mut seen = vec![0u32; means.len()];
-        let mut cameras = Vec::new();
-        for v in &annotated {
-            let Some(mask) = &v.mask else { continue };
-            if !mask.data.contains(&label8) {
+        let mut plane = match fit_to_outline(g, &masks, label8, material, extent, settings, rng) {
+            Ok(plane) => plane,
+            Err(why) => {
+                out.failed.push((label, why));
                 continue;
             }
-            cameras.push(v.camera.pose.centre());
-            let k = &v.camera.intrinsics;
-            let radius = (settings.band_px_at_800 * f64::from(k.width) / 800.0).max(2.0);
-            let band = outline_band(mask, label8, radius);
-            for (i, (m, pop)) in means.iter().zip(&g.populations).enumerate() {
-                if *pop != Population::Primary {
-                    continue;
-                }
-                let Some(u) = v.camera.image_point(*m) else { continue };
-                seen[i] += 1;
-                if band[(u.y as usize) * k.width as usize + u.x as usize] {
-                    in_band[i] += 1;
-                }
-            }
-        }
-        let candidates: Vec<DVec3> = (0..means.len())
-            .filter(|&i| in_band[i] > 0 && 2 * in_band[i] >= seen[i])
-            .map(|i| means[i])
-            .collect();
-        let Some(fit) = fit_rectangle(
-            &candidates,
-            settings.ransac_threshold * extent,
-            settings.ransac_iterations,
-            rng,
-        ) else {
-            out.failed.push((
-                label,
-                format!("no plane fits the {} Gaussians on the mask outline", candidates.len()),
-            ));
-            continue;
         };
-        let mut plane = fit.to_plane(material);
-        plane.normal = orient_towards(fit.normal, fit.centre, &cameras);
-        plane.orthogonalise_axis();
         let mut offset_limit = None;
         if let Some(silhouette) = &settings.silhouette {
-            let masks: Vec<_> =
-                annotated.iter().filter_map(|v| Some((&v.camera, v.mask.as_ref()?))).collect();
             out.refined.push(match refine_to_masks(&plane, &masks, label8, silhouette) {
                 Some(r) => {
                     let moved = (r.plane.centre - plane.centre).dot(plane.unit_normal());
@@ -204,6 +167,60 @@ pub fn initialise_planes(
         out.offset_limits.push(offset_limit);
     }
     out
+}
+
+/// The plane of the primary Gaussians of `g` around the outline of `label` in `masks` (camera,
+/// label image): those whose centres project into a band around the outline in at least half
+/// the views that see them are fitted with a RANSAC plane and a minimum-area rectangle, and the
+/// normal is turned toward the cameras that show the label. Around a pane's outline lies its
+/// frame, which stands in the pane's plane. Err says why no plane fits.
+pub fn fit_to_outline(
+    g: &Gaussians<f32>,
+    masks: &[(&Camera, &Image<u8>)],
+    label: u8,
+    material: Material,
+    extent: f64,
+    settings: &PlaneInitSettings,
+    rng: &mut Rng,
+) -> Result<ReflectionPlane, String> {
+    let means: Vec<DVec3> = g.means.iter().map(|m| DVec3::from_array(m.map(f64::from))).collect();
+    // Votes: views where the centre falls in the band / views where it falls in the image.
+    let mut in_band = vec![0u32; means.len()];
+    let mut seen = vec![0u32; means.len()];
+    let mut cameras = Vec::new();
+    for (camera, mask) in masks.iter().filter(|(_, m)| m.data.contains(&label)) {
+        cameras.push(camera.pose.centre());
+        let k = &camera.intrinsics;
+        let radius = (settings.band_px_at_800 * f64::from(k.width) / 800.0).max(2.0);
+        let band = outline_band(mask, label, radius);
+        for (i, (m, pop)) in means.iter().zip(&g.populations).enumerate() {
+            if *pop != Population::Primary {
+                continue;
+            }
+            let Some(u) = camera.image_point(*m) else { continue };
+            seen[i] += 1;
+            if band[(u.y as usize) * k.width as usize + u.x as usize] {
+                in_band[i] += 1;
+            }
+        }
+    }
+    let candidates: Vec<DVec3> = (0..means.len())
+        .filter(|&i| in_band[i] > 0 && 2 * in_band[i] >= seen[i])
+        .map(|i| means[i])
+        .collect();
+    let fit = fit_rectangle(
+        &candidates,
+        settings.ransac_threshold * extent,
+        settings.ransac_iterations,
+        rng,
+    )
+    .ok_or_else(|| {
+        format!("no plane fits the {} Gaussians on the mask outline", candidates.len())
+    })?;
+    let mut plane = fit.to_plane(material);
+    plane.normal = orient_towards(fit.normal, fit.centre, &cameras);
+    plane.orthogonalise_axis();
+    Ok(plane)
 }
 
 /// Glass Gaussians on `plane`: flat discs of about the sample spacing, thin along the normal.
