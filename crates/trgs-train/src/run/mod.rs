@@ -33,6 +33,7 @@ mod folder;
 mod log;
 mod options;
 mod outputs;
+mod plane_refit;
 mod plane_trial;
 mod scene;
 mod state;
