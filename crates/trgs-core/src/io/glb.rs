@@ -4,7 +4,8 @@
 //! Written per the extension (release candidate of 2026-04): `POSITION` (with min/max),
 //! `KHR_gaussian_splatting:ROTATION` (unit quaternion, x y z w), `:SCALE` (linear), `:OPACITY`
 //! (after the sigmoid), `:SH_DEGREE_l_COEF_n` (3DGS's raw coefficients, `n` from the lowest order
-//! m; trgs's coefficient `l^2 + n`), and a `COLOR_0` fallback for point-cloud viewers, all f32.
+//! m; trgs's coefficient `l^2 + n`), and a `COLOR_0` fallback for point-cloud viewers (the
+//! DC colour, which 3DGS trains as sRGB, decoded to the linear values glTF expects), all f32.
 //! What the standard attributes cannot carry exactly goes into application attributes (the
 //! leading underscore of glTF): `_TRGS_OPACITY_LOGIT` (a logit does not survive a round trip
 //! through an f32 sigmoid near 0 or 1), `_TRGS_MASK_LOGIT`, `_TRGS_LOG_REFLECTION` and
@@ -100,7 +101,9 @@ fn columns(g: &Gaussians<f32>) -> Vec<Column> {
         }
     }
     let fallback = (0..n)
-        .flat_map(|i| g.sh[i * coeffs].map(|v| (0.5 + C0 as f32 * v).clamp(0.0, 1.0)))
+        .flat_map(|i| {
+            g.sh[i * coeffs].map(|v| srgb_to_linear((0.5 + C0 as f32 * v).clamp(0.0, 1.0)))
+        })
         .collect();
     cols.push(col("COLOR_0", "VEC3", fallback));
     cols.push(col("_TRGS_OPACITY_LOGIT", "SCALAR", g.opacity_logits.clone()));
@@ -112,6 +115,12 @@ fn columns(g: &Gaussians<f32>) -> Vec<Column> {
         g.populations.iter().map(|&p| p as u8 as f32).collect(),
     ));
     cols
+}
+
+/// The linear value of an sRGB-encoded one in [0, 1] (IEC 61966-2-1), as glTF's `COLOR_0`
+/// holds linear colour.
+fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
 }
 
 /// What the file stores `field` as, for messages (scales are stored as their exp, and read back

@@ -263,6 +263,18 @@ fn the_file_follows_the_extension_rules() {
     assert!(values("KHR_gaussian_splatting:SCALE").iter().all(|&s| s >= 0.0));
     assert!(values("KHR_gaussian_splatting:OPACITY").iter().all(|o| (0.0..=1.0).contains(o)));
     assert!(values("COLOR_0").iter().all(|c| (0.0..=1.0).contains(c)));
+    // COLOR_0 is linear: the DC colour (sRGB, as 3DGS trains it) decoded.
+    for (i, c) in values("COLOR_0").chunks(3).enumerate() {
+        let srgb = g.sh[i * g.sh_coeffs()].map(|v| (0.5 + C0 as f32 * v).clamp(0.0, 1.0));
+        for ch in 0..3 {
+            let want = if srgb[ch] <= 0.04045 {
+                srgb[ch] / 12.92
+            } else {
+                ((srgb[ch] + 0.055) / 1.055).powf(2.4)
+            };
+            assert!((c[ch] - want).abs() < 1e-6, "{c:?} for sRGB {srgb:?}");
+        }
+    }
     // The plane nodes hang under the root with their transform and extras.
     let root = &doc["nodes"][doc["scenes"][0]["nodes"][0].as_u64().expect("root") as usize];
     assert_eq!(root["children"].as_array().expect("children").len(), 3);
