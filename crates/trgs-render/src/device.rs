@@ -399,7 +399,13 @@ impl GpuContext {
         self.loss.reason()
     }
 
-    /// One line for logs: adapter, backend and optional features.
+    /// The adapter for users: its name, backend and kind.
+    pub fn adapter(&self) -> String {
+        format!("{} ({:?}, {:?})", self.info.name, self.info.backend, self.info.device_type)
+    }
+
+    /// One line for logs and benchmarks: adapter, backend, optional features and the layout
+    /// choices made for them.
     pub fn describe(&self) -> String {
         let on: Vec<&str> = OPTIONAL
             .iter()

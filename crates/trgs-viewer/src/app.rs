@@ -47,6 +47,8 @@ struct Shown {
     extent: Extent,
     /// Gaussian centres, for the depth display's range.
     means: Vec<[f32; 3]>,
+    test_views: Vec<String>,
+    folder: Option<PathBuf>,
     name: String,
 }
 
@@ -166,6 +168,8 @@ impl ViewerApp {
                     cameras: model.cameras,
                     extent,
                     means: model.gaussians.means,
+                    test_views: model.test_views,
+                    folder: model.folder,
                     name: model.name,
                 });
                 let view = self.pending_view.take().unwrap_or(0);
@@ -216,6 +220,8 @@ impl ViewerApp {
             reflection: snap.reflection,
             cameras: feed.cameras(),
             dropped: Vec::new(),
+            test_views: Vec::new(),
+            folder: None,
             name: "training".into(),
         };
         let Some(s) = &mut self.shown else {
@@ -267,7 +273,9 @@ impl ViewerApp {
                 |ui| {
                     if let Some(s) = &self.shown {
                         for (i, c) in s.cameras.iter().enumerate() {
-                            if ui.selectable_label(false, format!("{i}: {}", c.name)).clicked() {
+                            let test = if s.test_views.contains(&c.name) { " (test)" } else { "" };
+                            let label = format!("{i}: {}{test}", c.name);
+                            if ui.selectable_label(false, label).clicked() {
                                 go = Some(i);
                             }
                         }
@@ -329,7 +337,7 @@ impl ViewerApp {
         }
         ui.separator();
         if ui.button("Screenshot (F12)").clicked() {
-            self.screenshot(ui.ctx(), default_shot_path());
+            self.screenshot(ui.ctx(), self.default_shot_path());
         }
         ui.separator();
         if let Some(ms) = self.times.render_ms.0 {
@@ -341,7 +349,7 @@ impl ViewerApp {
         if let Some((c, _)) = &self.last_view {
             ui.label(format!("{}x{}", c.width(), c.height()));
         }
-        ui.small(self.ctx.describe());
+        ui.small(self.ctx.adapter());
     }
 
     /// Camera input on the scene's area. Returns whether the camera moved.
@@ -481,6 +489,16 @@ impl ViewerApp {
         }
     }
 
+    /// Where F12 saves: `screenshots/` in the open model's folder (the working directory while
+    /// watching training or with nothing open), named by the time.
+    fn default_shot_path(&self) -> PathBuf {
+        let secs = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_secs());
+        let folder = self.shown.as_ref().and_then(|s| s.folder.clone()).unwrap_or_default();
+        folder.join("screenshots").join(format!("trgs-screenshot-{secs}.png"))
+    }
+
     fn screenshot(&mut self, ctx: &egui::Context, path: PathBuf) {
         let Some((camera, rect)) = self.last_view.clone() else {
             self.message = Some(("nothing rendered yet to screenshot".into(), true));
@@ -499,13 +517,6 @@ impl ViewerApp {
         });
         ctx.request_repaint();
     }
-}
-
-fn default_shot_path() -> PathBuf {
-    let secs = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| d.as_secs());
-    PathBuf::from(format!("trgs-screenshot-{secs}.png"))
 }
 
 impl eframe::App for ViewerApp {
@@ -532,7 +543,7 @@ impl eframe::App for ViewerApp {
             }
         }
         if ctx.input(|i| i.key_pressed(egui::Key::F12)) {
-            self.screenshot(&ctx, default_shot_path());
+            self.screenshot(&ctx, self.default_shot_path());
         }
         if let Some(done) = self.shot_result.lock().unwrap_or_else(|p| p.into_inner()).take() {
             if let (Err(e), Some(_)) = (&done, &self.script.screenshot) {

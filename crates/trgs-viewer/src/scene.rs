@@ -20,6 +20,10 @@ pub struct LoadedModel {
     /// The candidate planes a `--planes auto` run tried and dropped (its metrics.json's
     /// `candidates`), drawn as outlines only.
     pub dropped: Vec<ReflectionPlane>,
+    /// The names of the run's test views (its metrics.json's `views`), marked in the view list.
+    pub test_views: Vec<String>,
+    /// The folder screenshots go to (under `screenshots/`): the run folder or the model's.
+    pub folder: Option<PathBuf>,
     /// What the title bar says.
     pub name: String,
 }
@@ -38,8 +42,19 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
         reflection: model.reflection,
         cameras,
         dropped: dropped_candidates(&folder.join("metrics.json")),
+        test_views: test_view_names(&folder.join("metrics.json")),
+        folder: Some(folder),
         name,
     })
+}
+
+/// The test views of the run whose metrics are at `path` (`views[].name`); none when the file
+/// is missing or unreadable.
+pub fn test_view_names(path: &Path) -> Vec<String> {
+    let Ok(text) = std::fs::read_to_string(path) else { return Vec::new() };
+    let Ok(metrics) = serde_json::from_str::<serde_json::Value>(&text) else { return Vec::new() };
+    let Some(views) = metrics.get("views").and_then(|v| v.as_array()) else { return Vec::new() };
+    views.iter().filter_map(|v| v["name"].as_str().map(str::to_owned)).collect()
 }
 
 /// The candidate planes that the run whose metrics are at `path` tried and dropped; none when
@@ -169,6 +184,11 @@ mod tests {
         assert_eq!(dropped.len(), 1, "only the one tried and dropped");
         assert_eq!((dropped[0].width, dropped[0].height), (2.0, 1.0));
         assert!(dropped_candidates(&dir.join("none.json")).is_empty());
+        let metrics =
+            serde_json::json!({"views": [{"name": "a.png", "psnr": 30.0}, {"name": "b.png"}]});
+        std::fs::write(&path, metrics.to_string()).expect("write");
+        assert_eq!(test_view_names(&path), ["a.png", "b.png"]);
+        assert!(test_view_names(&dir.join("none.json")).is_empty());
     }
 
     #[test]

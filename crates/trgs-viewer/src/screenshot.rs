@@ -32,6 +32,10 @@ pub fn save_screenshot(image: &egui::ColorImage, info: &ShotInfo) -> Result<()> 
             rgb.data[p * 3 + ch] = f32::from(v) / 255.0;
         }
     }
+    if let Some(dir) = info.path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("creating the screenshot folder {}", dir.display()))?;
+    }
     write_png_rgb(&info.path, &rgb)?;
     let camera: serde_json::Value =
         serde_json::from_str(&encode_cameras_json(std::slice::from_ref(&info.camera)))?;
