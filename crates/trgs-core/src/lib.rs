@@ -1,5 +1,6 @@
 //! trgs-core: everything of TR-Gaussians that needs no GPU.
 //!
+//! - [`bake`]: a model with planes as plain Gaussians for other 3DGS viewers;
 //! - [`scene`]: Gaussians (structure of arrays), cameras, reflection planes, input validation;
 //! - [`plane_math`]: Householder reflections, ray-rectangle hits, nearest-plane selection, Schlick;
 //! - [`plane_grad`]: a mirrored view's gradient chained into its plane's parameters;
@@ -11,6 +12,7 @@
 //! - [`io`]: COLMAP, transforms.json, glass masks, test split, planes.json and PLY.
 //!
 //! The procedural glass scenes that demos and tests train on are the crate `trgs-synthetic`.
+pub mod bake;
 pub mod fit;
 pub mod fixtures;
 pub mod image;

@@ -20,6 +20,7 @@
 //! each with its GPU stages), `planes/` (initialisation, seeds, plane Adam, perturbation),
 //! `losses/`, `exposure/` (per-view exposure compensation), `data/`; `kernels` and `layout` hold
 //! the crate's kernel table and GPU structs.
+pub mod bake;
 mod data;
 pub mod densify;
 pub mod eval;

@@ -28,6 +28,7 @@ pub mod planes_json;
 pub mod ply;
 pub mod png;
 pub mod run_folder;
+pub mod spz;
 pub mod test_split;
 #[cfg(test)]
 mod test_util;
@@ -53,5 +54,6 @@ pub use run_folder::{
     UNFINISHED_RUN_MARKER, UnfinishedRun, check_finished_run, clear_unfinished_run,
     read_unfinished_run, write_unfinished_run,
 };
+pub use spz::{encode_spz, parse_spz, read_spz, write_spz};
 pub use test_split::{default_test_views, read_test_views, write_test_views};
 pub use transforms::{TransformsFrame, read_transforms, write_transforms};

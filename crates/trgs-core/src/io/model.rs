@@ -1,5 +1,6 @@
 //! Loading a trained model: a Gaussian PLY (trgs or any INRIA-layout file) and its planes, or a
-//! `.glb` with `KHR_gaussian_splatting` (Gaussians and planes in one file).
+//! `.glb` with `KHR_gaussian_splatting` (Gaussians and planes in one file), or an `.spz`
+//! (Gaussians only).
 use super::{FormatError, check_finished_run, read_glb, read_planes_json, read_ply};
 use crate::pipeline::ReflectionModel;
 use crate::scene::{Gaussians, ReflectionPlane};
@@ -83,6 +84,17 @@ pub fn load_model(path: &Path, planes: Option<&Path>) -> Result<Model, FormatErr
         }
         let reflection = trained_reflection_model(path, path);
         return Ok(Model { gaussians, planes: inside, ply: path.to_path_buf(), reflection });
+    }
+    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("spz")) {
+        // SPZ holds plain Gaussians: planes only when given.
+        let gaussians = super::read_spz(path)?;
+        checked(path, &gaussians)?;
+        let planes = match planes {
+            Some(p) => load_model_planes(p)?,
+            None => Vec::new(),
+        };
+        let reflection = trained_reflection_model(path, path);
+        return Ok(Model { gaussians, planes, ply: path.to_path_buf(), reflection });
     }
     let ply = find_ply(path)?;
     let gaussians = read_ply(&ply)?;

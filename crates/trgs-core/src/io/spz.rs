@@ -1,0 +1,282 @@
+//! Niantic's SPZ, the compressed splat format that Scaniverse writes and SuperSplat, Spark and
+//! others read: a gzip stream of a 16-byte header and then, for all Gaussians at once, each
+//! attribute quantised to bytes (positions as 24-bit fixed point, the rest as 8 bits).
+//!
+//! Written by hand after the reference implementation's format (nianticlabs/spz, `load-spz.cc`):
+//! the spz crates on crates.io are young single-author ports, and the format is a few pages.
+//! trgs writes version 3 (gzip, rotations as "smallest three"), which every reader of the
+//! format reads; it reads versions 2 and 3. Version 4 (several zstd streams, 2025) is refused
+//! with a message: reading it would take a zstd decoder for one file type.
+//!
+//! The file holds its Gaussians in a right-up-back frame (x right, y up, z back, as OpenGL and
+//! glTF); trgs's, like the INRIA PLY's, is COLMAP's right-down-forward. The two differ by a half
+//! turn about x: positions and quaternion axes flip y and z, and each SH coefficient flips sign
+//! with its basis function (`rub_sign`), as the reference converts from a PLY.
+//!
+//! What is lost: positions to 1/4096 of a unit, colours and opacities to 8 bits, log-scales to
+//! 1/16, degree-1 SH to 5 bits and higher degrees to 4 bits, rotations to 9 bits per component;
+//! trgs's own fields (planes, glass Gaussians' masks, reflection intensities) are not stored.
+use super::{FormatError, write_atomic};
+use crate::scene::{Gaussians, Population, sh_coeff_count};
+use flate2::Compression;
+use flate2::read::GzDecoder;
+use flate2::write::GzEncoder;
+use std::io::{Read, Write};
+use std::path::Path;
+
+/// "NGSP", little-endian.
+const MAGIC: u32 = 0x5053_474e;
+/// The version written: gzip, smallest-three rotations.
+const VERSION: u32 = 3;
+/// Bits after the binary point of the 24-bit positions (the reference's choice: 0.25 mm in
+/// metres).
+const FRACTIONAL_BITS: u8 = 12;
+/// The DC colour's scale: byte = 255 (0.15 dc + 0.5).
+const COLOUR_SCALE: f32 = 0.15;
+/// SH quantisation: buckets of 2^(8 - bits) byte values, for degree 1 and for higher degrees.
+const SH1_BITS: u32 = 5;
+const SH_REST_BITS: u32 = 4;
+/// Header flag: the splats were trained with the anti-aliasing (Mip-Splatting) filter.
+const FLAG_ANTIALIASED: u8 = 0x1;
+/// Header flag of version 4 files only: extensions follow the data.
+const FLAG_HAS_EXTENSIONS: u8 = 0x2;
+
+/// The Gaussians in SPZ, gzip-compressed (glass Gaussians are written as any other). A
+/// position beyond what 24 bits hold (2048 units from the origin) is refused, naming it.
+pub fn encode_spz(g: &Gaussians<f32>) -> Result<Vec<u8>, String> {
+    let n = g.len();
+    let unit = f32::from(1u16 << FRACTIONAL_BITS);
+    let limit = (1 << 23) as f32 / unit;
+    if let Some(i) = g.means.iter().position(|m| m.iter().any(|v| !(v.abs() < limit))) {
+        return Err(format!(
+            "Gaussian {i} at {:?}: SPZ holds positions within {limit} units of the origin",
+            g.means[i]
+        ));
+    }
+    let k = g.sh_coeffs();
+    let signs = rub_signs(g.sh_degree);
+    let mut raw = Vec::with_capacity(16 + n * (9 + 1 + 3 + 3 + 4 + 3 * (k - 1)));
+    raw.extend_from_slice(&MAGIC.to_le_bytes());
+    raw.extend_from_slice(&VERSION.to_le_bytes());
+    raw.extend_from_slice(&(n as u32).to_le_bytes());
+    raw.extend_from_slice(&[g.sh_degree as u8, FRACTIONAL_BITS, 0, 0]);
+    for m in &g.means {
+        for v in rub_position(*m) {
+            let fixed = (v * unit).round() as i32;
+            raw.extend_from_slice(&fixed.to_le_bytes()[..3]);
+        }
+    }
+    raw.extend(g.opacity_logits.iter().map(|&l| to_u8(sigmoid(l) * 255.0)));
+    for i in 0..n {
+        raw.extend(g.sh[i * k].map(|dc| to_u8(dc * COLOUR_SCALE * 255.0 + 127.5)));
+    }
+    for s in &g.log_scales {
+        raw.extend(s.map(|v| to_u8((v + 10.0) * 16.0)));
+    }
+    for q in &g.rotations {
+        raw.extend_from_slice(&smallest_three(rub_quaternion(*q)).to_le_bytes());
+    }
+    for i in 0..n {
+        for j in 1..k {
+            for ch in 0..3 {
+                let bits = if j < 4 { SH1_BITS } else { SH_REST_BITS };
+                raw.push(quantise_sh(g.sh[i * k + j][ch] * signs[j], 1 << (8 - bits)));
+            }
+        }
+    }
+    let mut gz = GzEncoder::new(Vec::new(), Compression::default());
+    // Writing to a Vec cannot fail.
+    gz.write_all(&raw).map_err(|e| e.to_string())?;
+    gz.finish().map_err(|e| e.to_string())
+}
+
+/// Write `g` as an SPZ file (whole or not at all).
+pub fn write_spz(path: &Path, g: &Gaussians<f32>) -> Result<(), FormatError> {
+    let bytes = encode_spz(g).map_err(|e| FormatError::new(path, e))?;
+    write_atomic(path, &bytes)
+}
+
+/// Read an SPZ file of version 2 or 3 into primary Gaussians.
+pub fn read_spz(path: &Path) -> Result<Gaussians<f32>, FormatError> {
+    let bytes = std::fs::read(path).map_err(|e| FormatError::io(path, &e))?;
+    parse_spz(&bytes, path)
+}
+
+/// Parse the bytes of an SPZ file; `path` names it in errors.
+pub fn parse_spz(bytes: &[u8], path: &Path) -> Result<Gaussians<f32>, FormatError> {
+    let err = |what: String| FormatError::new(path, what);
+    if bytes.len() >= 4 && u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]) == MAGIC {
+        return Err(err(
+            "SPZ version 4 or later (zstd streams) is not read; write the file as version 3 \
+             (the reference library's PackOptions::version = 3)"
+                .into(),
+        ));
+    }
+    let mut raw = Vec::new();
+    GzDecoder::new(bytes)
+        .read_to_end(&mut raw)
+        .map_err(|e| err(format!("{e}; expected a gzip stream (an SPZ file of version 2 or 3)")))?;
+    let word = |at: usize| u32::from_le_bytes([raw[at], raw[at + 1], raw[at + 2], raw[at + 3]]);
+    if raw.len() < 16 || word(0) != MAGIC {
+        return Err(err("no SPZ header (expected the magic \"NGSP\" after decompressing)".into()));
+    }
+    let (version, n) = (word(4), word(8) as usize);
+    let (degree, fractional, flags) = (u32::from(raw[12]), raw[13], raw[14]);
+    if !(2..=3).contains(&version) {
+        return Err(err(format!("SPZ version {version}: trgs reads versions 2 and 3")));
+    }
+    if degree > 3 {
+        return Err(err(format!("SH degree {degree}: trgs models hold degrees 0 to 3")));
+    }
+    if flags & FLAG_HAS_EXTENSIONS != 0 {
+        return Err(err("extensions are a version 4 feature; the file says version 3".into()));
+    }
+    let _antialiased = flags & FLAG_ANTIALIASED != 0;
+    let k = sh_coeff_count(degree);
+    let rotation_bytes = if version >= 3 { 4 } else { 3 };
+    let per_point = 9 + 1 + 3 + 3 + rotation_bytes + 3 * (k - 1);
+    let expected = n.checked_mul(per_point).and_then(|b| b.checked_add(16));
+    if expected != Some(raw.len()) {
+        return Err(err(format!(
+            "{} bytes after decompressing; {n} Gaussians of SH degree {degree} take {}",
+            raw.len(),
+            expected.map_or("more than memory holds".to_string(), |e| e.to_string())
+        )));
+    }
+    let mut at = 16;
+    let mut take = |len: usize| {
+        let s = &raw[at..at + len];
+        at += len;
+        s
+    };
+    let positions = take(9 * n);
+    let alphas = take(n);
+    let colours = take(3 * n);
+    let scales = take(3 * n);
+    let rotations = take(rotation_bytes * n);
+    let sh = take(3 * (k - 1) * n);
+    let signs = rub_signs(degree);
+    let unit = 1.0 / f32::from(1u16 << fractional.min(15));
+    let mut g = Gaussians::empty(degree);
+    let mut coeffs = vec![[0.0f32; 3]; k];
+    for i in 0..n {
+        let p = &positions[9 * i..9 * i + 9];
+        let coord = |a: usize| {
+            let b = &p[3 * a..3 * a + 3];
+            // Sign-extend the 24-bit value.
+            (i32::from_le_bytes([b[0], b[1], b[2], 0]) << 8 >> 8) as f32 * unit
+        };
+        let mean = rub_position([coord(0), coord(1), coord(2)]);
+        let rotation = if version >= 3 {
+            let r = &rotations[4 * i..4 * i + 4];
+            from_smallest_three(u32::from_le_bytes([r[0], r[1], r[2], r[3]]))
+        } else {
+            from_first_three(&rotations[3 * i..3 * i + 3])
+        };
+        coeffs[0] =
+            [0, 1, 2].map(|ch| (f32::from(colours[3 * i + ch]) / 255.0 - 0.5) / COLOUR_SCALE);
+        for (j, c) in coeffs.iter_mut().enumerate().skip(1) {
+            let at = 3 * ((k - 1) * i + j - 1);
+            *c = [0, 1, 2].map(|ch| (f32::from(sh[at + ch]) - 128.0) / 128.0 * signs[j]);
+        }
+        g.push(
+            mean,
+            rub_quaternion(rotation),
+            [0, 1, 2].map(|a| f32::from(scales[3 * i + a]) / 16.0 - 10.0),
+            logit(f32::from(alphas[i]) / 255.0),
+            &coeffs,
+            Population::Primary,
+        );
+    }
+    Ok(g)
+}
+
+/// A point between trgs's frame and the file's (the same half turn both ways).
+fn rub_position(p: [f32; 3]) -> [f32; 3] {
+    [p[0], -p[1], -p[2]]
+}
+
+/// A rotation (w x y z) between the frames: conjugated by the half turn about x, its axis flips
+/// in y and z.
+fn rub_quaternion(q: [f32; 4]) -> [f32; 4] {
+    [q[0], q[1], -q[2], -q[3]]
+}
+
+/// For each SH coefficient, the sign its basis function takes under the half turn about x
+/// (y and z negated): +1 or -1, from the basis itself at a direction with no zero component.
+fn rub_signs(degree: u32) -> Vec<f32> {
+    let d = [0.48, 0.36, 0.8];
+    let (b, f) = (crate::sh::basis(degree, d), crate::sh::basis(degree, [d[0], -d[1], -d[2]]));
+    (0..sh_coeff_count(degree)).map(|j| if b[j] * f[j] < 0.0 { -1.0 } else { 1.0 }).collect()
+}
+
+/// A unit quaternion (w x y z) as the reference's "smallest three": the index of the largest
+/// component (of x y z w) in the top two bits, the other three in order, each as a sign bit and
+/// 9 bits of magnitude in units of sqrt(1/2) / 511, the first in the highest bits; the largest
+/// is made positive (q and -q are one rotation) and recovered from the unit length.
+fn smallest_three(q: [f32; 4]) -> u32 {
+    let [w, x, y, z] = q;
+    let norm = (w * w + x * x + y * y + z * z).sqrt().max(f32::MIN_POSITIVE);
+    let xyzw = [x / norm, y / norm, z / norm, w / norm];
+    let largest = (0..4).fold(0, |l, i| if xyzw[i].abs() > xyzw[l].abs() { i } else { l });
+    let negate = xyzw[largest] < 0.0;
+    let mut packed = largest as u32;
+    for (i, &c) in xyzw.iter().enumerate() {
+        if i == largest {
+            continue;
+        }
+        let sign = u32::from((c < 0.0) != negate);
+        let magnitude = (511.0 * (c.abs() / std::f32::consts::FRAC_1_SQRT_2) + 0.5) as u32;
+        packed = (packed << 10) | (sign << 9) | magnitude.min(511);
+    }
+    packed
+}
+
+/// The unit quaternion (w x y z) of [`smallest_three`].
+fn from_smallest_three(mut packed: u32) -> [f32; 4] {
+    let largest = (packed >> 30) as usize;
+    let mut xyzw = [0.0f32; 4];
+    let mut sum = 0.0;
+    for i in (0..4).rev() {
+        if i == largest {
+            continue;
+        }
+        let magnitude = (packed & 511) as f32 / 511.0 * std::f32::consts::FRAC_1_SQRT_2;
+        let negative = packed & 512 != 0;
+        packed >>= 10;
+        xyzw[i] = if negative { -magnitude } else { magnitude };
+        sum += magnitude * magnitude;
+    }
+    xyzw[largest] = (1.0 - sum).max(0.0).sqrt();
+    [xyzw[3], xyzw[0], xyzw[1], xyzw[2]]
+}
+
+/// Version 2's rotation: x y z as signed bytes (w made positive and recovered).
+fn from_first_three(b: &[u8]) -> [f32; 4] {
+    let [x, y, z] = [0, 1, 2].map(|i| f32::from(b[i]) / 127.5 - 1.0);
+    [(1.0 - x * x - y * y - z * z).max(0.0).sqrt(), x, y, z]
+}
+
+/// The reference's SH quantisation: 8 bits (x in [-1, 1]), rounded to the centre of a bucket.
+fn quantise_sh(x: f32, bucket: i32) -> u8 {
+    let q = (x * 128.0).round() as i32 + 128;
+    let q = (q + bucket / 2) / bucket * bucket;
+    q.clamp(0, 255) as u8
+}
+
+fn to_u8(x: f32) -> u8 {
+    x.round().clamp(0.0, 255.0) as u8
+}
+
+fn sigmoid(x: f32) -> f32 {
+    1.0 / (1.0 + (-x).exp())
+}
+
+/// The logit of a byte opacity, finite at 0 and 1.
+fn logit(a: f32) -> f32 {
+    let a = a.clamp(0.5 / 255.0, 1.0 - 0.5 / 255.0);
+    (a / (1.0 - a)).ln()
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,83 @@
+//! A trained model baked for plain 3DGS viewers (`trgs_core::bake`) on the GPU: the strength of
+//! each view comes from trgs's renderer, and the bake's fidelity is measured as plain renders
+//! of the baked model against trgs's renders with the planes.
+use anyhow::{Context, Result};
+use trgs_core::bake::{BakeReport, StrengthView, bake};
+use trgs_core::io::model::Model;
+use trgs_core::metrics::psnr;
+use trgs_core::{Camera, Gaussians, Image};
+use trgs_render::{GpuContext, GpuScene, Layer, RenderOptions, Renderer};
+
+/// The model's Gaussians baked with the strength seen from `cameras` (its training views).
+pub fn bake_for_plain_viewers(
+    ctx: &GpuContext,
+    model: &Model,
+    cameras: &[Camera],
+) -> Result<(Gaussians<f32>, BakeReport)> {
+    if model.planes.is_empty() {
+        return Ok(bake(&model.gaussians, &[], &[]));
+    }
+    let scene = GpuScene::upload(ctx, &model.gaussians, &model.planes)
+        .with_context(|| format!("{}: invalid model", model.ply.display()))?;
+    let renderer = Renderer::new(ctx);
+    let options = RenderOptions { reflection: model.reflection, ..RenderOptions::default() };
+    let strengths: Vec<Image<f32>> = cameras
+        .iter()
+        .map(|c| {
+            let frame = renderer
+                .render(&scene, c, &options)
+                .with_context(|| format!("rendering view {:?}", c.name))?;
+            Ok(frame.read_layer(ctx, Layer::Strength)?)
+        })
+        .collect::<Result<_>>()?;
+    let views: Vec<StrengthView> = cameras
+        .iter()
+        .zip(&strengths)
+        .map(|(camera, strength)| StrengthView { camera, strength })
+        .collect();
+    Ok(bake(&model.gaussians, &model.planes, &views))
+}
+
+/// PSNR over `cameras` of plain renders of `gaussians` (no planes, as other viewers draw them)
+/// against trgs's renders of `model` with its planes: the squared error pooled over every view's
+/// pixels ([`pooled_psnr`]), since a view that sees no plane renders the same both ways.
+pub fn plain_render_psnr(
+    ctx: &GpuContext,
+    model: &Model,
+    gaussians: &Gaussians<f32>,
+    cameras: &[Camera],
+) -> Result<f64> {
+    let renderer = Renderer::new(ctx);
+    let with_planes = GpuScene::upload(ctx, &model.gaussians, &model.planes)
+        .with_context(|| format!("{}: invalid model", model.ply.display()))?;
+    let plain = GpuScene::upload(ctx, gaussians, &[]).context("uploading the baked model")?;
+    let options = RenderOptions { reflection: model.reflection, ..RenderOptions::default() };
+    let mut per_view = Vec::with_capacity(cameras.len());
+    for c in cameras {
+        let render = |scene: &GpuScene| -> Result<Image<f32>> {
+            let frame = renderer
+                .render(scene, c, &options)
+                .with_context(|| format!("rendering view {:?}", c.name))?;
+            Ok(frame.read_layer(ctx, Layer::Color)?)
+        };
+        per_view.push(psnr(&render(&plain)?, &render(&with_planes)?)?);
+    }
+    Ok(pooled_psnr(&per_view))
+}
+
+/// The PSNR of the mean squared error of views of one size, from their PSNRs (an infinite one,
+/// no error, counts as zero error).
+pub fn pooled_psnr(per_view: &[f64]) -> f64 {
+    let mse: f64 = per_view.iter().map(|p| 10f64.powf(-p / 10.0)).sum::<f64>();
+    -10.0 * (mse / per_view.len().max(1) as f64).log10()
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn pooled_psnr_counts_a_perfect_view_as_no_error() {
+        assert!((super::pooled_psnr(&[20.0, 20.0]) - 20.0).abs() < 1e-9);
+        assert!((super::pooled_psnr(&[20.0, f64::INFINITY]) - 23.0103).abs() < 1e-3);
+        assert!(super::pooled_psnr(&[f64::INFINITY]).is_infinite());
+    }
+}
