@@ -9,7 +9,8 @@ use trgs_core::scratch::ScratchDir;
 use trgs_train::RunConfig;
 
 fn prepare(input: &Path, out: &Path, extra: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_prepare"))
+    Command::new(env!("CARGO_BIN_EXE_trgs"))
+        .arg("prepare")
         .arg(input)
         .arg("--out")
         .arg(out)

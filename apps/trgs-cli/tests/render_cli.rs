@@ -40,7 +40,8 @@ fn renders_pngs_and_exrs_from_a_camera_path() {
         .collect();
     write_transforms(&dir.join("path.json"), &frames).expect("transforms");
     let out = dir.join("out");
-    let status = Command::new(env!("CARGO_BIN_EXE_render"))
+    let status = Command::new(env!("CARGO_BIN_EXE_trgs"))
+        .arg("render")
         .args(["--model", dir.to_str().expect("utf-8"), "--cameras"])
         .arg(dir.join("path.json"))
         .arg("--out")
@@ -49,7 +50,7 @@ fn renders_pngs_and_exrs_from_a_camera_path() {
         .expect("run render");
     let stdout = String::from_utf8_lossy(&status.stdout);
     assert!(status.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&status.stderr));
-    assert!(stdout.contains("1 planes"), "{stdout}");
+    assert!(stdout.contains("1 plane;"), "{stdout}");
     for name in ["second"] {
         let png = image::open(out.join(format!("{name}.png"))).expect("png").to_rgb8();
         assert_eq!(png.dimensions(), (64, 48));
@@ -69,7 +70,8 @@ fn renders_pngs_and_exrs_from_a_camera_path() {
 #[test]
 fn missing_model_names_the_path() {
     let dir = tmp("missing");
-    let out = Command::new(env!("CARGO_BIN_EXE_render"))
+    let out = Command::new(env!("CARGO_BIN_EXE_trgs"))
+        .arg("render")
         .args(["--model", "/nonexistent/model.ply", "--cameras"])
         .arg(&dir)
         .output()
@@ -106,7 +108,8 @@ fn mirror_view_is_the_raw_reflection_inside_the_rectangle() {
     write_transforms(&dir.join("path.json"), &frames).expect("transforms");
     let out = dir.join("out");
     let run = |plane: &str| {
-        Command::new(env!("CARGO_BIN_EXE_render"))
+        Command::new(env!("CARGO_BIN_EXE_trgs"))
+            .arg("render")
             .args(["--model", dir.to_str().expect("utf-8"), "--cameras"])
             .arg(dir.join("path.json"))
             .arg("--out")

@@ -126,7 +126,8 @@ fn eval_reproduces_the_run(
     out: &Path,
     metrics: &serde_json::Value,
 ) -> serde_json::Value {
-    let eval = Command::new(env!("CARGO_BIN_EXE_eval"))
+    let eval = Command::new(env!("CARGO_BIN_EXE_trgs"))
+        .arg("eval")
         .arg("--model")
         .arg(out)
         .arg("--data")
@@ -169,7 +170,8 @@ fn eval_on_the_training_views(
     out: &Path,
     evaluated: &serde_json::Value,
 ) -> Vec<String> {
-    let eval = Command::new(env!("CARGO_BIN_EXE_eval"))
+    let eval = Command::new(env!("CARGO_BIN_EXE_trgs"))
+        .arg("eval")
         .arg("--model")
         .arg(out)
         .arg("--data")

@@ -75,7 +75,8 @@ fn logged_steps(out: &Path) -> Vec<u64> {
 }
 
 fn eval(data: &Path, model: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_eval"))
+    Command::new(env!("CARGO_BIN_EXE_trgs"))
+        .arg("eval")
         .arg("--model")
         .arg(model)
         .arg("--data")
@@ -147,7 +148,8 @@ fn an_interrupted_new_run_leaves_no_stale_results(data: &Path, out: &Path) -> Pa
     }
     let stderr = failure(&eval(data, out));
     assert!(stderr.contains("unfinished training run") && stderr.contains("--resume"), "{stderr}");
-    let report = Command::new(env!("CARGO_BIN_EXE_report"))
+    let report = Command::new(env!("CARGO_BIN_EXE_trgs"))
+        .arg("report")
         .arg(out)
         .arg("--plot")
         .arg(out.join("report.png"))

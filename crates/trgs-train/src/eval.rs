@@ -191,14 +191,16 @@ fn nan_for_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Vec<(f64, f64)
 
 impl std::fmt::Display for TruthComparison {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        // Planes are numbered from 1 here as in the run's lines (their mask labels).
         for (i, (angle, centre)) in self.planes.iter().enumerate() {
             if angle.is_nan() {
-                write!(f, "plane {i}: not modelled (the model has no plane); ")?;
+                write!(f, "plane {}: not modelled (the model has no plane); ", i + 1)?;
                 continue;
             }
             write!(
                 f,
-                "plane {i}: normal off by {angle:.2} deg, centre by {:.2}% of the size",
+                "plane {}: normal off by {angle:.2} deg, centre by {:.2}% of the size",
+                i + 1,
                 100.0 * centre
             )?;
             match self.r0.get(i) {

@@ -2,10 +2,10 @@
 //! (PSNR and SSIM per view and mean, render FPS, and for a synthetic scene the plane and
 //! transmission errors against its ground truth), printed and written as JSON; optionally the
 //! renders and decomposition layers of those views.
+use crate::args::SplitArg;
 use anyhow::{Context, Result, bail};
 use clap::Parser;
 use std::path::PathBuf;
-use trgs_cli::args::SplitArg;
 use trgs_core::io::{SceneFolder, Split, write_atomic};
 use trgs_render::{GpuContext, GpuScene, RenderOptions, Renderer};
 use trgs_train::eval::{Renderable, compare_with_truth, evaluate, render_fps, write_renders};
@@ -18,7 +18,7 @@ use trgs_train::{LoadOptions, Resolution, TrainingData};
 /// against its ground truth; printed and written as JSON.
 #[derive(Debug, Parser)]
 #[command(name = "eval", version)]
-struct Args {
+pub struct Args {
     /// A run folder of `train` (model.ply, planes.json), a .ply (trgs or any INRIA-layout 3DGS
     /// PLY), a .glb (KHR_gaussian_splatting), or an INRIA output folder
     #[arg(long, value_name = "PATH")]
@@ -48,14 +48,22 @@ struct Args {
     /// split, when --model is a folder; otherwise only printed]
     #[arg(long, value_name = "FILE")]
     out: Option<PathBuf>,
+    /// Render MODEL as a plain 3DGS renderer does: its Gaussians alone, no planes (what other
+    /// viewers show of a trgs model)
+    #[arg(long)]
+    no_planes: bool,
+    /// Score against this model's renders (a run folder, .ply or .glb, with its planes) instead
+    /// of the photos: how close MODEL comes to it, e.g. a baked export to the model it came from
+    #[arg(long, value_name = "PATH")]
+    reference: Option<PathBuf>,
     /// Also write each view's render, and with planes its layers (C_t, C_r, R, R C_r), as PNG
     /// under DIR
     #[arg(long, value_name = "DIR")]
     renders: Option<PathBuf>,
 }
 
-fn main() -> Result<()> {
-    let args = Args::parse();
+pub fn run(matches: &clap::ArgMatches) -> Result<()> {
+    let args = super::parsed::<Args>(matches);
     let split = Split::from(args.split);
     let run_dir = args.model.is_dir().then(|| args.model.clone());
     let data_dir = match (&args.data, &run_dir) {
@@ -63,14 +71,20 @@ fn main() -> Result<()> {
         (None, Some(run)) if run.join("dataset").is_dir() => run.join("dataset"),
         _ => bail!("--data is required: {} has no dataset/ folder", args.model.display()),
     };
-    let model = load_model(&args.model, args.planes.as_deref())?;
+    let mut model = load_model(&args.model, args.planes.as_deref())?;
+    if args.no_planes {
+        model.planes.clear();
+    }
     let resolution = Resolution::from_flags(args.resolution, args.downscale, args.full_size);
     // Only the views measured are decoded: a few of a capture's hundreds of photos.
     let folder = SceneFolder::open(&data_dir)
         .with_context(|| format!("opening the scene folder {}", data_dir.display()))?;
     let options = LoadOptions { resolution, evaluate: Some(split), progress: None };
-    let data = TrainingData::load(&folder, &options)?;
+    let mut data = TrainingData::load(&folder, &options)?;
     let ctx = GpuContext::new()?;
+    if let Some(reference) = &args.reference {
+        replace_photos_with_renders(&ctx, reference, &mut data)?;
+    }
     let scene = GpuScene::upload(&ctx, &model.gaussians, &model.planes)
         .with_context(|| format!("uploading {}", model.ply.display()))?;
     let renderer = Renderer::new(&ctx);
@@ -80,18 +94,27 @@ fn main() -> Result<()> {
     for (name, p, s) in &e.views {
         println!("{name}: PSNR {p:.2} dB, SSIM {s:.4}");
     }
+    if args.reference.is_some() {
+        // A view the two models render alike scores infinite PSNR: pool the error instead.
+        let per_view: Vec<f64> = e.views.iter().map(|(_, p, _)| *p).collect();
+        println!(
+            "against {}: PSNR {:.2} dB pooled over the views' pixels",
+            args.reference.as_ref().map_or(String::new(), |r| r.display().to_string()),
+            trgs_train::bake::pooled_psnr(&per_view)
+        );
+    }
     let fps = render_fps(&subject, &data)?;
     let (w, h) = data.size();
     // A scene without test views is scored on training views: say so.
     let measured = if split == Split::Test { data.eval_views_name() } else { split.name() };
     println!(
-        "mean over {} {} views: PSNR {:.2} dB, SSIM {:.4}; {} Gaussians, {} planes, {fps:.1} FPS at {w}x{h}",
+        "mean over {} {} views: PSNR {:.2} dB, SSIM {:.4}; {} Gaussians, {}, {fps:.1} FPS at {w}x{h}",
         e.views.len(),
         measured,
         e.psnr,
         e.ssim,
         model.gaussians.len(),
-        model.planes.len()
+        crate::wording::count(model.planes.len(), "plane")
     );
     if let Some(h) = &e.right_half {
         println!(
@@ -130,6 +153,28 @@ fn main() -> Result<()> {
     if let Some(out) = out {
         write_atomic(&out, serde_json::to_string_pretty(&json)?.as_bytes())?;
         println!("metrics written to {}", out.display());
+    }
+    Ok(())
+}
+
+/// The eval views' photos replaced by renders of the model at `reference` (with its planes), so
+/// that the scores say how close the evaluated model comes to it.
+fn replace_photos_with_renders(
+    ctx: &GpuContext,
+    reference: &std::path::Path,
+    data: &mut TrainingData,
+) -> Result<()> {
+    let model = load_model(reference, None)?;
+    let scene = GpuScene::upload(ctx, &model.gaussians, &model.planes)
+        .with_context(|| format!("uploading {}", model.ply.display()))?;
+    let renderer = Renderer::new(ctx);
+    let options = RenderOptions { reflection: model.reflection, ..RenderOptions::default() };
+    let views = if data.test.is_empty() { &mut data.train } else { &mut data.test };
+    for v in views.iter_mut() {
+        let frame = renderer.render(&scene, &v.camera, &options).with_context(|| {
+            format!("rendering view {:?} of {}", v.camera.name, reference.display())
+        })?;
+        v.image = frame.read_layer(ctx, trgs_render::Layer::Color)?.quantised();
     }
     Ok(())
 }

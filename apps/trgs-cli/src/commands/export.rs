@@ -1,33 +1,137 @@
-//! `convert`: a model between trgs's formats: a run folder or .ply (with its planes.json) to a
-//! .glb with `KHR_gaussian_splatting`, or a .glb back to model.ply and planes.json.
-use anyhow::{Result, bail};
+//! `export`: a model for other viewers and back. By default a model with planes is baked
+//! (`trgs_core::bake`) into plain Gaussians that any 3DGS viewer shows close to trgs's own
+//! render; `--full` keeps the planes and the glass for trgs (a .ply with planes.json beside it,
+//! or a .glb with the planes as nodes). The baked model's plain render is measured against trgs's
+//! render on the model's views and the figure printed.
+use anyhow::{Context, Result, bail};
 use clap::Parser;
 use std::path::{Path, PathBuf};
-use trgs_core::io::{write_glb, write_planes_json, write_ply};
-use trgs_train::model::load_model;
+use trgs_core::io::{read_cameras_json, write_glb, write_planes_json, write_ply};
+use trgs_core::{Camera, Gaussians};
+use trgs_render::GpuContext;
+use trgs_train::bake::{bake_for_plain_viewers, plain_render_psnr};
+use trgs_train::model::{Model, load_model};
 
-/// A model to glTF (KHR_gaussian_splatting) or back to PLY.
+/// A model for any 3DGS viewer (.ply, .glb, .spz), or for trgs with its planes (--full).
+///
+/// A model with planes is baked by default: its glass Gaussians are left out, what each plane
+/// reflects is added as mirrored Gaussians behind it, weighted by the strength its views see,
+/// and what is seen through the glass is dimmed as the glass dims it; plain 3DGS renderers
+/// (SuperSplat, Spark, Brush, SIBR, Cesium) then show the model close to trgs's own render.
+/// The figure printed is the PSNR of a plain render of the output against trgs's render over
+/// the model's views. A model without planes is written as it is.
 #[derive(Debug, Parser)]
-#[command(name = "convert", version)]
-struct Args {
-    /// A run folder of `train`, a .ply (trgs or any INRIA-layout 3DGS PLY) or a .glb
+#[command(
+    name = "export",
+    version,
+    after_help = "Which file for which viewer: the baked .ply, .glb or .spz for any 3DGS viewer; \
+                  --full .ply (with planes.json) or .glb for trgs view, trgs render and trgs eval."
+)]
+pub struct Args {
+    /// A run folder of `train`, a .ply (trgs or any INRIA-layout 3DGS PLY), a .glb or a .spz
     model: PathBuf,
-    /// A .glb: Gaussians and planes in one file (planes as nodes, every parameter in their
-    /// extras); or a .ply: the Gaussians, with the planes in planes.json beside it
+    /// The file to write: .ply (INRIA layout), .glb (KHR_gaussian_splatting) or .spz (Niantic's
+    /// compressed splats)
     out: PathBuf,
+    /// Keep the planes and glass Gaussians (trgs's own model, for trgs's viewer and renderer):
+    /// a .ply gets its planes.json beside it, a .glb holds them
+    #[arg(long)]
+    full: bool,
     /// The planes.json of MODEL [default: beside the PLY or in the run folder]
     #[arg(long, value_name = "FILE")]
     planes: Option<PathBuf>,
+    /// The views the bake samples the glass from: a cameras.json [default: the run folder's or
+    /// the one beside the model]
+    #[arg(long, value_name = "FILE")]
+    cameras: Option<PathBuf>,
 }
 
-fn main() -> Result<()> {
-    let Args { model, out, planes } = Args::parse();
-    let (model, out) = (&model, &out);
-    let m = load_model(model, planes.as_deref())?;
+/// The output's format, from its extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Format {
+    Ply,
+    Glb,
+    Spz,
+}
+
+fn format_of(out: &Path) -> Result<Format> {
     let extension = out.extension().map(|e| e.to_string_lossy().to_lowercase());
-    match extension.as_deref() {
-        Some("glb") => write_glb(out, &m.gaussians, &m.planes)?,
-        Some("ply") => {
+    Ok(match extension.as_deref() {
+        Some("ply") => Format::Ply,
+        Some("glb") => Format::Glb,
+        Some("spz") => Format::Spz,
+        _ => bail!("{}: the output must end in .ply, .glb or .spz", out.display()),
+    })
+}
+
+pub fn run(matches: &clap::ArgMatches) -> Result<()> {
+    let args = super::parsed::<Args>(matches);
+    let format = format_of(&args.out)?;
+    if args.full && format == Format::Spz {
+        bail!("--full keeps the planes, which .spz cannot hold: write a .ply or a .glb");
+    }
+    let model = load_model(&args.model, args.planes.as_deref())?;
+    if args.full || model.planes.is_empty() {
+        return write_as_is(&model, &args.out, format);
+    }
+    let cameras = views_of(&args, &model)?;
+    let ctx = GpuContext::new()?;
+    let (baked, report) = bake_for_plain_viewers(&ctx, &model, &cameras)?;
+    write_gaussians(&args.out, format, &baked)?;
+    let mirrored: Vec<String> = report
+        .mirrored
+        .iter()
+        .enumerate()
+        .map(|(k, n)| format!("{n} for plane {}", k + 1))
+        .collect();
+    println!(
+        "{} baked for plain 3DGS viewers to {}: {} Gaussians; {} glass Gaussians left out, {} \
+         seen through glass dimmed, mirrored copies added ({}), {} not seen in a reflection",
+        model.ply.display(),
+        args.out.display(),
+        baked.len(),
+        report.glass_left_out,
+        report.dimmed,
+        mirrored.join(", "),
+        report.not_seen_mirrored
+    );
+    let baked_psnr = plain_render_psnr(&ctx, &model, &baked, &cameras)?;
+    let unbaked_psnr = plain_render_psnr(&ctx, &model, &model.gaussians, &cameras)?;
+    println!(
+        "a plain 3DGS render of it against trgs's render: PSNR {baked_psnr:.2} dB over {} (the \
+         model unbaked: {unbaked_psnr:.2} dB)",
+        crate::wording::count(cameras.len(), "view")
+    );
+    Ok(())
+}
+
+/// The views the bake samples: `--cameras`, or the cameras.json of the run folder or beside
+/// the model.
+fn views_of(args: &Args, model: &Model) -> Result<Vec<Camera>> {
+    let candidates = match &args.cameras {
+        Some(c) => vec![c.clone()],
+        None => vec![args.model.join("cameras.json"), model.ply.with_file_name("cameras.json")],
+    };
+    let Some(path) = candidates.iter().find(|p| p.is_file()) else {
+        bail!(
+            "{}: baking its planes needs the views they were trained from, and there is no \
+             cameras.json in the run folder or beside the model: give --cameras FILE, or \
+             --full to keep the planes for trgs's own viewer",
+            args.model.display()
+        );
+    };
+    let cameras = read_cameras_json(path)?;
+    if cameras.is_empty() {
+        bail!("{}: no views to bake from", path.display());
+    }
+    Ok(cameras)
+}
+
+/// The model as it is: with `--full`, or without planes to bake.
+fn write_as_is(m: &Model, out: &Path, format: Format) -> Result<()> {
+    match format {
+        Format::Glb => write_glb(out, &m.gaussians, &m.planes)?,
+        Format::Ply => {
             write_ply(out, &m.gaussians)?;
             // A planes.json already beside OUT would be read as this model's planes: a model
             // without planes overwrites it with an empty list rather than inherit stale ones.
@@ -36,27 +140,32 @@ fn main() -> Result<()> {
                 write_planes_json(&json, &m.planes)?;
             }
         }
-        _ => bail!("{}: the output must end in .glb or .ply", out.display()),
+        Format::Spz => write_gaussians(out, format, &m.gaussians)?,
     }
+    let planes_beside = format == Format::Ply && out.with_file_name("planes.json").exists();
     println!(
-        "{} Gaussians (SH degree {}) and {} planes from {} written to {}",
+        "{} Gaussians (SH degree {}) and {} from {} written to {}{}",
         m.gaussians.len(),
         m.gaussians.sh_degree,
-        m.planes.len(),
+        crate::wording::count(m.planes.len(), "plane"),
         m.ply.display(),
-        display_with_planes(
-            out,
-            !m.planes.is_empty() || out.with_file_name("planes.json").exists()
-        )
+        out.display(),
+        if planes_beside {
+            format!(" (planes in {})", out.with_file_name("planes.json").display())
+        } else {
+            String::new()
+        }
     );
     Ok(())
 }
 
-fn display_with_planes(out: &Path, planes: bool) -> String {
-    let is_ply = out.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply"));
-    if is_ply && planes {
-        format!("{} (planes in {})", out.display(), out.with_file_name("planes.json").display())
-    } else {
-        out.display().to_string()
+/// Plain Gaussians in `format`.
+fn write_gaussians(out: &Path, format: Format, g: &Gaussians<f32>) -> Result<()> {
+    match format {
+        Format::Ply => write_ply(out, g)?,
+        Format::Glb => write_glb(out, g, &[])?,
+        Format::Spz => trgs_core::io::write_spz(out, g)
+            .with_context(|| format!("writing {}", out.display()))?,
     }
+    Ok(())
 }

@@ -13,12 +13,12 @@ use trgs_synthetic::family::{self, FamilyMember};
 use trgs_train::eval::TruthComparison;
 use trgs_train::{RunConfig, RunEvent, RunOptions, TrainingRun};
 
-/// TR-Gaussians against plain 3DGS on members of the synthetic scene family, with the table of
-/// issue 38 (PSNR overall, where the glass reflects and elsewhere, transmission against the
+/// TR-Gaussians against plain 3DGS on members of the synthetic scene family: a table of PSNR
+/// (overall, where the glass reflects and elsewhere, transmission against the
 /// truth, planes, R0, time).
 #[derive(Debug, Parser)]
 #[command(name = "family", version)]
-struct Args {
+pub struct Args {
     /// Members: names of the fixed members, drawn-<SEED> for a member drawn from a seed, or
     /// `all` for the eight fixed members
     #[arg(long, value_name = "NAMES", value_delimiter = ',', default_value = "all")]
@@ -54,8 +54,8 @@ struct Outcome {
     truth: Option<TruthComparison>,
 }
 
-fn main() -> Result<()> {
-    let args = Args::parse();
+pub fn run(matches: &clap::ArgMatches) -> Result<()> {
+    let args = super::parsed::<Args>(matches);
     let members = resolve(&args.members)?;
     if args.list {
         for m in &members {

@@ -1,9 +1,9 @@
 //! `prepare`: a folder of photos or a video's frames to a scene folder `train` reads, through
-//! COLMAP ([`trgs_cli::prepare`]).
+//! COLMAP ([`crate::prepare`]).
+use crate::prepare::{Matching, PrepareOptions, prepare};
 use anyhow::Result;
 use clap::Parser;
 use std::path::PathBuf;
-use trgs_cli::prepare::{Matching, PrepareOptions, prepare};
 
 /// A scene folder from photos: COLMAP's features, matches and mapping (the `colmap` program),
 /// the largest model kept as sparse/0, the photos checked and turned upright into images/.
@@ -13,8 +13,8 @@ use trgs_cli::prepare::{Matching, PrepareOptions, prepare};
 /// A run that failed or was stopped is picked up by running it again with the same --out: the
 /// photos and features are kept unless the flags they depend on changed.
 #[derive(Debug, Parser)]
-#[command(name = "prepare", version, after_help = "Then: train --data OUT")]
-struct Args {
+#[command(name = "prepare", version, after_help = "Then: trgs train --data OUT")]
+pub struct Args {
     /// The folder of photos or frames (JPEG or PNG)
     input: PathBuf,
     /// The scene folder to write (images/, sparse/0/, and COLMAP's database in colmap/)
@@ -48,8 +48,8 @@ struct Args {
     threads: i32,
 }
 
-fn main() -> Result<()> {
-    let a = Args::parse();
+pub fn run(matches: &clap::ArgMatches) -> Result<()> {
+    let a = super::parsed::<Args>(matches);
     let options = PrepareOptions {
         input: a.input,
         out: a.out,

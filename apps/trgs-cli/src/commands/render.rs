@@ -1,13 +1,13 @@
 //! `render`: render a model from the cameras of a dataset folder or a camera path, writing a PNG
 //! of the final image per view and an OpenEXR of its linear layers (depth, strength,
 //! transmission, reflection, mask), with a progress bar.
+use crate::args::{SplitArg, parse_colour};
+use crate::exr_layers::write_exr;
 use anyhow::{Context, Result, bail};
 use clap::Parser;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use trgs_cli::args::{SplitArg, parse_colour};
-use trgs_cli::exr_layers::write_exr;
 use trgs_core::io::{SceneFolder, Split, read_transforms, write_png_rgb};
 use trgs_core::plane_math::{flip_horizontal, mirror_camera, mirrored_pass_gaussians};
 use trgs_core::scene::Camera;
@@ -19,7 +19,7 @@ use trgs_train::model::{Model, load_model};
 /// depth.Z).
 #[derive(Debug, Parser)]
 #[command(name = "render", version)]
-struct Args {
+pub struct Args {
     /// A .ply (trgs or any INRIA-layout 3DGS PLY), a .glb (KHR_gaussian_splatting, planes
     /// included), or a run folder holding model.ply or point_cloud/iteration_*/point_cloud.ply
     #[arg(long, value_name = "PATH")]
@@ -129,8 +129,8 @@ fn render_mirror(
     Ok(())
 }
 
-fn main() -> Result<()> {
-    let args = Args::parse();
+pub fn run(matches: &clap::ArgMatches) -> Result<()> {
+    let args = super::parsed::<Args>(matches);
     let model = load_model(&args.model, args.planes.as_deref())?;
     let split = Split::from(args.split);
     let cams = cameras(&args.cameras, split)?;
@@ -139,13 +139,13 @@ fn main() -> Result<()> {
     }
     let ctx = GpuContext::new()?;
     println!(
-        "{}: {} Gaussians (SH degree {}), {} planes; {} views on {}",
+        "{}: {} Gaussians (SH degree {}), {}; {} on {}",
         model.ply.display(),
         model.gaussians.len(),
         model.gaussians.sh_degree,
-        model.planes.len(),
-        cams.len(),
-        ctx.describe()
+        crate::wording::count(model.planes.len(), "plane"),
+        crate::wording::count(cams.len(), "view"),
+        ctx.adapter()
     );
     let renderer = Renderer::new(&ctx);
     let options = RenderOptions {

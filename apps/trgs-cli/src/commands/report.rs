@@ -1,16 +1,16 @@
 //! `report`: speed against error of several training runs — their test PSNR after so many
 //! seconds of training — as a Markdown table (printed) and a PNG plot.
+use crate::plot::{curve_of, markdown_table, plot};
 use anyhow::{Context, Result, bail};
 use clap::Parser;
 use std::path::PathBuf;
-use trgs_cli::plot::{curve_of, markdown_table, plot};
 use trgs_core::io::write_png_rgb8;
 
 /// Test PSNR against training time of several runs: reads each run's metrics.json
 /// (psnr_over_time), prints a Markdown table and writes the plot.
 #[derive(Debug, Parser)]
 #[command(name = "report", version)]
-struct Args {
+pub struct Args {
     /// Run folders of `train`
     #[arg(required = true, value_name = "RUN_DIR")]
     runs: Vec<PathBuf>,
@@ -22,13 +22,13 @@ struct Args {
     plot: PathBuf,
 }
 
-fn main() -> Result<()> {
-    let Args { runs, names, plot: out } = Args::parse();
-    if runs.len() > trgs_cli::plot::COLOURS.len() {
+pub fn run(matches: &clap::ArgMatches) -> Result<()> {
+    let Args { runs, names, plot: out } = super::parsed::<Args>(matches);
+    if runs.len() > crate::plot::COLOURS.len() {
         bail!(
             "{} runs: at most {} fit one plot with a colour each",
             runs.len(),
-            trgs_cli::plot::COLOURS.len()
+            crate::plot::COLOURS.len()
         );
     }
     if let Some(n) = &names

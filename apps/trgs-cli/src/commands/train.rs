@@ -2,7 +2,7 @@
 //! `--viewer` the live viewer fed from the run's events.
 use anyhow::{Context, Result, bail};
 use clap::parser::ValueSource;
-use clap::{CommandFactory, FromArgMatches, Parser};
+use clap::{CommandFactory, Parser};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -22,9 +22,9 @@ const SNAPSHOT_INTERVAL: Duration = Duration::from_millis(500);
 #[command(
     name = "train",
     version,
-    after_help = "Continue an interrupted run: train --out DIR --resume"
+    after_help = "Continue an interrupted run: trgs train --out DIR --resume"
 )]
-struct Cli {
+pub struct Args {
     /// Continue the run in --out from its checkpoint, with the settings it started with (only
     /// --target-memory may be given anew: it depends on the machine, not the training)
     #[arg(long)]
@@ -46,13 +46,8 @@ enum Start {
 
 /// The command line, refusing settings beside --resume (the run keeps its own) other than the
 /// machine's (`RunOptions::target_memory`).
-fn parse() -> Result<(Start, bool)> {
-    let command = Cli::command();
-    let matches = command.clone().get_matches();
-    let cli = match Cli::from_arg_matches(&matches) {
-        Ok(cli) => cli,
-        Err(e) => e.exit(),
-    };
+fn parse(matches: &clap::ArgMatches) -> Result<(Start, bool)> {
+    let cli = super::parsed::<Args>(matches);
     if !cli.resume {
         let mut config = cli.config;
         let steps_given = matches.value_source("iterations") == Some(ValueSource::CommandLine);
@@ -60,7 +55,7 @@ fn parse() -> Result<(Start, bool)> {
         config.check()?;
         return Ok((Start::New(config), cli.viewer));
     }
-    let given: Vec<String> = command
+    let given: Vec<String> = Args::command()
         .get_arguments()
         .filter(|a| !matches!(a.get_id().as_str(), "out" | "resume" | "viewer" | "target_memory"))
         .filter(|a| matches.value_source(a.get_id().as_str()) == Some(ValueSource::CommandLine))
@@ -76,8 +71,8 @@ fn parse() -> Result<(Start, bool)> {
     Ok((Start::Resume(cli.config.out, cli.config.target_memory), cli.viewer))
 }
 
-fn main() -> Result<()> {
-    let (start, viewer) = parse()?;
+pub fn run(matches: &clap::ArgMatches) -> Result<()> {
+    let (start, viewer) = parse(matches)?;
     let out = match &start {
         Start::New(config) => config.out.clone(),
         Start::Resume(out, _) => out.clone(),
@@ -116,7 +111,7 @@ fn main() -> Result<()> {
 /// What an interrupted run in `out` leaves: its checkpoint is written whole or not at all, so
 /// the last one stands (a write cut short leaves a temporary file that the next start removes).
 fn interrupted(out: &Path) -> String {
-    let resume = format!("`train --out {} --resume` continues from it", out.display());
+    let resume = format!("`trgs train --out {} --resume` continues from it", out.display());
     match trgs_core::io::read_unfinished_run(out) {
         Some(r) if r.checkpoint_step > 0 => format!(
             "interrupted: the checkpoint of step {} of {} is saved in {}; {resume}",
@@ -144,20 +139,31 @@ fn say(bar: &ProgressBar, line: String) {
     bar.suspend(|| println!("{line}"));
 }
 
+/// Until the photos load (the built-in scene is written first), a line says the run is starting;
+/// the photos load on several threads and the bar counts them (through the returned progress
+/// callback), then gives way to the steps'.
+fn loading_bar() -> (ProgressBar, impl Fn(usize, usize) + Sync) {
+    let loading = ProgressBar::new_spinner();
+    loading.set_message("starting the run");
+    loading.enable_steady_tick(Duration::from_millis(200));
+    let bar = loading.clone();
+    let progress = move |done: usize, total: usize| {
+        if bar.length() != Some(total as u64) {
+            bar.set_style(
+                ProgressStyle::with_template("loading photos {bar:40} {pos}/{len}  eta {eta}")
+                    .unwrap_or_else(|_| ProgressStyle::default_bar()),
+            );
+            bar.set_length(total as u64);
+        }
+        bar.set_position(done as u64);
+    };
+    (loading, progress)
+}
+
 /// The run from its start or its checkpoint, its events shown on the terminal and, when a
 /// viewer watches, published to `feed`.
 fn train(start: Start, feed: Option<&LiveFeed>) -> Result<()> {
-    // The photos load on several threads; the bar counts them, then gives way to the steps'.
-    let loading = ProgressBar::new(0);
-    loading.set_style(
-        ProgressStyle::with_template("loading photos {bar:40} {pos}/{len}  eta {eta}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
-    let bar = loading.clone();
-    let progress = move |done: usize, total: usize| {
-        bar.set_length(total as u64);
-        bar.set_position(done as u64);
-    };
+    let (loading, progress) = loading_bar();
     let options = |target_memory| RunOptions {
         progress: Some(&progress),
         target_memory,

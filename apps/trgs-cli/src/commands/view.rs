@@ -1,8 +1,8 @@
 //! `viewer [MODEL] [OPTIONS]`: the trgs viewer (see `viewer --help`).
+use crate::args::parse_window_size;
 use anyhow::{Result, bail};
 use clap::Parser;
 use std::path::PathBuf;
-use trgs_cli::args::parse_window_size;
 use trgs_render::Layer;
 use trgs_viewer::{Script, Source, ViewerOptions, load_for_viewer};
 
@@ -19,7 +19,7 @@ use trgs_viewer::{Script, Source, ViewerOptions, load_for_viewer};
                   zooms\n  fly mode: left drag looks around\n  both: W/A/S/D move, Q/E move \
                   down/up, shift moves faster; F12 saves a screenshot"
 )]
-struct Args {
+pub struct Args {
     /// The model to show
     model: Option<PathBuf>,
     /// Start from dataset view N of cameras.json
@@ -97,6 +97,6 @@ fn options(args: Args) -> Result<ViewerOptions> {
     })
 }
 
-fn main() -> Result<()> {
-    trgs_viewer::run(options(Args::parse())?)
+pub fn run(matches: &clap::ArgMatches) -> Result<()> {
+    trgs_viewer::run(options(super::parsed::<Args>(matches))?)
 }

@@ -139,7 +139,7 @@ pub fn prepare(options: &PrepareOptions, say: &mut dyn FnMut(String)) -> Result<
     // The matched database stays for COLMAP's own tools; the features-only copy was for reruns.
     remove_if_present(&work.join("features.db"))?;
     say(format!(
-        "scene folder {} written ({:.0} s): train --data {}",
+        "scene folder {} written ({:.0} s): trgs train --data {}",
         out.display(),
         secs(t0),
         out.display()

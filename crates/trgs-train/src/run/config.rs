@@ -100,14 +100,13 @@ pub struct RunConfig {
     #[arg(long, value_enum, value_name = "SOURCE", conflicts_with = "no_planes")]
     #[serde(default)]
     pub planes: Option<PlaneSource>,
-    /// Do not mirror what stage 1 learnt behind each plane to its front at plane
-    /// initialisation (`trgs_train::reflection_seed`): the reflection layer then starts empty
+    /// Do not mirror what stage 1 learnt behind each plane to its front when the plane is
+    /// initialised: the reflection layer then starts empty
     #[arg(long, conflicts_with = "no_planes")]
     #[serde(default)]
     pub no_reflection_seeds: bool,
     /// Keep each plane as fitted to the Gaussians around the mask outline (the paper's
     /// initialisation), without moving it onto the glass the masks outline
-    /// (`trgs_core::fit::refine_to_masks`)
     #[arg(long, conflicts_with = "no_planes")]
     #[serde(default)]
     pub no_mask_refinement: bool,

@@ -171,7 +171,7 @@ impl TrainingRun {
         let out = &self.config().out;
         if out.join(CHECKPOINT_FILE).is_file() {
             format!(
-                "training stopped at step {step}; `train --out {} --resume` continues from the \
+                "training stopped at step {step}; `trgs train --out {} --resume` continues from the \
                  last checkpoint",
                 out.display()
             )

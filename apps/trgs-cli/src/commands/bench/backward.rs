@@ -1,5 +1,5 @@
 //! The backward measurement of `bench`: forward and backward of one training-like step.
-use crate::common::{median, room_100k, upload, warm_up};
+use super::common::{median, room_100k, upload, warm_up};
 use anyhow::Result;
 use std::time::Instant;
 use trgs_core::fixtures::RoomDensity;

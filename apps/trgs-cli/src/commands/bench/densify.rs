@@ -4,7 +4,7 @@
 //! as training does); decided on the CPU from the attributes read back and rebuilt on the GPU
 //! (as sets too large for the deciding stages' bindings are); and through the CPU (the whole
 //! state read back, rebuilt and uploaded).
-use crate::common::median;
+use super::common::median;
 use anyhow::Result;
 use std::fmt::Write as _;
 use std::time::Instant;

@@ -29,7 +29,7 @@ fn timed<T>(reps: usize, mut work: impl FnMut() -> Result<T>) -> Result<(f64, T)
         last = Some(out);
     }
     #[allow(clippy::expect_used)]
-    Ok((crate::common::median(times), last.expect("at least one rep")))
+    Ok((super::common::median(times), last.expect("at least one rep")))
 }
 
 /// A photo-like image: smooth shading with edges, so that JPEG has detail to code.

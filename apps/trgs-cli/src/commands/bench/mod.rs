@@ -33,7 +33,7 @@ use trgs_render::{Frame, GpuContext, GpuScene, RenderOptions, Renderer};
 /// forward + backward, whole training steps and densification.
 #[derive(Debug, Parser)]
 #[command(name = "bench", version)]
-struct Args {
+pub struct Args {
     /// Only 256x192 and at most 100k Gaussians
     #[arg(long)]
     quick: bool,
@@ -350,8 +350,8 @@ fn measure_throughput(
     })
 }
 
-fn main() -> Result<()> {
-    let args = Args::parse();
+pub fn run(matches: &clap::ArgMatches) -> Result<()> {
+    let args = super::parsed::<Args>(matches);
     if args.host {
         return host_work::bench_host(args.reps.max(1));
     }

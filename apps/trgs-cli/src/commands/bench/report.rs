@@ -1,8 +1,8 @@
 //! The Markdown report of `bench`: every measurement's table, with the command that made it.
-use crate::backward::BackwardRow;
-use crate::densify::{DensifyRow, densify_section};
-use crate::train_step::TrainStepRow;
-use crate::{Args, PlaneCost, Row};
+use super::backward::BackwardRow;
+use super::densify::{DensifyRow, densify_section};
+use super::train_step::TrainStepRow;
+use super::{Args, PlaneCost, Row};
 use std::fmt::Write as _;
 use trgs_core::fixtures::RoomDensity;
 use trgs_render::GpuContext;

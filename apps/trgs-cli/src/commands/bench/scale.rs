@@ -2,8 +2,8 @@
 //! one plane (a glass pane) at growing image sizes and Gaussian counts, classic densification
 //! on, with the step's time, the time of a step that densifies, and the GPU memory the trainer
 //! holds.
-use crate::common::median;
-use crate::train_step::{pipelined_step_ms, profiled_steps};
+use super::common::median;
+use super::train_step::{pipelined_step_ms, profiled_steps};
 use anyhow::Result;
 use std::time::Instant;
 use trgs_core::fixtures::{RoomDensity, RoomSpec, room_scene};
@@ -52,7 +52,7 @@ pub fn bench_scale(
         density: RoomDensity::AsCaptured,
     };
     let scene = room_scene(&spec);
-    let (mut trainer, view) = crate::train_step::joint_stage_trainer(ctx, &scene)?;
+    let (mut trainer, view) = super::train_step::joint_stage_trainer(ctx, &scene)?;
     // Statistics every step, the decisions on the step after the measured ones.
     let densify_at = 3 * steps as u32 + 3;
     trainer.set_densification(&Densification::Classic(ClassicSettings {

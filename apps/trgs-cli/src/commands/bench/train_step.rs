@@ -1,6 +1,6 @@
 //! The training-step measurement of `bench`: whole steps of `Trainer` (render, loss, backward,
 //! Adam) at 256x192 on the capture-like room with 100k Gaussians, with their phase breakdown.
-use crate::common::{median, room_100k, warm_up};
+use super::common::{median, room_100k, warm_up};
 use anyhow::Result;
 use trgs_core::fixtures::{RoomDensity, Scene, room_scene};
 use trgs_render::{GpuContext, Layer};
