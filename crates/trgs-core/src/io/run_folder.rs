@@ -63,7 +63,7 @@ pub fn check_finished_run(dir: &Path) -> Result<(), FormatError> {
         dir,
         format!(
             "an unfinished training run (still running, or stopped: {how_far}); its results are \
-             written when it finishes, and `train --out {} --resume` continues it",
+             written when it finishes, and `trgs train --out {} --resume` continues it",
             dir.display()
         ),
     ))
