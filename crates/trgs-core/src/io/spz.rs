@@ -5,8 +5,9 @@
 //! Written by hand after the reference implementation's format (nianticlabs/spz, `load-spz.cc`):
 //! the spz crates on crates.io are young single-author ports, and the format is a few pages.
 //! trgs writes version 3 (gzip, rotations as "smallest three"), which every reader of the
-//! format reads; it reads versions 2 and 3. Version 4 (several zstd streams, 2025) is refused
-//! with a message: reading it would take a zstd decoder for one file type.
+//! format reads (the reference's newest writer defaults to version 4, one zstd frame per
+//! attribute, which older readers refuse); it reads versions 2, 3 and 4 (`container`; zstd by
+//! ruzstd, a pure-Rust decoder).
 //!
 //! The file holds its Gaussians in a right-up-back frame (x right, y up, z back, as OpenGL and
 //! glTF); trgs's, like the INRIA PLY's, is COLMAP's right-down-forward. The two differ by a half
@@ -18,14 +19,14 @@
 //! trgs's own fields (planes, glass Gaussians' masks, reflection intensities) are not stored.
 use super::{FormatError, write_atomic};
 use crate::scene::{Gaussians, Population, sh_coeff_count};
+use container::{MAGIC, Packed, StoredFrame};
 use flate2::Compression;
-use flate2::read::GzDecoder;
 use flate2::write::GzEncoder;
-use std::io::{Read, Write};
+use std::io::Write;
 use std::path::Path;
 
-/// "NGSP", little-endian.
-const MAGIC: u32 = 0x5053_474e;
+mod container;
+
 /// The version written: gzip, smallest-three rotations.
 const VERSION: u32 = 3;
 /// Bits after the binary point of the 24-bit positions (the reference's choice: 0.25 mm in
@@ -36,10 +37,6 @@ const COLOUR_SCALE: f32 = 0.15;
 /// SH quantisation: buckets of 2^(8 - bits) byte values, for degree 1 and for higher degrees.
 const SH1_BITS: u32 = 5;
 const SH_REST_BITS: u32 = 4;
-/// Header flag: the splats were trained with the anti-aliasing (Mip-Splatting) filter.
-const FLAG_ANTIALIASED: u8 = 0x1;
-/// Header flag of version 4 files only: extensions follow the data.
-const FLAG_HAS_EXTENSIONS: u8 = 0x2;
 
 /// The Gaussians in SPZ, gzip-compressed (glass Gaussians are written as any other). A
 /// position beyond what 24 bits hold (2048 units from the origin) is refused, naming it.
@@ -96,7 +93,7 @@ pub fn write_spz(path: &Path, g: &Gaussians<f32>) -> Result<(), FormatError> {
     write_atomic(path, &bytes)
 }
 
-/// Read an SPZ file of version 2 or 3 into primary Gaussians.
+/// Read an SPZ file of version 2, 3 or 4 into primary Gaussians.
 pub fn read_spz(path: &Path) -> Result<Gaussians<f32>, FormatError> {
     let bytes = std::fs::read(path).map_err(|e| FormatError::io(path, &e))?;
     parse_spz(&bytes, path)
@@ -104,91 +101,49 @@ pub fn read_spz(path: &Path) -> Result<Gaussians<f32>, FormatError> {
 
 /// Parse the bytes of an SPZ file; `path` names it in errors.
 pub fn parse_spz(bytes: &[u8], path: &Path) -> Result<Gaussians<f32>, FormatError> {
-    let err = |what: String| FormatError::new(path, what);
-    if bytes.len() >= 4 && u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]) == MAGIC {
-        return Err(err(
-            "SPZ version 4 or later (zstd streams) is not read; write the file as version 3 \
-             (the reference library's PackOptions::version = 3)"
-                .into(),
-        ));
-    }
-    let mut raw = Vec::new();
-    GzDecoder::new(bytes)
-        .read_to_end(&mut raw)
-        .map_err(|e| err(format!("{e}; expected a gzip stream (an SPZ file of version 2 or 3)")))?;
-    let word = |at: usize| u32::from_le_bytes([raw[at], raw[at + 1], raw[at + 2], raw[at + 3]]);
-    if raw.len() < 16 || word(0) != MAGIC {
-        return Err(err("no SPZ header (expected the magic \"NGSP\" after decompressing)".into()));
-    }
-    let (version, n) = (word(4), word(8) as usize);
-    let (degree, fractional, flags) = (u32::from(raw[12]), raw[13], raw[14]);
-    if !(2..=3).contains(&version) {
-        return Err(err(format!("SPZ version {version}: trgs reads versions 2 and 3")));
-    }
-    if degree > 3 {
-        return Err(err(format!("SH degree {degree}: trgs models hold degrees 0 to 3")));
-    }
-    if flags & FLAG_HAS_EXTENSIONS != 0 {
-        return Err(err("extensions are a version 4 feature; the file says version 3".into()));
-    }
-    let _antialiased = flags & FLAG_ANTIALIASED != 0;
+    let packed = container::open(bytes).map_err(|e| FormatError::new(path, e))?;
+    Ok(unpack(&packed))
+}
+
+/// The Gaussians of an opened file, in trgs's frame.
+fn unpack(p: &Packed) -> Gaussians<f32> {
+    let (n, degree) = (p.count, p.sh_degree);
     let k = sh_coeff_count(degree);
-    let rotation_bytes = if version >= 3 { 4 } else { 3 };
-    let per_point = 9 + 1 + 3 + 3 + rotation_bytes + 3 * (k - 1);
-    let expected = n.checked_mul(per_point).and_then(|b| b.checked_add(16));
-    if expected != Some(raw.len()) {
-        return Err(err(format!(
-            "{} bytes after decompressing; {n} Gaussians of SH degree {degree} take {}",
-            raw.len(),
-            expected.map_or("more than memory holds".to_string(), |e| e.to_string())
-        )));
-    }
-    let mut at = 16;
-    let mut take = |len: usize| {
-        let s = &raw[at..at + len];
-        at += len;
-        s
-    };
-    let positions = take(9 * n);
-    let alphas = take(n);
-    let colours = take(3 * n);
-    let scales = take(3 * n);
-    let rotations = take(rotation_bytes * n);
-    let sh = take(3 * (k - 1) * n);
-    let signs = rub_signs(degree);
-    let unit = 1.0 / f32::from(1u16 << fractional.min(15));
+    let rub = p.frame == StoredFrame::Rub;
+    let signs = if rub { rub_signs(degree) } else { vec![1.0; k] };
+    let position = |m: [f32; 3]| if rub { rub_position(m) } else { m };
+    let rotation = |q: [f32; 4]| if rub { rub_quaternion(q) } else { q };
+    let unit = 1.0 / f32::from(1u16 << p.fractional_bits.min(15));
     let mut g = Gaussians::empty(degree);
     let mut coeffs = vec![[0.0f32; 3]; k];
     for i in 0..n {
-        let p = &positions[9 * i..9 * i + 9];
+        let b = &p.positions[9 * i..9 * i + 9];
+        // Each coordinate is 24-bit two's complement: sign-extended through the top byte.
         let coord = |a: usize| {
-            let b = &p[3 * a..3 * a + 3];
-            // Sign-extend the 24-bit value.
-            (i32::from_le_bytes([b[0], b[1], b[2], 0]) << 8 >> 8) as f32 * unit
+            (i32::from_le_bytes([b[3 * a], b[3 * a + 1], b[3 * a + 2], 0]) << 8 >> 8) as f32 * unit
         };
-        let mean = rub_position([coord(0), coord(1), coord(2)]);
-        let rotation = if version >= 3 {
-            let r = &rotations[4 * i..4 * i + 4];
+        let q = if p.version >= 3 {
+            let r = &p.rotations[4 * i..4 * i + 4];
             from_smallest_three(u32::from_le_bytes([r[0], r[1], r[2], r[3]]))
         } else {
-            from_first_three(&rotations[3 * i..3 * i + 3])
+            from_first_three(&p.rotations[3 * i..3 * i + 3])
         };
         coeffs[0] =
-            [0, 1, 2].map(|ch| (f32::from(colours[3 * i + ch]) / 255.0 - 0.5) / COLOUR_SCALE);
+            [0, 1, 2].map(|ch| (f32::from(p.colours[3 * i + ch]) / 255.0 - 0.5) / COLOUR_SCALE);
         for (j, c) in coeffs.iter_mut().enumerate().skip(1) {
             let at = 3 * ((k - 1) * i + j - 1);
-            *c = [0, 1, 2].map(|ch| (f32::from(sh[at + ch]) - 128.0) / 128.0 * signs[j]);
+            *c = [0, 1, 2].map(|ch| (f32::from(p.sh[at + ch]) - 128.0) / 128.0 * signs[j]);
         }
         g.push(
-            mean,
-            rub_quaternion(rotation),
-            [0, 1, 2].map(|a| f32::from(scales[3 * i + a]) / 16.0 - 10.0),
-            logit(f32::from(alphas[i]) / 255.0),
+            position([coord(0), coord(1), coord(2)]),
+            rotation(q),
+            [0, 1, 2].map(|a| f32::from(p.scales[3 * i + a]) / 16.0 - 10.0),
+            logit(f32::from(p.alphas[i]) / 255.0),
             &coeffs,
             Population::Primary,
         );
     }
-    Ok(g)
+    g
 }
 
 /// A point between trgs's frame and the file's (the same half turn both ways).
