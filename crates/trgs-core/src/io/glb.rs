@@ -43,6 +43,8 @@ use super::model_values::{Field, check_gaussians};
 use crate::scene::{Gaussians, Material, ReflectionPlane, sh_coeff_count};
 use crate::sh::C0;
 
+/// glTF's bufferView target for vertex attributes.
+const ARRAY_BUFFER: u32 = 34962;
 const MAGIC: u32 = 0x4654_6C67;
 const CHUNK_JSON: u32 = 0x4E4F_534A;
 const CHUNK_BIN: u32 = 0x004E_4942;
@@ -207,7 +209,11 @@ pub fn encode_glb(g: &Gaussians<f32>, planes: &[ReflectionPlane]) -> Result<Vec<
     for (i, c) in columns(g).into_iter().enumerate() {
         let offset = bin.len();
         bin.extend(c.values.iter().flat_map(|v| v.to_le_bytes()));
-        views.push(json!({"buffer": 0, "byteOffset": offset, "byteLength": c.values.len() * 4}));
+        // Every view holds one vertex attribute: ARRAY_BUFFER (the validator hints otherwise).
+        views.push(json!({
+            "buffer": 0, "byteOffset": offset, "byteLength": c.values.len() * 4,
+            "target": ARRAY_BUFFER,
+        }));
         let mut accessor = json!({
             "bufferView": i, "componentType": FLOAT, "count": g.len(), "type": c.kind,
         });

@@ -244,6 +244,7 @@ fn the_file_follows_the_extension_rules() {
         let len = view["byteLength"].as_u64().expect("len") as usize;
         let width = components(acc["type"].as_str().expect("type")).expect("known type");
         assert_eq!(offset % 4, 0, "{name}: 4-byte aligned");
+        assert_eq!(view["target"], 34962, "{name}: a vertex attribute's view is ARRAY_BUFFER");
         assert_eq!(len, 101 * width * 4, "{name}");
         assert!(offset + len <= byte_length, "{name}: inside the buffer");
     }
