@@ -3,7 +3,8 @@
 //! attribute quantised to bytes (positions as 24-bit fixed point, the rest as 8 bits).
 //!
 //! Written by hand after the reference implementation's format (nianticlabs/spz, `load-spz.cc`):
-//! the spz crates on crates.io are young single-author ports, and the format is a few pages.
+//! the crates.io ports (`spz` 0.0.6, `spz-rs` 0.1.0) are young single-author ones, and the
+//! format is a few pages.
 //! trgs writes version 3 (gzip, rotations as "smallest three"), which every reader of the
 //! format reads (the reference's newest writer defaults to version 4, one zstd frame per
 //! attribute, which older readers refuse); it reads versions 2, 3 and 4 (`container`; zstd by
