@@ -539,7 +539,7 @@ impl eframe::App for ViewerApp {
                 self.open(p);
             } else {
                 self.message =
-                    Some((format!("{}: not a .ply, .glb or run folder", p.display()), true));
+                    Some((format!("{}: not a .ply, .glb, .spz or run folder", p.display()), true));
             }
         }
         if ctx.input(|i| i.key_pressed(egui::Key::F12)) {

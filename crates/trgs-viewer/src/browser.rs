@@ -1,6 +1,6 @@
 //! The open dialog: a small file browser drawn with egui (no native dialog library, so the
-//! viewer needs no GTK or portal). Folders, .ply and .glb files are listed; a folder can be
-//! opened as a run folder.
+//! viewer needs no GTK or portal). Folders, .ply, .glb and .spz files are listed; a folder can
+//! be opened as a run folder.
 use eframe::egui;
 use std::path::{Path, PathBuf};
 
@@ -15,7 +15,7 @@ pub struct Browser {
 
 /// Files the viewer can open.
 pub fn is_model_file(p: &Path) -> bool {
-    p.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply") || e.eq_ignore_ascii_case("glb"))
+    p.extension().is_some_and(|e| ["ply", "glb", "spz"].iter().any(|m| e.eq_ignore_ascii_case(m)))
 }
 
 impl Browser {

@@ -9,7 +9,8 @@ use trgs_viewer::{Script, Source, ViewerOptions, load_for_viewer};
 /// Real-time rendering of trained TR-Gaussians and 3DGS models.
 ///
 /// MODEL is a run folder (model.ply, planes.json, cameras.json), a .ply (any INRIA-layout 3DGS
-/// file; planes.json and cameras.json beside it are used) or a .glb (KHR_gaussian_splatting).
+/// file; planes.json and cameras.json beside it are used), a .glb (KHR_gaussian_splatting) or an
+/// .spz (Niantic's compressed splats).
 /// Without one, open a model from the window (Open..., or drop a file on it).
 #[derive(Debug, Parser)]
 #[command(
