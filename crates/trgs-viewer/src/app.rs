@@ -221,7 +221,7 @@ impl ViewerApp {
             cameras: feed.cameras(),
             dropped: Vec::new(),
             test_views: Vec::new(),
-            folder: None,
+            folder: feed.folder(),
             name: "training".into(),
         };
         let Some(s) = &mut self.shown else {
@@ -236,6 +236,7 @@ impl ViewerApp {
                 s.reflection = model.reflection;
                 s.cameras = model.cameras;
                 s.means = model.gaussians.means;
+                s.folder = model.folder;
                 self.dirty = true;
             }
             Err(e) => self.message = Some((format!("training snapshot: {e}"), true)),
@@ -489,8 +490,8 @@ impl ViewerApp {
         }
     }
 
-    /// Where F12 saves: `screenshots/` in the open model's folder (the working directory while
-    /// watching training or with nothing open), named by the time.
+    /// Where F12 saves: `screenshots/` in the open model's folder or the run's being watched (the
+    /// working directory with nothing open), named by the time.
     fn default_shot_path(&self) -> PathBuf {
         let secs = std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)

@@ -2,6 +2,7 @@
 //! [`LiveFeed`], and the viewer shows the newest. The trainer only reads its scene back when the
 //! viewer has taken the previous snapshot and a minimum interval has passed, so a slow viewer
 //! never slows training by more than one readback per interval.
+use std::path::PathBuf;
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
 use trgs_core::pipeline::ReflectionModel;
@@ -21,6 +22,8 @@ pub struct Snapshot {
 #[derive(Debug, Default)]
 struct State {
     cameras: Vec<Camera>,
+    /// The run's folder (where screenshots go).
+    folder: Option<PathBuf>,
     snapshot: Option<Snapshot>,
     /// Bumped by each publish.
     generation: u64,
@@ -48,6 +51,15 @@ impl LiveFeed {
     /// The training views (the viewer snaps to them).
     pub fn set_cameras(&self, cameras: Vec<Camera>) {
         self.lock().cameras = cameras;
+    }
+
+    /// The run's folder: the viewer saves screenshots under its `screenshots/`.
+    pub fn set_folder(&self, folder: PathBuf) {
+        self.lock().folder = Some(folder);
+    }
+
+    pub fn folder(&self) -> Option<PathBuf> {
+        self.lock().folder.clone()
     }
 
     /// Whether the trainer should publish now: the viewer is open, has taken the last snapshot,

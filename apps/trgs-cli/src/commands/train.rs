@@ -177,6 +177,7 @@ fn train(start: Start, feed: Option<&LiveFeed>) -> Result<()> {
     let mut run = run?;
     if let Some(feed) = feed {
         feed.set_cameras(run.cameras());
+        feed.set_folder(run.config().out.clone());
     }
     let iterations = run.config().iterations;
     let bar = ProgressBar::new(u64::from(iterations));
