@@ -8,7 +8,34 @@ use trgs_core::metrics::psnr;
 use trgs_core::{Camera, Gaussians, Image};
 use trgs_render::{GpuContext, GpuScene, Layer, RenderOptions, Renderer};
 
-/// The model's Gaussians baked with the strength seen from `cameras` (its training views).
+/// The longest side the strength is rendered at: it is smooth (Schlick times the mask), and a
+/// capture's hundreds of views at full size would not fit in memory side by side.
+pub const STRENGTH_LONG_SIDE: u32 = 512;
+
+/// The views the bake's fidelity is measured on, at most: spread over the capture.
+pub const MEASURED_VIEWS: usize = 16;
+
+/// `camera` with its longer side at most `long` pixels (the same view, fewer pixels).
+pub fn at_most(camera: &Camera, long: u32) -> Camera {
+    let (w, h) = (camera.width(), camera.height());
+    if w.max(h) <= long {
+        return camera.clone();
+    }
+    let s = f64::from(long) / f64::from(w.max(h));
+    let size = |d: u32| ((f64::from(d) * s).round() as u32).max(1);
+    Camera::new(camera.name.clone(), camera.intrinsics.resized(size(w), size(h)), camera.pose)
+}
+
+/// Up to `count` of `cameras`, spread evenly over them (all when there are no more).
+pub fn spread(cameras: &[Camera], count: usize) -> Vec<Camera> {
+    if cameras.len() <= count {
+        return cameras.to_vec();
+    }
+    (0..count).map(|i| cameras[i * cameras.len() / count].clone()).collect()
+}
+
+/// The model's Gaussians baked with the strength seen from `cameras` (its training views),
+/// rendered at most [`STRENGTH_LONG_SIDE`] pixels long.
 pub fn bake_for_plain_viewers(
     ctx: &GpuContext,
     model: &Model,
@@ -21,6 +48,7 @@ pub fn bake_for_plain_viewers(
         .with_context(|| format!("{}: invalid model", model.ply.display()))?;
     let renderer = Renderer::new(ctx);
     let options = RenderOptions { reflection: model.reflection, ..RenderOptions::default() };
+    let cameras: Vec<Camera> = cameras.iter().map(|c| at_most(c, STRENGTH_LONG_SIDE)).collect();
     let strengths: Vec<Image<f32>> = cameras
         .iter()
         .map(|c| {
@@ -79,5 +107,21 @@ mod tests {
         assert!((super::pooled_psnr(&[20.0, 20.0]) - 20.0).abs() < 1e-9);
         assert!((super::pooled_psnr(&[20.0, f64::INFINITY]) - 23.0103).abs() < 1e-3);
         assert!(super::pooled_psnr(&[f64::INFINITY]).is_infinite());
+    }
+
+    #[test]
+    fn strength_views_are_smaller_and_measured_views_spread() {
+        use trgs_core::{Intrinsics, Pose};
+        let k = Intrinsics::from_fov_x(1.0, 1600, 1200);
+        let c = super::Camera::new("big", k, Pose::default());
+        let small = super::at_most(&c, 512);
+        assert_eq!((small.width(), small.height()), (512, 384));
+        assert!((small.intrinsics.fx / k.fx - 0.32).abs() < 1e-12, "the same field of view");
+        assert_eq!(super::at_most(&small, 512).width(), 512);
+        let many: Vec<super::Camera> =
+            (0..100).map(|i| super::Camera::new(format!("v{i}"), k, Pose::default())).collect();
+        let picked: Vec<String> = super::spread(&many, 4).into_iter().map(|c| c.name).collect();
+        assert_eq!(picked, ["v0", "v25", "v50", "v75"]);
+        assert_eq!(super::spread(&many[..3], 16).len(), 3);
     }
 }

@@ -9,7 +9,9 @@ use std::path::{Path, PathBuf};
 use trgs_core::io::{read_cameras_json, write_glb, write_planes_json, write_ply};
 use trgs_core::{Camera, Gaussians};
 use trgs_render::GpuContext;
-use trgs_train::bake::{bake_for_plain_viewers, plain_render_psnr};
+use trgs_train::bake::{
+    MEASURED_VIEWS, STRENGTH_LONG_SIDE, at_most, bake_for_plain_viewers, plain_render_psnr, spread,
+};
 use trgs_train::model::{Model, load_model};
 
 /// A model for any 3DGS viewer (.ply, .glb, .spz), or for trgs with its planes (--full).
@@ -19,7 +21,8 @@ use trgs_train::model::{Model, load_model};
 /// and what is seen through the glass is dimmed as the glass dims it; plain 3DGS renderers
 /// (SuperSplat, Spark, Brush, SIBR, Cesium) then show the model close to trgs's own render.
 /// The figure printed is the PSNR of a plain render of the output against trgs's render over
-/// the model's views. A model without planes is written as it is.
+/// up to 16 of the model's views (at most 512 pixels long); `trgs eval --model OUT --reference
+/// RUN` scores the test views. A model without planes is written as it is.
 #[derive(Debug, Parser)]
 #[command(
     name = "export",
@@ -95,11 +98,16 @@ pub fn run(matches: &clap::ArgMatches) -> Result<()> {
         mirrored.join(", "),
         report.not_seen_mirrored
     );
-    let baked_psnr = plain_render_psnr(&ctx, &model, &baked, &cameras)?;
-    let unbaked_psnr = plain_render_psnr(&ctx, &model, &model.gaussians, &cameras)?;
+    // A check, not the evaluation (`trgs eval --reference` scores the test views): a spread of
+    // the views, at most 512 pixels long.
+    let measured: Vec<Camera> =
+        spread(&cameras, MEASURED_VIEWS).iter().map(|c| at_most(c, STRENGTH_LONG_SIDE)).collect();
+    let baked_psnr = plain_render_psnr(&ctx, &model, &baked, &measured)?;
+    let unbaked_psnr = plain_render_psnr(&ctx, &model, &model.gaussians, &measured)?;
     println!(
-        "a plain 3DGS render of it against trgs's render: PSNR {baked_psnr:.2} dB over {} (the \
-         model unbaked: {unbaked_psnr:.2} dB)",
+        "a plain 3DGS render of it against trgs's render: PSNR {baked_psnr:.2} dB over {} of \
+         the {} (the model unbaked: {unbaked_psnr:.2} dB)",
+        measured.len(),
         crate::wording::count(cameras.len(), "view")
     );
     Ok(())
