@@ -34,6 +34,22 @@ pub fn parse_colour(v: &str) -> Result<[f32; 3], String> {
     }
 }
 
+/// A finite number at least 0.
+pub fn parse_non_negative(v: &str) -> Result<f64, String> {
+    v.parse::<f64>()
+        .ok()
+        .filter(|x| x.is_finite() && *x >= 0.0)
+        .ok_or_else(|| "expected a number at least 0".into())
+}
+
+/// A share in [0, 1].
+pub fn parse_share(v: &str) -> Result<f64, String> {
+    v.parse::<f64>()
+        .ok()
+        .filter(|x| (0.0..=1.0).contains(x))
+        .ok_or_else(|| "expected a number in [0, 1]".into())
+}
+
 /// A size `WxH` in points, each at least 1.
 pub fn parse_window_size(v: &str) -> Result<[f32; 2], String> {
     let (w, h) = v.split_once('x').ok_or("expected WxH, e.g. 800x600")?;
@@ -60,5 +76,9 @@ mod tests {
         assert_eq!(parse_window_size("800x600"), Ok([800.0, 600.0]));
         assert!(parse_window_size("big").is_err_and(|e| e.contains("WxH")));
         assert!(parse_window_size("0x600").is_err_and(|e| e.contains("at least 1")));
+        assert_eq!(parse_non_negative("0.5"), Ok(0.5));
+        assert!(parse_non_negative("-1").is_err() && parse_non_negative("inf").is_err());
+        assert_eq!(parse_share("1"), Ok(1.0));
+        assert!(parse_share("1.5").is_err() && parse_share("x").is_err());
     }
 }

@@ -1,5 +1,6 @@
 //! trgs-core: everything of TR-Gaussians that needs no GPU.
 //!
+//! - [`blocks`]: a capture split into overlapping blocks on the ground (partition and views);
 //! - [`bake`]: a model with planes as plain Gaussians for other 3DGS viewers;
 //! - [`scene`]: Gaussians (structure of arrays), cameras, reflection planes, input validation;
 //! - [`plane_math`]: Householder reflections, ray-rectangle hits, nearest-plane selection, Schlick;
@@ -13,6 +14,7 @@
 //!
 //! The procedural glass scenes that demos and tests train on are the crate `trgs-synthetic`.
 pub mod bake;
+pub mod blocks;
 pub mod fit;
 pub mod fixtures;
 pub mod image;

@@ -13,6 +13,7 @@ pub mod family;
 pub mod prepare;
 pub mod render;
 pub mod report;
+pub mod split;
 pub mod train;
 pub mod view;
 
@@ -34,6 +35,7 @@ const SUBCOMMANDS: &[Subcommand] = &[
     Subcommand { name: "report", command: report::Args::command, run: report::run },
     Subcommand { name: "bench", command: bench::Args::command, run: bench::run },
     Subcommand { name: "family", command: family::Args::command, run: family::run },
+    Subcommand { name: "split", command: split::Args::command, run: split::run },
     Subcommand { name: "completions", command: completions::Args::command, run: completions::run },
 ];
 

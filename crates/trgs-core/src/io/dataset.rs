@@ -241,7 +241,7 @@ impl SceneFolder {
 }
 
 /// `sparse/0/` (COLMAP's layout) or `sparse/` itself, whichever holds a model.
-fn colmap_dir(root: &Path) -> Option<PathBuf> {
+pub fn colmap_dir(root: &Path) -> Option<PathBuf> {
     let has_model = |d: &Path| d.join("cameras.bin").is_file() || d.join("cameras.txt").is_file();
     [root.join("sparse").join("0"), root.join("sparse")].into_iter().find(|d| has_model(d))
 }

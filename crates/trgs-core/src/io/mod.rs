@@ -38,7 +38,7 @@ pub use cameras_json::{
     encode_cameras_json, parse_cameras_json, read_cameras_json, write_cameras_json,
 };
 pub use colmap::{ColmapCamera, ColmapImage, ColmapModel, ColmapPoint};
-pub use dataset::{SceneFolder, Split, ViewSpec, view_output_stem};
+pub use dataset::{SceneFolder, Split, ViewSpec, colmap_dir, view_output_stem};
 pub use error::{FormatError, remove_stale_temporaries, write_atomic, write_atomic_with};
 pub use glb::{encode_glb, parse_glb, read_glb, write_glb};
 pub use masks::{

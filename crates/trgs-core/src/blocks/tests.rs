@@ -1,0 +1,75 @@
+use super::*;
+
+/// Points along a street (x from 0 to 40, y across it from -3 to 3) on a ground with up -y in
+/// world space (COLMAP's image y points down).
+fn street(n: usize) -> Vec<DVec2> {
+    let mut rng = Rng::new(5);
+    (0..n).map(|_| DVec2::new(40.0 * rng.uniform(), 6.0 * rng.uniform() - 3.0)).collect()
+}
+
+#[test]
+fn the_ground_is_across_the_mean_up() {
+    let ups = [DVec3::new(0.1, -1.0, 0.0), DVec3::new(-0.1, -1.0, 0.05)];
+    let g = Ground::from_ups(&ups).expect("ground");
+    assert!(g.up.dot(DVec3::NEG_Y) > 0.99);
+    assert!(g.axes[0].dot(g.up).abs() < 1e-12 && g.axes[1].dot(g.up).abs() < 1e-12);
+    assert!((g.axes[0].cross(g.axes[1]).dot(g.up) - 1.0).abs() < 1e-12);
+    assert!(Ground::from_ups(&[DVec3::Y, DVec3::NEG_Y]).is_none());
+}
+
+#[test]
+fn kmeans_tiles_a_street_along_its_length() {
+    let points = street(2000);
+    let mut centres = kmeans(&points, 4, 1);
+    centres.sort_by(|a, b| a.x.total_cmp(&b.x));
+    for (i, c) in centres.iter().enumerate() {
+        assert!((c.x - (5.0 + 10.0 * i as f64)).abs() < 1.5, "{centres:?}");
+        assert!(c.y.abs() < 0.6, "{centres:?}");
+    }
+    assert_eq!(kmeans(&points, 4, 1), kmeans(&points, 4, 1), "the seed decides");
+    assert_eq!(kmeans(&[DVec2::ONE; 5], 3, 1).len(), 1, "one distinct point, one centre");
+}
+
+#[test]
+fn widened_regions_overlap_by_twice_the_margin() {
+    let r = Regions { centres: vec![DVec2::new(0.0, 0.0), DVec2::new(10.0, 0.0)] };
+    assert!(r.contains(0, DVec2::new(4.9, 0.0), 0.0) && !r.contains(0, DVec2::new(5.1, 0.0), 0.0));
+    assert!(r.contains(0, DVec2::new(6.9, 0.0), 2.0) && !r.contains(0, DVec2::new(7.1, 0.0), 2.0));
+    assert!(r.contains(1, DVec2::new(3.1, 0.0), 2.0) && !r.contains(1, DVec2::new(2.9, 0.0), 2.0));
+    assert_eq!(r.owner(DVec2::new(4.0, 9.0)), 0);
+    assert!((r.spacing() - 10.0).abs() < 1e-12);
+}
+
+#[test]
+fn views_go_where_their_points_are_and_test_views_to_one_block() {
+    let r = Regions { centres: vec![DVec2::new(0.0, 0.0), DVec2::new(10.0, 0.0)] };
+    // Points at x = 0, 1, ..., 10.
+    let points: Vec<DVec2> = (0..=10).map(|x| DVec2::new(f64::from(x), 0.0)).collect();
+    let observations = vec![
+        vec![0, 1, 2],       // left only
+        vec![8, 9, 10],      // right only
+        vec![3, 4, 5, 6, 7], // the seam: both
+        vec![5, 6, 7, 8],    // a test view at the seam, mostly right
+        vec![],              // sees nothing: still trains somewhere
+    ];
+    let is_test = [false, false, false, true, false];
+    let a = Assignment { margin: 1.0, min_share: 0.3, min_views: 1 };
+    let plans = plan_blocks(&r, &points, &observations, &is_test, a);
+    assert_eq!(plans[0].points, vec![0, 1, 2, 3, 4, 5, 6]);
+    assert_eq!(plans[1].points, vec![4, 5, 6, 7, 8, 9, 10]);
+    assert_eq!(plans[0].train, vec![0, 2, 4]);
+    assert_eq!(plans[1].train, vec![1, 2]);
+    assert_eq!((plans[0].test.clone(), plans[1].test.clone()), (vec![], vec![3]));
+}
+
+#[test]
+fn a_block_few_views_see_takes_those_that_see_most_of_it() {
+    let r = Regions { centres: vec![DVec2::new(0.0, 0.0), DVec2::new(10.0, 0.0)] };
+    let points: Vec<DVec2> = (0..=10).map(|x| DVec2::new(f64::from(x), 0.0)).collect();
+    // Every view sees mostly the left; two see a little of the right.
+    let observations = vec![vec![0, 1, 2, 3, 4, 10], vec![0, 1, 2, 3, 9, 10], vec![0, 1, 2, 3]];
+    let a = Assignment { margin: 0.0, min_share: 0.5, min_views: 2 };
+    let plans = plan_blocks(&r, &points, &observations, &[false; 3], a);
+    assert_eq!(plans[0].train, vec![0, 1, 2]);
+    assert_eq!(plans[1].train, vec![0, 1], "the two views that see it, the one seeing most first");
+}
