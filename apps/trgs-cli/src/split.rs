@@ -6,7 +6,7 @@
 //! is the capture's.
 use anyhow::{Context, Result, bail};
 use glam::{DVec2, DVec3};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 use trgs_core::blocks::{Assignment, BlockPlan, Ground, Regions, kmeans, plan_blocks};
@@ -35,7 +35,7 @@ pub struct SplitOptions {
 
 /// What `split` wrote: the ground, the regions and each block, for `merge` and for a driver
 /// (Ray, Slurm) that runs one `trgs train` per block.
-#[derive(Debug, Serialize)]
+#[derive(Debug, Serialize, Deserialize)]
 pub struct Manifest {
     pub source: PathBuf,
     pub up: [f64; 3],
@@ -44,7 +44,7 @@ pub struct Manifest {
     pub blocks: Vec<BlockRecord>,
 }
 
-#[derive(Debug, Serialize)]
+#[derive(Debug, Serialize, Deserialize)]
 pub struct BlockRecord {
     pub name: String,
     /// The block's scene folder, relative to the manifest.

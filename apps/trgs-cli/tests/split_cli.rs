@@ -77,3 +77,89 @@ fn bad_arguments_are_refused_by_name() {
     assert!(refused(&[&d, "--out", "x", "--blocks", "2", "--min-share", "2"]).contains("[0, 1]"));
     assert!(refused(&[&d, "--out", "x", "--blocks", "2"]).contains(&d));
 }
+
+#[test]
+fn trained_blocks_merge_into_one_run() {
+    use trgs_core::Population;
+    use trgs_core::io::{load_model, write_planes_json, write_ply};
+    use trgs_core::scene::{Gaussians, Material, ReflectionPlane};
+    let dir = ScratchDir::new("merge-cli");
+    let scene = dir.join("scene");
+    write_dataset(&generate(&SyntheticConfig::small()), &scene).expect("scene");
+    let blocks = dir.join("blocks");
+    let split = Command::new(env!("CARGO_BIN_EXE_trgs"))
+        .arg("split")
+        .arg(&scene)
+        .args(["--blocks", "2", "--out"])
+        .arg(&blocks)
+        .output()
+        .expect("split");
+    assert!(split.status.success(), "{}", String::from_utf8_lossy(&split.stderr));
+    let manifest: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(blocks.join("blocks.json")).expect("read"))
+            .expect("JSON");
+    let axis = |k: usize| -> [f64; 3] {
+        let a = &manifest["axes"][k];
+        [0, 1, 2].map(|i| a[i].as_f64().expect("axis"))
+    };
+    let (a0, a1) = (axis(0), axis(1));
+    let centre = |b: usize| -> [f64; 2] {
+        let c = &manifest["blocks"][b]["centre"];
+        [c[0].as_f64().expect("c"), c[1].as_f64().expect("c")]
+    };
+    // A world point at ground coordinates (u, v).
+    let at = |u: f64, v: f64| -> [f32; 3] { [0, 1, 2].map(|i| (u * a0[i] + v * a1[i]) as f32) };
+    let (c0, c1) = (centre(0), centre(1));
+    let mid = [(c0[0] + c1[0]) / 2.0, (c0[1] + c1[1]) / 2.0];
+    // Each block's run: one Gaussian at each centre (each block keeps its own), and half of one
+    // pane across the seam.
+    let runs = dir.join("runs");
+    for b in 0..2 {
+        let run = runs.join(format!("block_{b}"));
+        std::fs::create_dir_all(&run).expect("run");
+        let mut g = Gaussians::empty(0);
+        for c in [c0, c1] {
+            g.push(
+                at(c[0], c[1]),
+                [1.0, 0.0, 0.0, 0.0],
+                [-3.0; 3],
+                0.0,
+                &[[0.0; 3]],
+                Population::Primary,
+            );
+        }
+        write_ply(&run.join("model.ply"), &g).expect("ply");
+        let side = if b == 0 { -0.5 } else { 0.5 };
+        let along = glam::DVec3::from_array(a0);
+        let pane_centre =
+            glam::DVec3::from_array([0, 1, 2].map(|i| f64::from(at(mid[0], mid[1])[i])))
+                + along * side;
+        let normal = glam::DVec3::from_array(a1);
+        let p = ReflectionPlane::new(pane_centre, normal, along, 1.0, 0.5, Material::Glass);
+        write_planes_json(&run.join("planes.json"), &[p]).expect("planes");
+    }
+    let out = dir.join("merged");
+    let merge = || {
+        Command::new(env!("CARGO_BIN_EXE_trgs"))
+            .arg("merge")
+            .arg(&blocks)
+            .arg("--runs")
+            .arg(&runs)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .expect("merge")
+    };
+    let merged = merge();
+    let stdout = String::from_utf8_lossy(&merged.stdout);
+    assert!(merged.status.success(), "{stdout}{}", String::from_utf8_lossy(&merged.stderr));
+    let model = load_model(&out, None).expect("the merged run");
+    assert_eq!(model.gaussians.len(), 2, "each block keeps the Gaussian on its own ground");
+    assert_eq!(model.planes.len(), 1, "the halves of one pane are one plane: {stdout}");
+    assert!((model.planes[0].width - 2.0).abs() < 1e-6);
+    // A block without a run is named.
+    std::fs::remove_dir_all(runs.join("block_1")).expect("remove");
+    let missing = merge();
+    assert!(!missing.status.success());
+    assert!(String::from_utf8_lossy(&missing.stderr).contains("no run of block_1"));
+}

@@ -7,6 +7,8 @@
 use crate::rng::Rng;
 use glam::{DVec2, DVec3};
 
+pub mod merge;
+
 /// The ground the blocks tile: the plane across the cameras' mean up direction.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ground {

@@ -10,6 +10,7 @@ pub mod completions;
 pub mod eval;
 pub mod export;
 pub mod family;
+pub mod merge;
 pub mod prepare;
 pub mod render;
 pub mod report;
@@ -36,6 +37,7 @@ const SUBCOMMANDS: &[Subcommand] = &[
     Subcommand { name: "bench", command: bench::Args::command, run: bench::run },
     Subcommand { name: "family", command: family::Args::command, run: family::run },
     Subcommand { name: "split", command: split::Args::command, run: split::run },
+    Subcommand { name: "merge", command: merge::Args::command, run: merge::run },
     Subcommand { name: "completions", command: completions::Args::command, run: completions::run },
 ];
 

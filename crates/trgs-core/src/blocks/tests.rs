@@ -73,3 +73,87 @@ fn a_block_few_views_see_takes_those_that_see_most_of_it() {
     assert_eq!(plans[0].train, vec![0, 1, 2]);
     assert_eq!(plans[1].train, vec![0, 1], "the two views that see it, the one seeing most first");
 }
+
+mod merging {
+    use super::super::merge::*;
+    use super::*;
+    use crate::scene::{Gaussians, Material, Population, ReflectionPlane};
+
+    fn pane(centre: [f64; 3], normal: [f64; 3], width: f64, r0: f64) -> ReflectionPlane {
+        let mut p = ReflectionPlane::new(
+            DVec3::from_array(centre),
+            DVec3::from_array(normal),
+            DVec3::X,
+            width,
+            2.0,
+            Material::Glass,
+        );
+        p.r0_logit = (r0 / (1.0 - r0)).ln();
+        p
+    }
+
+    fn gaussians_at(xs: &[f32]) -> Gaussians<f32> {
+        let mut g = Gaussians::empty(0);
+        for &x in xs {
+            g.push(
+                [x, 0.0, 0.0],
+                [1.0, 0.0, 0.0, 0.0],
+                [0.0; 3],
+                0.0,
+                &[[0.0; 3]],
+                Population::Primary,
+            );
+        }
+        g
+    }
+
+    const SAME: SamePane = SamePane { max_angle_deg: 5.0, max_offset: 0.05, max_gap: 0.1 };
+
+    #[test]
+    fn a_pane_across_a_seam_becomes_one_plane() {
+        // A pane along x from -3 to 3 at z = 5, seen by two blocks split at x = 0: the left block
+        // found its left part, the right block its right part, slightly tilted and offset.
+        let left = pane([-1.5, 0.0, 5.0], [0.0, 0.0, -1.0], 3.0, 0.2);
+        let right = pane([1.5, 0.0, 5.02], [0.0, 0.03, -1.0], 3.0, 0.3);
+        assert!(same_pane(&left, &right, SAME));
+        let m = merge_planes(&[&left, &right]);
+        assert!((m.width - 6.0).abs() < 0.05, "{}", m.width);
+        assert!(
+            (m.centre.x - 0.0).abs() < 0.05 && (m.centre.z - 5.01).abs() < 0.01,
+            "{:?}",
+            m.centre
+        );
+        assert!((m.r0() - 0.25).abs() < 1e-9, "the area-weighted mean");
+        // A pane elsewhere, a turned one, a mirror: not the same pane.
+        assert!(!same_pane(&left, &pane([-1.5, 0.0, 5.3], [0.0, 0.0, -1.0], 3.0, 0.2), SAME));
+        assert!(!same_pane(&left, &pane([1.6, 0.0, 5.0], [0.2, 0.0, -1.0], 3.0, 0.2), SAME));
+        assert!(!same_pane(&left, &pane([4.0, 0.0, 5.0], [0.0, 0.0, -1.0], 1.0, 0.2), SAME));
+        let mut mirror = right;
+        mirror.material = Material::Mirror;
+        assert!(!same_pane(&left, &mirror, SAME));
+    }
+
+    #[test]
+    fn each_block_keeps_its_own_cell_and_planes_group() {
+        let ground = Ground { up: DVec3::NEG_Y, axes: [DVec3::X, DVec3::Z] };
+        let regions = Regions { centres: vec![DVec2::new(-5.0, 0.0), DVec2::new(5.0, 0.0)] };
+        let left = TrainedBlock {
+            gaussians: gaussians_at(&[-6.0, -1.0, 0.5, 2.0]),
+            planes: vec![pane([-1.5, 0.0, 5.0], [0.0, 0.0, -1.0], 3.0, 0.2)],
+        };
+        let right = TrainedBlock {
+            gaussians: gaussians_at(&[-0.5, 1.0, 7.0]),
+            planes: vec![
+                pane([1.5, 0.0, 5.0], [0.0, 0.0, -1.0], 3.0, 0.2),
+                pane([6.0, 0.0, 9.0], [1.0, 0.0, 0.0], 1.0, 0.9),
+            ],
+        };
+        let (g, planes, report) = merge_blocks(&[left, right], &ground, &regions, SAME);
+        assert_eq!(report.kept, vec![2, 2], "left keeps x < 0, right x >= 0");
+        let xs: Vec<f32> = g.means.iter().map(|m| m[0]).collect();
+        assert_eq!(xs, vec![-6.0, -1.0, 1.0, 7.0]);
+        assert_eq!(planes.len(), 2);
+        assert_eq!(report.planes_from, vec![vec![(0, 0), (1, 0)], vec![(1, 1)]]);
+        assert!((planes[0].width - 6.0).abs() < 1e-9);
+    }
+}

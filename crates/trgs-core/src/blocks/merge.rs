@@ -1,0 +1,167 @@
+//! Trained blocks into one model: each block keeps the Gaussians on its own part of the ground
+//! (its Voronoi cell, without the margin it trained with), and planes that several blocks found
+//! for one pane become one plane.
+use super::{Ground, Regions};
+use crate::scene::{Gaussians, ReflectionPlane, sh_coeff_count};
+use glam::DVec3;
+
+/// When two blocks' planes are one pane.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SamePane {
+    /// Largest angle between their normals, degrees.
+    pub max_angle_deg: f64,
+    /// Largest distance of one's centre from the other's plane, scene units.
+    pub max_offset: f64,
+    /// Largest gap between their rectangles within the plane, scene units (0: they must touch).
+    pub max_gap: f64,
+}
+
+/// One trained block: its Gaussians and planes.
+#[derive(Clone, Debug)]
+pub struct TrainedBlock {
+    pub gaussians: Gaussians<f32>,
+    pub planes: Vec<ReflectionPlane>,
+}
+
+/// What a merge did, for its report.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MergeReport {
+    /// Gaussians kept from each block.
+    pub kept: Vec<usize>,
+    /// For each merged plane, the (block, plane) pairs it came from.
+    pub planes_from: Vec<Vec<(usize, usize)>>,
+}
+
+/// The blocks merged: block `b` (`blocks[b]`, trained on region `b` of `regions`) gives the
+/// Gaussians whose centre lies in its cell; the planes are grouped by [`SamePane`] (a plane
+/// joins a group when it is the same pane as any member) and each group becomes one plane
+/// ([`merge_planes`]).
+pub fn merge_blocks(
+    blocks: &[TrainedBlock],
+    ground: &Ground,
+    regions: &Regions,
+    same: SamePane,
+) -> (Gaussians<f32>, Vec<ReflectionPlane>, MergeReport) {
+    let degree = blocks.iter().map(|b| b.gaussians.sh_degree).max().unwrap_or(0);
+    let mut out = Gaussians::empty(degree);
+    let mut report = MergeReport::default();
+    for (b, block) in blocks.iter().enumerate() {
+        let g = &block.gaussians;
+        let own = g.subset(|i| {
+            let m = g.means[i];
+            let x = DVec3::new(f64::from(m[0]), f64::from(m[1]), f64::from(m[2]));
+            regions.owner(ground.project(x)) == b
+        });
+        report.kept.push(own.len());
+        out.append(&own);
+    }
+    debug_assert_eq!(out.sh.len(), out.len() * sh_coeff_count(degree));
+    let all: Vec<(usize, usize, &ReflectionPlane)> = blocks
+        .iter()
+        .enumerate()
+        .flat_map(|(b, block)| block.planes.iter().enumerate().map(move |(k, p)| (b, k, p)))
+        .collect();
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for (i, (_, _, p)) in all.iter().enumerate() {
+        let joined: Vec<usize> = (0..groups.len())
+            .filter(|&gi| groups[gi].iter().any(|&j| same_pane(p, all[j].2, same)))
+            .collect();
+        match joined.split_first() {
+            None => groups.push(vec![i]),
+            Some((&first, rest)) => {
+                // A plane that bridges groups joins them.
+                let mut merged = vec![i];
+                for &gi in rest.iter().rev() {
+                    merged.extend(groups.remove(gi));
+                }
+                groups[first].extend(merged);
+            }
+        }
+    }
+    let mut planes = Vec::new();
+    for group in &groups {
+        let members: Vec<&ReflectionPlane> = group.iter().map(|&i| all[i].2).collect();
+        planes.push(merge_planes(&members));
+        report.planes_from.push(group.iter().map(|&i| (all[i].0, all[i].1)).collect());
+    }
+    (out, planes, report)
+}
+
+/// Whether `a` and `b` are one pane: same material, normals within the angle, each centre near
+/// the other's plane, and their rectangles within the gap of each other in `a`'s plane.
+pub fn same_pane(a: &ReflectionPlane, b: &ReflectionPlane, same: SamePane) -> bool {
+    if a.material != b.material {
+        return false;
+    }
+    let cos = a.unit_normal().dot(b.unit_normal()).clamp(-1.0, 1.0);
+    if cos.acos().to_degrees() > same.max_angle_deg {
+        return false;
+    }
+    if a.signed_distance(b.centre).abs() > same.max_offset
+        || b.signed_distance(a.centre).abs() > same.max_offset
+    {
+        return false;
+    }
+    // The gap between the two rectangles' boxes in a's frame (b's corners projected).
+    let (t, h) = (a.axis, a.bitangent());
+    let box_of = |p: &ReflectionPlane| {
+        let uv: Vec<(f64, f64)> =
+            p.corners().iter().map(|c| ((*c - a.centre).dot(t), (*c - a.centre).dot(h))).collect();
+        let lo =
+            uv.iter().fold((f64::INFINITY, f64::INFINITY), |m, q| (m.0.min(q.0), m.1.min(q.1)));
+        let hi = uv
+            .iter()
+            .fold((f64::NEG_INFINITY, f64::NEG_INFINITY), |m, q| (m.0.max(q.0), m.1.max(q.1)));
+        (lo, hi)
+    };
+    let ((alo, ahi), (blo, bhi)) = (box_of(a), box_of(b));
+    let gap_u = (blo.0 - ahi.0).max(alo.0 - bhi.0).max(0.0);
+    let gap_v = (blo.1 - ahi.1).max(alo.1 - bhi.1).max(0.0);
+    gap_u.max(gap_v) <= same.max_gap
+}
+
+/// One plane from several found for one pane: its normal and R0 the area-weighted means, its
+/// width axis the largest member's, its rectangle the box of every member's corners in that
+/// frame, centred on the weighted mean offset.
+pub fn merge_planes(members: &[&ReflectionPlane]) -> ReflectionPlane {
+    let largest = members
+        .iter()
+        .max_by(|a, b| (a.width * a.height).total_cmp(&(b.width * b.height)))
+        .map_or(*members[0], |p| **p);
+    if members.len() == 1 {
+        return largest;
+    }
+    let reference = largest.unit_normal();
+    let (mut normal, mut offset, mut r0, mut area) = (DVec3::ZERO, 0.0, 0.0, 0.0);
+    for p in members {
+        let w = p.width * p.height;
+        // Normals of one pane point the same way; a flipped one would cancel the others.
+        let n =
+            if p.unit_normal().dot(reference) < 0.0 { -p.unit_normal() } else { p.unit_normal() };
+        normal += w * n;
+        r0 += w * p.r0();
+        area += w;
+        offset += w * p.centre.dot(n);
+    }
+    let n = normal.normalize();
+    let offset = offset / area;
+    let r0 = (r0 / area).clamp(1e-6, 0.999);
+    let mut plane = largest;
+    plane.normal = n;
+    plane.orthogonalise_axis();
+    let (t, h) = (plane.axis, n.cross(plane.axis));
+    let anchor = largest.centre - n * (largest.centre.dot(n) - offset);
+    let (mut lo, mut hi) = ((f64::INFINITY, f64::INFINITY), (f64::NEG_INFINITY, f64::NEG_INFINITY));
+    for p in members {
+        for c in p.corners() {
+            let (u, v) = ((c - anchor).dot(t), (c - anchor).dot(h));
+            lo = (lo.0.min(u), lo.1.min(v));
+            hi = (hi.0.max(u), hi.1.max(v));
+        }
+    }
+    plane.centre = anchor + t * (0.5 * (lo.0 + hi.0)) + h * (0.5 * (lo.1 + hi.1));
+    plane.width = hi.0 - lo.0;
+    plane.height = hi.1 - lo.1;
+    plane.r0_logit = (r0 / (1.0 - r0)).ln();
+    plane
+}
