@@ -116,19 +116,21 @@ pub fn run(matches: &clap::ArgMatches) -> Result<()> {
 /// The views the bake samples: `--cameras`, or the cameras.json of the run folder or beside
 /// the model.
 fn views_of(args: &Args, model: &Model) -> Result<Vec<Camera>> {
-    let candidates = match &args.cameras {
-        Some(c) => vec![c.clone()],
-        None => vec![args.model.join("cameras.json"), model.ply.with_file_name("cameras.json")],
+    let candidates = [args.model.join("cameras.json"), model.ply.with_file_name("cameras.json")];
+    // A file given by name is read as it is, so that a missing one is named as such.
+    let path = match &args.cameras {
+        Some(given) => given.clone(),
+        None => match candidates.into_iter().find(|p| p.is_file()) {
+            Some(found) => found,
+            None => bail!(
+                "{}: baking its planes needs the views they were trained from, and there is no \
+                 cameras.json in the run folder or beside the model: give --cameras FILE, or \
+                 --full to keep the planes for trgs's own viewer",
+                args.model.display()
+            ),
+        },
     };
-    let Some(path) = candidates.iter().find(|p| p.is_file()) else {
-        bail!(
-            "{}: baking its planes needs the views they were trained from, and there is no \
-             cameras.json in the run folder or beside the model: give --cameras FILE, or \
-             --full to keep the planes for trgs's own viewer",
-            args.model.display()
-        );
-    };
-    let cameras = read_cameras_json(path)?;
+    let cameras = read_cameras_json(&path)?;
     if cameras.is_empty() {
         bail!("{}: no views to bake from", path.display());
     }
