@@ -217,8 +217,9 @@ fn write_block(
     write_test_views(&dir.join("test_views.txt"), &test)?;
     let planes = input.join("planes.json");
     if planes.is_file() {
-        std::fs::copy(&planes, dir.join("planes.json"))
-            .with_context(|| format!("copying {}", planes.display()))?;
+        let bytes =
+            std::fs::read(&planes).with_context(|| format!("reading {}", planes.display()))?;
+        write_atomic(&dir.join("planes.json"), &bytes)?;
     }
     Ok(sub.points.len())
 }

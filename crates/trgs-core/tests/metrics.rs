@@ -263,3 +263,11 @@ fn ssim_map_has_the_input_layout() {
     assert_eq!(mean, ssim(&a, &b).expect("same size"));
     assert!(map.data.iter().all(|v| v.is_finite() && *v <= 1.0 + 1e-12));
 }
+
+#[test]
+fn pooled_psnr_counts_a_perfect_view_as_no_error() {
+    use trgs_core::metrics::pooled_psnr;
+    assert!((pooled_psnr(&[20.0, 20.0]) - 20.0).abs() < 1e-9);
+    assert!((pooled_psnr(&[20.0, f64::INFINITY]) - 23.0103).abs() < 1e-3);
+    assert!(pooled_psnr(&[f64::INFINITY]).is_infinite());
+}

@@ -4,7 +4,7 @@
 use anyhow::{Context, Result};
 use trgs_core::bake::{BakeReport, StrengthView, bake};
 use trgs_core::io::model::Model;
-use trgs_core::metrics::psnr;
+use trgs_core::metrics::{pooled_psnr, psnr};
 use trgs_core::{Camera, Gaussians, Image};
 use trgs_render::{GpuContext, GpuScene, Layer, RenderOptions, Renderer};
 
@@ -66,21 +66,25 @@ pub fn bake_for_plain_viewers(
     Ok(bake(&model.gaussians, &model.planes, &views))
 }
 
-/// PSNR over `cameras` of plain renders of `gaussians` (no planes, as other viewers draw them)
-/// against trgs's renders of `model` with its planes: the squared error pooled over every view's
-/// pixels ([`pooled_psnr`]), since a view that sees no plane renders the same both ways.
+/// PSNR over `cameras` of plain renders of each of `candidates` (no planes, as other viewers
+/// draw them) against trgs's renders of `model` with its planes, rendered once per view: the
+/// squared error pooled over every view's pixels (`metrics::pooled_psnr`), since a view that
+/// sees no plane renders the same both ways.
 pub fn plain_render_psnr(
     ctx: &GpuContext,
     model: &Model,
-    gaussians: &Gaussians<f32>,
+    candidates: &[&Gaussians<f32>],
     cameras: &[Camera],
-) -> Result<f64> {
+) -> Result<Vec<f64>> {
     let renderer = Renderer::new(ctx);
     let with_planes = GpuScene::upload(ctx, &model.gaussians, &model.planes)
         .with_context(|| format!("{}: invalid model", model.ply.display()))?;
-    let plain = GpuScene::upload(ctx, gaussians, &[]).context("uploading the baked model")?;
+    let plain: Vec<GpuScene> = candidates
+        .iter()
+        .map(|g| GpuScene::upload(ctx, g, &[]).context("uploading a plain model"))
+        .collect::<Result<_>>()?;
     let options = RenderOptions { reflection: model.reflection, ..RenderOptions::default() };
-    let mut per_view = Vec::with_capacity(cameras.len());
+    let mut per_view = vec![Vec::with_capacity(cameras.len()); candidates.len()];
     for c in cameras {
         let render = |scene: &GpuScene| -> Result<Image<f32>> {
             let frame = renderer
@@ -88,27 +92,16 @@ pub fn plain_render_psnr(
                 .with_context(|| format!("rendering view {:?}", c.name))?;
             Ok(frame.read_layer(ctx, Layer::Color)?)
         };
-        per_view.push(psnr(&render(&plain)?, &render(&with_planes)?)?);
+        let reference = render(&with_planes)?;
+        for (scores, scene) in per_view.iter_mut().zip(&plain) {
+            scores.push(psnr(&render(scene)?, &reference)?);
+        }
     }
-    Ok(pooled_psnr(&per_view))
-}
-
-/// The PSNR of the mean squared error of views of one size, from their PSNRs (an infinite one,
-/// no error, counts as zero error).
-pub fn pooled_psnr(per_view: &[f64]) -> f64 {
-    let mse: f64 = per_view.iter().map(|p| 10f64.powf(-p / 10.0)).sum::<f64>();
-    -10.0 * (mse / per_view.len().max(1) as f64).log10()
+    Ok(per_view.iter().map(|v| pooled_psnr(v)).collect())
 }
 
 #[cfg(test)]
 mod tests {
-    #[test]
-    fn pooled_psnr_counts_a_perfect_view_as_no_error() {
-        assert!((super::pooled_psnr(&[20.0, 20.0]) - 20.0).abs() < 1e-9);
-        assert!((super::pooled_psnr(&[20.0, f64::INFINITY]) - 23.0103).abs() < 1e-3);
-        assert!(super::pooled_psnr(&[f64::INFINITY]).is_infinite());
-    }
-
     #[test]
     fn strength_views_are_smaller_and_measured_views_spread() {
         use trgs_core::{Intrinsics, Pose};

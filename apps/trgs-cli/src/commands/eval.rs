@@ -100,7 +100,7 @@ pub fn run(matches: &clap::ArgMatches) -> Result<()> {
         println!(
             "against {}: PSNR {:.2} dB pooled over the views' pixels",
             args.reference.as_ref().map_or(String::new(), |r| r.display().to_string()),
-            trgs_train::bake::pooled_psnr(&per_view)
+            trgs_core::metrics::pooled_psnr(&per_view)
         );
     }
     let fps = render_fps(&subject, &data)?;

@@ -102,8 +102,8 @@ pub fn run(matches: &clap::ArgMatches) -> Result<()> {
     // the views, at most 512 pixels long.
     let measured: Vec<Camera> =
         spread(&cameras, MEASURED_VIEWS).iter().map(|c| at_most(c, STRENGTH_LONG_SIDE)).collect();
-    let baked_psnr = plain_render_psnr(&ctx, &model, &baked, &measured)?;
-    let unbaked_psnr = plain_render_psnr(&ctx, &model, &model.gaussians, &measured)?;
+    let scores = plain_render_psnr(&ctx, &model, &[&baked, &model.gaussians], &measured)?;
+    let (baked_psnr, unbaked_psnr) = (scores[0], scores[1]);
     println!(
         "a plain 3DGS render of it against trgs's render: PSNR {baked_psnr:.2} dB over {} of \
          the {} (the model unbaked: {unbaked_psnr:.2} dB)",

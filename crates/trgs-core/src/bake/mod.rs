@@ -24,6 +24,7 @@ pub mod sh_reflect;
 
 use crate::image::Image;
 use crate::plane_math::{householder, ray_rectangle_hit, reflect_point};
+use crate::reference::sigmoid;
 use crate::scene::{Camera, Gaussians, Population, ReflectionPlane};
 use crate::sh::C0;
 use glam::{DMat3, DQuat, DVec3};
@@ -222,10 +223,6 @@ fn scaled_colour(c: &[[f64; 3]], intensity: f64) -> Vec<[f64; 3]> {
 
 fn vec3(m: [f32; 3]) -> DVec3 {
     DVec3::new(f64::from(m[0]), f64::from(m[1]), f64::from(m[2]))
-}
-
-fn sigmoid(x: f64) -> f64 {
-    1.0 / (1.0 + (-x).exp())
 }
 
 /// The logit of an opacity, kept off 0 and 1 so that it stays finite.

@@ -19,6 +19,7 @@
 //! 1/16, degree-1 SH to 5 bits and higher degrees to 4 bits, rotations to 9 bits per component;
 //! trgs's own fields (planes, glass Gaussians' masks, reflection intensities) are not stored.
 use super::{FormatError, write_atomic};
+use crate::reference::sigmoid;
 use crate::scene::{Gaussians, Population, sh_coeff_count};
 use container::{MAGIC, Packed, StoredFrame};
 use flate2::Compression;
@@ -64,7 +65,7 @@ pub fn encode_spz(g: &Gaussians<f32>) -> Result<Vec<u8>, String> {
             raw.extend_from_slice(&fixed.to_le_bytes()[..3]);
         }
     }
-    raw.extend(g.opacity_logits.iter().map(|&l| to_u8(sigmoid(l) * 255.0)));
+    raw.extend(g.opacity_logits.iter().map(|&l| to_u8(sigmoid(f64::from(l)) as f32 * 255.0)));
     for i in 0..n {
         raw.extend(g.sh[i * k].map(|dc| to_u8(dc * COLOUR_SCALE * 255.0 + 127.5)));
     }
@@ -222,10 +223,6 @@ fn quantise_sh(x: f32, bucket: i32) -> u8 {
 
 fn to_u8(x: f32) -> u8 {
     x.round().clamp(0.0, 255.0) as u8
-}
-
-fn sigmoid(x: f32) -> f32 {
-    1.0 / (1.0 + (-x).exp())
 }
 
 /// The logit of a byte opacity, finite at 0 and 1.

@@ -66,6 +66,14 @@ pub fn psnr(a: &Image<f32>, b: &Image<f32>) -> Result<f64, MetricsError> {
     Ok(psnr_of_mse(mse(a, b)?))
 }
 
+/// The PSNR of the mean squared error of images of one size, from their PSNRs (an infinite
+/// one, no error, counts as zero error): a mean over views that stays finite when some view is
+/// rendered exactly.
+pub fn pooled_psnr(per_image: &[f64]) -> f64 {
+    let mse: f64 = per_image.iter().map(|p| 10f64.powf(-p / 10.0)).sum::<f64>();
+    psnr_of_mse(mse / per_image.len().max(1) as f64)
+}
+
 /// `10 log10(1 / mse)`, infinite for no error.
 fn psnr_of_mse(mse: f64) -> f64 {
     if mse == 0.0 { f64::INFINITY } else { 10.0 * (1.0 / mse).log10() }

@@ -52,6 +52,7 @@ pub use frame::{Frame, FrameGrads, PlaneLayerGrads, PlaneLayers, ViewPass};
 pub use mcmc::{draw_below, mcmc_noise, mcmc_regularise, noise_normal, noise_offset, pcg_hash};
 pub use photometric_loss::{PhotometricLoss, photometric_loss, photometric_loss_covered};
 pub use prefix_sum::prefix_sum;
+pub(crate) use project::sigmoid;
 pub use project::{Projected, ProjectionFilter, project};
 pub use project_bwd::{ProjectedGrads, project_bwd};
 pub use rasterize::{PixelState, rasterize};

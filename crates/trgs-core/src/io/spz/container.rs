@@ -42,6 +42,26 @@ pub struct Packed {
 }
 
 impl Packed {
+    /// The attributes `parts` (positions, alphas, colours, scales, rotations, SH) with what the
+    /// header says of them.
+    fn new(h: Header, frame: StoredFrame, parts: impl IntoIterator<Item = Vec<u8>>) -> Self {
+        let mut parts = parts.into_iter();
+        let mut next = || parts.next().unwrap_or_default();
+        Packed {
+            version: h.version,
+            count: h.count,
+            sh_degree: h.sh_degree,
+            fractional_bits: h.fractional_bits,
+            frame,
+            positions: next(),
+            alphas: next(),
+            colours: next(),
+            scales: next(),
+            rotations: next(),
+            sh: next(),
+        }
+    }
+
     /// The byte count of each attribute (positions, alphas, colours, scales, rotations, SH).
     fn sizes(version: u32, count: usize, sh_degree: u32) -> Option<[usize; 6]> {
         let dim = ((sh_degree + 1) * (sh_degree + 1) - 1) as usize;
@@ -71,11 +91,18 @@ fn word(b: &[u8], at: usize) -> u32 {
     u32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
 }
 
+/// The header fields both containers share.
+#[derive(Clone, Copy, Debug)]
+struct Header {
+    version: u32,
+    count: usize,
+    sh_degree: u32,
+    fractional_bits: u8,
+    flags: u8,
+}
+
 /// The header fields both containers share, checked.
-fn header(
-    b: &[u8],
-    accepted: std::ops::RangeInclusive<u32>,
-) -> Result<(u32, usize, u32, u8, u8), String> {
+fn header(b: &[u8], accepted: std::ops::RangeInclusive<u32>) -> Result<Header, String> {
     if b.len() < 16 || word(b, 0) != MAGIC {
         return Err("no SPZ header (expected the magic \"NGSP\")".into());
     }
@@ -87,15 +114,16 @@ fn header(
     if degree > 3 {
         return Err(format!("SH degree {degree}: trgs models hold degrees 0 to 3"));
     }
-    Ok((version, count, degree, b[13], b[14]))
+    Ok(Header { version, count, sh_degree: degree, fractional_bits: b[13], flags: b[14] })
 }
 
 /// Versions 2 and 3: the gzip stream's content.
 fn open_gzip_payload(raw: &[u8]) -> Result<Packed, String> {
-    let (version, count, degree, fractional_bits, flags) = header(raw, 2..=3)?;
-    let sizes = Packed::sizes(version, count, degree).ok_or("the Gaussian count overflows")?;
+    let h = header(raw, 2..=3)?;
+    let (count, degree) = (h.count, h.sh_degree);
+    let sizes = Packed::sizes(h.version, count, degree).ok_or("the Gaussian count overflows")?;
     let total = 16 + sizes.iter().sum::<usize>();
-    let has_extensions = flags & FLAG_HAS_EXTENSIONS != 0;
+    let has_extensions = h.flags & FLAG_HAS_EXTENSIONS != 0;
     if raw.len() < total || (!has_extensions && raw.len() != total) {
         return Err(format!(
             "{} bytes after decompressing; {count} Gaussians of SH degree {degree} take {total}",
@@ -104,24 +132,12 @@ fn open_gzip_payload(raw: &[u8]) -> Result<Packed, String> {
     }
     let frame = if has_extensions { frame_of(&raw[total..])? } else { StoredFrame::Rub };
     let mut at = 16;
-    let mut take = |len: usize| {
-        let s = raw[at..at + len].to_vec();
+    let parts = sizes.map(|len| {
+        let part = raw[at..at + len].to_vec();
         at += len;
-        s
-    };
-    Ok(Packed {
-        version,
-        count,
-        sh_degree: degree,
-        fractional_bits,
-        frame,
-        positions: take(sizes[0]),
-        alphas: take(sizes[1]),
-        colours: take(sizes[2]),
-        scales: take(sizes[3]),
-        rotations: take(sizes[4]),
-        sh: take(sizes[5]),
-    })
+        part
+    });
+    Ok(Packed::new(h, frame, parts))
 }
 
 /// Version 4: header, extensions up to the table of streams, then one zstd frame per attribute
@@ -130,10 +146,11 @@ fn open_streams(b: &[u8]) -> Result<Packed, String> {
     if b.len() < 32 {
         return Err("an SPZ version 4 header is 32 bytes; the file is shorter".into());
     }
-    let (version, count, degree, fractional_bits, flags) = header(b, 4..=4)?;
+    let h = header(b, 4..=4)?;
+    let (count, degree) = (h.count, h.sh_degree);
     let streams = usize::from(b[15]);
     let table = word(b, 16) as usize;
-    let sizes = Packed::sizes(version, count, degree).ok_or("the Gaussian count overflows")?;
+    let sizes = Packed::sizes(h.version, count, degree).ok_or("the Gaussian count overflows")?;
     let expected = sizes.iter().filter(|&&s| s > 0).count();
     if streams != expected {
         return Err(format!(
@@ -143,8 +160,11 @@ fn open_streams(b: &[u8]) -> Result<Packed, String> {
     if table < 32 || table + 16 * streams > b.len() {
         return Err(format!("the table of streams at byte {table} lies outside the file"));
     }
-    let frame =
-        if flags & FLAG_HAS_EXTENSIONS != 0 { frame_of(&b[32..table])? } else { StoredFrame::Rub };
+    let frame = if h.flags & FLAG_HAS_EXTENSIONS != 0 {
+        frame_of(&b[32..table])?
+    } else {
+        StoredFrame::Rub
+    };
     let mut at = table + 16 * streams;
     let mut out: Vec<Vec<u8>> = Vec::with_capacity(6);
     let mut entry = 0;
@@ -164,10 +184,14 @@ fn open_streams(b: &[u8]) -> Result<Packed, String> {
         let Some(end) = end.filter(|&e| e <= b.len()) else {
             return Err(format!("stream {entry} runs past the end of the file"));
         };
-        let mut decoder = ruzstd::decoding::StreamingDecoder::new(&b[at..end])
+        let decoder = ruzstd::decoding::StreamingDecoder::new(&b[at..end])
             .map_err(|e| format!("stream {entry}: {e}"))?;
         let mut data = Vec::with_capacity(size);
-        decoder.read_to_end(&mut data).map_err(|e| format!("stream {entry}: {e}"))?;
+        // A byte past the expected size is enough to refuse the stream: no more is inflated.
+        decoder
+            .take(size as u64 + 1)
+            .read_to_end(&mut data)
+            .map_err(|e| format!("stream {entry}: {e}"))?;
         if data.len() != size {
             return Err(format!(
                 "stream {entry} decompresses to {} bytes, {size} expected",
@@ -180,21 +204,7 @@ fn open_streams(b: &[u8]) -> Result<Packed, String> {
     if at != b.len() {
         return Err(format!("{} bytes after the last stream", b.len() - at));
     }
-    let mut out = out.into_iter();
-    let mut next = || out.next().unwrap_or_default();
-    Ok(Packed {
-        version,
-        count,
-        sh_degree: degree,
-        fractional_bits,
-        frame,
-        positions: next(),
-        alphas: next(),
-        colours: next(),
-        scales: next(),
-        rotations: next(),
-        sh: next(),
-    })
+    Ok(Packed::new(h, frame, out))
 }
 
 /// The stored frame that extension records `{type, length, payload}` name (right-up-back when
