@@ -141,8 +141,10 @@ pub struct Capabilities {
 /// How to choose the device.
 #[derive(Clone, Debug, Default)]
 pub struct DeviceOptions {
-    /// Use the first adapter whose name contains this (case-insensitive); also read from the
-    /// environment variable `TRGS_ADAPTER` when None.
+    /// Use the first adapter whose name or PCI bus address (`0000:1b:00.0`) contains this
+    /// (case-insensitive); also read from the environment variable `TRGS_ADAPTER` when None.
+    /// The address tells apart the identical GPUs of one machine (a cluster task is handed one
+    /// of them: python/trgs_ray).
     pub adapter_name: Option<String>,
     /// Never enable the optional features (tests of the fallback paths).
     pub disable_optional_features: bool,
@@ -226,7 +228,7 @@ fn rank(info: &wgpu::AdapterInfo) -> u8 {
 }
 
 /// The adapter named by `options.adapter_name` or `TRGS_ADAPTER` (a case-insensitive part of its
-/// name), else the best: discrete, integrated, virtual, other, then CPU.
+/// name or PCI bus address), else the best: discrete, integrated, virtual, other, then CPU.
 pub fn pick_adapter(
     mut adapters: Vec<wgpu::Adapter>,
     options: &DeviceOptions,
@@ -239,11 +241,27 @@ pub fn pick_adapter(
     let Some(w) = wanted else {
         return Ok(adapters.swap_remove(0));
     };
-    let names: Vec<String> = adapters.iter().map(|a| a.get_info().name).collect();
-    match names.iter().position(|n| n.to_lowercase().contains(&w.to_lowercase())) {
+    let infos: Vec<wgpu::AdapterInfo> = adapters.iter().map(wgpu::Adapter::get_info).collect();
+    match infos.iter().position(|i| adapter_matches(&i.name, &i.device_pci_bus_id, &w)) {
         Some(p) => Ok(adapters.swap_remove(p)),
-        None => Err(DeviceError::NoMatchingAdapter { wanted: w, available: names.join(", ") }),
+        None => {
+            let available: Vec<String> = infos
+                .iter()
+                .map(|i| match i.device_pci_bus_id.as_str() {
+                    "" => i.name.clone(),
+                    bus => format!("{} ({bus})", i.name),
+                })
+                .collect();
+            Err(DeviceError::NoMatchingAdapter { wanted: w, available: available.join(", ") })
+        }
     }
+}
+
+/// Whether `wanted` is a case-insensitive part of an adapter's name or of its PCI bus address.
+fn adapter_matches(name: &str, pci_bus_id: &str, wanted: &str) -> bool {
+    let wanted = wanted.to_lowercase();
+    name.to_lowercase().contains(&wanted)
+        || (!pci_bus_id.is_empty() && pci_bus_id.to_lowercase().contains(&wanted))
 }
 
 /// The device trgs asks `adapter` for: the optional features it has (unless disabled) and every
@@ -422,5 +440,23 @@ impl GpuContext {
             self.capabilities.block_width,
             if self.capabilities.block_walk { "on" } else { "off" },
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::adapter_matches;
+
+    #[test]
+    fn an_adapter_is_chosen_by_a_part_of_its_name_or_bus_address() {
+        let (h200, bus) = ("NVIDIA H200", "0000:1b:00.0");
+        assert!(adapter_matches(h200, bus, "h200"));
+        // nvidia-smi writes the address in capitals with a longer domain; its bus, device and
+        // function are what python/trgs_ray passes.
+        assert!(adapter_matches(h200, bus, "1B:00.0"));
+        assert!(!adapter_matches(h200, bus, "1c:00.0"));
+        // Lavapipe has no address: only its name matches.
+        assert!(adapter_matches("llvmpipe (LLVM 15.0.6, 256 bits)", "", "llvmpipe"));
+        assert!(!adapter_matches("llvmpipe (LLVM 15.0.6, 256 bits)", "", ":"));
     }
 }
