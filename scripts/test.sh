@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The test command of the README: installs what the tests need (a Vulkan driver, Xvfb for the
-# viewer's window test, COLMAP for prepare's), then runs every test of the workspace (CPU
-# reference, formats, GPU stages on lavapipe or a real GPU, the viewer in a virtual X window).
+# viewer's window test, COLMAP for prepare's, Ray for the block driver's), then runs every test
+# of the workspace (CPU reference, formats, GPU stages on lavapipe or a real GPU, the viewer in
+# a virtual X window) and the Ray driver's.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/ensure-vulkan.sh
@@ -24,3 +25,14 @@ if [ -z "${XDG_RUNTIME_DIR:-}" ] && [ -z "${WAYLAND_DISPLAY:-}" ] && [ -z "${MES
     export NODEVICE_SELECT=1
 fi
 cargo test --workspace --locked "$@"
+# The Ray driver (python/trgs_ray): its own tests, then a local Ray cluster training two blocks
+# with the trgs binary the line above built.
+profile=debug
+for arg in "$@"; do
+    if [ "$arg" = "--release" ]; then
+        profile=release
+    fi
+done
+python=$(scripts/ensure-ray.sh)
+TRGS_BIN="$PWD/target/$profile/trgs" TRGS_RAY_REQUIRED=1 \
+    "$python" -m unittest discover --start-directory python/trgs_ray/tests --verbose
