@@ -35,6 +35,20 @@ pub enum Backdrop {
     Showcase,
 }
 
+/// Where the scene is.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Setting {
+    /// A camera room in front of a window wall (the built-in scenes and the scene family): the
+    /// panes, backdrop, path and light panels of the config apply.
+    #[default]
+    Room,
+    /// A street of shop windows, 24 m long, walked along twice ([`SyntheticConfig::street`]):
+    /// for blocks, seams and panes that two blocks share. The panes take the street's fixed
+    /// slots in order (at most five); backdrop, path, pane size and turn, room views and light
+    /// panels do not apply.
+    Street,
+}
+
 /// Settings of [`generate`](fn@super::generate).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SyntheticConfig {
@@ -73,6 +87,8 @@ pub struct SyntheticConfig {
     pub path: CameraPath,
     /// The lens the photos are taken through (their COLMAP model).
     pub lens: SyntheticLens,
+    /// A room or a street.
+    pub setting: Setting,
 }
 
 /// The lens of the synthetic photos: a pinhole, or a distorting lens whose photos the loader must
@@ -158,6 +174,7 @@ impl Default for SyntheticConfig {
             reflected_lights: 0,
             path: CameraPath::Loop,
             lens: SyntheticLens::Pinhole,
+            setting: Setting::Room,
         }
     }
 }
@@ -186,6 +203,23 @@ impl SyntheticConfig {
     /// outside the panes is unchanged, and the reflection is a larger share of the glass pixels.
     pub fn night(self) -> Self {
         Self { behind_gain: NIGHT_BEHIND_GAIN, ..self }
+    }
+
+    /// The street fixture: four shop windows of glass and a mirror along a 24 m shop front,
+    /// 240 views along two walks past it (every 8th a test view), 30 of them masked, 12000
+    /// sparse points. Across the street stand facades that the glass reflects and no camera
+    /// faces.
+    pub fn street() -> Self {
+        use PaneKind::{Glass, Mirror};
+        Self {
+            views: 240,
+            room_views: 0,
+            panes: vec![Glass, Glass, Glass, Mirror, Glass],
+            masked_views: 30,
+            sparse_points: 12_000,
+            setting: Setting::Street,
+            ..Self::default()
+        }
     }
 
     /// The same camera room and cameras with [`Backdrop::Showcase`] behind the wall.

@@ -4,10 +4,11 @@ use std::f64::consts::PI;
 
 use glam::{DMat3, DVec3};
 
-use super::config::{Backdrop, GLASS_R0, MIRROR_R0, PaneKind, SyntheticConfig};
+use super::config::{Backdrop, GLASS_R0, MIRROR_R0, PaneKind, Setting, SyntheticConfig};
 use super::geom::{Ray, Rect, Turn};
 use super::paths::{camera_path, room_view_path};
 use super::room::{FRONT_DEPTH, HALF_WIDTH, HEIGHT};
+use super::street;
 use super::texture::Texture;
 use super::trace::{Object, Pane, Shape, World};
 use trgs_core::lens::Distortion;
@@ -99,11 +100,11 @@ pub(crate) struct Layout {
     pub lens: Option<Distortion>,
 }
 
-const fn rgb(r: f64, g: f64, b: f64) -> DVec3 {
+pub(crate) const fn rgb(r: f64, g: f64, b: f64) -> DVec3 {
     DVec3::new(r, g, b)
 }
 
-fn cuboid(min: [f64; 3], max: [f64; 3], texture: Texture) -> Object {
+pub(crate) fn cuboid(min: [f64; 3], max: [f64; 3], texture: Texture) -> Object {
     Object {
         shape: Shape::Cuboid { min: min.into(), max: max.into(), turn: None },
         texture,
@@ -111,12 +112,18 @@ fn cuboid(min: [f64; 3], max: [f64; 3], texture: Texture) -> Object {
     }
 }
 
-fn sphere(centre: [f64; 3], radius: f64, texture: Texture) -> Object {
+pub(crate) fn sphere(centre: [f64; 3], radius: f64, texture: Texture) -> Object {
     Object { shape: Shape::Sphere { centre: centre.into(), radius }, texture, gain: 1.0 }
 }
 
 /// An axis-aligned wall given by its centre, its two in-plane axes and half sizes.
-fn quad(centre: [f64; 3], u: DVec3, v: DVec3, half: [f64; 2], texture: Texture) -> Object {
+pub(crate) fn quad(
+    centre: [f64; 3],
+    u: DVec3,
+    v: DVec3,
+    half: [f64; 2],
+    texture: Texture,
+) -> Object {
     let rect = Rect { centre: centre.into(), u, v, half_u: half[0], half_v: half[1] };
     Object { shape: Shape::Quad { rect, holes: Vec::new() }, texture, gain: 1.0 }
 }
@@ -180,13 +187,13 @@ fn behind_shell(bd: f64) -> Vec<Object> {
 
 /// Textures of the objects behind the glass, which both backdrops share: the showcase displays
 /// the same objects as the room, nearer the glass.
-const RED_STRIPES: Texture =
+pub(crate) const RED_STRIPES: Texture =
     Texture::Stripes { period: 0.16, a: rgb(0.85, 0.20, 0.18), b: rgb(0.92, 0.90, 0.85) };
-const AMBER_NOISE: Texture =
+pub(crate) const AMBER_NOISE: Texture =
     Texture::Noise { scale: 0.12, a: rgb(0.95, 0.70, 0.25), b: rgb(0.35, 0.15, 0.45) };
-const BLUE_CHECKER: Texture =
+pub(crate) const BLUE_CHECKER: Texture =
     Texture::Checker { period: 0.2, a: rgb(0.15, 0.30, 0.70), b: rgb(0.90, 0.85, 0.30) };
-const PANELS: Texture = Texture::Panels { width: 0.12, height: 0.38 };
+pub(crate) const PANELS: Texture = Texture::Panels { width: 0.12, height: 0.38 };
 
 /// [`Backdrop::Room`]'s objects, 1 to 4 m behind the glass, so that views through the window have
 /// strong parallax.
@@ -249,7 +256,7 @@ fn build_world(config: &SyntheticConfig) -> (World, Boxes, Vec<(f64, f64, f64)>)
     objects.extend(behind.into_iter().map(|o| Object { gain, ..o }));
     objects.extend(light_panels(config.reflected_lights));
 
-    let wall = pane_wall(config);
+    let wall = pane_wall(&room_slots(config), config.r0, WALL_Y);
     objects.extend(wall.frame_boxes.iter().map(|&b| frame_object(b)));
     objects.push(wall_object(wall.holes));
 
@@ -349,15 +356,26 @@ fn light_panels(count: usize) -> impl Iterator<Item = Object> {
 
 /// The panes of the window wall, their frames and sills, the openings they leave in the wall
 /// (x0, x1, y0, y1 about the wall's centre), and each pane's (width, height, R0).
-struct PaneWall {
-    panes: Vec<Pane>,
-    frame_boxes: Boxes,
-    holes: Vec<[f64; 4]>,
-    sizes: Vec<(f64, f64, f64)>,
+pub(crate) struct PaneWall {
+    pub panes: Vec<Pane>,
+    pub frame_boxes: Boxes,
+    pub holes: Vec<[f64; 4]>,
+    pub sizes: Vec<(f64, f64, f64)>,
 }
 
-/// The panes of `config` side by side in the window wall, each in its frame.
-fn pane_wall(config: &SyntheticConfig) -> PaneWall {
+/// Where one pane sits in its wall and what it is: centre (x, y) in the wall, size, turn.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PaneSlot {
+    pub kind: PaneKind,
+    pub cx: f64,
+    pub cy: f64,
+    pub w: f64,
+    pub h: f64,
+    pub turn_deg: f64,
+}
+
+/// The room's panes: those of `config` side by side in the window wall, at [`PANE_Y`].
+fn room_slots(config: &SyntheticConfig) -> Vec<PaneSlot> {
     let (single_w, pane_h) = config.backdrop.pane_size();
     let (single_w, pane_h) = if config.pane_scale == 1.0 {
         (single_w, pane_h)
@@ -366,17 +384,35 @@ fn pane_wall(config: &SyntheticConfig) -> PaneWall {
         ((single_w * s).min(2.0 * HALF_WIDTH - 0.8), (pane_h * s).min(MAX_PANE_H))
     };
     let (w, xs) = pane_slots(config.panes.len(), single_w);
+    config
+        .panes
+        .iter()
+        .zip(xs)
+        .enumerate()
+        .map(|(k, (&kind, cx))| PaneSlot {
+            kind,
+            cx,
+            cy: PANE_Y,
+            w,
+            h: pane_h,
+            turn_deg: config.pane_turn_deg.get(k).copied().unwrap_or(0.0),
+        })
+        .collect()
+}
+
+/// The panes of `slots` in a wall whose centre is `wall_y` high, each in its frame (glass in an
+/// opening with a sill under it, a mirror hung on the wall); `r0` overrides the materials'.
+pub(crate) fn pane_wall(slots: &[PaneSlot], r0_override: Option<f64>, wall_y: f64) -> PaneWall {
     let mut wall = PaneWall {
         panes: Vec::new(),
         frame_boxes: Vec::new(),
         holes: Vec::new(),
         sizes: Vec::new(),
     };
-    for (k, (&kind, &cx)) in config.panes.iter().zip(&xs).enumerate() {
+    for &PaneSlot { kind, cx, cy, w, h: pane_h, turn_deg } in slots {
         let (x0, x1) = (cx - 0.5 * w, cx + 0.5 * w);
-        let (y0, y1) = (PANE_Y - 0.5 * pane_h, PANE_Y + 0.5 * pane_h);
+        let (y0, y1) = (cy - 0.5 * pane_h, cy + 0.5 * pane_h);
         let f = FRAME_W;
-        let turn_deg = config.pane_turn_deg.get(k).copied().unwrap_or(0.0);
         // How far a turned frame's side edges leave the pane's centre line in z.
         let reach = (0.5 * w + f) * turn_deg.to_radians().sin().abs();
         let (pane_z, r0, frame_z) = match kind {
@@ -386,9 +422,8 @@ fn pane_wall(config: &SyntheticConfig) -> PaneWall {
             // it is turned, so that its edges clear the wall.
             PaneKind::Mirror => (0.015 + reach, MIRROR_R0, [reach, 0.05 + reach]),
         };
-        let r0 = config.r0.unwrap_or(r0);
-        let turn =
-            (turn_deg != 0.0).then(|| Turn::about_y(DVec3::new(cx, PANE_Y, pane_z), turn_deg));
+        let r0 = r0_override.unwrap_or(r0);
+        let turn = (turn_deg != 0.0).then(|| Turn::about_y(DVec3::new(cx, cy, pane_z), turn_deg));
         let bars = [
             ([x0 - f, y0 - f], [x1 + f, y0]),
             ([x0 - f, y1], [x1 + f, y1 + f]),
@@ -410,7 +445,7 @@ fn pane_wall(config: &SyntheticConfig) -> PaneWall {
                     (cx - half, cx + half)
                 }
             };
-            wall.holes.push([h0, h1, y0 - f - WALL_Y, y1 + f - WALL_Y]);
+            wall.holes.push([h0, h1, y0 - f - wall_y, y1 + f - wall_y]);
             // A sill under the window, as in a real room; it sticks out towards the cameras.
             wall.frame_boxes.push(FrameBox {
                 min: DVec3::new(h0 - 0.06, y0 - f - 0.05, -0.06),
@@ -419,7 +454,7 @@ fn pane_wall(config: &SyntheticConfig) -> PaneWall {
             });
         }
         let rect = Rect {
-            centre: DVec3::new(cx, PANE_Y, pane_z),
+            centre: DVec3::new(cx, cy, pane_z),
             u: turn.map_or(DVec3::X, |t| t.dir(DVec3::X)),
             v: DVec3::Y,
             half_u: 0.5 * w,
@@ -432,7 +467,7 @@ fn pane_wall(config: &SyntheticConfig) -> PaneWall {
 }
 
 /// A frame bar or sill as a traced object.
-fn frame_object(FrameBox { min, max, turn }: FrameBox) -> Object {
+pub(crate) fn frame_object(FrameBox { min, max, turn }: FrameBox) -> Object {
     Object {
         shape: Shape::Cuboid { min, max, turn },
         texture: Texture::Noise { scale: 0.04, a: rgb(0.92, 0.92, 0.90), b: rgb(0.55, 0.52, 0.48) },
@@ -459,14 +494,27 @@ fn wall_object(holes: Vec<[f64; 4]>) -> Object {
 }
 
 pub(crate) fn layout(config: &SyntheticConfig) -> Layout {
-    let (world, frame_boxes, sizes) = build_world(config);
+    let (world, frame_boxes, sizes) = match config.setting {
+        Setting::Room => build_world(config),
+        Setting::Street => street::build_world(config),
+    };
     let placement = Placement::fixed();
     let up = placement.rotation * DVec3::Y;
     let intrinsics = Intrinsics::from_fov_x(FOV_X_DEG.to_radians(), config.width, config.height);
-    let room = (0..config.room_views).map(|j| room_view_path(j, config.room_views));
-    let cameras = (0..config.views)
-        .map(|i| camera_path(config.path, i, config.views))
-        .chain(room)
+    let paths: Vec<(DVec3, DVec3)> = match config.setting {
+        Setting::Room => {
+            let room = (0..config.room_views).map(|j| room_view_path(j, config.room_views));
+            (0..config.views)
+                .map(|i| camera_path(config.path, i, config.views))
+                .chain(room)
+                .collect()
+        }
+        Setting::Street => {
+            (0..config.views).map(|i| street::camera_path(i, config.views)).collect()
+        }
+    };
+    let cameras = paths
+        .into_iter()
         .enumerate()
         .map(|(i, (eye, target))| {
             let pose =

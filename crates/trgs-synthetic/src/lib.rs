@@ -46,13 +46,14 @@ mod plan;
 mod points;
 mod render_views;
 mod room;
+mod street;
 mod texture;
 mod trace;
 mod write;
 
 pub use config::{
     Backdrop, CameraPath, DAY_BEHIND_GAIN, GLASS_R0, MIRROR_R0, NIGHT_BEHIND_GAIN, PaneKind,
-    SyntheticConfig, SyntheticLens,
+    Setting, SyntheticConfig, SyntheticLens,
 };
 pub use plan::{SyntheticScene, TRACED_LONG_SIDE, generate};
 pub use write::{colmap_model, write_dataset, write_generated};

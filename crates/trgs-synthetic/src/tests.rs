@@ -515,3 +515,57 @@ fn undistorted_photos_match_a_direct_pinhole_render() {
         );
     }
 }
+
+#[test]
+fn street_walks_past_every_pane() {
+    let cfg = SyntheticConfig {
+        width: 64,
+        height: 48,
+        views: 64,
+        masked_views: 12,
+        sparse_points: 1500,
+        ..SyntheticConfig::street()
+    };
+    let s = generate(&cfg);
+    assert_eq!(s.planes.len(), 5);
+    assert_eq!(s.planes[3].material, trgs_core::scene::Material::Mirror);
+    assert_eq!(s.cameras.len(), 64, "no room views");
+    assert_eq!(s.test_views.len(), 8);
+    for p in &s.planes {
+        assert!(p.validate(0).is_ok());
+        for cam in &s.cameras {
+            assert!(p.signed_distance(cam.pose.centre()) > 2.0, "{} behind a pane", cam.name);
+        }
+    }
+    // The walk is long: 21 m along the street, in the plane of the panes.
+    let along = s.planes[0].axis;
+    let xs: Vec<f64> = s.cameras.iter().map(|c| c.pose.centre().dot(along)).collect();
+    let span =
+        xs.iter().copied().fold(f64::MIN, f64::max) - xs.iter().copied().fold(f64::MAX, f64::min);
+    assert!(span > 20.0 && span < 22.0, "walk spans {span:.2} m");
+    // Every pane is masked in some view; outside the masks the images are the transmission.
+    let labels: std::collections::BTreeSet<u8> =
+        s.masks.iter().flatten().flat_map(|m| m.data.iter().copied()).collect();
+    assert_eq!(labels, (0..=5).collect(), "labels seen: {labels:?}");
+    check_reflection(&s);
+    // Points on every part of the street, each seen twice at least.
+    assert!(s.points.len() >= 1400, "{} points", s.points.len());
+    assert!(s.tracks.iter().all(|t| t.len() >= 2));
+}
+
+#[test]
+fn street_cameras_stay_clear_of_surfaces() {
+    let cfg = SyntheticConfig { width: 32, height: 24, views: 48, ..SyntheticConfig::street() };
+    let lay = layout(&cfg);
+    let mut nearest = f64::INFINITY;
+    for cam in &lay.cameras {
+        for y in 0..cam.height() {
+            for x in 0..cam.width() {
+                let ray =
+                    super::generate::local_ray(&lay, cam, f64::from(x) + 0.5, f64::from(y) + 0.5);
+                nearest = nearest.min(lay.world.sample(&ray).depth);
+            }
+        }
+    }
+    assert!(nearest > 1.0, "a camera is {nearest:.2} m from a surface");
+}

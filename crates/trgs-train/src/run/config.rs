@@ -30,7 +30,7 @@ pub struct RunConfig {
     #[serde(default)]
     pub demo_size: Option<(u32, u32)>,
     /// Views on the built-in scene's camera loop, every 8th a test view (8 views looking back
-    /// into the camera room come on top) [default: 40]
+    /// into the camera room come on top) [default: 40; the street's 240 along its walks]
     #[arg(long, value_name = "N", conflicts_with = "data",
           value_parser = clap::value_parser!(u32).range(2..))]
     #[serde(default)]
@@ -207,11 +207,14 @@ pub enum DemoScene {
     NightWindow,
     /// The window scene's room with the wall closed: no glass, no masks
     NoGlass,
+    /// A street of four shop windows and a mirror, 240 views along two walks past them: the
+    /// scene for trgs split and merge
+    Street,
 }
 
 impl DemoScene {
-    pub const ALL: [DemoScene; 4] =
-        [Self::Showcase, Self::Window, Self::NightWindow, Self::NoGlass];
+    pub const ALL: [DemoScene; 5] =
+        [Self::Showcase, Self::Window, Self::NightWindow, Self::NoGlass, Self::Street];
 
     /// The `--demo-scene` value, also written in the dataset's marker file.
     pub fn name(self) -> &'static str {
@@ -220,6 +223,7 @@ impl DemoScene {
             Self::Window => "window",
             Self::NightWindow => "night-window",
             Self::NoGlass => "no-glass",
+            Self::Street => "street",
         }
     }
 
@@ -235,6 +239,7 @@ impl DemoScene {
             Self::Window => "window scene",
             Self::NightWindow => "window scene at night",
             Self::NoGlass => "scene without glass",
+            Self::Street => "street scene",
         }
     }
 
@@ -245,6 +250,7 @@ impl DemoScene {
             Self::Window => window,
             Self::NightWindow => window.night(),
             Self::NoGlass => window.without_glass(),
+            Self::Street => SyntheticConfig::street(),
         }
     }
 }
