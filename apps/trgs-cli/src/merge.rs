@@ -5,11 +5,15 @@ use anyhow::{Context, Result, bail};
 use glam::{DVec2, DVec3};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use trgs_core::blocks::merge::{MergeReport, SamePane, TrainedBlock, merge_blocks};
+use trgs_core::blocks::merge::{MergeReport, PaneEvidence, SamePane, TrainedBlock, merge_blocks};
 use trgs_core::blocks::{Ground, Regions};
+use trgs_core::image::Image;
+use trgs_core::io::SceneFolder;
 use trgs_core::io::{
     load_model, read_cameras_json, write_atomic, write_cameras_json, write_planes_json, write_ply,
 };
+use trgs_core::scene::Camera;
+use trgs_train::{Resolution, load_masked_views};
 
 /// How to merge.
 #[derive(Clone, Debug)]
@@ -22,9 +26,18 @@ pub struct MergeOptions {
     pub max_angle_deg: f64,
     /// None: 1% of the blocks' spacing.
     pub max_offset: Option<f64>,
-    /// None: the split's margin.
+    /// None: the same as the offset.
     pub max_gap: Option<f64>,
+    /// Group the planes by geometry even where the capture has glass masks.
+    pub by_geometry: bool,
 }
+
+/// The intersection over union with a mask label below which a block's plane covers no pane
+/// (a partial view of a pane from a neighbouring block still scores about half).
+const MIN_MASK_IOU: f64 = 0.3;
+
+/// The longest side the masks are checked at: enough to tell which plane covers a pane best.
+const MASK_CHECK_SIDE: u32 = 640;
 
 /// The merged model written to `o.out` as a run folder (model.ply, planes.json, cameras.json,
 /// metrics.json with the reflection model and what came from where).
@@ -64,12 +77,21 @@ pub fn merge(o: &MergeOptions) -> Result<(MergeReport, usize, usize)> {
         }
         blocks.push(TrainedBlock { gaussians: model.gaussians, planes: model.planes });
     }
+    let max_offset = o.max_offset.unwrap_or(0.01 * regions.spacing());
     let same = SamePane {
         max_angle_deg: o.max_angle_deg,
-        max_offset: o.max_offset.unwrap_or(0.01 * regions.spacing()),
-        max_gap: o.max_gap.unwrap_or(manifest.margin),
+        max_offset,
+        max_gap: o.max_gap.unwrap_or(max_offset),
     };
-    let (gaussians, planes, report) = merge_blocks(&blocks, &ground, &regions, same);
+    let masked = if o.by_geometry { Vec::new() } else { masked_views(&manifest.source)? };
+    let masks: Vec<(&Camera, &Image<u8>)> =
+        masked.iter().filter_map(|v| Some((&v.camera, v.mask.as_ref()?))).collect();
+    let evidence = if masks.is_empty() {
+        PaneEvidence::Geometry(same)
+    } else {
+        PaneEvidence::Masks { masks: &masks, min_iou: MIN_MASK_IOU }
+    };
+    let (gaussians, planes, report) = merge_blocks(&blocks, &ground, &regions, evidence);
     std::fs::create_dir_all(&o.out)
         .with_context(|| format!("creating the output folder {}", o.out.display()))?;
     write_ply(&o.out.join("model.ply"), &gaussians)?;
@@ -80,11 +102,30 @@ pub fn merge(o: &MergeOptions) -> Result<(MergeReport, usize, usize)> {
         "merged_from": manifest.blocks.iter().map(|b| &b.name).collect::<Vec<_>>(),
         "kept_per_block": report.kept,
         "planes_from": report.planes_from,
+        "plane_labels": report.labels,
+        "planes_dropped": report.dropped,
         "gaussians": gaussians.len(),
         "reflection_model": reflection_model,
     });
     write_atomic(&o.out.join("metrics.json"), serde_json::to_string_pretty(&metrics)?.as_bytes())?;
     Ok((report, gaussians.len(), planes.len()))
+}
+
+/// The masked views of the capture that was split (none when it has no masks); its folder must
+/// still be where the manifest says.
+fn masked_views(source: &Path) -> Result<Vec<trgs_train::View>> {
+    let folder = SceneFolder::open(source).with_context(|| {
+        format!(
+            "opening the capture the blocks were split from, {} (for its glass masks; \
+             --by-geometry merges without them)",
+            source.display()
+        )
+    })?;
+    if folder.views.iter().all(|v| v.mask_path.is_none()) {
+        return Ok(Vec::new());
+    }
+    load_masked_views(&folder, Resolution::LongSide(MASK_CHECK_SIDE))
+        .with_context(|| format!("loading the glass masks of {}", source.display()))
 }
 
 /// The reflection model a block's run trained with (its metrics.json), or null.

@@ -85,7 +85,8 @@ fn trained_blocks_merge_into_one_run() {
     use trgs_core::scene::{Gaussians, Material, ReflectionPlane};
     let dir = ScratchDir::new("merge-cli");
     let scene = dir.join("scene");
-    write_dataset(&generate(&SyntheticConfig::small()), &scene).expect("scene");
+    let synthetic = generate(&SyntheticConfig::small());
+    write_dataset(&synthetic, &scene).expect("scene");
     let blocks = dir.join("blocks");
     let split = Command::new(env!("CARGO_BIN_EXE_trgs"))
         .arg("split")
@@ -136,10 +137,12 @@ fn trained_blocks_merge_into_one_run() {
                 + along * side;
         let normal = glam::DVec3::from_array(a1);
         let p = ReflectionPlane::new(pane_centre, normal, along, 1.0, 0.5, Material::Glass);
-        write_planes_json(&run.join("planes.json"), &[p]).expect("planes");
+        // The second block also found the scene's window as it is.
+        let planes = if b == 0 { vec![p] } else { vec![p, synthetic.planes[0]] };
+        write_planes_json(&run.join("planes.json"), &planes).expect("planes");
     }
     let out = dir.join("merged");
-    let merge = || {
+    let merge = |extra: &[&str]| {
         Command::new(env!("CARGO_BIN_EXE_trgs"))
             .arg("merge")
             .arg(&blocks)
@@ -147,19 +150,31 @@ fn trained_blocks_merge_into_one_run() {
             .arg(&runs)
             .arg("--out")
             .arg(&out)
+            .args(extra)
             .output()
             .expect("merge")
     };
-    let merged = merge();
+    // By geometry the halves of one pane are one plane.
+    let merged = merge(&["--by-geometry"]);
     let stdout = String::from_utf8_lossy(&merged.stdout);
     assert!(merged.status.success(), "{stdout}{}", String::from_utf8_lossy(&merged.stderr));
     let model = load_model(&out, None).expect("the merged run");
     assert_eq!(model.gaussians.len(), 2, "each block keeps the Gaussian on its own ground");
-    assert_eq!(model.planes.len(), 1, "the halves of one pane are one plane: {stdout}");
+    assert_eq!(model.planes.len(), 2, "the halves of one pane are one plane: {stdout}");
     assert!((model.planes[0].width - 2.0).abs() < 1e-6);
+    // Held against the scene's glass masks, the halves cover no glass and are left out; the
+    // window stands.
+    let merged = merge(&[]);
+    let stdout = String::from_utf8_lossy(&merged.stdout);
+    assert!(merged.status.success(), "{stdout}{}", String::from_utf8_lossy(&merged.stderr));
+    let model = load_model(&out, None).expect("the merged run");
+    assert_eq!(model.planes.len(), 1, "{stdout}");
+    assert!((model.planes[0].centre - synthetic.planes[0].centre).length() < 1e-9);
+    assert!(stdout.contains("mask label 1, from block_1 plane 2"), "{stdout}");
+    assert_eq!(stdout.matches("left out, covers no glass").count(), 2, "{stdout}");
     // A block without a run is named.
     std::fs::remove_dir_all(runs.join("block_1")).expect("remove");
-    let missing = merge();
+    let missing = merge(&[]);
     assert!(!missing.status.success());
     assert!(String::from_utf8_lossy(&missing.stderr).contains("no run of block_1"));
 }

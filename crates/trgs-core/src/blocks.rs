@@ -7,6 +7,7 @@
 use crate::rng::Rng;
 use glam::{DVec2, DVec3};
 
+pub mod mask_support;
 pub mod merge;
 
 /// The ground the blocks tile: the plane across the cameras' mean up direction.

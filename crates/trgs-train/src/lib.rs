@@ -35,7 +35,9 @@ mod settings;
 pub mod stages;
 mod trainer;
 
-pub use data::{LoadOptions, LoadProgress, Resolution, TrainingData, View, resize_area_u8};
+pub use data::{
+    LoadOptions, LoadProgress, Resolution, TrainingData, View, load_masked_views, resize_area_u8,
+};
 pub use densify::{ClassicSettings, Densification, DensifyEvent, McmcSettings};
 pub use eval::Evaluation;
 pub use gaussians::init::{InitialShape, SeedPoint, gaussians_from_points};

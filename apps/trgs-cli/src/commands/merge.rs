@@ -6,7 +6,11 @@ use std::path::PathBuf;
 /// Merge the trained blocks of `trgs split` into one run folder.
 ///
 /// Each block gives the Gaussians on its own part of the ground (its region without the margin
-/// it trained with); planes that several blocks found for one pane (same material, normals
+/// it trained with). Where the capture has glass masks, each block's plane is held against
+/// them: the planes that cover one mask label best are that pane, the one that covers it best
+/// (the block that saw it whole) stands for it with its glass Gaussians, R0 is their mean by
+/// how well each covers it, and a plane that covers no label is left out. Without masks (or
+/// with --by-geometry), planes that several blocks found for one pane (same material, normals
 /// within --max-angle, offsets within --max-offset, rectangles within --max-gap of each other)
 /// become one plane over the union of their rectangles, its normal and R0 weighted by area.
 /// OUT is a run folder for trgs eval, view, render and export.
@@ -32,9 +36,12 @@ pub struct Args {
     /// distance between neighbouring blocks]
     #[arg(long, value_name = "DISTANCE", value_parser = crate::args::parse_non_negative)]
     max_offset: Option<f64>,
-    /// Largest gap between their rectangles, scene units [default: the split's margin]
+    /// Largest gap between their rectangles, scene units [default: --max-offset's: they touch]
     #[arg(long, value_name = "DISTANCE", value_parser = crate::args::parse_non_negative)]
     max_gap: Option<f64>,
+    /// Tell the planes of one pane by geometry even where the capture has glass masks
+    #[arg(long)]
+    by_geometry: bool,
 }
 
 pub fn run(matches: &clap::ArgMatches) -> Result<()> {
@@ -46,6 +53,7 @@ pub fn run(matches: &clap::ArgMatches) -> Result<()> {
         max_angle_deg: a.max_angle,
         max_offset: a.max_offset,
         max_gap: a.max_gap,
+        by_geometry: a.by_geometry,
     };
     let (report, gaussians, planes) = crate::merge::merge(&options)?;
     for (b, kept) in report.kept.iter().enumerate() {
@@ -54,7 +62,18 @@ pub fn run(matches: &clap::ArgMatches) -> Result<()> {
     for (k, from) in report.planes_from.iter().enumerate() {
         let sources: Vec<String> =
             from.iter().map(|(b, p)| format!("block_{b} plane {}", p + 1)).collect();
-        println!("plane {}: from {}", k + 1, sources.join(", "));
+        match report.labels.get(k) {
+            Some((label, iou)) => println!(
+                "plane {}: mask label {label}, from {} (covers it by {iou:.2} IoU; the others \
+                 give R0)",
+                k + 1,
+                sources.join(", ")
+            ),
+            None => println!("plane {}: from {}", k + 1, sources.join(", ")),
+        }
+    }
+    for (b, p, why) in &report.dropped {
+        println!("block_{b} plane {}: left out, {why}", p + 1);
     }
     println!(
         "{gaussians} Gaussians and {} written to {}",

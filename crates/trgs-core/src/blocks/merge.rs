@@ -1,9 +1,26 @@
-//! Trained blocks into one model: each block keeps the Gaussians on its own part of the ground
-//! (its Voronoi cell, without the margin it trained with), and planes that several blocks found
-//! for one pane become one plane.
+//! Trained blocks into one model: each block keeps the primary Gaussians on its own part of
+//! the ground (its Voronoi cell, without the margin it trained with), and planes that several
+//! blocks found for one pane become one plane: by the capture's glass masks where it has them
+//! (the label each plane covers best; the plane that covers it best stands for the pane, with
+//! its glass Gaussians), else by geometry.
+use super::mask_support::label_support;
 use super::{Ground, Regions};
-use crate::scene::{Gaussians, ReflectionPlane, sh_coeff_count};
+use crate::image::Image;
+use crate::scene::{Camera, Gaussians, Population, ReflectionPlane, sh_coeff_count};
 use glam::DVec3;
+use std::collections::BTreeMap;
+
+/// How `merge_blocks` tells that planes of several blocks are one pane.
+#[derive(Clone, Copy, Debug)]
+pub enum PaneEvidence<'a> {
+    /// By geometry: [`same_pane`].
+    Geometry(SamePane),
+    /// By the capture's glass masks (camera, label image at the camera's size): planes that
+    /// cover one label best are that pane, and the one covering it best (the block that saw it
+    /// whole) is kept with its glass Gaussians; a plane whose best intersection over union is
+    /// below `min_iou` covers no pane and is left out.
+    Masks { masks: &'a [(&'a Camera, &'a Image<u8>)], min_iou: f64 },
+}
 
 /// When two blocks' planes are one pane.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -28,26 +45,42 @@ pub struct TrainedBlock {
 pub struct MergeReport {
     /// Gaussians kept from each block.
     pub kept: Vec<usize>,
-    /// For each merged plane, the (block, plane) pairs it came from.
+    /// For each merged plane, the (block, plane) pairs it came from, the one it stands on first.
     pub planes_from: Vec<Vec<(usize, usize)>>,
+    /// For each merged plane with masks, the label it covers and the intersection over union of
+    /// the plane kept.
+    pub labels: Vec<(u8, f64)>,
+    /// Planes left out, (block, plane, why).
+    pub dropped: Vec<(usize, usize, String)>,
 }
 
 /// The blocks merged: block `b` (`blocks[b]`, trained on region `b` of `regions`) gives the
-/// Gaussians whose centre lies in its cell; the planes are grouped by [`SamePane`] (a plane
-/// joins a group when it is the same pane as any member) and each group becomes one plane
-/// ([`merge_planes`]).
+/// Gaussians whose centre lies in its cell; the planes are grouped by `evidence`. By geometry
+/// (a plane joins a group when it is the same pane as any member) each group becomes one plane
+/// ([`merge_planes`]); by masks, each pane keeps its best plane and that plane's glass
+/// Gaussians, whichever cells they lie in.
 pub fn merge_blocks(
     blocks: &[TrainedBlock],
     ground: &Ground,
     regions: &Regions,
-    same: SamePane,
+    evidence: PaneEvidence<'_>,
 ) -> (Gaussians<f32>, Vec<ReflectionPlane>, MergeReport) {
     let degree = blocks.iter().map(|b| b.gaussians.sh_degree).max().unwrap_or(0);
     let mut out = Gaussians::empty(degree);
     let mut report = MergeReport::default();
+    let all: Vec<(usize, usize, &ReflectionPlane)> = blocks
+        .iter()
+        .enumerate()
+        .flat_map(|(b, block)| block.planes.iter().enumerate().map(move |(k, p)| (b, k, p)))
+        .collect();
+    let by_masks = matches!(evidence, PaneEvidence::Masks { .. });
     for (b, block) in blocks.iter().enumerate() {
         let g = &block.gaussians;
         let own = g.subset(|i| {
+            // With masks the glass Gaussians go with their plane (below).
+            if by_masks && g.populations[i] == Population::Glass {
+                return false;
+            }
             let m = g.means[i];
             let x = DVec3::new(f64::from(m[0]), f64::from(m[1]), f64::from(m[2]));
             regions.owner(ground.project(x)) == b
@@ -55,12 +88,15 @@ pub fn merge_blocks(
         report.kept.push(own.len());
         out.append(&own);
     }
+    let same = match evidence {
+        PaneEvidence::Geometry(same) => same,
+        PaneEvidence::Masks { masks, min_iou } => {
+            let planes = merge_by_masks(blocks, &all, masks, min_iou, &mut out, &mut report);
+            debug_assert_eq!(out.sh.len(), out.len() * sh_coeff_count(degree));
+            return (out, planes, report);
+        }
+    };
     debug_assert_eq!(out.sh.len(), out.len() * sh_coeff_count(degree));
-    let all: Vec<(usize, usize, &ReflectionPlane)> = blocks
-        .iter()
-        .enumerate()
-        .flat_map(|(b, block)| block.planes.iter().enumerate().map(move |(k, p)| (b, k, p)))
-        .collect();
     let mut groups: Vec<Vec<usize>> = Vec::new();
     for (i, (_, _, p)) in all.iter().enumerate() {
         let joined: Vec<usize> = (0..groups.len())
@@ -85,6 +121,76 @@ pub fn merge_blocks(
         report.planes_from.push(group.iter().map(|&i| (all[i].0, all[i].1)).collect());
     }
     (out, planes, report)
+}
+
+/// The planes by the masks (see [`PaneEvidence::Masks`]); appends each kept plane's glass
+/// Gaussians to `out`.
+fn merge_by_masks(
+    blocks: &[TrainedBlock],
+    all: &[(usize, usize, &ReflectionPlane)],
+    masks: &[(&Camera, &Image<u8>)],
+    min_iou: f64,
+    out: &mut Gaussians<f32>,
+    report: &mut MergeReport,
+) -> Vec<ReflectionPlane> {
+    let mut panes: BTreeMap<u8, Vec<(usize, f64)>> = BTreeMap::new();
+    for (i, &(b, k, p)) in all.iter().enumerate() {
+        match label_support(p, masks) {
+            Some(s) if s.iou >= min_iou => panes.entry(s.label).or_default().push((i, s.iou)),
+            Some(s) => report.dropped.push((
+                b,
+                k,
+                format!("covers label {} of the masks by {:.2} only (IoU)", s.label, s.iou),
+            )),
+            None => report.dropped.push((b, k, "covers no glass of the masks".into())),
+        }
+    }
+    let mut planes = Vec::new();
+    for (label, mut members) in panes {
+        members.sort_by(|a, b| b.1.total_cmp(&a.1));
+        let (best, iou) = members[0];
+        let (b, k, p) = all[best];
+        // R0 from every block that found the pane, by how well each covers it.
+        let weight: f64 = members.iter().map(|m| m.1).sum();
+        let r0 = members.iter().map(|&(i, w)| w * all[i].2.r0()).sum::<f64>() / weight;
+        let mut plane = *p;
+        plane.r0_logit = (r0.clamp(1e-6, 0.999) / (1.0 - r0.clamp(1e-6, 0.999))).ln();
+        planes.push(plane);
+        out.append(&glass_of(&blocks[b], k));
+        report.labels.push((label, iou));
+        report.planes_from.push(members.iter().map(|&(i, _)| (all[i].0, all[i].1)).collect());
+    }
+    planes
+}
+
+/// The glass Gaussians of `block` that belong to its plane `k`: those nearer its rectangle than
+/// any other of the block's planes (they were sampled on it, or split from such).
+fn glass_of(block: &TrainedBlock, k: usize) -> Gaussians<f32> {
+    let g = &block.gaussians;
+    g.subset(|i| {
+        if g.populations[i] != Population::Glass {
+            return false;
+        }
+        let m = g.means[i];
+        let x = DVec3::new(f64::from(m[0]), f64::from(m[1]), f64::from(m[2]));
+        let nearest = block
+            .planes
+            .iter()
+            .map(|p| distance_to_rectangle(p, x))
+            .enumerate()
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(j, _)| j);
+        nearest == Some(k)
+    })
+}
+
+/// The distance of `x` from `p`'s rectangle.
+fn distance_to_rectangle(p: &ReflectionPlane, x: DVec3) -> f64 {
+    let r = x - p.centre;
+    let u = (r.dot(p.axis).abs() - 0.5 * p.width).max(0.0);
+    let v = (r.dot(p.bitangent()).abs() - 0.5 * p.height).max(0.0);
+    let n = r.dot(p.unit_normal());
+    (u * u + v * v + n * n).sqrt()
 }
 
 /// Whether `a` and `b` are one pane: same material, normals within the angle, each centre near

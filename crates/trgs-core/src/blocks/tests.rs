@@ -77,7 +77,10 @@ fn a_block_few_views_see_takes_those_that_see_most_of_it() {
 mod merging {
     use super::super::merge::*;
     use super::*;
-    use crate::scene::{Gaussians, Material, Population, ReflectionPlane};
+    use crate::image::Image;
+    use crate::scene::{
+        Camera, Gaussians, Intrinsics, Material, Population, Pose, ReflectionPlane,
+    };
 
     fn pane(centre: [f64; 3], normal: [f64; 3], width: f64, r0: f64) -> ReflectionPlane {
         let mut p = ReflectionPlane::new(
@@ -148,12 +151,85 @@ mod merging {
                 pane([6.0, 0.0, 9.0], [1.0, 0.0, 0.0], 1.0, 0.9),
             ],
         };
-        let (g, planes, report) = merge_blocks(&[left, right], &ground, &regions, SAME);
+        let (g, planes, report) =
+            merge_blocks(&[left, right], &ground, &regions, PaneEvidence::Geometry(SAME));
         assert_eq!(report.kept, vec![2, 2], "left keeps x < 0, right x >= 0");
         let xs: Vec<f32> = g.means.iter().map(|m| m[0]).collect();
         assert_eq!(xs, vec![-6.0, -1.0, 1.0, 7.0]);
         assert_eq!(planes.len(), 2);
         assert_eq!(report.planes_from, vec![vec![(0, 0), (1, 0)], vec![(1, 1)]]);
         assert!((planes[0].width - 6.0).abs() < 1e-9);
+    }
+
+    /// A label image of `planes` as `camera` sees them, labelled 1, 2, ... in order.
+    fn mask_of(camera: &Camera, planes: &[ReflectionPlane]) -> Image<u8> {
+        let mut m = Image::<u8>::new(camera.width(), camera.height(), 1);
+        for y in 0..camera.height() {
+            for x in 0..camera.width() {
+                let ray = camera.pixel_ray(x, y);
+                let eye = camera.pose.centre();
+                for (k, p) in planes.iter().enumerate() {
+                    let n = p.unit_normal();
+                    let t = (p.centre - eye).dot(n) / ray.dot(n);
+                    let r = eye + ray * t - p.centre;
+                    if t > 0.0
+                        && r.dot(p.axis).abs() <= 0.5 * p.width
+                        && r.dot(p.bitangent()).abs() <= 0.5 * p.height
+                    {
+                        m.set(x, y, 0, k as u8 + 1);
+                    }
+                }
+            }
+        }
+        m
+    }
+
+    #[test]
+    fn by_masks_the_block_that_saw_a_pane_whole_stands_for_it() {
+        let ground = Ground { up: DVec3::NEG_Y, axes: [DVec3::X, DVec3::Z] };
+        let regions = Regions { centres: vec![DVec2::new(-5.0, 0.0), DVec2::new(5.0, 0.0)] };
+        // The truth: a pane from x = -1 to 2 at z = 5 (across the seam x = 0), seen by cameras
+        // at z = 0 along the street.
+        let truth = pane([0.5, 0.0, 5.0], [0.0, 0.0, -1.0], 3.0, 0.2);
+        let cameras: Vec<Camera> = [-2.0, 0.5, 3.0]
+            .iter()
+            .map(|&x| {
+                let pose =
+                    Pose::look_at(DVec3::new(x, 0.0, 0.0), DVec3::new(0.5, 0.0, 5.0), DVec3::NEG_Y);
+                Camera::new("v", Intrinsics::from_fov_x(70f64.to_radians(), 96, 72), pose)
+            })
+            .collect();
+        let images: Vec<Image<u8>> = cameras.iter().map(|c| mask_of(c, &[truth])).collect();
+        let masks: Vec<(&Camera, &Image<u8>)> = cameras.iter().zip(&images).collect();
+        // The left block saw the pane's left part, tilted; the right block the whole pane, and
+        // a plane of nothing (in the left block's cell).
+        let mut left_part = pane([-0.3, 0.0, 5.1], [0.05, 0.0, -1.0], 1.8, 0.3);
+        left_part.r0_logit = (0.3f64 / 0.7).ln();
+        let mut glass_left = gaussians_at(&[-0.3, 0.4]);
+        glass_left.populations = vec![Population::Glass; 2];
+        glass_left.means.iter_mut().for_each(|m| m[2] = 5.1);
+        let left = TrainedBlock { gaussians: glass_left, planes: vec![left_part] };
+        let mut glass_right = gaussians_at(&[-0.8, 1.5, -3.0]);
+        glass_right.populations = vec![Population::Glass; 3];
+        glass_right.means[0][2] = 5.0;
+        glass_right.means[1][2] = 5.0;
+        glass_right.means[2][2] = 9.0;
+        let nothing = pane([-3.0, 0.0, 9.0], [0.0, 0.0, -1.0], 0.5, 0.2);
+        let right = TrainedBlock { gaussians: glass_right, planes: vec![truth, nothing] };
+        let evidence = PaneEvidence::Masks { masks: &masks, min_iou: 0.3 };
+        let (g, planes, report) = merge_blocks(&[left, right], &ground, &regions, evidence);
+        assert_eq!(planes.len(), 1, "{report:?}");
+        assert_eq!(report.planes_from, vec![vec![(1, 0), (0, 0)]], "the whole pane first");
+        assert_eq!(planes[0].centre, truth.centre);
+        assert_eq!(report.labels[0].0, 1);
+        assert!(report.labels[0].1 > 0.95, "{report:?}");
+        assert_eq!(report.dropped.len(), 1);
+        assert_eq!((report.dropped[0].0, report.dropped[0].1), (1, 1));
+        // R0 between the two blocks' (0.3 and 0.2), nearer the better cover.
+        assert!(planes[0].r0() > 0.2 && planes[0].r0() < 0.25, "{}", planes[0].r0());
+        // The kept plane's glass Gaussians, on both sides of the seam; none of the left block's
+        // tilted plane, none of the plane of nothing.
+        let xs: Vec<f32> = g.means.iter().map(|m| m[0]).collect();
+        assert_eq!(xs, vec![-0.8, 1.5]);
     }
 }

@@ -256,6 +256,15 @@ impl TrainingData {
     }
 }
 
+/// The views of `folder` that have a glass mask, at `resolution`: what `trgs merge` holds the
+/// blocks' planes against (a capture's masked views are few).
+pub fn load_masked_views(folder: &SceneFolder, resolution: Resolution) -> Result<Vec<View>> {
+    let masked: Vec<usize> =
+        (0..folder.views.len()).filter(|&i| folder.views[i].mask_path.is_some()).collect();
+    let silent = |_: usize, _: usize| {};
+    Ok(load_views(folder, &masked, resolution, &silent)?.0)
+}
+
 /// Loading threads: enough to keep the cores decoding, few enough that the full-size photos
 /// they hold at once (36 MB for 12 MP at 8 bits) stay small.
 const LOAD_THREADS: usize = 8;
