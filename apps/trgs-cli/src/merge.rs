@@ -3,12 +3,12 @@
 use crate::split::{MANIFEST, Manifest};
 use anyhow::{Context, Result, bail};
 use glam::{DVec2, DVec3};
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap, HashSet};
 use std::path::{Path, PathBuf};
 use trgs_core::blocks::merge::{MergeReport, PaneEvidence, SamePane, TrainedBlock, merge_blocks};
 use trgs_core::blocks::{Ground, Regions};
 use trgs_core::image::Image;
-use trgs_core::io::SceneFolder;
+use trgs_core::io::{ColmapModel, SceneFolder, colmap_dir};
 use trgs_core::io::{
     load_model, read_cameras_json, write_atomic, write_cameras_json, write_planes_json, write_ply,
 };
@@ -98,17 +98,45 @@ pub fn merge(o: &MergeOptions) -> Result<(MergeReport, usize, usize)> {
     write_planes_json(&o.out.join("planes.json"), &planes)?;
     let cameras: Vec<_> = cameras.into_values().collect();
     write_cameras_json(&o.out.join("cameras.json"), &cameras)?;
+    let seams = seam_views(&manifest.source, &ground, &regions);
     let metrics = serde_json::json!({
         "merged_from": manifest.blocks.iter().map(|b| &b.name).collect::<Vec<_>>(),
         "kept_per_block": report.kept,
         "planes_from": report.planes_from,
         "plane_labels": report.labels,
         "planes_dropped": report.dropped,
+        "seam_views": seams,
         "gaussians": gaussians.len(),
         "reflection_model": reflection_model,
     });
     write_atomic(&o.out.join("metrics.json"), serde_json::to_string_pretty(&metrics)?.as_bytes())?;
     Ok((report, gaussians.len(), planes.len()))
+}
+
+/// The capture's test views that look across a seam between blocks
+/// ([`Regions::spans_a_seam`], by the sparse points each observes), for `trgs eval` to score
+/// apart; None where the capture or its COLMAP model cannot be read.
+fn seam_views(source: &Path, ground: &Ground, regions: &Regions) -> Option<Vec<String>> {
+    let folder = SceneFolder::open(source).ok()?;
+    let model = ColmapModel::read(&colmap_dir(source)?).ok()?;
+    let at: HashMap<u64, DVec2> =
+        model.points.iter().map(|p| (p.id, ground.project(DVec3::from_array(p.xyz)))).collect();
+    let test: HashSet<&str> = folder.test_views.iter().map(String::as_str).collect();
+    let seams = model
+        .images
+        .iter()
+        .filter(|im| test.contains(im.name.as_str()))
+        .filter(|im| {
+            let seen: Vec<DVec2> = im
+                .points2d
+                .iter()
+                .filter_map(|&(_, id)| u64::try_from(id).ok().and_then(|id| at.get(&id).copied()))
+                .collect();
+            regions.spans_a_seam(&seen)
+        })
+        .map(|im| im.name.clone())
+        .collect();
+    Some(seams)
 }
 
 /// The masked views of the capture that was split (none when it has no masks); its folder must

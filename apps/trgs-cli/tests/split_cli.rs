@@ -172,6 +172,13 @@ fn trained_blocks_merge_into_one_run() {
     assert!((model.planes[0].centre - synthetic.planes[0].centre).length() < 1e-9);
     assert!(stdout.contains("mask label 1, from block_1 plane 2"), "{stdout}");
     assert_eq!(stdout.matches("left out, covers no glass").count(), 2, "{stdout}");
+    // The capture's test views that look across the seam, for eval to score apart.
+    let metrics: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("metrics.json")).expect("read"))
+            .expect("JSON");
+    let seams = metrics["seam_views"].as_array().expect("seam views");
+    let tests = std::fs::read_to_string(scene.join("test_views.txt")).expect("test views");
+    assert!(seams.iter().all(|v| tests.contains(v.as_str().expect("a name"))), "{seams:?}");
     // A block without a run is named.
     std::fs::remove_dir_all(runs.join("block_1")).expect("remove");
     let missing = merge(&[]);

@@ -10,6 +10,10 @@ use glam::{DVec2, DVec3};
 pub mod mask_support;
 pub mod merge;
 
+/// The share of a view's points in a second block's cell that makes it a seam view
+/// ([`Regions::spans_a_seam`]).
+pub const SEAM_SHARE: f64 = 0.10;
+
 /// The ground the blocks tile: the plane across the cameras' mean up direction.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ground {
@@ -57,6 +61,19 @@ impl Regions {
                 p.distance_squared(self.centres[a]).total_cmp(&p.distance_squared(self.centres[b]))
             })
             .unwrap_or(0)
+    }
+
+    /// Whether a view that observes the ground points `seen` looks across a seam: at least
+    /// [`SEAM_SHARE`] of them lie in a cell other than the one most of them lie in. A seam view
+    /// shows what two blocks trained apart, side by side.
+    pub fn spans_a_seam(&self, seen: &[DVec2]) -> bool {
+        let mut counts = vec![0usize; self.centres.len()];
+        for &p in seen {
+            counts[self.owner(p)] += 1;
+        }
+        counts.sort_unstable();
+        let second = counts.iter().rev().nth(1).copied().unwrap_or(0);
+        !seen.is_empty() && second as f64 >= SEAM_SHARE * seen.len() as f64
     }
 
     /// The median distance from a centre to its nearest other centre (0 for one block).

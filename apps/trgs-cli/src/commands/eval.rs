@@ -62,6 +62,13 @@ pub struct Args {
     renders: Option<PathBuf>,
 }
 
+/// The seam views `trgs merge` recorded in a merged run's metrics.json (None for other runs).
+fn seam_views(run: &std::path::Path) -> Option<Vec<String>> {
+    let text = std::fs::read_to_string(run.join("metrics.json")).ok()?;
+    let metrics: serde_json::Value = serde_json::from_str(&text).ok()?;
+    serde_json::from_value(metrics.get("seam_views")?.clone()).ok()
+}
+
 pub fn run(matches: &clap::ArgMatches) -> Result<()> {
     let args = super::parsed::<Args>(matches);
     let split = Split::from(args.split);
@@ -127,6 +134,23 @@ pub fn run(matches: &clap::ArgMatches) -> Result<()> {
     if let Some(t) = &truth {
         println!("against the ground truth: {t}");
     }
+    let seams = run_dir.as_deref().and_then(seam_views).filter(|_| split == Split::Test);
+    let seam_scores = seams.as_ref().map(|seams| {
+        let (on, off): (Vec<_>, Vec<_>) = e.views.iter().partition(|(n, _, _)| seams.contains(n));
+        let mean = |v: &[&(String, f64, f64)]| {
+            (!v.is_empty()).then(|| v.iter().map(|x| x.1).sum::<f64>() / v.len() as f64)
+        };
+        let (on_psnr, off_psnr) = (mean(&on), mean(&off));
+        println!(
+            "seam views (where the merged blocks meet): {} of {}, PSNR {}; the others {}",
+            on.len(),
+            e.views.len(),
+            on_psnr.map_or("-".into(), |p| format!("{p:.2} dB")),
+            off_psnr.map_or("-".into(), |p| format!("{p:.2} dB"))
+        );
+        serde_json::json!({"views": on.iter().map(|x| &x.0).collect::<Vec<_>>(),
+            "psnr": on_psnr, "other_psnr": off_psnr})
+    });
     let json = serde_json::json!({
         "model": model.ply,
         "data": data_dir,
@@ -140,6 +164,7 @@ pub fn run(matches: &clap::ArgMatches) -> Result<()> {
         "render_fps": fps,
         "resolution": [w, h],
         "truth": truth,
+        "seams": seam_scores,
     });
     if let Some(dir) = &args.renders {
         write_renders(&subject, &data, dir)?;

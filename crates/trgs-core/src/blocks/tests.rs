@@ -74,6 +74,21 @@ fn a_block_few_views_see_takes_those_that_see_most_of_it() {
     assert_eq!(plans[1].train, vec![0, 1], "the two views that see it, the one seeing most first");
 }
 
+#[test]
+fn a_view_that_sees_two_cells_spans_a_seam() {
+    let regions = Regions { centres: vec![DVec2::new(-5.0, 0.0), DVec2::new(5.0, 0.0)] };
+    let at = |xs: &[f64]| xs.iter().map(|&x| DVec2::new(x, 1.0)).collect::<Vec<_>>();
+    assert!(!regions.spans_a_seam(&at(&[-3.0; 20])));
+    // 1 point of 20 across the border is not a seam; 2 of 20 (10%) are.
+    let mut one = at(&[-3.0; 19]);
+    one.push(DVec2::new(1.0, 0.0));
+    assert!(!regions.spans_a_seam(&one));
+    let mut two = at(&[-3.0; 18]);
+    two.extend(at(&[1.0, 2.0]));
+    assert!(regions.spans_a_seam(&two));
+    assert!(!regions.spans_a_seam(&[]));
+}
+
 mod merging {
     use super::super::merge::*;
     use super::*;
