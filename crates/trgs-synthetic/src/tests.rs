@@ -100,21 +100,25 @@ fn truth_plane_faces_the_cameras() {
     assert!(max_angle > 45.0 && max_angle < 60.0, "most oblique view at {max_angle} degrees");
 }
 
-#[test]
-fn cameras_stay_clear_of_surfaces() {
-    let cfg = SyntheticConfig::small();
-    let lay = layout(&cfg);
+/// The distance from any camera of `cfg` to the nearest surface its pixels see.
+fn nearest_surface(cfg: &SyntheticConfig) -> f64 {
+    let lay = layout(cfg);
     let mut nearest = f64::INFINITY;
     for cam in &lay.cameras {
         for y in 0..cam.height() {
             for x in 0..cam.width() {
                 let ray =
                     super::generate::local_ray(&lay, cam, f64::from(x) + 0.5, f64::from(y) + 0.5);
-                let s = lay.world.sample(&ray);
-                nearest = nearest.min(s.depth);
+                nearest = nearest.min(lay.world.sample(&ray).depth);
             }
         }
     }
+    nearest
+}
+
+#[test]
+fn cameras_stay_clear_of_surfaces() {
+    let nearest = nearest_surface(&SyntheticConfig::small());
     println!("nearest surface from any camera: {nearest:.3} m");
     assert!(nearest > 0.5);
 }
@@ -556,16 +560,6 @@ fn street_walks_past_every_pane() {
 #[test]
 fn street_cameras_stay_clear_of_surfaces() {
     let cfg = SyntheticConfig { width: 32, height: 24, views: 48, ..SyntheticConfig::street() };
-    let lay = layout(&cfg);
-    let mut nearest = f64::INFINITY;
-    for cam in &lay.cameras {
-        for y in 0..cam.height() {
-            for x in 0..cam.width() {
-                let ray =
-                    super::generate::local_ray(&lay, cam, f64::from(x) + 0.5, f64::from(y) + 0.5);
-                nearest = nearest.min(lay.world.sample(&ray).depth);
-            }
-        }
-    }
+    let nearest = nearest_surface(&cfg);
     assert!(nearest > 1.0, "a camera is {nearest:.2} m from a surface");
 }

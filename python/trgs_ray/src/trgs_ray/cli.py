@@ -17,6 +17,19 @@ A block that failed, or whose machine went away, starts again from its checkpoin
 same command again resumes every unfinished block and keeps the finished ones."""
 
 
+def _command(sub, name: str, help: str) -> argparse.ArgumentParser:
+    """A subcommand with the arguments both take: the split's folder, the runs' folder, trgs."""
+    c = sub.add_parser(name, help=help, epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    c.add_argument("blocks", type=Path, help="the folder trgs split wrote (with blocks.json)")
+    c.add_argument(
+        "--runs", type=Path, required=True, help="where each block's run folder goes (RUNS/block_<k>)"
+    )
+    c.add_argument(
+        "--trgs", help="the trgs binary, at the same path on every node [default: trgs on the PATH]"
+    )
+    return c
+
+
 def parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="trgs-ray",
@@ -26,20 +39,8 @@ def parser() -> argparse.ArgumentParser:
     )
     sub = p.add_subparsers(dest="command", required=True)
 
-    run = sub.add_parser(
-        "run",
-        help="train every block as a Ray task, then merge",
-        epilog=EPILOG,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
-    run.add_argument("blocks", type=Path, help="the folder trgs split wrote (with blocks.json)")
-    run.add_argument(
-        "--runs", type=Path, required=True, help="where each block's run folder goes (RUNS/block_<k>)"
-    )
+    run = _command(sub, "run", "train every block as a Ray task, then merge")
     run.add_argument("--out", type=Path, help="the merged run folder (omit to train without merging)")
-    run.add_argument(
-        "--trgs", help="the trgs binary, at the same path on every node [default: trgs on the PATH]"
-    )
     run.add_argument(
         "--address",
         help="the Ray cluster to join (e.g. auto, or ray://host:10001) [default: a new local one]",
@@ -59,21 +60,13 @@ def parser() -> argparse.ArgumentParser:
     )
     run.add_argument("--poll-seconds", type=float, default=2.0, help=argparse.SUPPRESS)
 
-    one = sub.add_parser(
-        "block",
-        help="train one block (for Slurm array jobs and other engines)",
-        epilog=EPILOG,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
-    one.add_argument("blocks", type=Path, help="the folder trgs split wrote (with blocks.json)")
+    one = _command(sub, "block", "train one block (for Slurm array jobs and other engines)")
     one.add_argument(
         "--index",
         type=int,
         required=True,
         help="the block's index in the manifest (e.g. $SLURM_ARRAY_TASK_ID)",
     )
-    one.add_argument("--runs", type=Path, required=True, help="where each block's run folder goes")
-    one.add_argument("--trgs", help="the trgs binary [default: trgs on the PATH]")
     return p
 
 
