@@ -169,7 +169,9 @@ fn trained_blocks_merge_into_one_run() {
     assert!(merged.status.success(), "{stdout}{}", String::from_utf8_lossy(&merged.stderr));
     let model = load_model(&out, None).expect("the merged run");
     assert_eq!(model.planes.len(), 1, "{stdout}");
-    assert!((model.planes[0].centre - synthetic.planes[0].centre).length() < 1e-9);
+    let truth = &synthetic.planes[0];
+    let off = (model.planes[0].centre - truth.centre).length();
+    assert!(off < 0.02 * truth.width.max(truth.height), "{off} off the window");
     assert!(stdout.contains("mask label 1, from block_1 plane 2"), "{stdout}");
     assert_eq!(stdout.matches("left out, covers no glass").count(), 2, "{stdout}");
     // The capture's test views that look across the seam, for eval to score apart.

@@ -8,8 +8,9 @@ use std::path::PathBuf;
 /// Each block gives the Gaussians on its own part of the ground (its region without the margin
 /// it trained with). Where the capture has glass masks, each block's plane is held against
 /// them: the planes that cover one mask label best are that pane, the one that covers it best
-/// (the block that saw it whole) stands for it with its glass Gaussians, R0 is their mean by
-/// how well each covers it, and a plane that covers no label is left out. Without masks (or
+/// (the block that saw it whole) stands for it with its glass Gaussians, moved onto all of the
+/// capture's masks of that label, R0 is their mean by how well each covers it, and a plane that
+/// covers no label is left out. Without masks (or
 /// with --by-geometry), planes that several blocks found for one pane (same material, normals
 /// within --max-angle, offsets within --max-offset, rectangles within --max-gap of each other)
 /// become one plane over the union of their rectangles, its normal and R0 weighted by area.

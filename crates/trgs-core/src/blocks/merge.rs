@@ -2,9 +2,10 @@
 //! the ground (its Voronoi cell, without the margin it trained with), and planes that several
 //! blocks found for one pane become one plane: by the capture's glass masks where it has them
 //! (the label each plane covers best; the plane that covers it best stands for the pane, with
-//! its glass Gaussians), else by geometry.
+//! its glass Gaussians, moved onto all the masks of its label), else by geometry.
 use super::mask_support::label_support;
 use super::{Ground, Regions};
+use crate::fit::{SilhouetteSettings, refine_to_masks};
 use crate::image::Image;
 use crate::scene::{Camera, Gaussians, Population, ReflectionPlane, sh_coeff_count};
 use glam::DVec3;
@@ -154,6 +155,13 @@ fn merge_by_masks(
         let weight: f64 = members.iter().map(|m| m.1).sum();
         let r0 = members.iter().map(|&(i, w)| w * all[i].2.r0()).sum::<f64>() / weight;
         let mut plane = *p;
+        // The block saw the pane through its own masked views; the capture's, all of them,
+        // place it better (its offset along the normal, its edges).
+        if let Some(fit) = refine_to_masks(&plane, masks, label, &SilhouetteSettings::default())
+            && fit.cost_after < fit.cost_before
+        {
+            plane = fit.plane;
+        }
         plane.r0_logit = (r0.clamp(1e-6, 0.999) / (1.0 - r0.clamp(1e-6, 0.999))).ln();
         planes.push(plane);
         out.append(&glass_of(&blocks[b], k));

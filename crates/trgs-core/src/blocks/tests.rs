@@ -230,12 +230,17 @@ mod merging {
         glass_right.means[1][2] = 5.0;
         glass_right.means[2][2] = 9.0;
         let nothing = pane([-3.0, 0.0, 9.0], [0.0, 0.0, -1.0], 0.5, 0.2);
-        let right = TrainedBlock { gaussians: glass_right, planes: vec![truth, nothing] };
+        // The right block's plane 12 cm off the glass (its frame's face): the capture's masks
+        // move it back.
+        let mut whole = truth;
+        whole.centre.z -= 0.12;
+        let right = TrainedBlock { gaussians: glass_right, planes: vec![whole, nothing] };
         let evidence = PaneEvidence::Masks { masks: &masks, min_iou: 0.3 };
         let (g, planes, report) = merge_blocks(&[left, right], &ground, &regions, evidence);
         assert_eq!(planes.len(), 1, "{report:?}");
         assert_eq!(report.planes_from, vec![vec![(1, 0), (0, 0)]], "the whole pane first");
-        assert_eq!(planes[0].centre, truth.centre);
+        let off = (planes[0].centre - truth.centre).length();
+        assert!(off < 0.03, "{:?} is {off:.3} off the pane", planes[0].centre);
         assert_eq!(report.labels[0].0, 1);
         assert!(report.labels[0].1 > 0.95, "{report:?}");
         assert_eq!(report.dropped.len(), 1);
