@@ -83,7 +83,17 @@ pub fn merge(o: &MergeOptions) -> Result<(MergeReport, usize, usize)> {
         max_offset,
         max_gap: o.max_gap.unwrap_or(max_offset),
     };
-    let masked = if o.by_geometry { Vec::new() } else { masked_views(&manifest.source)? };
+    // The capture that was split: its masks tell the panes apart, its COLMAP model the seams.
+    let capture = SceneFolder::open(&manifest.source);
+    let masked = match (&capture, o.by_geometry) {
+        (_, true) => Vec::new(),
+        (Ok(folder), false) => masked_views(folder)?,
+        (Err(e), false) => bail!(
+            "opening the capture the blocks were split from, {} (for its glass masks; \
+             --by-geometry merges without them): {e:#}",
+            manifest.source.display()
+        ),
+    };
     let masks: Vec<(&Camera, &Image<u8>)> =
         masked.iter().filter_map(|v| Some((&v.camera, v.mask.as_ref()?))).collect();
     let evidence = if masks.is_empty() {
@@ -98,7 +108,7 @@ pub fn merge(o: &MergeOptions) -> Result<(MergeReport, usize, usize)> {
     write_planes_json(&o.out.join("planes.json"), &planes)?;
     let cameras: Vec<_> = cameras.into_values().collect();
     write_cameras_json(&o.out.join("cameras.json"), &cameras)?;
-    let seams = seam_views(&manifest.source, &ground, &regions);
+    let seams = capture.ok().and_then(|folder| seam_views(&folder, &ground, &regions));
     let metrics = serde_json::json!({
         "merged_from": manifest.blocks.iter().map(|b| &b.name).collect::<Vec<_>>(),
         "kept_per_block": report.kept,
@@ -115,10 +125,9 @@ pub fn merge(o: &MergeOptions) -> Result<(MergeReport, usize, usize)> {
 
 /// The capture's test views that look across a seam between blocks
 /// ([`Regions::spans_a_seam`], by the sparse points each observes), for `trgs eval` to score
-/// apart; None where the capture or its COLMAP model cannot be read.
-fn seam_views(source: &Path, ground: &Ground, regions: &Regions) -> Option<Vec<String>> {
-    let folder = SceneFolder::open(source).ok()?;
-    let model = ColmapModel::read(&colmap_dir(source)?).ok()?;
+/// apart; None where its COLMAP model cannot be read.
+fn seam_views(folder: &SceneFolder, ground: &Ground, regions: &Regions) -> Option<Vec<String>> {
+    let model = ColmapModel::read(&colmap_dir(&folder.root)?).ok()?;
     let at: HashMap<u64, DVec2> =
         model.points.iter().map(|p| (p.id, ground.project(DVec3::from_array(p.xyz)))).collect();
     let test: HashSet<&str> = folder.test_views.iter().map(String::as_str).collect();
@@ -139,21 +148,13 @@ fn seam_views(source: &Path, ground: &Ground, regions: &Regions) -> Option<Vec<S
     Some(seams)
 }
 
-/// The masked views of the capture that was split (none when it has no masks); its folder must
-/// still be where the manifest says.
-fn masked_views(source: &Path) -> Result<Vec<trgs_train::View>> {
-    let folder = SceneFolder::open(source).with_context(|| {
-        format!(
-            "opening the capture the blocks were split from, {} (for its glass masks; \
-             --by-geometry merges without them)",
-            source.display()
-        )
-    })?;
+/// The masked views of the capture that was split (none when it has no masks).
+fn masked_views(folder: &SceneFolder) -> Result<Vec<trgs_train::View>> {
     if folder.views.iter().all(|v| v.mask_path.is_none()) {
         return Ok(Vec::new());
     }
-    load_masked_views(&folder, Resolution::LongSide(MASK_CHECK_SIDE))
-        .with_context(|| format!("loading the glass masks of {}", source.display()))
+    load_masked_views(folder, Resolution::LongSide(MASK_CHECK_SIDE))
+        .with_context(|| format!("loading the glass masks of {}", folder.root.display()))
 }
 
 /// The reflection model a block's run trained with (its metrics.json), or null.

@@ -82,9 +82,7 @@ pub fn merge_blocks(
             if by_masks && g.populations[i] == Population::Glass {
                 return false;
             }
-            let m = g.means[i];
-            let x = DVec3::new(f64::from(m[0]), f64::from(m[1]), f64::from(m[2]));
-            regions.owner(ground.project(x)) == b
+            regions.owner(ground.project(DVec3::from_array(g.means[i].map(f64::from)))) == b
         });
         report.kept.push(own.len());
         out.append(&own);
@@ -162,7 +160,7 @@ fn merge_by_masks(
         {
             plane = fit.plane;
         }
-        plane.r0_logit = (r0.clamp(1e-6, 0.999) / (1.0 - r0.clamp(1e-6, 0.999))).ln();
+        plane.set_r0(r0);
         planes.push(plane);
         out.append(&glass_of(&blocks[b], k));
         report.labels.push((label, iou));
@@ -179,8 +177,7 @@ fn glass_of(block: &TrainedBlock, k: usize) -> Gaussians<f32> {
         if g.populations[i] != Population::Glass {
             return false;
         }
-        let m = g.means[i];
-        let x = DVec3::new(f64::from(m[0]), f64::from(m[1]), f64::from(m[2]));
+        let x = DVec3::from_array(g.means[i].map(f64::from));
         let nearest = block
             .planes
             .iter()
@@ -259,7 +256,7 @@ pub fn merge_planes(members: &[&ReflectionPlane]) -> ReflectionPlane {
     }
     let n = normal.normalize();
     let offset = offset / area;
-    let r0 = (r0 / area).clamp(1e-6, 0.999);
+    let r0 = r0 / area;
     let mut plane = largest;
     plane.normal = n;
     plane.orthogonalise_axis();
@@ -276,6 +273,6 @@ pub fn merge_planes(members: &[&ReflectionPlane]) -> ReflectionPlane {
     plane.centre = anchor + t * (0.5 * (lo.0 + hi.0)) + h * (0.5 * (lo.1 + hi.1));
     plane.width = hi.0 - lo.0;
     plane.height = hi.1 - lo.1;
-    plane.r0_logit = (r0 / (1.0 - r0)).ln();
+    plane.set_r0(r0);
     plane
 }

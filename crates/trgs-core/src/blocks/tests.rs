@@ -200,6 +200,35 @@ mod merging {
     }
 
     #[test]
+    fn a_plane_is_told_by_the_label_it_covers_and_a_part_of_it_scores_less() {
+        use super::super::mask_support::label_support;
+        // A camera 4 m in front of the plane z = 0, two panes in it.
+        let pose = Pose::look_at(DVec3::new(0.0, 0.0, 4.0), DVec3::ZERO, DVec3::NEG_Y);
+        let cam = Camera::new("v", Intrinsics::from_fov_x(60f64.to_radians(), 96, 72), pose);
+        let at = |cx: f64, width: f64| {
+            ReflectionPlane::new(
+                DVec3::new(cx, 0.0, 0.0),
+                DVec3::Z,
+                DVec3::X,
+                width,
+                1.0,
+                Material::Glass,
+            )
+        };
+        let truth = [at(-1.0, 1.2), at(1.2, 1.6)];
+        let mask = mask_of(&cam, &truth);
+        let masks = [(&cam, &mask)];
+        let whole = label_support(&truth[1], &masks).expect("support");
+        assert_eq!(whole.label, 2);
+        assert!(whole.iou > 0.97, "{whole:?}");
+        let half = label_support(&at(0.8, 0.8), &masks).expect("support");
+        assert_eq!(half.label, 2);
+        assert!(half.iou > 0.4 && half.iou < 0.6, "{half:?}");
+        // A plane off to one side covers no glass.
+        assert_eq!(label_support(&at(3.5, 0.3), &masks), None);
+    }
+
+    #[test]
     fn by_masks_the_block_that_saw_a_pane_whole_stands_for_it() {
         let ground = Ground { up: DVec3::NEG_Y, axes: [DVec3::X, DVec3::Z] };
         let regions = Regions { centres: vec![DVec2::new(-5.0, 0.0), DVec2::new(5.0, 0.0)] };

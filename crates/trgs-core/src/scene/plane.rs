@@ -79,6 +79,12 @@ impl ReflectionPlane {
         1.0 / (1.0 + (-self.r0_logit).exp())
     }
 
+    /// Set R0, kept within [1e-6, 0.999] so that its logit stays finite.
+    pub fn set_r0(&mut self, r0: f64) {
+        let r0 = r0.clamp(1e-6, 0.999);
+        self.r0_logit = (r0 / (1.0 - r0)).ln();
+    }
+
     /// Signed distance of `x` from the plane; positive on the front side.
     pub fn signed_distance(&self, x: DVec3) -> f64 {
         (x - self.centre).dot(self.unit_normal())

@@ -14,7 +14,7 @@ import signal
 import subprocess
 import sys
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Callable
 
@@ -106,7 +106,6 @@ class LogTail:
     path: Path
     offset: int = 0
     pending: bytes = b""
-    lines: list = field(default_factory=list)
 
     def read(self) -> list:
         try:
