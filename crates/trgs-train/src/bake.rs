@@ -34,18 +34,24 @@ pub fn spread(cameras: &[Camera], count: usize) -> Vec<Camera> {
     (0..count).map(|i| cameras[i * cameras.len() / count].clone()).collect()
 }
 
+/// `model` with its planes on the GPU, once for both the bake and its check.
+pub fn upload_model(ctx: &GpuContext, model: &Model) -> Result<GpuScene> {
+    GpuScene::upload(ctx, &model.gaussians, &model.planes)
+        .with_context(|| format!("{}: invalid model", model.ply.display()))
+}
+
 /// The model's Gaussians baked with the strength seen from `cameras` (its training views),
-/// rendered at most [`STRENGTH_LONG_SIDE`] pixels long.
+/// rendered at most [`STRENGTH_LONG_SIDE`] pixels long; `scene` is `model` on the GPU
+/// ([`upload_model`]).
 pub fn bake_for_plain_viewers(
     ctx: &GpuContext,
     model: &Model,
+    scene: &GpuScene,
     cameras: &[Camera],
 ) -> Result<(Gaussians<f32>, BakeReport)> {
     if model.planes.is_empty() {
         return Ok(bake(&model.gaussians, &[], &[]));
     }
-    let scene = GpuScene::upload(ctx, &model.gaussians, &model.planes)
-        .with_context(|| format!("{}: invalid model", model.ply.display()))?;
     let renderer = Renderer::new(ctx);
     let options = RenderOptions { reflection: model.reflection, ..RenderOptions::default() };
     let cameras: Vec<Camera> = cameras.iter().map(|c| at_most(c, STRENGTH_LONG_SIDE)).collect();
@@ -53,7 +59,7 @@ pub fn bake_for_plain_viewers(
         .iter()
         .map(|c| {
             let frame = renderer
-                .render(&scene, c, &options)
+                .render(scene, c, &options)
                 .with_context(|| format!("rendering view {:?}", c.name))?;
             Ok(frame.read_layer(ctx, Layer::Strength)?)
         })
@@ -69,16 +75,16 @@ pub fn bake_for_plain_viewers(
 /// PSNR over `cameras` of plain renders of each of `candidates` (no planes, as other viewers
 /// draw them) against trgs's renders of `model` with its planes, rendered once per view: the
 /// squared error pooled over every view's pixels (`metrics::pooled_psnr`), since a view that
-/// sees no plane renders the same both ways.
+/// sees no plane renders the same both ways. `with_planes` is `model` on the GPU
+/// ([`upload_model`]).
 pub fn plain_render_psnr(
     ctx: &GpuContext,
     model: &Model,
+    with_planes: &GpuScene,
     candidates: &[&Gaussians<f32>],
     cameras: &[Camera],
 ) -> Result<Vec<f64>> {
     let renderer = Renderer::new(ctx);
-    let with_planes = GpuScene::upload(ctx, &model.gaussians, &model.planes)
-        .with_context(|| format!("{}: invalid model", model.ply.display()))?;
     let plain: Vec<GpuScene> = candidates
         .iter()
         .map(|g| GpuScene::upload(ctx, g, &[]).context("uploading a plain model"))
@@ -92,7 +98,7 @@ pub fn plain_render_psnr(
                 .with_context(|| format!("rendering view {:?}", c.name))?;
             Ok(frame.read_layer(ctx, Layer::Color)?)
         };
-        let reference = render(&with_planes)?;
+        let reference = render(with_planes)?;
         for (scores, scene) in per_view.iter_mut().zip(&plain) {
             scores.push(psnr(&render(scene)?, &reference)?);
         }

@@ -11,6 +11,7 @@ use trgs_core::{Camera, Gaussians};
 use trgs_render::GpuContext;
 use trgs_train::bake::{
     MEASURED_VIEWS, STRENGTH_LONG_SIDE, at_most, bake_for_plain_viewers, plain_render_psnr, spread,
+    upload_model,
 };
 use trgs_train::model::{Model, load_model};
 
@@ -79,7 +80,8 @@ pub fn run(matches: &clap::ArgMatches) -> Result<()> {
     }
     let cameras = views_of(&args, &model)?;
     let ctx = GpuContext::new()?;
-    let (baked, report) = bake_for_plain_viewers(&ctx, &model, &cameras)?;
+    let scene = upload_model(&ctx, &model)?;
+    let (baked, report) = bake_for_plain_viewers(&ctx, &model, &scene, &cameras)?;
     write_gaussians(&args.out, format, &baked)?;
     let mirrored: Vec<String> = report
         .mirrored
@@ -102,7 +104,7 @@ pub fn run(matches: &clap::ArgMatches) -> Result<()> {
     // the views, at most 512 pixels long.
     let measured: Vec<Camera> =
         spread(&cameras, MEASURED_VIEWS).iter().map(|c| at_most(c, STRENGTH_LONG_SIDE)).collect();
-    let scores = plain_render_psnr(&ctx, &model, &[&baked, &model.gaussians], &measured)?;
+    let scores = plain_render_psnr(&ctx, &model, &scene, &[&baked, &model.gaussians], &measured)?;
     let (baked_psnr, unbaked_psnr) = (scores[0], scores[1]);
     println!(
         "a plain 3DGS render of it against trgs's render: PSNR {baked_psnr:.2} dB over {} of \
