@@ -2,11 +2,15 @@
 #![allow(dead_code)]
 //! What the GPU-versus-twin tests share: the tolerance, the value comparison and the scene shape.
 use glam::DVec2;
+use trgs_core::Image;
 use trgs_core::fixtures::SceneSpec;
 use trgs_core::reference::Projected;
+use trgs_core::reference::{Frame, FrameGrads};
+use trgs_core::rng::Rng;
 use trgs_render::toolkit::layout::{
     FLAG_CLAMPED_B, FLAG_CLAMPED_G, FLAG_CLAMPED_R, FLAG_GLASS, FLAG_VISIBLE, ProjectedGaussian,
 };
+use trgs_render::{DeviceOptions, GpuContext, TileLayout};
 
 pub const ATOL: f64 = 1e-5;
 pub const RTOL: f64 = 1e-3;
@@ -70,4 +74,56 @@ pub fn to_reference(p: &[ProjectedGaussian]) -> Projected {
         out.glass.push(f & FLAG_GLASS != 0);
     }
     out
+}
+
+/// The adapter's features with each replay layout (one pixel per thread is what a GPU runs, four
+/// rows what a CPU adapter runs), and the fallback without them.
+pub fn contexts() -> Vec<(&'static str, GpuContext)> {
+    let fast = DeviceOptions { poison_fresh_buffers: true, ..Default::default() };
+    let layout = |l| DeviceOptions { tile_layout: Some(l), ..fast.clone() };
+    let fallback = DeviceOptions { disable_optional_features: true, ..fast.clone() };
+    vec![
+        ("native, one pixel per thread", layout(TileLayout::PixelPerThread)),
+        ("native, four rows per thread", layout(TileLayout::FourRowsPerThread)),
+        ("fallback", fallback),
+    ]
+    .into_iter()
+    .map(|(n, o)| (n, GpuContext::with_options(&o).unwrap_or_else(|e| panic!("{e}"))))
+    .collect()
+}
+
+/// Pixels of up to four single- or multi-channel images packed as vec4 per pixel.
+pub fn pack(parts: &[(&Image<f64>, usize)]) -> Vec<[f32; 4]> {
+    let (w, h) = (parts[0].0.width, parts[0].0.height);
+    let mut out = vec![[0.0f32; 4]; (w * h) as usize];
+    for &(im, first) in parts {
+        for y in 0..h {
+            for x in 0..w {
+                for c in 0..im.channels {
+                    out[(y * w + x) as usize][first + c as usize] = im.get(x, y, c) as f32;
+                }
+            }
+        }
+    }
+    out
+}
+
+/// [`compare_values`] of single values.
+pub fn compare(what: &str, gpu: &[f32], cpu: &[f64]) -> usize {
+    compare_values(what, gpu, cpu, 1)
+}
+
+/// The `channels` of each packed pixel, in order.
+pub fn channel(v: &[[f32; 4]], channels: std::ops::Range<usize>) -> Vec<f32> {
+    v.iter().flat_map(|p| p[channels.clone()].to_vec()).collect()
+}
+
+/// Random upstream gradients in [-1, 1] for every layer of `frame`.
+pub fn random_grads(seed: u64, frame: &Frame, planes: usize) -> FrameGrads {
+    let mut rng = Rng::new(seed);
+    FrameGrads::filled(frame.width(), frame.height(), planes, |im| {
+        for v in &mut im.data {
+            *v = rng.range(-1.0, 1.0);
+        }
+    })
 }
