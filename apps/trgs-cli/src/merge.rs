@@ -9,6 +9,7 @@ use trgs_core::blocks::merge::{MergeReport, PaneEvidence, SamePane, TrainedBlock
 use trgs_core::blocks::{Ground, Regions};
 use trgs_core::image::Image;
 use trgs_core::io::{ColmapModel, SceneFolder, colmap_dir};
+use trgs_core::io::{ReflectionRecord, RunMetrics};
 use trgs_core::io::{
     load_model, read_cameras_json, write_atomic, write_cameras_json, write_planes_json, write_ply,
 };
@@ -53,7 +54,7 @@ pub fn merge(o: &MergeOptions) -> Result<(MergeReport, usize, usize)> {
         Regions { centres: manifest.blocks.iter().map(|b| DVec2::from_array(b.centre)).collect() };
     let mut blocks = Vec::new();
     let mut cameras = BTreeMap::new();
-    let mut reflection_model = serde_json::Value::Null;
+    let mut reflection_model: Option<ReflectionRecord> = None;
     for b in &manifest.blocks {
         let run = o.runs.join(&b.name);
         if !run.is_dir() {
@@ -72,7 +73,7 @@ pub fn merge(o: &MergeOptions) -> Result<(MergeReport, usize, usize)> {
                 cameras.entry(c.name.clone()).or_insert(c);
             }
         }
-        if reflection_model.is_null() {
+        if reflection_model.is_none() {
             reflection_model = reflection_model_of(&run);
         }
         blocks.push(TrainedBlock { gaussians: model.gaussians, planes: model.planes });
@@ -157,11 +158,7 @@ fn masked_views(folder: &SceneFolder) -> Result<Vec<trgs_train::View>> {
         .with_context(|| format!("loading the glass masks of {}", folder.root.display()))
 }
 
-/// The reflection model a block's run trained with (its metrics.json), or null.
-fn reflection_model_of(run: &Path) -> serde_json::Value {
-    std::fs::read_to_string(run.join("metrics.json"))
-        .ok()
-        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
-        .map(|m| m["reflection_model"].clone())
-        .unwrap_or(serde_json::Value::Null)
+/// The reflection model a block's run trained with (its metrics.json), if it says.
+fn reflection_model_of(run: &Path) -> Option<ReflectionRecord> {
+    RunMetrics::read_if_any(&run.join("metrics.json"))?.reflection_model
 }

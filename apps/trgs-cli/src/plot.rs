@@ -5,6 +5,7 @@
 use anyhow::{Result, anyhow};
 use plotters::prelude::*;
 use trgs_core::Image;
+use trgs_core::io::RunMetrics;
 
 /// One run's curve: (training seconds, test PSNR) in order.
 #[derive(Clone, Debug)]
@@ -29,16 +30,9 @@ pub const COLOURS: [([u8; 3], &str); 8] = [
 /// The font family every label is drawn in.
 const FONT: &str = "sans-serif";
 
-/// Read `psnr_over_time` of a run's metrics.json text.
-pub fn curve_of(name: &str, metrics: &serde_json::Value) -> Curve {
-    let points = metrics["psnr_over_time"]
-        .as_array()
-        .map(|rows| {
-            rows.iter()
-                .filter_map(|r| Some((r["seconds"].as_f64()?, r["psnr"].as_f64()?)))
-                .collect()
-        })
-        .unwrap_or_default();
+/// The curve of a run's evaluations (its metrics.json's `psnr_over_time`).
+pub fn curve_of(name: &str, metrics: &RunMetrics) -> Curve {
+    let points = metrics.psnr_over_time.iter().map(|e| (e.seconds, e.psnr)).collect();
     Curve { name: name.to_string(), points }
 }
 
@@ -149,9 +143,12 @@ mod tests {
     use super::*;
 
     fn curves() -> Vec<Curve> {
-        let m = serde_json::json!({"psnr_over_time": [
-            {"step": 100, "seconds": 30.0, "psnr": 22.0},
-            {"step": 200, "seconds": 70.0, "psnr": 25.5}]});
+        let m = RunMetrics::parse(
+            r#"{"psnr_over_time": [
+                {"step": 100, "seconds": 30.0, "psnr": 22.0, "ssim": 0.8},
+                {"step": 200, "seconds": 70.0, "psnr": 25.5, "ssim": 0.9}]}"#,
+        )
+        .expect("metrics");
         let mut b = curve_of("b", &m);
         b.points.iter_mut().for_each(|p| p.1 -= 1.0);
         vec![curve_of("a", &m), b]

@@ -4,7 +4,7 @@
 use anyhow::{Context, Result};
 use glam::DVec3;
 use std::path::{Path, PathBuf};
-use trgs_core::io::{load_model, read_cameras_json};
+use trgs_core::io::{RunMetrics, load_model, read_cameras_json};
 use trgs_core::pipeline::ReflectionModel;
 use trgs_core::scene::{Camera, Gaussians, Material, ReflectionPlane};
 
@@ -51,32 +51,22 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
 /// The test views of the run whose metrics are at `path` (`views[].name`); none when the file
 /// is missing or unreadable.
 pub fn test_view_names(path: &Path) -> Vec<String> {
-    let Ok(text) = std::fs::read_to_string(path) else { return Vec::new() };
-    let Ok(metrics) = serde_json::from_str::<serde_json::Value>(&text) else { return Vec::new() };
-    let Some(views) = metrics.get("views").and_then(|v| v.as_array()) else { return Vec::new() };
-    views.iter().filter_map(|v| v["name"].as_str().map(str::to_owned)).collect()
+    RunMetrics::read_if_any(path).map(|m| m.test_view_names()).unwrap_or_default()
 }
 
 /// The candidate planes that the run whose metrics are at `path` tried and dropped; none when
 /// the file is missing or holds no candidates (the outline is a help, not the model: an
 /// unreadable record does not stop the viewer).
 pub fn dropped_candidates(path: &Path) -> Vec<ReflectionPlane> {
-    let Ok(text) = std::fs::read_to_string(path) else { return Vec::new() };
-    let Ok(metrics) = serde_json::from_str::<serde_json::Value>(&text) else { return Vec::new() };
-    let Some(records) = metrics.get("candidates").and_then(|c| c.as_array()) else {
-        return Vec::new();
-    };
-    let vec3 = |v: &serde_json::Value| -> Option<DVec3> {
-        let a = v.as_array()?;
-        Some(DVec3::new(a.first()?.as_f64()?, a.get(1)?.as_f64()?, a.get(2)?.as_f64()?))
-    };
-    records
+    let Some(metrics) = RunMetrics::read_if_any(path) else { return Vec::new() };
+    let vec3 = |v: [f64; 3]| DVec3::from_array(v);
+    metrics
+        .candidates
         .iter()
-        .filter(|r| r["proposed"] == true && r["kept"] == false)
+        .filter(|r| r.proposed && !r.kept)
         .filter_map(|r| {
-            let size = r["size"].as_array()?;
-            let (w, h) = (size.first()?.as_f64()?, size.get(1)?.as_f64()?);
-            let (c, n, t) = (vec3(&r["centre"])?, vec3(&r["normal"])?, vec3(&r["axis"])?);
+            let [w, h] = r.size?;
+            let (c, n, t) = (vec3(r.centre?), vec3(r.normal?), vec3(r.axis?));
             let plane = ReflectionPlane::new(c, n, t, w, h, Material::Glass);
             plane.validate(0).is_ok().then_some(plane)
         })
@@ -184,8 +174,8 @@ mod tests {
         assert_eq!(dropped.len(), 1, "only the one tried and dropped");
         assert_eq!((dropped[0].width, dropped[0].height), (2.0, 1.0));
         assert!(dropped_candidates(&dir.join("none.json")).is_empty());
-        let metrics =
-            serde_json::json!({"views": [{"name": "a.png", "psnr": 30.0}, {"name": "b.png"}]});
+        let view = |name: &str| serde_json::json!({"name": name, "psnr": 30.0, "ssim": 0.9});
+        let metrics = serde_json::json!({"views": [view("a.png"), view("b.png")]});
         std::fs::write(&path, metrics.to_string()).expect("write");
         assert_eq!(test_view_names(&path), ["a.png", "b.png"]);
         assert!(test_view_names(&dir.join("none.json")).is_empty());

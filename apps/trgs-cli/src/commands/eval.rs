@@ -64,9 +64,7 @@ pub struct Args {
 
 /// The seam views `trgs merge` recorded in a merged run's metrics.json (None for other runs).
 fn seam_views(run: &std::path::Path) -> Option<Vec<String>> {
-    let text = std::fs::read_to_string(run.join("metrics.json")).ok()?;
-    let metrics: serde_json::Value = serde_json::from_str(&text).ok()?;
-    serde_json::from_value(metrics.get("seam_views")?.clone()).ok()
+    trgs_core::io::RunMetrics::read_if_any(&run.join("metrics.json"))?.seam_views
 }
 
 pub fn run(matches: &clap::ArgMatches) -> Result<()> {

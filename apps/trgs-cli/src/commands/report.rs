@@ -1,7 +1,7 @@
 //! `report`: speed against error of several training runs — their test PSNR after so many
 //! seconds of training — as a Markdown table (printed) and a PNG plot.
 use crate::plot::{curve_of, markdown_table, plot};
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use clap::Parser;
 use std::path::PathBuf;
 use trgs_core::io::write_png_rgb8;
@@ -40,10 +40,7 @@ pub fn run(matches: &clap::ArgMatches) -> Result<()> {
     for (i, run) in runs.iter().enumerate() {
         trgs_core::io::check_finished_run(run)?;
         let path = run.join("metrics.json");
-        let text = std::fs::read_to_string(&path)
-            .with_context(|| format!("{}: cannot read the run's metrics", path.display()))?;
-        let metrics: serde_json::Value =
-            serde_json::from_str(&text).with_context(|| format!("{}: not JSON", path.display()))?;
+        let metrics = trgs_core::io::RunMetrics::read(&path)?;
         let name = names
             .as_ref()
             .and_then(|n| n.get(i).cloned())

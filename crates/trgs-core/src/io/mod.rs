@@ -11,6 +11,7 @@
 //! - [`glb`]: binary glTF with `KHR_gaussian_splatting`, planes as nodes;
 //! - [`model`]: a trained model to render (a PLY and its planes.json, a run folder, or a .glb);
 //! - [`cameras_json`]: the INRIA output folder's `cameras.json` (a run's views);
+//! - [`metrics`]: what is read back of a run's `metrics.json`;
 //! - [`run_folder`]: whether the run in a training run's folder has finished;
 //! - [`dataset`]: a scene folder that puts the above together.
 mod bytes;
@@ -22,6 +23,7 @@ pub mod glb;
 mod jpeg;
 mod mask_labels;
 pub mod masks;
+pub mod metrics;
 pub mod model;
 mod model_values;
 pub mod planes_json;
@@ -44,6 +46,7 @@ pub use glb::{encode_glb, parse_glb, read_glb, write_glb};
 pub use masks::{
     GlassMask, MAX_PLANES, check_plane_count, mask_path, read_glass_mask, write_glass_mask,
 };
+pub use metrics::{CandidateOutline, EvaluationPoint, ReflectionRecord, RunMetrics, ViewScore};
 pub use model::{Model, find_ply, load_model};
 pub use planes_json::{PlaneSpec, read_planes_json, write_plane_materials, write_planes_json};
 pub use ply::{ColouredPoint, encode_ply, parse_ply, read_ply, read_point_cloud_ply, write_ply};

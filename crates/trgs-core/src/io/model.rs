@@ -1,7 +1,7 @@
 //! Loading a trained model: a Gaussian PLY (trgs or any INRIA-layout file) and its planes, or a
 //! `.glb` with `KHR_gaussian_splatting` (Gaussians and planes in one file), or an `.spz`
 //! (Gaussians only).
-use super::{FormatError, check_finished_run, read_glb, read_planes_json, read_ply};
+use super::{FormatError, RunMetrics, check_finished_run, read_glb, read_planes_json, read_ply};
 use crate::pipeline::ReflectionModel;
 use crate::scene::{Gaussians, ReflectionPlane};
 use std::path::{Path, PathBuf};
@@ -26,10 +26,10 @@ fn trained_reflection_model(path: &Path, ply: &Path) -> ReflectionModel {
     let Some(text) = candidates.iter().find_map(|p| std::fs::read_to_string(p).ok()) else {
         return model;
     };
-    let v: serde_json::Value = serde_json::from_str(&text).unwrap_or_default();
-    let flag = |name: &str| v["reflection_model"][name].as_bool();
-    model.fresnel = flag("fresnel").unwrap_or(true);
-    model.intensity = flag("intensity").unwrap_or(true);
+    if let Some(r) = RunMetrics::parse(&text).ok().and_then(|m| m.reflection_model) {
+        model.fresnel = r.fresnel;
+        model.intensity = r.intensity;
+    }
     model
 }
 

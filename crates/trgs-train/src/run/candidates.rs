@@ -128,6 +128,34 @@ mod tests {
     }
 
     #[test]
+    fn a_record_reads_back_as_the_outline_the_viewer_draws() {
+        let record = CandidateRecord {
+            centre: Some([0.5, 1.0, -2.0]),
+            normal: Some([0.0, 0.0, 1.0]),
+            axis: Some([1.0, 0.0, 0.0]),
+            size: Some([2.4, 1.4]),
+            support: 120,
+            seen_through: 40,
+            seen_fraction: 0.25,
+            cameras_in_front: 1.0,
+            proposed: true,
+            held_out_l1_gain: Some(0.0007),
+            strength: Some(0.07),
+            kept: false,
+            why: "dropped".into(),
+            opening_of: None,
+        };
+        let text =
+            serde_json::to_string(&serde_json::json!({"candidates": [record]})).expect("json");
+        let outline = &trgs_core::io::RunMetrics::parse(&text).expect("metrics").candidates[0];
+        assert_eq!(outline.centre, record.centre);
+        assert_eq!(outline.normal, record.normal);
+        assert_eq!(outline.axis, record.axis);
+        assert_eq!(outline.size, record.size);
+        assert_eq!((outline.proposed, outline.kept), (true, false));
+    }
+
+    #[test]
     fn the_proposal_is_tried_every_stage1_length_up_to_half_the_run() {
         // 2000 steps: stage 1 ends at 200; tries at 200, 400, ..., 1000.
         let (mut at, mut tries) = (200, vec![200]);

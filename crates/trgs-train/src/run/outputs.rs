@@ -8,6 +8,7 @@ use crate::eval::{render_fps, write_renders};
 use crate::trainer::Trainer;
 use anyhow::{Context, Result};
 use std::path::{Path, PathBuf};
+use trgs_core::io::{EvaluationPoint, ReflectionRecord, ViewScore};
 use trgs_core::io::{write_atomic, write_planes_json, write_ply};
 
 /// The outcome of a finished run.
@@ -103,21 +104,21 @@ pub fn write_outputs(
 fn metrics_json(s: &RunSummary, data: &TrainingData, state: &RunState) -> serde_json::Value {
     let config = &state.config;
     let last = &s.last;
+    // The parts other tools read back are written from the types they read (`RunMetrics`).
     let views: Vec<_> = last
         .views
         .iter()
-        .map(|(n, p, ss)| serde_json::json!({"name": n, "psnr": p, "ssim": ss}))
+        .map(|(name, psnr, ssim)| ViewScore { name: name.clone(), psnr: *psnr, ssim: *ssim })
         .collect();
     let step_ms: serde_json::Map<_, _> =
         s.step_ms.iter().map(|(k, v)| (k.to_string(), serde_json::json!(v))).collect();
     let over_time: Vec<_> = state
         .evaluations
         .iter()
-        .map(|e| {
-            serde_json::json!({"step": e.step, "seconds": e.seconds, "psnr": e.psnr, "ssim": e.ssim})
-        })
+        .map(|e| EvaluationPoint { step: e.step, seconds: e.seconds, psnr: e.psnr, ssim: e.ssim })
         .collect();
     let ab = &config.ablations;
+    let reflection = ReflectionRecord { fresnel: !ab.no_fresnel, intensity: !ab.no_intensity };
     serde_json::json!({
         "psnr": last.psnr,
         "ssim": last.ssim,
@@ -134,7 +135,7 @@ fn metrics_json(s: &RunSummary, data: &TrainingData, state: &RunState) -> serde_
         "render_fps": s.render_fps,
         "resolution": [data.size().0, data.size().1],
         "ablations": ab.names(),
-        "reflection_model": {"fresnel": !ab.no_fresnel, "intensity": !ab.no_intensity},
+        "reflection_model": reflection,
         "data": config.data,
         "no_planes": config.no_planes || config.planes == Some(super::PlaneSource::None),
         "plane_source": config.planes,
