@@ -8,11 +8,12 @@ use std::path::{Path, PathBuf};
 use trgs_core::blocks::merge::{MergeReport, PaneEvidence, SamePane, TrainedBlock, merge_blocks};
 use trgs_core::blocks::{Ground, Regions};
 use trgs_core::image::Image;
+use trgs_core::io::RunMetrics;
 use trgs_core::io::{ColmapModel, SceneFolder, colmap_dir};
-use trgs_core::io::{ReflectionRecord, RunMetrics};
 use trgs_core::io::{
     load_model, read_cameras_json, write_atomic, write_cameras_json, write_planes_json, write_ply,
 };
+use trgs_core::pipeline::ReflectionModel;
 use trgs_core::scene::Camera;
 use trgs_train::{Resolution, load_masked_views};
 
@@ -54,7 +55,7 @@ pub fn merge(o: &MergeOptions) -> Result<(MergeReport, usize, usize)> {
         Regions { centres: manifest.blocks.iter().map(|b| DVec2::from_array(b.centre)).collect() };
     let mut blocks = Vec::new();
     let mut cameras = BTreeMap::new();
-    let mut reflection_model: Option<ReflectionRecord> = None;
+    let mut reflection_model: Option<ReflectionModel> = None;
     for b in &manifest.blocks {
         let run = o.runs.join(&b.name);
         if !run.is_dir() {
@@ -159,6 +160,6 @@ fn masked_views(folder: &SceneFolder) -> Result<Vec<trgs_train::View>> {
 }
 
 /// The reflection model a block's run trained with (its metrics.json), if it says.
-fn reflection_model_of(run: &Path) -> Option<ReflectionRecord> {
+fn reflection_model_of(run: &Path) -> Option<ReflectionModel> {
     RunMetrics::read_if_any(&run.join("metrics.json"))?.reflection_model
 }

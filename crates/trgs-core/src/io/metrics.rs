@@ -3,6 +3,7 @@
 //! same types, so each field's name is in one place. The rest of the file (timings, memory,
 //! the truth comparison) is written for people and scripts and read back by none of them.
 use super::FormatError;
+use crate::pipeline::ReflectionModel;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -22,21 +23,6 @@ pub struct ViewScore {
     pub name: String,
     pub psnr: f64,
     pub ssim: f64,
-}
-
-/// The parts of the reflection model a run trained with (`reflection_model`); an ablation turns
-/// one off, and a renderer of the model must do the same. A part the record leaves out is on.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct ReflectionRecord {
-    pub fresnel: bool,
-    pub intensity: bool,
-}
-
-impl Default for ReflectionRecord {
-    fn default() -> Self {
-        Self { fresnel: true, intensity: true }
-    }
 }
 
 /// Where a candidate plane of a `--planes auto` run lay and what became of it: the fields of
@@ -62,7 +48,9 @@ pub struct RunMetrics {
     pub ssim: Option<f64>,
     pub views: Vec<ViewScore>,
     pub psnr_over_time: Vec<EvaluationPoint>,
-    pub reflection_model: Option<ReflectionRecord>,
+    /// The reflection model the run trained with (its ablations), which a renderer of the
+    /// model must follow; a part the record leaves out is on.
+    pub reflection_model: Option<ReflectionModel>,
     pub candidates: Vec<CandidateOutline>,
     /// A merged run's test views that look across a seam between blocks (`trgs merge`).
     pub seam_views: Option<Vec<String>>,
@@ -106,7 +94,7 @@ mod tests {
         assert_eq!(m.reflection_model, None);
         assert_eq!(m.seam_views, None);
         let m = RunMetrics::parse(r#"{"reflection_model": {"fresnel": false}}"#).expect("metrics");
-        assert_eq!(m.reflection_model, Some(ReflectionRecord { fresnel: false, intensity: true }));
+        assert_eq!(m.reflection_model, Some(ReflectionModel { fresnel: false, intensity: true }));
     }
 
     #[test]

@@ -46,7 +46,7 @@ pub use glb::{encode_glb, parse_glb, read_glb, write_glb};
 pub use masks::{
     GlassMask, MAX_PLANES, check_plane_count, mask_path, read_glass_mask, write_glass_mask,
 };
-pub use metrics::{CandidateOutline, EvaluationPoint, ReflectionRecord, RunMetrics, ViewScore};
+pub use metrics::{CandidateOutline, EvaluationPoint, RunMetrics, ViewScore};
 pub use model::{Model, find_ply, load_model};
 pub use planes_json::{PlaneSpec, read_planes_json, write_plane_materials, write_planes_json};
 pub use ply::{ColouredPoint, encode_ply, parse_ply, read_ply, read_point_cloud_ply, write_ply};

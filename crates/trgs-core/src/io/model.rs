@@ -21,16 +21,11 @@ pub struct Model {
 /// The reflection model recorded in the `metrics.json` beside `ply` or in the folder `path`.
 /// A file without the record (another tool's) gives the full model.
 fn trained_reflection_model(path: &Path, ply: &Path) -> ReflectionModel {
-    let mut model = ReflectionModel::default();
     let candidates = [ply.with_file_name("metrics.json"), path.join("metrics.json")];
     let Some(text) = candidates.iter().find_map(|p| std::fs::read_to_string(p).ok()) else {
-        return model;
+        return ReflectionModel::default();
     };
-    if let Some(r) = RunMetrics::parse(&text).ok().and_then(|m| m.reflection_model) {
-        model.fresnel = r.fresnel;
-        model.intensity = r.intensity;
-    }
-    model
+    RunMetrics::parse(&text).ok().and_then(|m| m.reflection_model).unwrap_or_default()
 }
 
 /// The PLY of `path`: the file itself, or in a folder `model.ply`, else the INRIA layout's

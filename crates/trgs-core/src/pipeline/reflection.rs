@@ -3,7 +3,9 @@ use crate::plane_math::{schlick, schlick_grad};
 
 /// Which parts of the reflection model are on. The full model has both; each switch off is one
 /// of the paper's ablations (section "Reflection intensity and Fresnel-based reflection").
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// A run's metrics.json records it (`reflection_model`); a switch the record leaves out is on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
 pub struct ReflectionModel {
     /// Schlick's view-dependent R_raw; off: R_raw = R0, a learnable constant.
     pub fresnel: bool,

@@ -8,8 +8,9 @@ use crate::eval::{render_fps, write_renders};
 use crate::trainer::Trainer;
 use anyhow::{Context, Result};
 use std::path::{Path, PathBuf};
-use trgs_core::io::{EvaluationPoint, ReflectionRecord, ViewScore};
+use trgs_core::io::{EvaluationPoint, ViewScore};
 use trgs_core::io::{write_atomic, write_planes_json, write_ply};
+use trgs_core::pipeline::ReflectionModel;
 
 /// The outcome of a finished run.
 #[derive(Clone, Debug)]
@@ -118,7 +119,7 @@ fn metrics_json(s: &RunSummary, data: &TrainingData, state: &RunState) -> serde_
         .map(|e| EvaluationPoint { step: e.step, seconds: e.seconds, psnr: e.psnr, ssim: e.ssim })
         .collect();
     let ab = &config.ablations;
-    let reflection = ReflectionRecord { fresnel: !ab.no_fresnel, intensity: !ab.no_intensity };
+    let reflection = ReflectionModel { fresnel: !ab.no_fresnel, intensity: !ab.no_intensity };
     serde_json::json!({
         "psnr": last.psnr,
         "ssim": last.ssim,
