@@ -323,7 +323,7 @@ fn load_view(folder: &SceneFolder, i: usize, resolution: Resolution) -> Result<L
     let (w, h) = target_size(full.0, full.1, resolution)
         .with_context(|| format!("resizing {}", spec.image_path.display()))?;
     let scaled = ((w, h) != full).then_some((full, (w, h)));
-    let mut report = ViewReport { scaled, lens: None, soft };
+    let mut report = ViewReport { size: (w, h), scaled, lens: None, soft };
     let mut camera = spec.camera.clone();
     camera.intrinsics = camera.intrinsics.resized(w, h);
     let Some(u) = &spec.undistortion else {
