@@ -30,9 +30,11 @@ pub const COLOURS: [([u8; 3], &str); 8] = [
 /// The font family every label is drawn in.
 const FONT: &str = "sans-serif";
 
-/// The curve of a run's evaluations (its metrics.json's `psnr_over_time`).
+/// The curve of a run's evaluations (its metrics.json's `psnr_over_time`); an exact render's
+/// infinite PSNR has no place on an axis and is left out.
 pub fn curve_of(name: &str, metrics: &RunMetrics) -> Curve {
-    let points = metrics.psnr_over_time.iter().map(|e| (e.seconds, e.psnr)).collect();
+    let finite = metrics.psnr_over_time.iter().filter(|e| e.psnr.is_finite());
+    let points = finite.map(|e| (e.seconds, e.psnr)).collect();
     Curve { name: name.to_string(), points }
 }
 

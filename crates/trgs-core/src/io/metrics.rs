@@ -13,6 +13,7 @@ pub struct EvaluationPoint {
     pub step: u32,
     /// Seconds of training steps up to it (not evaluating or writing checkpoints).
     pub seconds: f64,
+    #[serde(deserialize_with = "psnr_or_exact")]
     pub psnr: f64,
     pub ssim: f64,
 }
@@ -21,8 +22,15 @@ pub struct EvaluationPoint {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ViewScore {
     pub name: String,
+    #[serde(deserialize_with = "psnr_or_exact")]
     pub psnr: f64,
     pub ssim: f64,
+}
+
+/// A PSNR as JSON holds it: a view rendered exactly has an infinite PSNR, which JSON cannot
+/// hold and serde_json writes as null; read back, null is that infinity.
+fn psnr_or_exact<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::INFINITY))
 }
 
 /// Where a candidate plane of a `--planes auto` run lay and what became of it: the fields of
@@ -95,6 +103,18 @@ mod tests {
         assert_eq!(m.seam_views, None);
         let m = RunMetrics::parse(r#"{"reflection_model": {"fresnel": false}}"#).expect("metrics");
         assert_eq!(m.reflection_model, Some(ReflectionModel { fresnel: false, intensity: true }));
+    }
+
+    #[test]
+    fn a_view_rendered_exactly_reads_back_with_an_infinite_psnr() {
+        let exact = ViewScore { name: "a.png".into(), psnr: f64::INFINITY, ssim: 1.0 };
+        let point = EvaluationPoint { step: 10, seconds: 1.5, psnr: f64::INFINITY, ssim: 1.0 };
+        let text = serde_json::json!({"views": [exact], "psnr_over_time": [point]}).to_string();
+        assert!(text.contains("null"), "{text}");
+        let m = RunMetrics::parse(&text).expect("metrics");
+        assert_eq!(m.views[0].psnr, f64::INFINITY);
+        assert_eq!(m.psnr_over_time[0].psnr, f64::INFINITY);
+        assert_eq!(m.test_view_names(), ["a.png"]);
     }
 
     #[test]
