@@ -54,8 +54,9 @@ pack() {
     echo "wrote $bundle ($(du -h "$bundle" | cut -f1), scenes: $*)"
 }
 
-# One trgs run and one Brush run of SCENE at WIDTH px (trgs: --resolution or --downscale ARG),
-# STEPS on the schedule, evaluated every EVAL steps, each stopped after SECONDS.
+# One trgs run and one Brush run of SCENE, named by TAG: trgs with TRGS_SIZE (empty: its
+# default, 1600 px on the longer side; or "--downscale F"), Brush at --max-resolution
+# BRUSH_SIZE; STEPS on the schedule, evaluated every EVAL steps, each stopped after SECONDS.
 pair() {
     local tag=$1 scene=$2 trgs_size=$3 brush_size=$4 steps=$5 eval=$6 seconds=$7 work=$8
     timeout -s INT "$seconds" ./train --data "scenes/$scene" $trgs_size --iterations "$steps" \
@@ -72,7 +73,8 @@ run() {
     local work unpacked
     work=$(mktemp -d)
     unpacked=$(mktemp -d)
-    mkdir -p "$out"
+    trap "rm -rf '$work' '$unpacked'" EXIT
+    mkdir -p "$out" && out=$(cd "$out" && pwd) || exit 3
     tar xJf "$bundle" -C "$unpacked" || exit 3
     cd "$unpacked" || exit 3
     command -v nvidia-smi >/dev/null &&

@@ -8,8 +8,7 @@ use std::path::{Path, PathBuf};
 use trgs_core::blocks::merge::{MergeReport, PaneEvidence, SamePane, TrainedBlock, merge_blocks};
 use trgs_core::blocks::{Ground, Regions};
 use trgs_core::image::Image;
-use trgs_core::io::RunMetrics;
-use trgs_core::io::{ColmapModel, SceneFolder, colmap_dir};
+use trgs_core::io::{ColmapModel, RunMetrics, SceneFolder, colmap_dir};
 use trgs_core::io::{
     load_model, read_cameras_json, write_atomic, write_cameras_json, write_planes_json, write_ply,
 };

@@ -51,9 +51,6 @@ pub struct CandidateOutline {
 #[derive(Clone, Debug, Default, PartialEq, Deserialize)]
 #[serde(default)]
 pub struct RunMetrics {
-    /// Mean test PSNR and SSIM of the last evaluation.
-    pub psnr: Option<f64>,
-    pub ssim: Option<f64>,
     pub views: Vec<ViewScore>,
     pub psnr_over_time: Vec<EvaluationPoint>,
     /// The reflection model the run trained with (its ablations), which a renderer of the
@@ -97,7 +94,6 @@ mod tests {
     #[test]
     fn a_run_of_an_older_build_or_another_tool_reads_with_what_it_has() {
         let m = RunMetrics::parse(r#"{"psnr": 30.5, "other": [1, 2]}"#).expect("metrics");
-        assert_eq!(m.psnr, Some(30.5));
         assert!(m.views.is_empty() && m.psnr_over_time.is_empty() && m.candidates.is_empty());
         assert_eq!(m.reflection_model, None);
         assert_eq!(m.seam_views, None);
