@@ -2,7 +2,7 @@
 //! `plan_densify` applied on the CPU: the report, every row's source, every parameter and Adam
 //! moment bit for bit, and the split children's means within f32 rounding of the twin's f64.
 //! Hard cases: a scan of several blocks, the room under `max_gaussians` running out part way,
-//! the size prune on and off, a set pruned to nothing, and an empty set.
+//! the size prune on and off, a set pruned to nothing, an empty set, and a growth share.
 mod common;
 
 use trgs_core::rng::Rng;
@@ -48,11 +48,15 @@ fn check(
     let report = classic
         .densify_now(&mut gpu, &mut Rng::new(seed), extent, prune_large)
         .expect("densify on the GPU");
-    // Decided on the GPU: only the five counters (cloned, split, pruned, rows, seen) come back.
-    assert_eq!(ctx.bytes_read() - read_before, 20, "bytes read back to densify");
+    // Decided on the GPU: only the five counters (cloned, split, pruned, rows, seen) come back,
+    // and the statistics where a growth share ranks the candidates.
+    if settings.grow_fraction >= 1.0 {
+        assert_eq!(ctx.bytes_read() - read_before, 20, "bytes read back to densify");
+    }
     let geometry = Geometry::of(&state.gaussians);
+    let twin_settings = settings.for_densification(stats);
     let (plan, twin_report) =
-        plan_densify(&geometry, stats, settings, extent, prune_large, &mut Rng::new(seed));
+        plan_densify(&geometry, stats, &twin_settings, extent, prune_large, &mut Rng::new(seed));
     assert_eq!(report, twin_report, "the report");
     let twin = plan.apply(state);
     let got = gpu.read().expect("readback");
@@ -130,4 +134,20 @@ fn a_set_pruned_to_nothing_and_an_empty_set() {
     let (empty, stats) = case(0, 10);
     let r = check(&ctx, &empty, &stats, &settings, true);
     assert_eq!(r, DensifyReport::default());
+}
+
+#[test]
+fn a_growth_share_densifies_about_that_share() {
+    let ctx = ctx();
+    let (state, stats) = case(9000, 11);
+    let mut settings = ClassicSettings::scaled(30_000);
+    let all = check(&ctx, &state, &stats, &settings, false);
+    settings.grow_fraction = 0.25;
+    let share = check(&ctx, &state, &stats, &settings, false);
+    let (all, share) = (all.cloned + all.split, share.cloned + share.split);
+    println!("densified: {all} of all candidates, {share} under a share of 0.25");
+    // The candidates are ranked before the transparent ones are left out, which the case draws
+    // whatever their gradient: about a quarter densify.
+    assert!(all > 1000, "{all}");
+    assert!(share * 10 >= all * 2 && share * 10 <= all * 3, "{share} of {all}");
 }

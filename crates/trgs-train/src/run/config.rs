@@ -89,6 +89,12 @@ pub struct RunConfig {
     /// The most Gaussians of --densify mcmc [default: 300000]
     #[arg(long, value_name = "N")]
     pub cap: Option<usize>,
+    /// Of the Gaussians over --densify classic's gradient threshold at each densification,
+    /// densify only the share F (0 to 1) with the largest average gradients, as Brush grows a
+    /// share of its candidates [default: 1, all of them, as 3DGS]
+    #[arg(long, value_name = "F", value_parser = parse_share)]
+    #[serde(default)]
+    pub grow_fraction: Option<f64>,
     /// Ignore the glass masks: plain 3DGS (the baseline of the comparisons); the same as
     /// `--planes none`
     #[arg(long)]
@@ -150,6 +156,14 @@ pub fn parse_positive(v: &str) -> Result<f64, String> {
     match v.parse::<f64>() {
         Ok(f) if f.is_finite() && f > 0.0 => Ok(f),
         _ => Err(format!("{v:?}: expected a number above 0")),
+    }
+}
+
+/// A number above 0 and at most 1 (clap's parser of `--grow-fraction`).
+pub fn parse_share(v: &str) -> Result<f64, String> {
+    match v.parse::<f64>() {
+        Ok(f) if f > 0.0 && f <= 1.0 => Ok(f),
+        _ => Err(format!("{v:?}: expected a share above 0 and at most 1")),
     }
 }
 
@@ -417,6 +431,12 @@ impl RunConfig {
         if self.cap.is_some() && self.densify != DensifyMode::Mcmc {
             bail!("--cap is the MCMC count: it needs --densify mcmc");
         }
+        if self.grow_fraction.is_some() && self.densify != DensifyMode::Classic {
+            bail!("--grow-fraction shares out classic growth: it needs --densify classic");
+        }
+        if self.grow_fraction.is_some_and(|f| !(f > 0.0 && f <= 1.0)) {
+            bail!("--grow-fraction must be above 0 and at most 1");
+        }
         if self.cap == Some(0) {
             bail!("--cap 0: MCMC keeps at most --cap Gaussians, so it must be at least 1");
         }
@@ -457,7 +477,9 @@ impl RunConfig {
     pub fn densification(&self) -> Densification {
         match self.densify {
             DensifyMode::Classic => {
-                Densification::Classic(ClassicSettings::scaled(self.iterations))
+                let mut settings = ClassicSettings::scaled(self.iterations);
+                settings.grow_fraction = self.grow_fraction.unwrap_or(1.0);
+                Densification::Classic(settings)
             }
             DensifyMode::Mcmc => Densification::Mcmc(McmcSettings::scaled(
                 self.iterations,

@@ -43,7 +43,7 @@ fn demo_flags_shape_the_built_in_scene_and_name_it() {
 
 #[test]
 fn a_library_caller_gets_the_command_line_refusals() {
-    let bad: [(&str, RunConfig); 10] = [
+    let bad: [(&str, RunConfig); 12] = [
         ("--iterations", RunConfig { iterations: 0, ..RunConfig::default() }),
         ("--sh-degree", RunConfig { sh_degree: 4, ..RunConfig::default() }),
         ("--eval-every", RunConfig { eval_every: Some(0), ..RunConfig::default() }),
@@ -53,6 +53,15 @@ fn a_library_caller_gets_the_command_line_refusals() {
             RunConfig { resolution: Some(64), downscale: Some(2.0), ..RunConfig::default() },
         ),
         ("--cap", RunConfig { cap: Some(10), ..RunConfig::default() }),
+        (
+            "--grow-fraction shares",
+            RunConfig {
+                densify: DensifyMode::Mcmc,
+                grow_fraction: Some(0.5),
+                ..RunConfig::default()
+            },
+        ),
+        ("--grow-fraction must", RunConfig { grow_fraction: Some(1.5), ..RunConfig::default() }),
         ("--cap 0", RunConfig { densify: DensifyMode::Mcmc, cap: Some(0), ..RunConfig::default() }),
         (
             "--full-size keeps",

@@ -93,18 +93,28 @@ impl ClassicDensification {
     ) -> Result<Option<DensifyReport>> {
         anyhow::ensure!(self.pending.is_none(), "a densification is already pending");
         let n = gaussians.len();
-        if self.on_gpu && GpuDensifyPlan::fits(&self.ctx, n) {
+        let on_gpu = self.on_gpu && GpuDensifyPlan::fits(&self.ctx, n);
+        // A growth share below 1 ranks the candidates, which needs their statistics here.
+        let stats = if on_gpu && self.settings.grow_fraction >= 1.0 {
+            None
+        } else {
+            Some(self.stats.read(&self.ctx)?)
+        };
+        let settings = match &stats {
+            Some(stats) => self.settings.for_densification(stats),
+            None => self.settings.clone(),
+        };
+        if on_gpu {
             let seed = plan_seed(rng);
-            let params = plan_params(&self.settings, extent, prune_large, n, seed);
+            let params = plan_params(&settings, extent, prune_large, n, seed);
             let scene = gaussians.scene();
             self.pending =
                 Some(self.planner.record(&self.ctx, scene, self.stats.buffer(), &params)?);
             return Ok(None);
         }
-        let stats = self.stats.read(&self.ctx)?;
+        let stats = stats.context("statistics read back for the CPU's plan")?;
         let geometry = gaussians.geometry()?;
-        let (plan, report) =
-            plan_densify(&geometry, &stats, &self.settings, extent, prune_large, rng);
+        let (plan, report) = plan_densify(&geometry, &stats, &settings, extent, prune_large, rng);
         gaussians.apply_plan(&plan)?;
         self.stats.reset(&self.ctx, plan.sources.len());
         Ok(Some(report))
@@ -304,6 +314,38 @@ mod tests {
             densify_and_prune(&s, &stats, &settings, extent, false, &mut Rng::new(1));
         assert_eq!(report, DensifyReport { cloned: 1, split: 2, pruned: 0, seen: 3 });
         assert_eq!(out.gaussians.len(), 6);
+    }
+
+    #[test]
+    fn a_growth_share_raises_the_threshold_to_its_last_candidate() {
+        let mut s = state(10);
+        // Gaussian 9 is transparent: ranked, then left out.
+        s.gaussians.opacity_logits[9] = -10.0;
+        let mut stats = DensifyStats::new(10);
+        // Averages 1e-4 (under the threshold), then 3e-4 ... 1.1e-3 over two observations.
+        stats.count = vec![2; 10];
+        stats.grad_sum =
+            (0..10).map(|i| 2.0 * if i == 0 { 1e-4 } else { (i + 2) as f64 * 1e-4 }).collect();
+        let mut settings = ClassicSettings::scaled(30_000);
+        let densified = |s: &TrainState, settings: &ClassicSettings| {
+            let settings = settings.for_densification(&stats);
+            let (_, r) = densify_and_prune(s, &stats, &settings, 1.0, false, &mut Rng::new(1));
+            r.cloned + r.split
+        };
+        // All eight opaque candidates (1 to 8).
+        assert_eq!(densified(&s, &settings), 8);
+        assert_eq!(settings.for_densification(&stats), settings);
+        // Three of the nine candidates: 7, 8 and the transparent 9.
+        settings.grow_fraction = 1.0 / 3.0;
+        assert_eq!(densified(&s, &settings), 2);
+        // A share rounds up to whole candidates: 0.01 of nine is the largest one.
+        settings.grow_fraction = 0.01;
+        assert_eq!(densified(&s, &settings), 0);
+        s.gaussians.opacity_logits[9] = 0.0;
+        assert_eq!(densified(&s, &settings), 1);
+        // No candidates: nothing to rank.
+        let none = DensifyStats::new(10);
+        assert_eq!(settings.for_densification(&none).grad_threshold, settings.grad_threshold);
     }
 
     #[test]

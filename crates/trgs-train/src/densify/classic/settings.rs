@@ -20,6 +20,9 @@ pub struct ClassicSettings {
     pub max_screen_radius: f64,
     /// Never grow beyond this many Gaussians.
     pub max_gaussians: usize,
+    /// Of the Gaussians over `grad_threshold` at a densification, the share that densifies:
+    /// those with the largest average gradients (1: all of them, as 3DGS).
+    pub grow_fraction: f64,
 }
 
 impl ClassicSettings {
@@ -43,7 +46,42 @@ impl ClassicSettings {
             // pixel radius would also mean a different share of the image at each resolution.
             max_screen_radius: f64::INFINITY,
             max_gaussians: 1_000_000,
+            grow_fraction: 1.0,
         }
+    }
+
+    /// These settings for one densification from `stats`: under a `grow_fraction` below 1 the
+    /// gradient threshold rises to the average gradient of the last Gaussian of that share of
+    /// the candidates (ranked by average gradient), so the rules of `densify_plan` and its twin
+    /// densify only that share. Candidates are counted before the transparent ones are left
+    /// out, so a little less than the share may grow.
+    pub fn for_densification(&self, stats: &DensifyStats) -> Self {
+        let mut settings = self.clone();
+        if self.grow_fraction >= 1.0 {
+            return settings;
+        }
+        // As the rules compare: f32, `sum >= threshold * count`.
+        let threshold = self.grad_threshold as f32;
+        let mut averages: Vec<f32> = stats
+            .grad_sum
+            .iter()
+            .zip(&stats.count)
+            .filter(|&(&sum, &count)| count > 0 && sum as f32 >= threshold * count as f32)
+            .map(|(&sum, &count)| sum as f32 / count as f32)
+            .collect();
+        let keep = (self.grow_fraction.max(0.0) * averages.len() as f64).ceil() as usize;
+        if keep >= averages.len() {
+            return settings;
+        }
+        if keep == 0 {
+            settings.grad_threshold = f64::from(f32::MAX);
+            return settings;
+        }
+        averages.select_nth_unstable_by(keep - 1, |a, b| b.total_cmp(a));
+        // A hair below the last kept average, so that its own product rounds above it.
+        let last = f64::from(averages[keep - 1]) * (1.0 - 1e-6);
+        settings.grad_threshold = settings.grad_threshold.max(last);
+        settings
     }
 
     /// Whether step `t` ends with an opacity reset: every `opacity_reset_every` steps while
