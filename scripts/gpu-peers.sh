@@ -15,6 +15,9 @@
 #       C  the scene $ALONE (default: the first) at 1600 px, the pair with nothing else on the
 #          GPU, for T2 seconds (default 80; 0 skips it);
 #       then OUT/results.tgz: every log, log.jsonl and metrics.json (no models, no renders).
+#       $ALSO (e.g. "--grow-fraction 0.25") adds to A a second trgs run of each scene with those
+#       flags (tag 1600also); NO_BRUSH=1 leaves Brush out of A and C, where its curves of the
+#       same bundle's scenes are already known.
 #
 # Brush is given the same scene folder through brush_scene.py (its every-8th split is trgs's
 # test_views.txt), `--max-resolution` the size trgs trains at, and seed 42; it logs "Eval iter N:
@@ -25,7 +28,7 @@ set -uo pipefail
 cd "$(dirname "$0")/.."
 
 usage() {
-    sed -n '2,22p' "$0" >&2
+    sed -n '2,25p' "$0" >&2
     exit 2
 }
 
@@ -59,13 +62,20 @@ pack() {
 # BRUSH_SIZE; STEPS on the schedule, evaluated every EVAL steps, each stopped after SECONDS.
 pair() {
     local tag=$1 scene=$2 trgs_size=$3 brush_size=$4 steps=$5 eval=$6 seconds=$7 work=$8
-    timeout -s INT "$seconds" ./train --data "scenes/$scene" $trgs_size --iterations "$steps" \
-        --eval-every "$eval" --checkpoint-every "$steps" --out "$work/t${tag}_$scene" \
-        >"$work/t${tag}_$scene.log" 2>&1 &
+    trgs "$tag" "$scene" "$trgs_size" "$steps" "$eval" "$seconds" "$work"
+    [ "${NO_BRUSH:-0}" = 1 ] && [ "$tag" != 480 ] && return
     RUST_LOG=info timeout -s INT "$seconds" ./brush-cli "bscenes/$scene" \
         --total-train-iters "$steps" --eval-split-every 8 --eval-every "$eval" \
         --export-every "$steps" --max-resolution "$brush_size" --seed 42 \
         --export-path "$work/b${tag}_$scene" >"$work/b${tag}_$scene.log" 2>&1 &
+}
+
+# The trgs half of a pair; FLAGS (word-split) go on its command line.
+trgs() {
+    local tag=$1 scene=$2 flags=$3 steps=$4 eval=$5 seconds=$6 work=$7
+    timeout -s INT "$seconds" ./train --data "scenes/$scene" $flags --iterations "$steps" \
+        --eval-every "$eval" --checkpoint-every "$steps" --out "$work/t${tag}_$scene" \
+        >"$work/t${tag}_$scene.log" 2>&1 &
 }
 
 run() {
@@ -90,6 +100,7 @@ run() {
     start=$(date +%s)
     for s in $scenes; do
         pair 1600 "$s" "" 1600 30000 1000 "$t1" "$work"
+        [ -n "${ALSO:-}" ] && trgs 1600also "$s" "$ALSO" 30000 1000 "$t1" "$work"
     done
     for item in ${SMALL:-}; do
         pair 480 "${item%%:*}" "--downscale ${item#*:}" 480 2000 2000 "$t1" "$work"
