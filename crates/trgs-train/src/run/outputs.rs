@@ -8,8 +8,7 @@ use crate::eval::{render_fps, write_renders};
 use crate::trainer::Trainer;
 use anyhow::{Context, Result};
 use std::path::{Path, PathBuf};
-use trgs_core::io::{EvaluationPoint, ViewScore};
-use trgs_core::io::{write_atomic, write_planes_json, write_ply};
+use trgs_core::io::{EvaluationPoint, ViewScore, write_atomic, write_planes_json, write_ply};
 use trgs_core::pipeline::ReflectionModel;
 
 /// The outcome of a finished run.
