@@ -33,6 +33,8 @@ fn a_stopped_run_resumes_through_the_library() {
         eval_every: Some(20),
         sh_degree: 1,
         exposure: ExposureMode::On,
+        // Kept through the checkpoint (no reset falls in 40 steps either way).
+        opacity_reset_every: Some(0),
         ..RunConfig::default()
     };
     let mut run = TrainingRun::start(config.clone(), RunOptions::default()).expect("a new run");
@@ -72,6 +74,13 @@ fn a_stopped_run_resumes_through_the_library() {
     assert_eq!((summary.steps, summary.planes), (40, 1));
     assert!(summary.last.psnr.is_finite());
     assert!(out.join("metrics.json").is_file() && out.join("model.ply").is_file());
+    let metrics = std::fs::read_to_string(out.join("metrics.json")).expect("metrics.json");
+    let metrics: serde_json::Value = serde_json::from_str(&metrics).expect("JSON");
+    assert_eq!(
+        metrics["densification"],
+        serde_json::json!({ "mode": "classic", "grow_fraction": 1.0, "opacity_reset_every": 0 }),
+        "the metrics name the densification's knobs"
+    );
     let exposures = std::fs::read_to_string(out.join("exposures.json")).expect("exposures.json");
     let exposures: serde_json::Value = serde_json::from_str(&exposures).expect("JSON");
     let views = exposures["views"].as_object().expect("a matrix per training view");

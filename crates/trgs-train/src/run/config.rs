@@ -95,6 +95,13 @@ pub struct RunConfig {
     #[arg(long, value_name = "F", value_parser = parse_share)]
     #[serde(default)]
     pub grow_fraction: Option<f64>,
+    /// Cap every opacity at 0.01 each N steps while --densify classic grows, so that what
+    /// the next densifications find transparent is pruned (3DGS's reset; 0: never, as Brush,
+    /// which lowers opacities a little at each refinement instead) [default: 3000 of 30000
+    /// steps, scaled with --iterations, and none in runs of 2000 steps or fewer]
+    #[arg(long, value_name = "N")]
+    #[serde(default)]
+    pub opacity_reset_every: Option<u32>,
     /// Ignore the glass masks: plain 3DGS (the baseline of the comparisons); the same as
     /// `--planes none`
     #[arg(long)]
@@ -437,6 +444,11 @@ impl RunConfig {
         if self.grow_fraction.is_some_and(|f| !(f > 0.0 && f <= 1.0)) {
             bail!("--grow-fraction must be above 0 and at most 1");
         }
+        if self.opacity_reset_every.is_some() && self.densify != DensifyMode::Classic {
+            bail!(
+                "--opacity-reset-every is part of classic densification: it needs --densify classic"
+            );
+        }
         if self.cap == Some(0) {
             bail!("--cap 0: MCMC keeps at most --cap Gaussians, so it must be at least 1");
         }
@@ -479,6 +491,9 @@ impl RunConfig {
             DensifyMode::Classic => {
                 let mut settings = ClassicSettings::scaled(self.iterations);
                 settings.grow_fraction = self.grow_fraction.unwrap_or(1.0);
+                if let Some(every) = self.opacity_reset_every {
+                    settings.opacity_reset_every = every;
+                }
                 Densification::Classic(settings)
             }
             DensifyMode::Mcmc => Densification::Mcmc(McmcSettings::scaled(

@@ -43,7 +43,7 @@ fn demo_flags_shape_the_built_in_scene_and_name_it() {
 
 #[test]
 fn a_library_caller_gets_the_command_line_refusals() {
-    let bad: [(&str, RunConfig); 12] = [
+    let bad: [(&str, RunConfig); 13] = [
         ("--iterations", RunConfig { iterations: 0, ..RunConfig::default() }),
         ("--sh-degree", RunConfig { sh_degree: 4, ..RunConfig::default() }),
         ("--eval-every", RunConfig { eval_every: Some(0), ..RunConfig::default() }),
@@ -62,6 +62,14 @@ fn a_library_caller_gets_the_command_line_refusals() {
             },
         ),
         ("--grow-fraction must", RunConfig { grow_fraction: Some(1.5), ..RunConfig::default() }),
+        (
+            "--opacity-reset-every is part",
+            RunConfig {
+                densify: DensifyMode::Mcmc,
+                opacity_reset_every: Some(0),
+                ..RunConfig::default()
+            },
+        ),
         ("--cap 0", RunConfig { densify: DensifyMode::Mcmc, cap: Some(0), ..RunConfig::default() }),
         (
             "--full-size keeps",
@@ -139,4 +147,18 @@ fn old_checkpoints_resume_with_their_own_settings() {
 fn mcmc_trains_opacities_at_its_own_rate() {
     assert_eq!(config(DensifyMode::Classic).settings().rates.opacity, 0.025);
     assert_eq!(config(DensifyMode::Mcmc).settings().rates.opacity, 0.05);
+}
+
+#[test]
+fn the_opacity_reset_interval_replaces_the_scaled_one() {
+    let resets = |c: &RunConfig| match c.densification() {
+        Densification::Classic(s) => (1..=c.iterations).filter(|&t| s.resets_opacity_at(t)).count(),
+        other => panic!("classic expected, got {other:?}"),
+    };
+    let scaled = RunConfig { iterations: 30_000, ..RunConfig::default() };
+    assert_eq!(resets(&scaled), 4, "3000, 6000, 9000 and 12000");
+    let never = RunConfig { opacity_reset_every: Some(0), ..scaled.clone() };
+    assert_eq!(resets(&never), 0);
+    let often = RunConfig { opacity_reset_every: Some(1000), ..scaled };
+    assert_eq!(resets(&often), 14, "1000 ... 14000, while densification goes on");
 }

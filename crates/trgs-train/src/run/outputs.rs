@@ -3,6 +3,7 @@
 //! learned affine colour); each file written to a temporary name and renamed into place.
 use super::state::RunState;
 use crate::data::TrainingData;
+use crate::densify::Densification;
 use crate::eval::{Evaluation, Renderable, TruthComparison, compare_with_truth};
 use crate::eval::{render_fps, write_renders};
 use crate::trainer::Trainer;
@@ -135,6 +136,7 @@ fn metrics_json(s: &RunSummary, data: &TrainingData, state: &RunState) -> serde_
         "render_fps": s.render_fps,
         "resolution": [data.size().0, data.size().1],
         "ablations": ab.names(),
+        "densification": densification_json(&config.densification()),
         "reflection_model": reflection,
         "data": config.data,
         "no_planes": config.no_planes || config.planes == Some(super::PlaneSource::None),
@@ -149,4 +151,18 @@ fn metrics_json(s: &RunSummary, data: &TrainingData, state: &RunState) -> serde_
             "peak_ram_bytes": crate::trainer::memory::peak_ram_bytes(),
         },
     })
+}
+
+/// The densification's knobs as the run used them, so that runs told apart by a flag are told
+/// apart by their metrics too.
+fn densification_json(densification: &Densification) -> serde_json::Value {
+    match densification {
+        Densification::None => serde_json::json!({ "mode": "none" }),
+        Densification::Classic(s) => serde_json::json!({
+            "mode": "classic",
+            "grow_fraction": s.grow_fraction,
+            "opacity_reset_every": s.opacity_reset_every,
+        }),
+        Densification::Mcmc(s) => serde_json::json!({ "mode": "mcmc", "cap": s.cap }),
+    }
 }

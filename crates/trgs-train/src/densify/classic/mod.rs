@@ -169,6 +169,7 @@ impl DensifyStrategy for ClassicDensification {
         let s = &self.settings;
         let mut events = Vec::new();
         if step > s.from && step < s.until && step.is_multiple_of(s.every) {
+            // After the first reset; with none, from the first densification.
             let prune_large = step > s.opacity_reset_every;
             // Decided on the GPU, the plan is applied by `settle` (its counters a step late).
             if let Some(report) = self.densify_or_defer(gaussians, rng, extent, prune_large)? {
@@ -365,5 +366,7 @@ mod tests {
         // At least ten densifications apart: one at 4000 steps, none at 2000.
         assert_eq!(at(&ClassicSettings::scaled(4000)), vec![1000]);
         assert_eq!(at(&ClassicSettings::scaled(2000)), Vec::<u32>::new());
+        let never = ClassicSettings { opacity_reset_every: 0, ..ClassicSettings::scaled(30_000) };
+        assert_eq!(at(&never), Vec::<u32>::new());
     }
 }

@@ -9,6 +9,7 @@ pub struct ClassicSettings {
     pub from: u32,
     pub until: u32,
     pub every: u32,
+    /// Steps between opacity resets (0: none).
     pub opacity_reset_every: u32,
     /// Average norm of dL/d(mean in NDC) above which a Gaussian densifies.
     pub grad_threshold: f64,
@@ -85,9 +86,12 @@ impl ClassicSettings {
     }
 
     /// Whether step `t` ends with an opacity reset: every `opacity_reset_every` steps while
-    /// densification goes on (3DGS: 3000 ... 12000 of 15000).
+    /// densification goes on (3DGS: 3000 ... 12000 of 15000), never when that is 0.
     pub fn resets_opacity_at(&self, t: u32) -> bool {
-        t > 0 && t < self.until && t.is_multiple_of(self.opacity_reset_every)
+        self.opacity_reset_every > 0
+            && t > 0
+            && t < self.until
+            && t.is_multiple_of(self.opacity_reset_every)
     }
 }
 
