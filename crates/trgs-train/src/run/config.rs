@@ -96,9 +96,10 @@ pub struct RunConfig {
     #[serde(default)]
     pub grow_fraction: Option<f64>,
     /// Cap every opacity at 0.01 each N steps while --densify classic grows, so that what
-    /// the next densifications find transparent is pruned (3DGS's reset; 0: never, as Brush,
-    /// which lowers opacities a little at each refinement instead) [default: 3000 of 30000
-    /// steps, scaled with --iterations, and none in runs of 2000 steps or fewer]
+    /// the next densifications find transparent is pruned; the pruning of Gaussians over 0.1
+    /// of the scene extent starts after the first (3DGS's reset; 0: neither, as Brush, which
+    /// lowers opacities a little at each refinement instead) [default: 3000 of 30000 steps,
+    /// scaled with --iterations, and none in runs of 2000 steps or fewer]
     #[arg(long, value_name = "N")]
     #[serde(default)]
     pub opacity_reset_every: Option<u32>,

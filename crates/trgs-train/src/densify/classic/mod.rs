@@ -169,8 +169,7 @@ impl DensifyStrategy for ClassicDensification {
         let s = &self.settings;
         let mut events = Vec::new();
         if step > s.from && step < s.until && step.is_multiple_of(s.every) {
-            // After the first reset; with none, from the first densification.
-            let prune_large = step > s.opacity_reset_every;
+            let prune_large = s.prunes_large_at(step);
             // Decided on the GPU, the plan is applied by `settle` (its counters a step late).
             if let Some(report) = self.densify_or_defer(gaussians, rng, extent, prune_large)? {
                 events.push(DensifyEvent::Densified(report));
@@ -368,5 +367,13 @@ mod tests {
         assert_eq!(at(&ClassicSettings::scaled(2000)), Vec::<u32>::new());
         let never = ClassicSettings { opacity_reset_every: 0, ..ClassicSettings::scaled(30_000) };
         assert_eq!(at(&never), Vec::<u32>::new());
+    }
+
+    #[test]
+    fn the_world_size_prune_starts_after_the_first_reset_and_never_without_one() {
+        let s = ClassicSettings::scaled(30_000);
+        assert!(!s.prunes_large_at(2900) && !s.prunes_large_at(3000) && s.prunes_large_at(3100));
+        let never = ClassicSettings { opacity_reset_every: 0, ..s };
+        assert!((0..=30_000).step_by(100).all(|t| !never.prunes_large_at(t)));
     }
 }

@@ -85,6 +85,13 @@ impl ClassicSettings {
         settings
     }
 
+    /// Whether a densification at step `t` also prunes Gaussians too large in the world (over
+    /// 0.1 of the extent) or on screen: after the first opacity reset, as 3DGS; never without
+    /// resets, as 3DGS with its interval past the run's end.
+    pub fn prunes_large_at(&self, t: u32) -> bool {
+        self.opacity_reset_every > 0 && t > self.opacity_reset_every
+    }
+
     /// Whether step `t` ends with an opacity reset: every `opacity_reset_every` steps while
     /// densification goes on (3DGS: 3000 ... 12000 of 15000), never when that is 0.
     pub fn resets_opacity_at(&self, t: u32) -> bool {
