@@ -106,6 +106,11 @@ fn the_gpu_decides_as_the_twin_does() {
         println!("prune_large {prune_large}: {r:?}");
         assert!(r.cloned > 100 && r.split > 100 && r.pruned > 100, "{r:?}");
     }
+    // No world-size prune: its bound reaches the GPU as f32::MAX, and the plan still agrees.
+    settings.prune_scale = f64::INFINITY;
+    let r = check(&ctx, &state, &stats, &settings, true);
+    println!("no world-size prune: {r:?}");
+    assert!(r.cloned > 100 && r.split > 100, "{r:?}");
 }
 
 #[test]

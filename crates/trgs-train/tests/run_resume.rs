@@ -78,7 +78,12 @@ fn a_stopped_run_resumes_through_the_library() {
     let metrics: serde_json::Value = serde_json::from_str(&metrics).expect("JSON");
     assert_eq!(
         metrics["densification"],
-        serde_json::json!({ "mode": "classic", "grow_fraction": 1.0, "opacity_reset_every": 0 }),
+        serde_json::json!({
+            "mode": "classic",
+            "grow_fraction": 1.0,
+            "opacity_reset_every": 0,
+            "prune_scale": 0.1
+        }),
         "the metrics name the densification's knobs"
     );
     let exposures = std::fs::read_to_string(out.join("exposures.json")).expect("exposures.json");

@@ -103,6 +103,12 @@ pub struct RunConfig {
     #[arg(long, value_name = "N")]
     #[serde(default)]
     pub opacity_reset_every: Option<u32>,
+    /// After the first opacity reset, prune Gaussians larger than F times the scene extent
+    /// (the training cameras' radius) at each densification of --densify classic (3DGS: 0.1;
+    /// 0: never, as Brush) [default: 0.1]
+    #[arg(long, value_name = "F", value_parser = parse_non_negative)]
+    #[serde(default)]
+    pub prune_scale: Option<f64>,
     /// Ignore the glass masks: plain 3DGS (the baseline of the comparisons); the same as
     /// `--planes none`
     #[arg(long)]
@@ -164,6 +170,14 @@ pub fn parse_positive(v: &str) -> Result<f64, String> {
     match v.parse::<f64>() {
         Ok(f) if f.is_finite() && f > 0.0 => Ok(f),
         _ => Err(format!("{v:?}: expected a number above 0")),
+    }
+}
+
+/// A number 0 or above (clap's parser of `--prune-scale`).
+pub fn parse_non_negative(v: &str) -> Result<f64, String> {
+    match v.parse::<f64>() {
+        Ok(f) if f.is_finite() && f >= 0.0 => Ok(f),
+        _ => Err(format!("{v:?}: expected a number 0 or above")),
     }
 }
 
@@ -445,6 +459,12 @@ impl RunConfig {
         if self.grow_fraction.is_some_and(|f| !(f > 0.0 && f <= 1.0)) {
             bail!("--grow-fraction must be above 0 and at most 1");
         }
+        if self.prune_scale.is_some() && self.densify != DensifyMode::Classic {
+            bail!("--prune-scale is part of classic densification: it needs --densify classic");
+        }
+        if self.prune_scale.is_some_and(|f| !(f.is_finite() && f >= 0.0)) {
+            bail!("--prune-scale must be a number 0 or above");
+        }
         if self.opacity_reset_every.is_some() && self.densify != DensifyMode::Classic {
             bail!(
                 "--opacity-reset-every is part of classic densification: it needs --densify classic"
@@ -494,6 +514,11 @@ impl RunConfig {
                 settings.grow_fraction = self.grow_fraction.unwrap_or(1.0);
                 if let Some(every) = self.opacity_reset_every {
                     settings.opacity_reset_every = every;
+                }
+                match self.prune_scale {
+                    Some(f) if f > 0.0 => settings.prune_scale = f,
+                    Some(_) => settings.prune_scale = f64::INFINITY,
+                    None => {}
                 }
                 Densification::Classic(settings)
             }

@@ -43,7 +43,7 @@ fn demo_flags_shape_the_built_in_scene_and_name_it() {
 
 #[test]
 fn a_library_caller_gets_the_command_line_refusals() {
-    let bad: [(&str, RunConfig); 13] = [
+    let bad: [(&str, RunConfig); 15] = [
         ("--iterations", RunConfig { iterations: 0, ..RunConfig::default() }),
         ("--sh-degree", RunConfig { sh_degree: 4, ..RunConfig::default() }),
         ("--eval-every", RunConfig { eval_every: Some(0), ..RunConfig::default() }),
@@ -62,6 +62,15 @@ fn a_library_caller_gets_the_command_line_refusals() {
             },
         ),
         ("--grow-fraction must", RunConfig { grow_fraction: Some(1.5), ..RunConfig::default() }),
+        (
+            "--prune-scale is part",
+            RunConfig {
+                densify: DensifyMode::Mcmc,
+                prune_scale: Some(0.1),
+                ..RunConfig::default()
+            },
+        ),
+        ("--prune-scale must", RunConfig { prune_scale: Some(-0.1), ..RunConfig::default() }),
         (
             "--opacity-reset-every is part",
             RunConfig {
@@ -161,4 +170,17 @@ fn the_opacity_reset_interval_replaces_the_scaled_one() {
     assert_eq!(resets(&never), 0);
     let often = RunConfig { opacity_reset_every: Some(1000), ..scaled };
     assert_eq!(resets(&often), 14, "1000 ... 14000, while densification goes on");
+}
+
+#[test]
+fn the_prune_scale_replaces_3dgs_tenth_and_zero_turns_it_off() {
+    let scale = |c: RunConfig| match c.densification() {
+        Densification::Classic(s) => s.prune_scale,
+        other => panic!("classic expected, got {other:?}"),
+    };
+    assert_eq!(scale(RunConfig::default()), 0.1);
+    assert_eq!(scale(RunConfig { prune_scale: Some(0.3), ..RunConfig::default() }), 0.3);
+    assert_eq!(scale(RunConfig { prune_scale: Some(0.0), ..RunConfig::default() }), f64::INFINITY);
+    assert!(parse_non_negative("0") == Ok(0.0) && parse_non_negative("-1").is_err());
+    assert!(parse_non_negative("inf").is_err() && parse_non_negative("nan").is_err());
 }

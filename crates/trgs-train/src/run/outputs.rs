@@ -162,6 +162,8 @@ fn densification_json(densification: &Densification) -> serde_json::Value {
             "mode": "classic",
             "grow_fraction": s.grow_fraction,
             "opacity_reset_every": s.opacity_reset_every,
+            // null: never (JSON has no infinity).
+            "prune_scale": s.prune_scale.is_finite().then_some(s.prune_scale),
         }),
         Densification::Mcmc(s) => serde_json::json!({ "mode": "mcmc", "cap": s.cap }),
     }

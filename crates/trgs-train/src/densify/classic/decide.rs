@@ -44,15 +44,21 @@ pub fn plan_params(
         grad_threshold: settings.grad_threshold as f32,
         transparent_logit: (m / (1.0 - m)).ln() as f32,
         clone_log_scale: (settings.percent_dense * extent).ln() as f32,
-        prune_log_scale: (0.1 * extent).ln() as f32,
-        // A child's scale is its parent's over 1.6: over 0.1 extent when the parent's is over
-        // 0.16 extent.
-        child_prune_log_scale: (0.16 * extent).ln() as f32,
+        prune_log_scale: log_scale_or_max(settings.prune_scale * extent),
+        // A child's scale is its parent's over 1.6: over the prune's size when the parent's is
+        // over 1.6 times it.
+        child_prune_log_scale: log_scale_or_max(1.6 * settings.prune_scale * extent),
         // f32::MAX for "off" (infinite): WGSL may assume no infinities.
         max_screen_radius: (settings.max_screen_radius as f32).min(f32::MAX),
         child_log_shrink: 1.6f64.ln() as f32,
         pad0: 0,
     }
+}
+
+/// The log of a world size as the plan compares it, kept finite (WGSL may assume no
+/// infinities): f32::MAX for an infinite size, so that nothing is over it.
+fn log_scale_or_max(size: f64) -> f32 {
+    (size.ln() as f32).clamp(f32::MIN, f32::MAX)
 }
 
 /// What becomes of one Gaussian (the twin of `densify_plan_rows`' decision).

@@ -309,6 +309,13 @@ mod tests {
         for child in &out.gaussians.log_scales {
             assert!((f64::from(child[0]) - (0.1f64 / 1.6).ln()).abs() < 1e-6);
         }
+        // With no world-size prune only the screen-size one is left: 2 and its clone go, the
+        // children of 0 stay.
+        let unbounded = ClassicSettings { prune_scale: f64::INFINITY, ..settings.clone() };
+        let (out, report) =
+            densify_and_prune(&s, &stats, &unbounded, extent, true, &mut Rng::new(1));
+        assert_eq!(report, DensifyReport { cloned: 0, split: 2, pruned: 1, seen: 3 });
+        assert_eq!(out.gaussians.len(), 3 + 2 - 1);
         // Without the size prune (before the first reset) all of it stays.
         let (out, report) =
             densify_and_prune(&s, &stats, &settings, extent, false, &mut Rng::new(1));
