@@ -99,6 +99,7 @@ fn the_gpu_decides_as_the_twin_does() {
     let ctx = ctx();
     let mut settings = ClassicSettings::scaled(30_000);
     settings.max_screen_radius = 20.0;
+    settings.prune_scale = 0.1; // 3DGS's world-size prune (off by default)
     // 9000 Gaussians: more than two blocks of the scans on every adapter.
     let (state, stats) = case(9000, 5);
     for prune_large in [false, true] {
@@ -106,7 +107,8 @@ fn the_gpu_decides_as_the_twin_does() {
         println!("prune_large {prune_large}: {r:?}");
         assert!(r.cloned > 100 && r.split > 100 && r.pruned > 100, "{r:?}");
     }
-    // No world-size prune: its bound reaches the GPU as f32::MAX, and the plan still agrees.
+    // No world-size prune (the default): its bound reaches the GPU as f32::MAX, and the plan
+    // still agrees.
     settings.prune_scale = f64::INFINITY;
     let r = check(&ctx, &state, &stats, &settings, true);
     println!("no world-size prune: {r:?}");

@@ -154,6 +154,7 @@ fn trainers(ctx: &GpuContext) -> (Trainer, Trainer, Checkpoint) {
     let settings = TrainSettings::scaled(30_000);
     let mut densify = ClassicSettings::scaled(30_000);
     densify.max_screen_radius = 20.0;
+    densify.prune_scale = 0.1; // 3DGS's world-size prune too (off by default)
     let make = || {
         let s = settings.clone();
         let classic = Densification::Classic(densify.clone());
@@ -175,6 +176,7 @@ fn densification_on_the_gpu_matches_the_cpu_rebuild() {
     let settings = {
         let mut d = ClassicSettings::scaled(30_000);
         d.max_screen_radius = 20.0;
+        d.prune_scale = 0.1;
         d
     };
     let n = ck.state.gaussians.len();

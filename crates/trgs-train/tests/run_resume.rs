@@ -82,7 +82,7 @@ fn a_stopped_run_resumes_through_the_library() {
             "mode": "classic",
             "grow_fraction": 1.0,
             "opacity_reset_every": 0,
-            "prune_scale": 0.1
+            "prune_scale": null
         }),
         "the metrics name the densification's knobs"
     );

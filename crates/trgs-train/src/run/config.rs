@@ -96,16 +96,16 @@ pub struct RunConfig {
     #[serde(default)]
     pub grow_fraction: Option<f64>,
     /// Cap every opacity at 0.01 each N steps while --densify classic grows, so that what
-    /// the next densifications find transparent is pruned; the pruning of Gaussians over 0.1
-    /// of the scene extent starts after the first (3DGS's reset; 0: neither, as Brush, which
-    /// lowers opacities a little at each refinement instead) [default: 3000 of 30000 steps,
-    /// scaled with --iterations, and none in runs of 2000 steps or fewer]
+    /// the next densifications find transparent is pruned; --prune-scale's prune starts after
+    /// the first (3DGS's reset; 0: no reset and no such prune, as Brush, which lowers
+    /// opacities a little at each refinement instead) [default: 3000 of 30000 steps, scaled
+    /// with --iterations, and none in runs of 2000 steps or fewer]
     #[arg(long, value_name = "N")]
     #[serde(default)]
     pub opacity_reset_every: Option<u32>,
     /// After the first opacity reset, prune Gaussians larger than F times the scene extent
-    /// (the training cameras' radius) at each densification of --densify classic (3DGS: 0.1;
-    /// 0: never, as Brush) [default: 0.1]
+    /// (the training cameras' radius) at each densification of --densify classic: 3DGS's rule
+    /// is 0.1 [default: 0, never, as Brush: a capture's background lies far beyond its cameras]
     #[arg(long, value_name = "F", value_parser = parse_non_negative)]
     #[serde(default)]
     pub prune_scale: Option<f64>,

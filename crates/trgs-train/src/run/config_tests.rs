@@ -173,12 +173,13 @@ fn the_opacity_reset_interval_replaces_the_scaled_one() {
 }
 
 #[test]
-fn the_prune_scale_replaces_3dgs_tenth_and_zero_turns_it_off() {
+fn the_world_size_prune_is_off_unless_given_a_share() {
     let scale = |c: RunConfig| match c.densification() {
         Densification::Classic(s) => s.prune_scale,
         other => panic!("classic expected, got {other:?}"),
     };
-    assert_eq!(scale(RunConfig::default()), 0.1);
+    assert_eq!(scale(RunConfig::default()), f64::INFINITY, "none by default");
+    assert_eq!(scale(RunConfig { prune_scale: Some(0.1), ..RunConfig::default() }), 0.1);
     assert_eq!(scale(RunConfig { prune_scale: Some(0.3), ..RunConfig::default() }), 0.3);
     assert_eq!(scale(RunConfig { prune_scale: Some(0.0), ..RunConfig::default() }), f64::INFINITY);
     assert!(parse_non_negative("0") == Ok(0.0) && parse_non_negative("-1").is_err());

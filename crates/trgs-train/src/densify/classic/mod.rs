@@ -301,6 +301,7 @@ mod tests {
         stats.max_radius = vec![1.0, 1.0, 50.0];
         let mut settings = ClassicSettings::scaled(30_000);
         settings.max_screen_radius = 20.0;
+        settings.prune_scale = 0.1; // 3DGS's world-size prune (off by default)
         let extent = 2.0;
         let (out, report) =
             densify_and_prune(&s, &stats, &settings, extent, true, &mut Rng::new(1));

@@ -17,7 +17,8 @@ pub struct ClassicSettings {
     pub percent_dense: f64,
     pub min_opacity: f64,
     /// Prune Gaussians whose largest scale exceeds this share of the scene extent (the
-    /// training cameras' radius), after the first reset (3DGS: 0.1; infinite: never).
+    /// training cameras' radius), after the first reset (3DGS: 0.1; infinite: never, the
+    /// default).
     pub prune_scale: f64,
     /// Prune Gaussians whose screen radius exceeds this (pixels), after the first reset
     /// (infinite: no screen-size prune).
@@ -45,7 +46,11 @@ impl ClassicSettings {
             grad_threshold: 2e-4,
             percent_dense: 0.01,
             min_opacity: 0.005,
-            prune_scale: 0.1,
+            // Off, as Brush. 3DGS prunes over 0.1 of the cameras' radius, which assumes the
+            // scene lies within the cameras' reach: a capture walked along a street or through
+            // a room sees far beyond it, and that background is made of large Gaussians
+            // (docs/captures.md, "The world-size prune").
+            prune_scale: f64::INFINITY,
             // Off, as in effect in the references: INRIA's code zeroes the radii just before its
             // prune, so its 20-pixel test never fires, and gsplat disables it by default. A fixed
             // pixel radius would also mean a different share of the image at each resolution.
@@ -90,8 +95,8 @@ impl ClassicSettings {
     }
 
     /// Whether a densification at step `t` also prunes Gaussians too large in the world
-    /// (`prune_scale`) or on screen (`max_screen_radius`): after the first opacity reset, as 3DGS; never without
-    /// resets, as 3DGS with its interval past the run's end.
+    /// (`prune_scale`) or on screen (`max_screen_radius`): after the first opacity reset, as
+    /// 3DGS; never without resets, as 3DGS with its interval past the run's end.
     pub fn prunes_large_at(&self, t: u32) -> bool {
         self.opacity_reset_every > 0 && t > self.opacity_reset_every
     }
