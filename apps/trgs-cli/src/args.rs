@@ -1,5 +1,6 @@
 //! Argument types and parsers that several commands share.
 use trgs_core::io::Split;
+pub use trgs_train::run::parse_non_negative;
 
 /// Which views of a scene folder a command works on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -32,14 +33,6 @@ pub fn parse_colour(v: &str) -> Result<[f32; 3], String> {
         [Some(r), Some(g), Some(b)] => Ok([r, g, b]),
         _ => Err("expected three numbers in [0, 1], e.g. 1,1,1".into()),
     }
-}
-
-/// A finite number at least 0.
-pub fn parse_non_negative(v: &str) -> Result<f64, String> {
-    v.parse::<f64>()
-        .ok()
-        .filter(|x| x.is_finite() && *x >= 0.0)
-        .ok_or_else(|| "expected a number at least 0".into())
 }
 
 /// A share in [0, 1].

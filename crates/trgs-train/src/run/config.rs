@@ -2,6 +2,9 @@
 //! help from this type) and the record a checkpoint keeps, so that `--resume` continues a run
 //! with its own settings. Defaults live in the clap attributes only; [`RunConfig::default`]
 //! parses an empty command line.
+use super::arg_parsers::{
+    parse_image_size, parse_non_negative, parse_positive, parse_positive_share,
+};
 use crate::data::Resolution;
 use crate::densify::{ClassicSettings, Densification, McmcSettings};
 use crate::exposure::ExposureRates;
@@ -92,7 +95,7 @@ pub struct RunConfig {
     /// Of the Gaussians over --densify classic's gradient threshold at each densification,
     /// densify only the share F (0 to 1) with the largest average gradients, as Brush grows a
     /// share of its candidates [default: 1, all of them, as 3DGS]
-    #[arg(long, value_name = "F", value_parser = parse_share)]
+    #[arg(long, value_name = "F", value_parser = parse_positive_share)]
     #[serde(default)]
     pub grow_fraction: Option<f64>,
     /// Cap every opacity at 0.01 each N steps while --densify classic grows, so that what
@@ -151,42 +154,6 @@ pub struct RunConfig {
     pub profile: bool,
     #[command(flatten)]
     pub ablations: Ablations,
-}
-
-/// `WxH` with both sides at least 16 pixels (clap's parser of `--demo-size`).
-pub fn parse_image_size(v: &str) -> Result<(u32, u32), String> {
-    let bad = || format!("{v:?}: expected WxH, e.g. 1600x1200, each side at least 16");
-    let (w, h) = v.split_once(['x', 'X']).ok_or_else(bad)?;
-    let (w, h) =
-        (w.trim().parse::<u32>().map_err(|_| bad())?, h.trim().parse::<u32>().map_err(|_| bad())?);
-    if w < 16 || h < 16 {
-        return Err(bad());
-    }
-    Ok((w, h))
-}
-
-/// A number above 0 (clap's parser of `--downscale`).
-pub fn parse_positive(v: &str) -> Result<f64, String> {
-    match v.parse::<f64>() {
-        Ok(f) if f.is_finite() && f > 0.0 => Ok(f),
-        _ => Err(format!("{v:?}: expected a number above 0")),
-    }
-}
-
-/// A number 0 or above (clap's parser of `--prune-scale`).
-pub fn parse_non_negative(v: &str) -> Result<f64, String> {
-    match v.parse::<f64>() {
-        Ok(f) if f.is_finite() && f >= 0.0 => Ok(f),
-        _ => Err(format!("{v:?}: expected a number 0 or above")),
-    }
-}
-
-/// A number above 0 and at most 1 (clap's parser of `--grow-fraction`).
-pub fn parse_share(v: &str) -> Result<f64, String> {
-    match v.parse::<f64>() {
-        Ok(f) if f > 0.0 && f <= 1.0 => Ok(f),
-        _ => Err(format!("{v:?}: expected a share above 0 and at most 1")),
-    }
 }
 
 /// The paper's ablations: each switches one component of TR-Gaussians off.

@@ -25,6 +25,7 @@
 //! assert_eq!((run.trainer().planes().len(), image.width), (1, 64));
 //! # Ok::<(), anyhow::Error>(())
 //! ```
+mod arg_parsers;
 mod candidates;
 pub mod checkpoint;
 mod config;
@@ -39,10 +40,11 @@ mod scene;
 mod state;
 mod steps;
 
+pub use arg_parsers::{parse_image_size, parse_non_negative, parse_positive, parse_positive_share};
 pub use candidates::{CandidateRecord, PlaneTrial};
 pub use config::{
     Ablations, CAPTURE_ITERATIONS, DEFAULT_MCMC_CAP, DEMO_ITERATIONS, DemoScene, DensifyMode,
-    ExposureMode, PlaneSource, RunConfig, parse_image_size, parse_positive, upgrade_config_record,
+    ExposureMode, PlaneSource, RunConfig, upgrade_config_record,
 };
 pub use events::{RunEvent, StepEvent, StepMemory};
 pub use folder::LOCK_FILE;
