@@ -8,9 +8,11 @@
 // are summed over the thread's pixels, then over the subgroup, and added to the Gaussian's
 // record of `grads` (PROJECTED_GRAD_FLOATS per Gaussian) once per subgroup that touched it.
 // With one pixel per thread on a CPU adapter those reductions and atomics take most of the
-// kernel's time; with four rows per thread one of them serves 32 pixels instead of 8.
+// kernel's time; with a tile column of eight rows per thread one of them serves the tile's 64
+// pixels instead of 8.
 // With BLOCK_WALK a subgroup steps back only through the entries that can reach its block
-// (shared/block_walk.wgsl), by chunks of its lanes (`replay_batch`).
+// (shared/block_walk.wgsl), by chunks of its lanes read from the key list (`replay_list`);
+// without it the workgroup replays batches it loads into workgroup memory.
 #include "shared/common.wgsl"
 #include "shared/raster_pages.wgsl"
 #include "shared/splat.wgsl"
@@ -46,15 +48,13 @@
 @group(0) @binding(11) var<storage, read> values_hi: array<u32>;
 #endif
 
-// (mean, m, 1 for glass), conic with opacity, (colour, depth), the Gaussian's index.
+#ifndef BLOCK_WALK
+// A batch of list entries (`list_entry`'s fields).
 var<workgroup> s_mean: array<vec4<f32>, TILE_PIXELS>;
 var<workgroup> s_conic: array<vec4<f32>, TILE_PIXELS>;
 var<workgroup> s_color: array<vec4<f32>, TILE_PIXELS>;
 var<workgroup> s_index: array<u32, TILE_PIXELS>;
 var<workgroup> max_last: atomic<u32>;
-#ifdef BLOCK_WALK
-// The blocks of the tile (8 columns by ROWS rows: 8 threads' pixels) each entry can reach.
-var<workgroup> s_blocks: array<u32, TILE_PIXELS>;
 #endif
 
 // One pixel's replay: what it read at the start and what it carries from entry to entry.
@@ -169,10 +169,25 @@ fn replay_entry(entry: ChunkEntry, li: u32) {
     }
 }
 
+// For shared/chunk_replay.wgsl: the entry of key index i, (mean, m, 1 for glass), conic with
+// opacity, (colour, depth) and the Gaussian's index.
+fn list_entry(i: u32) -> ChunkEntry {
+    let gi = value_at(i);
+    let g = projected_at(gi);
+    return ChunkEntry(
+        vec4<f32>(g.mean2d, g.mask, f32((g.flags & FLAG_GLASS) != 0u)),
+        g.conic,
+        g.color,
+        gi,
+    );
+}
+
+#ifndef BLOCK_WALK
 // For shared/chunk_replay.wgsl: batch entry e.
 fn batch_entry(e: u32) -> ChunkEntry {
     return ChunkEntry(s_mean[e], s_conic[e], s_color[e], s_index[e]);
 }
+#endif
 
 // One workgroup per tile, TILE_SIZE x TILE_SIZE / ROWS threads numbered row by row (one-
 // dimensional: a subgroup's lane id needs it).
@@ -190,27 +205,26 @@ fn main(
     let tile = wid.y * params.tiles_x + wid.x;
     let start = ranges[2u * tile];
     let end = max(ranges[2u * tile + 1u], start);
-    if lid == 0u {
-        atomicStore(&max_last, 0u);
-    }
-    workgroupBarrier();
     var my_last = 0u;
     for (var k = 0u; k < ROWS; k++) {
         px[k] = start_pixel(x, y0 + k);
         my_last = max(my_last, px[k].last_t);
     }
-    atomicMax(&max_last, my_last);
-
-    let last = workgroupUniformLoad(&max_last);
     // The subgroup's own last entry: its lanes skip the entries none of them blended (a subgroup
     // runs its own trip count; on a CPU adapter it is one SIMD vector).
     let sg_last = subgroup_max(my_last);
-    let rounds = (last + TILE_PIXELS - 1u) / TILE_PIXELS;
 #ifdef BLOCK_WALK
     let block = lid / 8u;
     let corner = vec2<f32>(f32(wid.x * TILE_SIZE) + 0.5, f32(wid.y * TILE_SIZE) + 0.5);
-    let one_block = in_one_block(block);
-#endif
+    replay_list(start, sg_last, corner, block, in_one_block(block), sg_lane, sg_size);
+#else
+    if lid == 0u {
+        atomicStore(&max_last, 0u);
+    }
+    workgroupBarrier();
+    atomicMax(&max_last, my_last);
+    let last = workgroupUniformLoad(&max_last);
+    let rounds = (last + TILE_PIXELS - 1u) / TILE_PIXELS;
     for (var rr = 0u; rr < rounds; rr++) {
         let r = rounds - 1u - rr;
         workgroupBarrier();
@@ -218,25 +232,18 @@ fn main(
             let slot = lid + q * THREADS;
             let idx = start + r * TILE_PIXELS + slot;
             if idx < end {
-                let gi = value_at(idx);
-                let g = projected_at(gi);
-                s_mean[slot] = vec4<f32>(g.mean2d, g.mask, f32((g.flags & FLAG_GLASS) != 0u));
-                s_conic[slot] = g.conic;
-                s_color[slot] = g.color;
-                s_index[slot] = gi;
-#ifdef BLOCK_WALK
-                s_blocks[slot] = block_reach(g.conic, g.mean2d, corner, vec2<u32>(8u, ROWS));
-#endif
+                let e = list_entry(idx);
+                s_mean[slot] = e.mean;
+                s_conic[slot] = e.conic;
+                s_color[slot] = e.color;
+                s_index[slot] = e.index;
             }
         }
         workgroupBarrier();
         let batch = min(TILE_PIXELS, last - r * TILE_PIXELS);
         // Entries [0, mine) of this batch come before the subgroup's last.
         let mine = min(batch, sg_last - min(sg_last, r * TILE_PIXELS));
-#ifdef BLOCK_WALK
-        replay_batch(mine, r, block, one_block, sg_lane, sg_size);
-#else
         replay_batch(mine, r);
-#endif
     }
+#endif
 }

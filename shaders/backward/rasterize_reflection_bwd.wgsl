@@ -1,13 +1,14 @@
 // Stage `rasterize_reflection_bwd`, the adjoint of pass 2 (twin:
 // trgs_core::reference::rasterize_reflection_bwd): the back-to-front replay of rasterize_bwd with
 // one transmittance, over the tiles of the plane's footprint (tile_x0, tile_y0 is its corner),
-// each thread ROWS pixels of one column as in rasterize_bwd (four on CPU adapters, where a
-// subgroup reduction is a loop over the lanes). Pixels whose ray misses the plane kept the
+// each thread ROWS pixels of one column as in rasterize_bwd (the column's eight on CPU adapters,
+// where a subgroup reduction is a loop over the lanes). Pixels whose ray misses the plane kept the
 // cleared state (last = 0) and replay nothing. Adds each mirrored Gaussian's colour,
 // reflection-intensity, opacity, 2D mean and conic gradients into `grads`
 // (PROJECTED_GRAD_FLOATS per Gaussian), summed over the thread's pixels and then the subgroup,
 // once per subgroup that touched it. With BLOCK_WALK a subgroup steps back only through the
-// entries that can reach its block, by chunks of its lanes (shared/chunk_replay.wgsl).
+// entries that can reach its block, by chunks of its lanes read from the key list
+// (shared/chunk_replay.wgsl).
 #include "shared/common.wgsl"
 #include "shared/raster_pages.wgsl"
 #include "shared/splat.wgsl"
@@ -40,16 +41,14 @@
 @group(0) @binding(9) var<storage, read> values_hi: array<u32>;
 #endif
 
-// mean, conic with opacity, (colour, reflection intensity a), the Gaussian's index.
+#ifndef BLOCK_WALK
+// A batch of list entries (`list_entry`'s fields).
 var<workgroup> s_mean: array<vec2<f32>, TILE_PIXELS>;
 var<workgroup> s_conic: array<vec4<f32>, TILE_PIXELS>;
-#ifdef BLOCK_WALK
-// The blocks of the tile (8 columns by ROWS rows: 8 threads' pixels) each entry can reach.
-var<workgroup> s_blocks: array<u32, TILE_PIXELS>;
-#endif
 var<workgroup> s_color: array<vec4<f32>, TILE_PIXELS>;
 var<workgroup> s_index: array<u32, TILE_PIXELS>;
 var<workgroup> max_last: atomic<u32>;
+#endif
 
 // One pixel's replay: what it read at the start and what it carries from entry to entry.
 struct Pixel {
@@ -80,10 +79,20 @@ fn start_pixel(x: u32, y: u32) -> Pixel {
 // This thread's pixels (start_pixel), carried through the replay.
 var<private> px: array<Pixel, ROWS>;
 
+// For shared/chunk_replay.wgsl: the entry of key index i, its mean, conic with opacity,
+// (colour, reflection intensity a) and the Gaussian's index.
+fn list_entry(i: u32) -> ChunkEntry {
+    let gi = value_at(i);
+    let g = projected_at(gi);
+    return ChunkEntry(vec4<f32>(g.mean2d, 0.0, 0.0), g.conic, vec4<f32>(g.color.xyz, g.reflection), gi);
+}
+
+#ifndef BLOCK_WALK
 // For shared/chunk_replay.wgsl: batch entry e.
 fn batch_entry(e: u32) -> ChunkEntry {
     return ChunkEntry(vec4<f32>(s_mean[e], 0.0, 0.0), s_conic[e], s_color[e], s_index[e]);
 }
+#endif
 
 // Replays list entry `li` (as the batch keeps it: colour with the reflection intensity) at this
 // thread's pixels, and adds the subgroup's gradients to the mirrored Gaussian's record. In
@@ -138,28 +147,27 @@ fn main(
     let tile = params.tile_base + wid.y * params.tiles_w + wid.x;
     let start = ranges[2u * tile];
     let end = max(ranges[2u * tile + 1u], start);
-    if lid == 0u {
-        atomicStore(&max_last, 0u);
-    }
-    workgroupBarrier();
     var my_last = 0u;
     for (var k = 0u; k < ROWS; k++) {
         px[k] = start_pixel(x, y0 + k);
         my_last = max(my_last, px[k].last);
     }
-    atomicMax(&max_last, my_last);
-
-    let last = workgroupUniformLoad(&max_last);
     // The subgroup's own last entry: its lanes skip the entries none of them blended (a subgroup
     // runs its own trip count; on a CPU adapter it is one SIMD vector).
     let sg_last = subgroup_max(my_last);
-    let rounds = (last + TILE_PIXELS - 1u) / TILE_PIXELS;
 #ifdef BLOCK_WALK
     let block = lid / 8u;
     let tile_px = vec2<u32>(wid.x + params.tile_x0, wid.y + params.tile_y0) * TILE_SIZE;
     let corner = vec2<f32>(tile_px) + 0.5;
-    let one_block = in_one_block(block);
-#endif
+    replay_list(start, sg_last, corner, block, in_one_block(block), sg_lane, sg_size);
+#else
+    if lid == 0u {
+        atomicStore(&max_last, 0u);
+    }
+    workgroupBarrier();
+    atomicMax(&max_last, my_last);
+    let last = workgroupUniformLoad(&max_last);
+    let rounds = (last + TILE_PIXELS - 1u) / TILE_PIXELS;
     for (var rr = 0u; rr < rounds; rr++) {
         let r = rounds - 1u - rr;
         workgroupBarrier();
@@ -167,25 +175,18 @@ fn main(
             let slot = lid + q * THREADS;
             let idx = start + r * TILE_PIXELS + slot;
             if idx < end {
-                let gi = value_at(idx);
-                let g = projected_at(gi);
-                s_mean[slot] = g.mean2d;
-                s_conic[slot] = g.conic;
-                s_color[slot] = vec4<f32>(g.color.xyz, g.reflection);
-                s_index[slot] = gi;
-#ifdef BLOCK_WALK
-                s_blocks[slot] = block_reach(g.conic, g.mean2d, corner, vec2<u32>(8u, ROWS));
-#endif
+                let e = list_entry(idx);
+                s_mean[slot] = e.mean.xy;
+                s_conic[slot] = e.conic;
+                s_color[slot] = e.color;
+                s_index[slot] = e.index;
             }
         }
         workgroupBarrier();
         let batch = min(TILE_PIXELS, last - r * TILE_PIXELS);
         // Entries [0, mine) of this batch come before the subgroup's last.
         let mine = min(batch, sg_last - min(sg_last, r * TILE_PIXELS));
-#ifdef BLOCK_WALK
-        replay_batch(mine, r, block, one_block, sg_lane, sg_size);
-#else
         replay_batch(mine, r);
-#endif
     }
+#endif
 }

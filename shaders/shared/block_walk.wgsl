@@ -4,9 +4,7 @@
 // lying in one block steps only through the entries that reach it (the chunk walks,
 // shared/chunk_walk.wgsl and shared/chunk_replay.wgsl). On a CPU adapter a subgroup is a SIMD
 // vector, which leaves a loop together but runs a skipped branch's body anyway, so without this
-// it pays for every entry of the tile's list whether it reaches its pixels or not. The including
-// shader declares `s_blocks` (an entry's block mask per batch slot) and `batch_entry`
-// (shared/chunk_walk.wgsl).
+// it pays for every entry of the tile's list whether it reaches its pixels or not.
 
 // One list entry as the chunk walks take it from a batch (with BLOCK_WALK, from lane to lane:
 // `lane_entry`): the 2D mean and what the pass keeps beside it, the conic with the opacity, the
@@ -119,25 +117,6 @@ fn lane_entry(e: ChunkEntry, k: u32) -> ChunkEntry {
             return ChunkEntry(subgroupBroadcast(e.mean, 7u), subgroupBroadcast(e.conic, 7u), subgroupBroadcast(e.color, 7u), subgroupBroadcast(e.index, 7u));
         }
     }
-}
-
-// Lane `lane`'s entry of the chunk of up to `chunk` batch entries from `first` (those before
-// `end`), read from workgroup memory by the includer's `batch_entry`, and the subgroup's ballot
-// of the chunk's entries that reach its block (all of them when it spans several blocks).
-struct Chunk {
-    entry: ChunkEntry,
-    reach: u32,
-}
-
-fn read_chunk(first: u32, end: u32, chunk: u32, lane: u32, block: u32, one_block: bool) -> Chunk {
-    let e = first + lane;
-    var entry = ChunkEntry();
-    var reaches = false;
-    if lane < chunk && e < end {
-        entry = batch_entry(e);
-        reaches = !one_block || ((s_blocks[e] >> block) & 1u) != 0u;
-    }
-    return Chunk(entry, subgroupBallot(reaches).x);
 }
 
 // Whether this invocation's subgroup lies in one block (the walk may skip only then).

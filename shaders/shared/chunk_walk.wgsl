@@ -3,10 +3,29 @@
 //   fn batch_entry(e: u32) -> ChunkEntry     batch entry e, from workgroup memory;
 //   fn step_entry(g: ChunkEntry, li: u32)    list entry li at the thread's pixels;
 //   fn walk_over() -> bool                   whether the thread's pixels have all stopped;
-// and, with BLOCK_WALK, `s_blocks` (shared/block_walk.wgsl).
+// and, with BLOCK_WALK, `s_blocks` (an entry's block mask per batch slot, shared/block_walk.wgsl).
 #include "shared/block_walk.wgsl"
 
 #ifdef BLOCK_WALK
+// Lane `lane`'s entry of the chunk of up to `chunk` batch entries from `first` (those before
+// `end`), read from workgroup memory by the includer's `batch_entry`, and the subgroup's ballot
+// of the chunk's entries that reach its block (all of them when it spans several blocks).
+struct Chunk {
+    entry: ChunkEntry,
+    reach: u32,
+}
+
+fn read_chunk(first: u32, end: u32, chunk: u32, lane: u32, block: u32, one_block: bool) -> Chunk {
+    let e = first + lane;
+    var entry = ChunkEntry();
+    var reaches = false;
+    if lane < chunk && e < end {
+        entry = batch_entry(e);
+        reaches = !one_block || ((s_blocks[e] >> block) & 1u) != 0u;
+    }
+    return Chunk(entry, subgroupBallot(reaches).x);
+}
+
 // Batch entries [0, batch) of round r, by chunks of up to 8 of the subgroup's lanes
 // (`lane_entry`): lane l reads chunk entry l, and the chunk's entries that reach the subgroup's
 // block (all of them when the subgroup spans several blocks) are stepped through in order.

@@ -39,18 +39,21 @@ pub enum TileLayout {
     /// One pixel per thread: what fills a GPU.
     #[default]
     PixelPerThread,
-    /// Four rows of one tile column per thread, for CPU adapters. There a workgroup's subgroups
+    /// Several rows of one tile column per thread, for CPU adapters: four in
+    /// `rasterize_reflection`, the column's eight in the adjoints. There a workgroup's subgroups
     /// (SIMD vectors) run one after another, each paying its loads of a batch entry and loop
     /// control however few of its pixels still blend, and a subgroup reduction and its atomics
-    /// are loops over the lanes: four rows share all of these.
-    FourRowsPerThread,
+    /// are loops over the lanes: the rows share all of these, and with eight an adjoint's
+    /// subgroup is the whole tile, one reduction per entry. (Eight rows made
+    /// `rasterize_reflection` slower: `train --profile` on the built-in scene.)
+    RowsPerThread,
 }
 
 impl TileLayout {
     /// The layout that is faster on an adapter of this type.
     pub fn for_adapter(device_type: wgpu::DeviceType) -> Self {
         match device_type {
-            wgpu::DeviceType::Cpu => Self::FourRowsPerThread,
+            wgpu::DeviceType::Cpu => Self::RowsPerThread,
             _ => Self::PixelPerThread,
         }
     }

@@ -1,6 +1,8 @@
 //! The renderer's kernel tables: every compute pipeline of the renderer (compiled once per
 //! [`crate::Renderer`]), and the kernels of benchmarks and tests.
-use crate::toolkit::registry::{accumulation, block_walk, block_width, no_defines, tile_rows};
+use crate::toolkit::registry::{
+    accumulation, adjoint_tile_rows, block_walk, block_width, no_defines, tile_rows,
+};
 
 crate::kernel_registry! {
     /// Every kernel of the renderer: the forward stages, then the adjoints.
@@ -44,13 +46,13 @@ crate::kernel_registry! {
         display: "render/display.wgsl" => no_defines,
         compose_bwd: "backward/compose_bwd.wgsl" => accumulation,
         rasterize_bwd: "backward/rasterize_bwd.wgsl" =>
-            |c| [accumulation(c), tile_rows(c), block_walk(c)].concat(),
+            |c| [accumulation(c), adjoint_tile_rows(c), block_walk(c)].concat(),
         rasterize_bwd_paged: "backward/rasterize_bwd.wgsl" =>
-            |c| [accumulation(c), tile_rows(c), block_walk(c), vec!["PAGED"]].concat(),
+            |c| [accumulation(c), adjoint_tile_rows(c), block_walk(c), vec!["PAGED"]].concat(),
         rasterize_reflection_bwd: "backward/rasterize_reflection_bwd.wgsl" =>
-            |c| [accumulation(c), tile_rows(c), block_walk(c)].concat(),
+            |c| [accumulation(c), adjoint_tile_rows(c), block_walk(c)].concat(),
         rasterize_reflection_bwd_paged: "backward/rasterize_reflection_bwd.wgsl" =>
-            |c| [accumulation(c), tile_rows(c), block_walk(c), vec!["PAGED"]].concat(),
+            |c| [accumulation(c), adjoint_tile_rows(c), block_walk(c), vec!["PAGED"]].concat(),
         project_bwd: "backward/project_bwd.wgsl" => accumulation,
         /// `project_bwd` of a mirrored view: adds to the Gaussians' gradients (BWD_ADD).
         project_bwd_add: "backward/project_bwd.wgsl" =>

@@ -3,7 +3,7 @@
 //! the machine has): the same forward frame and the same random upstream gradients in, gradients
 //! within atol 1e-5 + rtol 1e-3 of the twin's out (plane sums relative to their scale). Each runs
 //! three times: with the adapter's float atomics and subgroup reduction in each replay layout (one
-//! pixel per thread as on a GPU, four rows per thread as on a CPU adapter), and with the optional
+//! pixel per thread as on a GPU, a tile column's rows per thread as on a CPU adapter), and with the optional
 //! features off (the compare-exchange fallback without subgroups). Fresh buffers are
 //! poison-filled.
 //!

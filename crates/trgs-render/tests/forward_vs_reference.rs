@@ -3,7 +3,7 @@
 //! projected Gaussians and must match exactly; projection, both rasterize passes and compose
 //! agree within atol 1e-5 + rtol 1e-3. Fresh buffers are poison-filled. The end-to-end render is
 //! compared with the reference renderer too. Every scene runs in both tile layouts (one pixel
-//! per thread as on a GPU, four rows per thread as on a CPU adapter).
+//! per thread as on a GPU, rows per thread as on a CPU adapter).
 use trgs_core::Image;
 use trgs_core::fixtures::{Scene, SceneSpec, random_scene};
 use trgs_core::pipeline::{ReflectionModel, RenderSettings, TileGrid, depth_key_base};
@@ -23,13 +23,13 @@ use common::{ATOL, RTOL, close, compare_values, spec, to_reference};
 
 /// A context with `layout`, and the scan and sort block width and pass 1's walk that go with it
 /// on a device of that kind (narrow blocks and the plain walk with one pixel per thread, as on a
-/// GPU; wide blocks and the walk by 4 x 2 blocks with four rows, as on a CPU adapter, where the
+/// GPU; wide blocks and the walk by 4 x 2 blocks with rows per thread, as on a CPU adapter, where the
 /// subgroups allow it), so that both devices' kernels are checked here. The second also strides
 /// its strided dispatches over three workgroups, so that each takes several blocks.
 fn ctx(layout: TileLayout) -> GpuContext {
     let (width, walk, strided) = match layout {
         TileLayout::PixelPerThread => (BlockWidth::Narrow, false, None),
-        TileLayout::FourRowsPerThread => (BlockWidth::Wide, true, Some(3)),
+        TileLayout::RowsPerThread => (BlockWidth::Wide, true, Some(3)),
     };
     let opts = DeviceOptions {
         poison_fresh_buffers: true,
@@ -73,7 +73,7 @@ fn check_scene(name: &str, spec: SceneSpec, split: Split) -> usize {
 
 fn check_given_scene(name: &str, scene: &Scene, split: Split) -> usize {
     let mut views = 0;
-    for layout in [TileLayout::PixelPerThread, TileLayout::FourRowsPerThread] {
+    for layout in [TileLayout::PixelPerThread, TileLayout::RowsPerThread] {
         views = check_scene_in(&format!("{name} ({layout:?})"), scene, split, &ctx(layout));
     }
     views
@@ -447,14 +447,14 @@ fn many_gaussians_match_reference() {
 
 #[test]
 fn partial_tiles_match_reference() {
-    // 93x70: the last column and row of tiles are partial, and in the four-rows layout a thread
-    // holds pixels on both sides of the bottom edge.
+    // 93x70: the last column and row of tiles are partial, and in the rows-per-thread layout a
+    // thread holds pixels on both sides of the bottom edge.
     check_scene("93x70", SceneSpec { width: 93, height: 70, ..spec(108, 1500, 2, 35.0) }, WHOLE);
 }
 
 #[test]
 fn profiled_frame_times_each_kernel_within_its_stage() {
-    let ctx = ctx(TileLayout::FourRowsPerThread);
+    let ctx = ctx(TileLayout::RowsPerThread);
     if !ctx.capabilities.timestamps {
         eprintln!("no timestamp queries on this adapter: nothing to time");
         return;

@@ -67,7 +67,7 @@ pub fn every_capability_set() -> Vec<Capabilities> {
                 if block_walk && !subgroups {
                     continue;
                 }
-                for tile_layout in [TileLayout::PixelPerThread, TileLayout::FourRowsPerThread] {
+                for tile_layout in [TileLayout::PixelPerThread, TileLayout::RowsPerThread] {
                     for block_width in [BlockWidth::Narrow, BlockWidth::Wide] {
                         out.push(Capabilities {
                             float_atomics,
@@ -105,12 +105,21 @@ pub fn accumulation(caps: &Capabilities) -> Vec<&'static str> {
     d
 }
 
-/// The pixels per thread of the per-tile kernels that have a choice (none for one pixel per
-/// thread); why: [`TileLayout`] and `shaders/shared/tile_rows.wgsl`.
+/// The pixels per thread of `rasterize_reflection` (none for one pixel per thread); why:
+/// [`TileLayout`] and `shaders/shared/tile_rows.wgsl`.
 pub fn tile_rows(caps: &Capabilities) -> Vec<&'static str> {
     match caps.tile_layout {
         TileLayout::PixelPerThread => Vec::new(),
-        TileLayout::FourRowsPerThread => vec!["ROWS_PER_THREAD_4"],
+        TileLayout::RowsPerThread => vec!["ROWS_PER_THREAD_4"],
+    }
+}
+
+/// The pixels per thread of the adjoints' replays (`rasterize_bwd`, `rasterize_reflection_bwd`):
+/// a tile column's eight rows where [`tile_rows`] gives four.
+pub fn adjoint_tile_rows(caps: &Capabilities) -> Vec<&'static str> {
+    match caps.tile_layout {
+        TileLayout::PixelPerThread => Vec::new(),
+        TileLayout::RowsPerThread => vec!["ROWS_PER_THREAD_8"],
     }
 }
 

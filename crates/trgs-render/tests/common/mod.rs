@@ -76,15 +76,15 @@ pub fn to_reference(p: &[ProjectedGaussian]) -> Projected {
     out
 }
 
-/// The adapter's features with each replay layout (one pixel per thread is what a GPU runs, four
-/// rows what a CPU adapter runs), and the fallback without them.
+/// The adapter's features with each replay layout (one pixel per thread is what a GPU runs,
+/// several rows what a CPU adapter runs), and the fallback without them.
 pub fn contexts() -> Vec<(&'static str, GpuContext)> {
     let fast = DeviceOptions { poison_fresh_buffers: true, ..Default::default() };
     let layout = |l| DeviceOptions { tile_layout: Some(l), ..fast.clone() };
     let fallback = DeviceOptions { disable_optional_features: true, ..fast.clone() };
     vec![
         ("native, one pixel per thread", layout(TileLayout::PixelPerThread)),
-        ("native, four rows per thread", layout(TileLayout::FourRowsPerThread)),
+        ("native, rows per thread", layout(TileLayout::RowsPerThread)),
         ("fallback", fallback),
     ]
     .into_iter()
