@@ -36,8 +36,11 @@ pub const LOSS_STRIP: u32 = 64;
 
 /// Pixels per thread of `photometric_loss`'s passes 2-4, consecutive along the pass's blur
 /// (shaders/shared/loss_channels.wgsl): a thread reads LOSS_BLUR_RUN + 10 pixels for as many
-/// outputs instead of 11 per output. `train --profile` times each pass.
-pub const LOSS_BLUR_RUN: u32 = 4;
+/// outputs instead of 11 per output. Three, not four: pass 2 keeps five moments per channel and
+/// pixel of its run, and on lavapipe its sixty sums a thread at four took twice the time of its
+/// forty-five at three, while passes 3 and 4 were no faster at four (`train --profile` times
+/// each pass).
+pub const LOSS_BLUR_RUN: u32 = 3;
 
 gpu_struct! {
     /// Parameters of the training losses: `photometric_loss` (its four passes), `regularisers`
