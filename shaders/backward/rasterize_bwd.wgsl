@@ -216,7 +216,8 @@ fn main(
 #ifdef BLOCK_WALK
     let block = lid / 8u;
     let corner = vec2<f32>(f32(wid.x * TILE_SIZE) + 0.5, f32(wid.y * TILE_SIZE) + 0.5);
-    replay_list(start, sg_last, corner, block, in_one_block(block), sg_lane, sg_size);
+    let b = BlockOf(corner, vec2<u32>(8u, ROWS), block, in_one_block(block));
+    replay_list(start, sg_last, b, sg_lane, sg_size);
 #else
     if lid == 0u {
         atomicStore(&max_last, 0u);

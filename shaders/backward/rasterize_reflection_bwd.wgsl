@@ -159,7 +159,8 @@ fn main(
     let block = lid / 8u;
     let tile_px = vec2<u32>(wid.x + params.tile_x0, wid.y + params.tile_y0) * TILE_SIZE;
     let corner = vec2<f32>(tile_px) + 0.5;
-    replay_list(start, sg_last, corner, block, in_one_block(block), sg_lane, sg_size);
+    let b = BlockOf(corner, vec2<u32>(8u, ROWS), block, in_one_block(block));
+    replay_list(start, sg_last, b, sg_lane, sg_size);
 #else
     if lid == 0u {
         atomicStore(&max_last, 0u);

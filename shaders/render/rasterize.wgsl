@@ -1,6 +1,7 @@
 // Stage `rasterize`, pass 1 (twin: trgs_core::reference::rasterize): one workgroup per tile
 // (TILE_PIXELS threads), one thread per pixel, the tile's depth-sorted Gaussians streamed through
-// workgroup memory in batches of TILE_PIXELS (walked by shared/chunk_walk.wgsl). Two
+// workgroup memory in batches of TILE_PIXELS, or with BLOCK_WALK read by each subgroup from the
+// key list (shared/chunk_walk.wgsl). Two
 // transmittances: primary Gaussians advance T_t (C_t, D_t, alpha) and T_m
 // (the glass mask M, which they occlude but never paint); glass Gaussians advance only T_m and
 // paint M. A primary Gaussian that would bring T_t below 1e-4 ends the pixel; one that would bring
@@ -32,10 +33,6 @@ var<workgroup> s_mean: array<vec4<f32>, TILE_PIXELS>;
 var<workgroup> s_conic: array<vec4<f32>, TILE_PIXELS>;
 // (colour, depth)
 var<workgroup> s_color: array<vec4<f32>, TILE_PIXELS>;
-#ifdef BLOCK_WALK
-// The 4 x 2 blocks of the tile each entry can reach (block_reach).
-var<workgroup> s_blocks: array<u32, TILE_PIXELS>;
-#endif
 var<workgroup> num_done: atomic<u32>;
 var<workgroup> max_last: atomic<u32>;
 var<workgroup> num_walked: atomic<u32>;
@@ -53,16 +50,26 @@ var<private> last_t: u32;
 var<private> last_m: u32;
 var<private> done: bool;
 
-fn load_batch(start: u32, end: u32, round: u32, lid: u32, corner: vec2<f32>) {
+// The entry of key index i: (mean, m, 1 for glass), conic with opacity, (colour, depth).
+fn list_entry(i: u32) -> ChunkEntry {
+    let g = projected_at(value_at(i));
+    return ChunkEntry(
+        vec4<f32>(g.mean2d, g.mask, f32((g.flags & FLAG_GLASS) != 0u)),
+        g.conic,
+        g.color,
+        0u,
+    );
+}
+
+// Batch `round` of the tile's list into workgroup memory (without BLOCK_WALK, and for the
+// depth-variance walk).
+fn load_batch(start: u32, end: u32, round: u32, lid: u32) {
     let idx = start + round * TILE_PIXELS + lid;
     if idx < end {
-        let g = projected_at(value_at(idx));
-        s_mean[lid] = vec4<f32>(g.mean2d, g.mask, f32((g.flags & FLAG_GLASS) != 0u));
-        s_conic[lid] = g.conic;
-        s_color[lid] = g.color;
-#ifdef BLOCK_WALK
-        s_blocks[lid] = block_reach(g.conic, g.mean2d, corner, vec2<u32>(4u, 2u));
-#endif
+        let e = list_entry(idx);
+        s_mean[lid] = e.mean;
+        s_conic[lid] = e.conic;
+        s_color[lid] = e.color;
     }
 }
 
@@ -107,9 +114,11 @@ fn step_entry(g: ChunkEntry, li: u32) {
 }
 
 // For shared/chunk_walk.wgsl: batch entry e, and whether this pixel has stopped.
+#ifndef BLOCK_WALK
 fn batch_entry(e: u32) -> ChunkEntry {
     return ChunkEntry(s_mean[e], s_conic[e], s_color[e], 0u);
 }
+#endif
 
 fn walk_over() -> bool {
     return done;
@@ -167,19 +176,19 @@ fn main(
     mask = 0.0;
     last_t = n;
     last_m = n;
+#ifdef BLOCK_WALK
+    walk_list(start, n, BlockOf(corner, vec2<u32>(4u, 2u), block, one_block), sg_lane, sg_size);
+#else
     for (var r = 0u; r < rounds; r++) {
         if workgroupUniformLoad(&num_done) == TILE_PIXELS {
             break;
         }
-        load_batch(start, end, r, lid, corner);
+        load_batch(start, end, r, lid);
         workgroupBarrier();
         let batch = min(TILE_PIXELS, n - r * TILE_PIXELS);
-#ifdef BLOCK_WALK
-        walk_batch(batch, r, block, one_block, sg_lane, sg_size);
-#else
         walk_batch(batch, r);
-#endif
     }
+#endif
     var depth = 0.0;
     if wsum > 0.0 {
         depth = zsum / wsum;
@@ -212,7 +221,7 @@ fn main(
         if workgroupUniformLoad(&num_walked) == TILE_PIXELS {
             break;
         }
-        load_batch(start, end, r, lid, corner);
+        load_batch(start, end, r, lid);
         workgroupBarrier();
         let batch = min(TILE_PIXELS, n - r * TILE_PIXELS);
         for (var j = 0u; j < batch && !walked; j++) {

@@ -29,15 +29,13 @@
 @group(0) @binding(9) var<storage, read> values_hi: array<u32>;
 #endif
 
+#ifndef BLOCK_WALK
+// A batch of list entries (`list_entry`'s fields).
 var<workgroup> s_mean: array<vec2<f32>, TILE_PIXELS>;
 var<workgroup> s_conic: array<vec4<f32>, TILE_PIXELS>;
-// (colour, reflection intensity a)
 var<workgroup> s_color: array<vec4<f32>, TILE_PIXELS>;
-#ifdef BLOCK_WALK
-// The blocks of the tile (8 columns by ROWS rows: 8 threads' pixels) each entry can reach.
-var<workgroup> s_blocks: array<u32, TILE_PIXELS>;
-#endif
 var<workgroup> num_done: atomic<u32>;
+#endif
 
 // One pixel's walk: where it is, what it has blended and where it stopped.
 struct Pixel {
@@ -74,7 +72,9 @@ fn step_entry(g: ChunkEntry, li: u32) {
             px[k].last = li;
             px[k].done = true;
             awake -= 1u;
+#ifndef BLOCK_WALK
             atomicAdd(&num_done, 1u);
+#endif
             continue;
         }
         let wgt = alpha * px[k].t;
@@ -84,10 +84,19 @@ fn step_entry(g: ChunkEntry, li: u32) {
     }
 }
 
-// For shared/chunk_walk.wgsl: batch entry e, and whether this thread's pixels have stopped.
+// For shared/chunk_walk.wgsl: the entry of key index i (its mean, conic with opacity, colour
+// with the reflection intensity a), batch entry e, and whether this thread's pixels have
+// stopped.
+fn list_entry(i: u32) -> ChunkEntry {
+    let g = projected_at(value_at(i));
+    return ChunkEntry(vec4<f32>(g.mean2d, 0.0, 0.0), g.conic, vec4<f32>(g.color.xyz, g.reflection), 0u);
+}
+
+#ifndef BLOCK_WALK
 fn batch_entry(e: u32) -> ChunkEntry {
     return ChunkEntry(vec4<f32>(s_mean[e], 0.0, 0.0), s_conic[e], s_color[e], 0u);
 }
+#endif
 
 fn walk_over() -> bool {
     return awake == 0u;
@@ -112,11 +121,6 @@ fn main(
     let start = ranges[2u * tile];
     let end = max(ranges[2u * tile + 1u], start);
     let n = end - start;
-    let rounds = (n + TILE_PIXELS - 1u) / TILE_PIXELS;
-    if lid == 0u {
-        atomicStore(&num_done, 0u);
-    }
-    workgroupBarrier();
     awake = 0u;
     for (var k = 0u; k < ROWS; k++) {
         let y = y0 + k;
@@ -130,13 +134,19 @@ fn main(
             awake += 1u;
         }
     }
-    atomicAdd(&num_done, ROWS - awake);
 #ifdef BLOCK_WALK
     let block = lid / 8u;
     let corner = vec2<f32>(f32(tx * TILE_SIZE) + 0.5, f32(ty * TILE_SIZE) + 0.5);
     // Whether this subgroup lies in one block (see shared/block_walk.wgsl).
-    let one_block = in_one_block(block);
-#endif
+    let b = BlockOf(corner, vec2<u32>(8u, ROWS), block, in_one_block(block));
+    walk_list(start, n, b, sg_lane, sg_size);
+#else
+    if lid == 0u {
+        atomicStore(&num_done, 0u);
+    }
+    workgroupBarrier();
+    atomicAdd(&num_done, ROWS - awake);
+    let rounds = (n + TILE_PIXELS - 1u) / TILE_PIXELS;
     for (var r = 0u; r < rounds; r++) {
         if workgroupUniformLoad(&num_done) == TILE_PIXELS {
             break;
@@ -145,23 +155,17 @@ fn main(
             let slot = lid + q * THREADS;
             let idx = start + r * TILE_PIXELS + slot;
             if idx < end {
-                let g = projected_at(value_at(idx));
-                s_mean[slot] = g.mean2d;
-                s_conic[slot] = g.conic;
-                s_color[slot] = vec4<f32>(g.color.xyz, g.reflection);
-#ifdef BLOCK_WALK
-                s_blocks[slot] = block_reach(g.conic, g.mean2d, corner, vec2<u32>(8u, ROWS));
-#endif
+                let e = list_entry(idx);
+                s_mean[slot] = e.mean.xy;
+                s_conic[slot] = e.conic;
+                s_color[slot] = e.color;
             }
         }
         workgroupBarrier();
         let batch = min(TILE_PIXELS, n - r * TILE_PIXELS);
-#ifdef BLOCK_WALK
-        walk_batch(batch, r, block, one_block, sg_lane, sg_size);
-#else
         walk_batch(batch, r);
-#endif
     }
+#endif
     for (var k = 0u; k < ROWS; k++) {
         if px[k].inside {
             let y = y0 + k;

@@ -119,6 +119,46 @@ fn lane_entry(e: ChunkEntry, k: u32) -> ChunkEntry {
     }
 }
 
+// Lane `lane`'s entry of the chunk of up to `chunk` list entries from `first` (those before
+// `count`), read from the key list from index `start` by the includer's `list_entry`, and the
+// subgroup's ballot of the chunk's entries that reach its block (`block_reach` with blocks of
+// `size` pixels from the tile's first pixel centre `corner`; all of them when the subgroup spans
+// several blocks). Each subgroup reads the entries it walks itself, with no batch in workgroup
+// memory and no barrier: on lavapipe, the devices with BLOCK_WALK, every workgroup-memory write
+// and read is a loop over the lanes, which a batch pays once to write and once per subgroup to
+// read back.
+struct Chunk {
+    entry: ChunkEntry,
+    reach: u32,
+}
+
+struct ChunkAt {
+    start: u32,
+    first: u32,
+    count: u32,
+    chunk: u32,
+    lane: u32,
+}
+
+struct BlockOf {
+    corner: vec2<f32>,
+    size: vec2<u32>,
+    block: u32,
+    one_block: bool,
+}
+
+fn read_list_chunk(at: ChunkAt, b: BlockOf) -> Chunk {
+    let e = at.first + at.lane;
+    var entry = ChunkEntry();
+    var reaches = false;
+    if at.lane < at.chunk && e < at.count {
+        entry = list_entry(at.start + e);
+        reaches = !b.one_block
+            || ((block_reach(entry.conic, entry.mean.xy, b.corner, b.size) >> b.block) & 1u) != 0u;
+    }
+    return Chunk(entry, subgroupBallot(reaches).x);
+}
+
 // Whether this invocation's subgroup lies in one block (the walk may skip only then).
 fn in_one_block(block: u32) -> bool {
     return subgroupAll(subgroupBroadcastFirst(block) == block);

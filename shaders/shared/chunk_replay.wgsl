@@ -9,39 +9,18 @@
 
 #ifdef BLOCK_WALK
 // The tile's list entries [0, count) from key index `start`, back to front, by chunks of up to 8
-// of the subgroup's lanes (`lane_entry`): lane l reads chunk entry l from the key list itself
-// and tests it against the subgroup's block (`block_reach`, the tile's blocks of 8 columns by
-// ROWS rows; `corner` is the tile's first pixel centre), and the chunk's entries that reach the
-// block (all of them when the subgroup spans several blocks) are replayed last first. Each
-// subgroup reads the entries it replays itself, without batches in workgroup memory or
-// barriers: on lavapipe (the devices with BLOCK_WALK) every workgroup-memory read and write is
-// a loop over the lanes, and a tile's one subgroup (eight rows per thread) would only write
-// what it reads back.
-fn replay_list(
-    start: u32,
-    count: u32,
-    corner: vec2<f32>,
-    block: u32,
-    one_block: bool,
-    lane: u32,
-    size: u32,
-) {
+// of the subgroup's lanes (`lane_entry`, `read_list_chunk`): the chunk's entries that reach the
+// subgroup's block `b` (all of them when it spans several blocks) are replayed last first.
+fn replay_list(start: u32, count: u32, b: BlockOf, lane: u32, size: u32) {
     if count == 0u {
         return;
     }
     let chunk = min(size, 8u);
     var first = ((count - 1u) / chunk) * chunk;
     loop {
-        let e = first + lane;
-        var entry = ChunkEntry();
-        var reaches = false;
-        if lane < chunk && e < count {
-            entry = list_entry(start + e);
-            reaches = !one_block
-                || ((block_reach(entry.conic, entry.mean.xy, corner, vec2<u32>(8u, ROWS)) >> block)
-                    & 1u) != 0u;
-        }
-        let reach = subgroupBallot(reaches).x;
+        let read = read_list_chunk(ChunkAt(start, first, count, chunk, lane), b);
+        let entry = read.entry;
+        let reach = read.reach;
         // Written out: each call's lane is then a constant (a loop left dynamic was slower).
         if (reach & 128u) != 0u {
             replay_entry(lane_entry(entry, 7u), first + 7u);
