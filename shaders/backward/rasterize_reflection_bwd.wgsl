@@ -47,7 +47,6 @@ var<workgroup> s_mean: array<vec2<f32>, TILE_PIXELS>;
 var<workgroup> s_conic: array<vec4<f32>, TILE_PIXELS>;
 var<workgroup> s_color: array<vec4<f32>, TILE_PIXELS>;
 var<workgroup> s_index: array<u32, TILE_PIXELS>;
-var<workgroup> max_last: atomic<u32>;
 #endif
 
 // One pixel's replay: what it read at the start and what it carries from entry to entry.
@@ -88,7 +87,14 @@ fn list_entry(i: u32) -> ChunkEntry {
 }
 
 #ifndef BLOCK_WALK
-// For shared/chunk_replay.wgsl: batch entry e.
+// For shared/chunk_replay.wgsl: a batch's slot written and read.
+fn store_entry(slot: u32, e: ChunkEntry) {
+    s_mean[slot] = e.mean.xy;
+    s_conic[slot] = e.conic;
+    s_color[slot] = e.color;
+    s_index[slot] = e.index;
+}
+
 fn batch_entry(e: u32) -> ChunkEntry {
     return ChunkEntry(vec4<f32>(s_mean[e], 0.0, 0.0), s_conic[e], s_color[e], s_index[e]);
 }
@@ -162,32 +168,6 @@ fn main(
     let b = BlockOf(corner, vec2<u32>(8u, ROWS), block, in_one_block(block));
     replay_list(start, sg_last, b, sg_lane, sg_size);
 #else
-    if lid == 0u {
-        atomicStore(&max_last, 0u);
-    }
-    workgroupBarrier();
-    atomicMax(&max_last, my_last);
-    let last = workgroupUniformLoad(&max_last);
-    let rounds = (last + TILE_PIXELS - 1u) / TILE_PIXELS;
-    for (var rr = 0u; rr < rounds; rr++) {
-        let r = rounds - 1u - rr;
-        workgroupBarrier();
-        for (var q = 0u; q < ROWS; q++) {
-            let slot = lid + q * THREADS;
-            let idx = start + r * TILE_PIXELS + slot;
-            if idx < end {
-                let e = list_entry(idx);
-                s_mean[slot] = e.mean.xy;
-                s_conic[slot] = e.conic;
-                s_color[slot] = e.color;
-                s_index[slot] = e.index;
-            }
-        }
-        workgroupBarrier();
-        let batch = min(TILE_PIXELS, last - r * TILE_PIXELS);
-        // Entries [0, mine) of this batch come before the subgroup's last.
-        let mine = min(batch, sg_last - min(sg_last, r * TILE_PIXELS));
-        replay_batch(mine, r);
-    }
+    replay_batches(start, end, my_last, sg_last, lid);
 #endif
 }

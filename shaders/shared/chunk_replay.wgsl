@@ -4,7 +4,8 @@
 //   fn replay_entry(g: ChunkEntry, li: u32)  list entry li replayed at the thread's pixels, its
 //                                            gradients added (subgroup reductions: called in
 //                                            uniform control flow);
-// and, without BLOCK_WALK, batch_entry(e) (batch slot e, from workgroup memory).
+// and, without BLOCK_WALK, fn store_entry(slot: u32, g: ChunkEntry) and
+// fn batch_entry(e: u32) -> ChunkEntry (batch slot e, into and from workgroup memory).
 #include "shared/block_walk.wgsl"
 
 #ifdef BLOCK_WALK
@@ -53,10 +54,39 @@ fn replay_list(start: u32, count: u32, b: BlockOf, lane: u32, size: u32) {
     }
 }
 #else
-// Batch entries [0, mine) of round r, back to front, one after another.
-fn replay_batch(mine: u32, r: u32) {
-    for (var j = mine; j > 0u; j--) {
-        replay_entry(batch_entry(j - 1u), r * TILE_PIXELS + j - 1u);
+// The tile's last entry any of its pixels blended.
+var<workgroup> max_last: atomic<u32>;
+
+// The tile's list entries [0, sg_last) from key index `start` (those before `end`), back to
+// front: the workgroup loads them into workgroup memory a batch of TILE_PIXELS at a time, ROWS
+// entries a thread (thread `lid` of the tile), from the last batch any of its pixels blended,
+// and each thread replays them one after another up to its subgroup's last, `sg_last`. In
+// uniform control flow: it has barriers.
+fn replay_batches(start: u32, end: u32, my_last: u32, sg_last: u32, lid: u32) {
+    if lid == 0u {
+        atomicStore(&max_last, 0u);
+    }
+    workgroupBarrier();
+    atomicMax(&max_last, my_last);
+    let last = workgroupUniformLoad(&max_last);
+    let rounds = (last + TILE_PIXELS - 1u) / TILE_PIXELS;
+    for (var rr = 0u; rr < rounds; rr++) {
+        let r = rounds - 1u - rr;
+        workgroupBarrier();
+        for (var q = 0u; q < ROWS; q++) {
+            let slot = lid + q * THREADS;
+            let idx = start + r * TILE_PIXELS + slot;
+            if idx < end {
+                store_entry(slot, list_entry(idx));
+            }
+        }
+        workgroupBarrier();
+        let batch = min(TILE_PIXELS, last - r * TILE_PIXELS);
+        // Entries [0, mine) of this batch come before the subgroup's last.
+        let mine = min(batch, sg_last - min(sg_last, r * TILE_PIXELS));
+        for (var j = mine; j > 0u; j--) {
+            replay_entry(batch_entry(j - 1u), r * TILE_PIXELS + j - 1u);
+        }
     }
 }
 #endif
