@@ -2,10 +2,10 @@
 //! compose_bwd_vs_reference.rs), on lavapipe (or whatever adapter
 //! the machine has): the same forward frame and the same random upstream gradients in, gradients
 //! within atol 1e-5 + rtol 1e-3 of the twin's out (plane sums relative to their scale). Each runs
-//! three times: with the adapter's float atomics and subgroup reduction in each replay layout (one
-//! pixel per thread as on a GPU, a tile column's rows per thread as on a CPU adapter), and with the optional
-//! features off (the compare-exchange fallback without subgroups). Fresh buffers are
-//! poison-filled.
+//! four times (`common::contexts`): with the adapter's float atomics and subgroup reduction in
+//! each replay layout (one pixel per thread as on a GPU, with and without the block walk, and a
+//! tile column's rows per thread as on a CPU adapter), and with the optional features off (the
+//! compare-exchange fallback without subgroups). Fresh buffers are poison-filled.
 //!
 //! `rasterize_bwd` is checked twice: as a stage, the twin run on the GPU's own forward results
 //! (projected records, lists, pixel states, D_t) and upstream gradients, to 1e-4 of each

@@ -77,13 +77,18 @@ pub fn to_reference(p: &[ProjectedGaussian]) -> Projected {
 }
 
 /// The adapter's features with each replay layout (one pixel per thread is what a GPU runs,
-/// several rows what a CPU adapter runs), and the fallback without them.
+/// several rows what a CPU adapter runs), one pixel per thread without the block walk as well
+/// (what a GPU runs: the passes' batches in workgroup memory with subgroup reductions), and the
+/// fallback without the features.
 pub fn contexts() -> Vec<(&'static str, GpuContext)> {
     let fast = DeviceOptions { poison_fresh_buffers: true, ..Default::default() };
     let layout = |l| DeviceOptions { tile_layout: Some(l), ..fast.clone() };
+    let as_on_a_gpu =
+        DeviceOptions { block_walk: Some(false), ..layout(TileLayout::PixelPerThread) };
     let fallback = DeviceOptions { disable_optional_features: true, ..fast.clone() };
     vec![
         ("native, one pixel per thread", layout(TileLayout::PixelPerThread)),
+        ("native, one pixel per thread, no block walk", as_on_a_gpu),
         ("native, rows per thread", layout(TileLayout::RowsPerThread)),
         ("fallback", fallback),
     ]
