@@ -1,7 +1,7 @@
 // Stage `rasterize_bwd`, the adjoint of pass 1 (twin: trgs_core::reference::rasterize_bwd): one
 // workgroup per tile, each thread ROWS pixels of one column (ROWS consecutive rows), a
-// back-to-front replay of the tile's list in batches of TILE_PIXELS from the last entry any
-// pixel blended. Each pixel recovers its transmittances by division (T_j = T_{j+1} / (1 -
+// back-to-front replay of the tile's list from the last entry any pixel of the subgroup (with
+// BLOCK_WALK) or of the tile (in batches of TILE_PIXELS) blended. Each pixel recovers its transmittances by division (T_j = T_{j+1} / (1 -
 // alpha_j), alpha <= 0.99) from the final ones the forward kept, with the forward's skip and
 // stop rules, and carries the suffix sums that dL/dalpha needs. Every batch entry's per-pixel
 // gradients (colour, depth with the depth-variance term, mask value, opacity, 2D mean and conic)
@@ -111,7 +111,7 @@ fn start_pixel(x: u32, y: u32) -> Pixel {
 // This thread's pixels (start_pixel), carried through the replay.
 var<private> px: array<Pixel, ROWS>;
 
-// Replays list entry `li` (as the batch keeps it) at this thread's pixels, and adds the
+// Replays list entry `li` (`list_entry`'s fields) at this thread's pixels, and adds the
 // subgroup's gradients to the Gaussian's record. In uniform control flow: it ends with subgroup
 // reductions.
 fn replay_entry(entry: ChunkEntry, li: u32) {

@@ -100,7 +100,7 @@ fn batch_entry(e: u32) -> ChunkEntry {
 }
 #endif
 
-// Replays list entry `li` (as the batch keeps it: colour with the reflection intensity) at this
+// Replays list entry `li` (`list_entry`'s fields: colour with the reflection intensity) at this
 // thread's pixels, and adds the subgroup's gradients to the mirrored Gaussian's record. In
 // uniform control flow: it ends with subgroup reductions.
 fn replay_entry(entry: ChunkEntry, li: u32) {

@@ -33,7 +33,10 @@ var<workgroup> s_mean: array<vec4<f32>, TILE_PIXELS>;
 var<workgroup> s_conic: array<vec4<f32>, TILE_PIXELS>;
 // (colour, depth)
 var<workgroup> s_color: array<vec4<f32>, TILE_PIXELS>;
+#ifndef BLOCK_WALK
+// Pixels of the tile that have stopped (with BLOCK_WALK each subgroup stops on its own).
 var<workgroup> num_done: atomic<u32>;
+#endif
 var<workgroup> max_last: atomic<u32>;
 var<workgroup> num_walked: atomic<u32>;
 
@@ -92,7 +95,9 @@ fn step_entry(g: ChunkEntry, li: u32) {
                 last_m = li;
             }
             done = true;
+#ifndef BLOCK_WALK
             atomicAdd(&num_done, 1u);
+#endif
             return;
         }
         let wgt = alpha * t;
@@ -152,14 +157,18 @@ fn main(
     let n = end - start;
     let rounds = (n + TILE_PIXELS - 1u) / TILE_PIXELS;
     if lid == 0u {
+#ifndef BLOCK_WALK
         atomicStore(&num_done, 0u);
+#endif
         atomicStore(&max_last, 0u);
     }
     workgroupBarrier();
     done = !inside;
+#ifndef BLOCK_WALK
     if done {
         atomicAdd(&num_done, 1u);
     }
+#endif
     pixel = vec2<f32>(f32(x) + 0.5, f32(y) + 0.5);
     let corner = vec2<f32>(f32(tx * TILE_SIZE) + 0.5, f32(ty * TILE_SIZE) + 0.5);
 #ifdef BLOCK_WALK

@@ -6,8 +6,8 @@
 // vector, which leaves a loop together but runs a skipped branch's body anyway, so without this
 // it pays for every entry of the tile's list whether it reaches its pixels or not.
 
-// One list entry as the chunk walks take it from a batch (with BLOCK_WALK, from lane to lane:
-// `lane_entry`): the 2D mean and what the pass keeps beside it, the conic with the opacity, the
+// One list entry as the walks take it (from a batch in workgroup memory, or with BLOCK_WALK from
+// the key list and then from lane to lane: `lane_entry`): the 2D mean and what the pass keeps beside it, the conic with the opacity, the
 // colour with the depth or the reflection intensity, and the Gaussian's index.
 struct ChunkEntry {
     mean: vec4<f32>,
@@ -85,11 +85,11 @@ fn ellipse_edge(a: f32, b: f32, det: f32, r: f32, y: f32, side: f32) -> f32 {
 }
 
 // Lane k's `e` on every lane of the subgroup (k < 8, the same on every lane). The chunk walks
-// (shared/chunk_walk.wgsl, shared/chunk_replay.wgsl) have lane l read chunk entry l from
-// workgroup memory and step through the chunk's entries with their values broadcast from their
-// lane. Lavapipe (Mesa 22) reads workgroup memory one lane at a time, in a loop over the SIMD
-// vector, so a read a lane per chunk costs far less than reads a step; a broadcast is a
-// register move. WGSL takes a broadcast's lane as a constant, hence the switch.
+// (shared/chunk_walk.wgsl, shared/chunk_replay.wgsl) have lane l read chunk entry l from the
+// key list and step through the chunk's entries with their values broadcast from their lane.
+// Lavapipe (Mesa 22) reads memory one lane at a time, in a loop over the SIMD vector, so a read
+// a lane per chunk costs far less than reads a step; a broadcast is a register move. WGSL takes
+// a broadcast's lane as a constant, hence the switch.
 fn lane_entry(e: ChunkEntry, k: u32) -> ChunkEntry {
     switch k {
         case 0u: {

@@ -4,9 +4,8 @@
 // One row on a GPU. On a CPU adapter four in `rasterize_reflection` (the define
 // ROWS_PER_THREAD_4) and the whole column of eight in the adjoints (ROWS_PER_THREAD_8): there a
 // subgroup is one SIMD vector and a workgroup's subgroups run one after another, each paying
-// every batch entry's loads from workgroup memory and loop control, and in the adjoints a
-// subgroup reduction and its atomics (loops over the lanes), however few of its pixels use the
-// entry; the rows share them (docs/gpu-renderer.md, "Choices per adapter"). With eight, one
+// every list entry's loads and loop control, and in the adjoints a subgroup reduction and its
+// atomics (loops over the lanes), however few of its pixels use the entry; the rows share them (docs/gpu-renderer.md, "Choices per adapter"). With eight, one
 // subgroup is the whole tile and makes one reduction per entry.
 #ifdef ROWS_PER_THREAD_8
 const ROWS: u32 = 8u;

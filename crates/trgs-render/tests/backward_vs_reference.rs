@@ -441,7 +441,7 @@ fn backward_stop_gradient() {
 }
 
 /// An image whose size is not a multiple of the tile: the last column and row of tiles are
-/// partial, so some threads of the replays hold pixels outside the image (in the four-rows
+/// partial, so some threads of the replays hold pixels outside the image (in the rows-per-thread
 /// layout, a thread may hold pixels on both sides of the bottom edge).
 #[test]
 fn backward_partial_tiles() {
