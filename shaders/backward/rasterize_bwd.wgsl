@@ -168,17 +168,10 @@ fn replay_entry(entry: ChunkEntry, li: u32) {
     }
 }
 
-// For shared/chunk_replay.wgsl: the entry of key index i, (mean, m, 1 for glass), conic with
-// opacity, (colour, depth) and the Gaussian's index.
+// For shared/chunk_replay.wgsl: the entry of key index i as pass 1 takes it
+// (shared/block_walk.wgsl).
 fn list_entry(i: u32) -> ChunkEntry {
-    let gi = value_at(i);
-    let g = projected_at(gi);
-    return ChunkEntry(
-        vec4<f32>(g.mean2d, g.mask, f32((g.flags & FLAG_GLASS) != 0u)),
-        g.conic,
-        g.color,
-        gi,
-    );
+    return pass1_entry(i);
 }
 
 #ifndef BLOCK_WALK

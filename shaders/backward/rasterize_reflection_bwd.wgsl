@@ -78,12 +78,10 @@ fn start_pixel(x: u32, y: u32) -> Pixel {
 // This thread's pixels (start_pixel), carried through the replay.
 var<private> px: array<Pixel, ROWS>;
 
-// For shared/chunk_replay.wgsl: the entry of key index i, its mean, conic with opacity,
-// (colour, reflection intensity a) and the Gaussian's index.
+// For shared/chunk_replay.wgsl: the entry of key index i as pass 2 takes it
+// (shared/block_walk.wgsl).
 fn list_entry(i: u32) -> ChunkEntry {
-    let gi = value_at(i);
-    let g = projected_at(gi);
-    return ChunkEntry(vec4<f32>(g.mean2d, 0.0, 0.0), g.conic, vec4<f32>(g.color.xyz, g.reflection), gi);
+    return pass2_entry(i);
 }
 
 #ifndef BLOCK_WALK

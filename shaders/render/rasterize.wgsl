@@ -53,15 +53,9 @@ var<private> last_t: u32;
 var<private> last_m: u32;
 var<private> done: bool;
 
-// The entry of key index i: (mean, m, 1 for glass), conic with opacity, (colour, depth).
+// The entry of key index i (shared/block_walk.wgsl).
 fn list_entry(i: u32) -> ChunkEntry {
-    let g = projected_at(value_at(i));
-    return ChunkEntry(
-        vec4<f32>(g.mean2d, g.mask, f32((g.flags & FLAG_GLASS) != 0u)),
-        g.conic,
-        g.color,
-        0u,
-    );
+    return pass1_entry(i);
 }
 
 // Batch `round` of the tile's list into workgroup memory (without BLOCK_WALK, and for the

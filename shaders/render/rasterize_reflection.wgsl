@@ -88,8 +88,7 @@ fn step_entry(g: ChunkEntry, li: u32) {
 // with the reflection intensity a), batch entry e, and whether this thread's pixels have
 // stopped.
 fn list_entry(i: u32) -> ChunkEntry {
-    let g = projected_at(value_at(i));
-    return ChunkEntry(vec4<f32>(g.mean2d, 0.0, 0.0), g.conic, vec4<f32>(g.color.xyz, g.reflection), 0u);
+    return pass2_entry(i);
 }
 
 #ifndef BLOCK_WALK

@@ -16,6 +16,25 @@ struct ChunkEntry {
     index: u32,
 }
 
+// The entry of key index i as pass 1 and its adjoint take it: (mean, m, 1 for glass), the conic
+// with the opacity, (colour, depth). The including shader binds the key values and the
+// projected records (shared/raster_pages.wgsl).
+fn pass1_entry(i: u32) -> ChunkEntry {
+    let gi = value_at(i);
+    let g = projected_at(gi);
+    let glass = f32((g.flags & FLAG_GLASS) != 0u);
+    return ChunkEntry(vec4<f32>(g.mean2d, g.mask, glass), g.conic, g.color, gi);
+}
+
+// The entry of key index i as pass 2 and its adjoint take it: the mean, the conic with the
+// opacity, (colour, reflection intensity a).
+fn pass2_entry(i: u32) -> ChunkEntry {
+    let gi = value_at(i);
+    let g = projected_at(gi);
+    let color = vec4<f32>(g.color.xyz, g.reflection);
+    return ChunkEntry(vec4<f32>(g.mean2d, 0.0, 0.0), g.conic, color, gi);
+}
+
 #ifdef BLOCK_WALK
 // Which blocks of a tile one Gaussian can reach (twin: reference::block_reach, where the
 // reasoning is set out): the tile is split row by row into blocks of `block` pixels (x, y), and
