@@ -54,9 +54,8 @@ fn check(
         assert_eq!(ctx.bytes_read() - read_before, 20, "bytes read back to densify");
     }
     let geometry = Geometry::of(&state.gaussians);
-    let twin_settings = settings.for_densification(stats);
     let (plan, twin_report) =
-        plan_densify(&geometry, stats, &twin_settings, extent, prune_large, &mut Rng::new(seed));
+        plan_densify(&geometry, stats, settings, extent, prune_large, &mut Rng::new(seed));
     assert_eq!(report, twin_report, "the report");
     let twin = plan.apply(state);
     let got = gpu.read().expect("readback");

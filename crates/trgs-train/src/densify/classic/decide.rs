@@ -127,7 +127,9 @@ impl Rules<'_> {
 /// opacity); a Gaussian pruned for its size is not cloned (the clone would only bring it back);
 /// split children still over the world-size limit are pruned at once (3DGS prunes after
 /// densifying). The children's means are the parent's plus R (s * z), z drawn by
-/// `noise_normal` numbered 2 i + k from a seed drawn from `rng`.
+/// `noise_normal` numbered 2 i + k from a seed drawn from `rng`. `settings` are the run's: a
+/// growth share below 1 is applied here ([`ClassicSettings::for_densification`]), so that no
+/// caller can leave it out.
 pub fn plan_densify(
     g: &Geometry,
     stats: &DensifyStats,
@@ -137,7 +139,8 @@ pub fn plan_densify(
     rng: &mut Rng,
 ) -> (RowPlan, DensifyReport) {
     let n = g.len();
-    let p = plan_params(settings, extent, prune_large, n, plan_seed(rng));
+    let settings = settings.for_densification(stats);
+    let p = plan_params(&settings, extent, prune_large, n, plan_seed(rng));
     let rules = Rules { p: &p, g, stats };
     let mut report = DensifyReport::default();
     let mut sources: Vec<(usize, bool)> = Vec::with_capacity(n);

@@ -100,11 +100,11 @@ impl ClassicDensification {
         } else {
             Some(self.stats.read(&self.ctx)?)
         };
-        let settings = match &stats {
-            Some(stats) => self.settings.for_densification(stats),
-            None => self.settings.clone(),
-        };
         if on_gpu {
+            let settings = match &stats {
+                Some(stats) => self.settings.for_densification(stats),
+                None => self.settings.clone(),
+            };
             let seed = plan_seed(rng);
             let params = plan_params(&settings, extent, prune_large, n, seed);
             let scene = gaussians.scene();
@@ -114,7 +114,8 @@ impl ClassicDensification {
         }
         let stats = stats.context("statistics read back for the CPU's plan")?;
         let geometry = gaussians.geometry()?;
-        let (plan, report) = plan_densify(&geometry, &stats, &settings, extent, prune_large, rng);
+        let (plan, report) =
+            plan_densify(&geometry, &stats, &self.settings, extent, prune_large, rng);
         gaussians.apply_plan(&plan)?;
         self.stats.reset(&self.ctx, plan.sources.len());
         Ok(Some(report))
@@ -336,8 +337,7 @@ mod tests {
             (0..10).map(|i| 2.0 * if i == 0 { 1e-4 } else { (i + 2) as f64 * 1e-4 }).collect();
         let mut settings = ClassicSettings::scaled(30_000);
         let densified = |s: &TrainState, settings: &ClassicSettings| {
-            let settings = settings.for_densification(&stats);
-            let (_, r) = densify_and_prune(s, &stats, &settings, 1.0, false, &mut Rng::new(1));
+            let (_, r) = densify_and_prune(s, &stats, settings, 1.0, false, &mut Rng::new(1));
             r.cloned + r.split
         };
         // All eight opaque candidates (1 to 8).
