@@ -46,12 +46,13 @@ fn main() {
             )
         });
         println!(
-            "support {:6} seen {:6} ({:5.1}%) front {:4.2} flat {:.2} size {:.2}x{:.2} {:?} opening of {:?} -> {}",
+            "support {:6} seen {:6} ({:5.1}%) front {:4.2} flat {:.2} ({:.2} over its own cells) size {:.2}x{:.2} {:?} opening of {:?} -> {}",
             c.support,
             c.seen_through,
             100.0 * c.seen_fraction,
             c.cameras_in_front,
             c.planarity,
+            c.wall_planarity,
             c.structure_size.0,
             c.structure_size.1,
             p,

@@ -17,6 +17,12 @@ pub struct CandidateRecord {
     pub seen_through: usize,
     pub seen_fraction: f64,
     pub cameras_in_front: f64,
+    /// How flat its structure is (`trgs_core::fit::PlaneCandidate::planarity` and
+    /// `wall_planarity`); absent in records from before.
+    #[serde(default)]
+    pub planarity: f64,
+    #[serde(default)]
+    pub wall_planarity: f64,
     /// Put on trial (the proposal's evidence sufficed).
     pub proposed: bool,
     /// On trial: the relative rise of the held-out L1 when it is switched off, and its mean
@@ -43,6 +49,8 @@ impl CandidateRecord {
             seen_through: c.seen_through,
             seen_fraction: c.seen_fraction,
             cameras_in_front: c.cameras_in_front,
+            planarity: c.planarity,
+            wall_planarity: c.wall_planarity,
             proposed: c.rejected.is_none(),
             held_out_l1_gain: None,
             strength: None,
@@ -81,9 +89,11 @@ impl CandidateRecord {
             (true, true, false) => format!("dropped: {}", self.why),
         };
         format!(
-            "candidate plane {index}{at}: {} points on it, {} seen through ({:.1}%), {:.0}% of \
-             the cameras in front{trial}: {verdict}",
+            "candidate plane {index}{at}: {} points on it ({:.0}% flat, {:.0}% over its own \
+             cells), {} seen through ({:.1}%), {:.0}% of the cameras in front{trial}: {verdict}",
             self.support,
+            100.0 * self.planarity,
+            100.0 * self.wall_planarity,
             self.seen_through,
             100.0 * self.seen_fraction,
             100.0 * self.cameras_in_front,
@@ -118,12 +128,13 @@ mod tests {
     use super::{CandidateRecord, next_proposal_try};
 
     #[test]
-    fn a_record_from_before_the_openings_reads_as_turned_in_none() {
+    fn a_record_from_before_the_openings_reads_as_turned_in_none_and_without_planarity() {
         let old = r#"{"centre": null, "normal": null, "axis": null, "size": null, "support": 3,
             "seen_through": 0, "seen_fraction": 0.0, "cameras_in_front": 1.0, "proposed": false,
             "held_out_l1_gain": null, "strength": null, "kept": false, "why": "too few"}"#;
         let record: CandidateRecord = serde_json::from_str(old).expect("an older record");
         assert_eq!(record.opening_of, None);
+        assert_eq!((record.planarity, record.wall_planarity), (0.0, 0.0));
         assert_eq!(record.why, "too few");
     }
 
@@ -138,6 +149,8 @@ mod tests {
             seen_through: 40,
             seen_fraction: 0.25,
             cameras_in_front: 1.0,
+            planarity: 0.38,
+            wall_planarity: 0.56,
             proposed: true,
             held_out_l1_gain: Some(0.0007),
             strength: Some(0.07),
