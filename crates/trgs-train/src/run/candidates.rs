@@ -17,12 +17,13 @@ pub struct CandidateRecord {
     pub seen_through: usize,
     pub seen_fraction: f64,
     pub cameras_in_front: f64,
-    /// How flat its structure is (`trgs_core::fit::PlaneCandidate::planarity` and
-    /// `wall_planarity`); absent in records from before.
+    /// How flat its structure is over its hull (`trgs_core::fit::PlaneCandidate::planarity`);
+    /// absent in records from before.
     #[serde(default)]
-    pub planarity: f64,
+    pub planarity: Option<f64>,
+    /// The same over the cells it holds points in (`PlaneCandidate::wall_planarity`).
     #[serde(default)]
-    pub wall_planarity: f64,
+    pub wall_planarity: Option<f64>,
     /// Put on trial (the proposal's evidence sufficed).
     pub proposed: bool,
     /// On trial: the relative rise of the held-out L1 when it is switched off, and its mean
@@ -49,8 +50,8 @@ impl CandidateRecord {
             seen_through: c.seen_through,
             seen_fraction: c.seen_fraction,
             cameras_in_front: c.cameras_in_front,
-            planarity: c.planarity,
-            wall_planarity: c.wall_planarity,
+            planarity: Some(c.planarity),
+            wall_planarity: Some(c.wall_planarity),
             proposed: c.rejected.is_none(),
             held_out_l1_gain: None,
             strength: None,
@@ -88,12 +89,16 @@ impl CandidateRecord {
             (true, true, true) => format!("kept: {}", self.why),
             (true, true, false) => format!("dropped: {}", self.why),
         };
+        let flat = match (self.planarity, self.wall_planarity) {
+            (Some(p), Some(w)) => {
+                format!(" ({:.0}% flat, {:.0}% over its own cells)", 100.0 * p, 100.0 * w)
+            }
+            _ => String::new(),
+        };
         format!(
-            "candidate plane {index}{at}: {} points on it ({:.0}% flat, {:.0}% over its own \
-             cells), {} seen through ({:.1}%), {:.0}% of the cameras in front{trial}: {verdict}",
+            "candidate plane {index}{at}: {} points on it{flat}, {} seen through ({:.1}%), {:.0}% \
+             of the cameras in front{trial}: {verdict}",
             self.support,
-            100.0 * self.planarity,
-            100.0 * self.wall_planarity,
             self.seen_through,
             100.0 * self.seen_fraction,
             100.0 * self.cameras_in_front,
@@ -134,7 +139,8 @@ mod tests {
             "held_out_l1_gain": null, "strength": null, "kept": false, "why": "too few"}"#;
         let record: CandidateRecord = serde_json::from_str(old).expect("an older record");
         assert_eq!(record.opening_of, None);
-        assert_eq!((record.planarity, record.wall_planarity), (0.0, 0.0));
+        assert_eq!((record.planarity, record.wall_planarity), (None, None));
+        assert!(!record.line(0).contains("flat"), "{}", record.line(0));
         assert_eq!(record.why, "too few");
     }
 
@@ -149,8 +155,8 @@ mod tests {
             seen_through: 40,
             seen_fraction: 0.25,
             cameras_in_front: 1.0,
-            planarity: 0.38,
-            wall_planarity: 0.56,
+            planarity: Some(0.38),
+            wall_planarity: Some(0.56),
             proposed: true,
             held_out_l1_gain: Some(0.0007),
             strength: Some(0.07),
