@@ -182,19 +182,8 @@ fn propose_at_scale(
         let (front, in_front) = facing[k];
         let mut c = assess(&structures[k], points, front, in_front, seen, cell, settings);
         (c.planarity, c.wall_planarity) = flatness[k];
-        if c.rejected.is_none()
-            && c.planarity < settings.min_planarity
-            && c.wall_planarity < settings.min_wall_planarity
-        {
-            c.rejected = Some(format!(
-                "not a surface: {:.0}% of the points near its plane lie on it over its hull, \
-                 {:.0}% over its own cells (at least {:.0}% over its hull or {:.0}% over its own \
-                 cells needed)",
-                100.0 * c.planarity,
-                100.0 * c.wall_planarity,
-                100.0 * settings.min_planarity,
-                100.0 * settings.min_wall_planarity
-            ));
+        if c.rejected.is_none() {
+            c.rejected = not_a_surface(&c, settings);
         }
         c
     };
@@ -272,6 +261,24 @@ fn propose_at_scale(
     );
     proposed.extend(parts);
     proposed
+}
+
+/// Why `c` is not a surface (a slice through a cloud), or None when either of its planarity
+/// shares passes its bar.
+fn not_a_surface(c: &PlaneCandidate, settings: &ProposalSettings) -> Option<String> {
+    let flat =
+        c.planarity >= settings.min_planarity || c.wall_planarity >= settings.min_wall_planarity;
+    (!flat).then(|| {
+        format!(
+            "not a surface: {:.0}% of the points near its plane lie on it over its hull, {:.0}% \
+             over its own cells (at least {:.0}% over its hull or {:.0}% over its own cells \
+             needed)",
+            100.0 * c.planarity,
+            100.0 * c.wall_planarity,
+            100.0 * settings.min_planarity,
+            100.0 * settings.min_wall_planarity
+        )
+    })
 }
 
 /// Hand each opening of a candidate that a structure is turned in over to that structure
