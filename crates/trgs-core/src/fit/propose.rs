@@ -54,7 +54,7 @@ pub struct ProposalSettings {
     /// the mirrored room right behind the glass, within a few thresholds of its plane (the
     /// family's mirror and two drawn ones scored 0.30-0.39 at step 200 of 2000). That room lies
     /// over the wall's hole: over the cells the wall holds points in, the three walls scored
-    /// 0.50-0.59, slices through the objects of a room at most 0.48.
+    /// 0.50-0.60, slices through the objects of a room at most 0.48.
     pub min_wall_planarity: f64,
 }
 

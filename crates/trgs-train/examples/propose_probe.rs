@@ -1,27 +1,42 @@
-//! Probe: the plane proposal on a scene folder's sparse points (and a model's opaque Gaussians).
-//! `cargo run --example propose_probe -p trgs-core -- SCENE [MODEL.ply]`
+//! Probe: the plane proposal on a scene folder's sparse points and a model's opaque primary
+//! Gaussians, seen by its training views, as `--planes auto` runs it at the end of stage 1.
+//! `cargo run --release --example propose_probe -p trgs-train -- SCENE [MODEL.ply|checkpoint.trgs]`
+//! A checkpoint is the model at the step it was written: a run with `--checkpoint-every 200`
+//! holds the model each proposal try sees (copy the file away after each step you want).
 use glam::DVec3;
 use std::path::Path;
 use trgs_core::fit::{ProposalSettings, propose_planes};
 use trgs_core::io::SceneFolder;
 use trgs_core::rng::Rng;
-use trgs_core::scene::Population;
+use trgs_core::scene::{Gaussians, Population};
+use trgs_train::checkpoint::read_checkpoint;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let folder = SceneFolder::open(Path::new(&args[1])).expect("scene");
     let mut points: Vec<DVec3> = folder.points.iter().map(|(p, _)| DVec3::from_array(*p)).collect();
     let sparse = points.len();
-    if let Some(model) = args.get(2) {
-        let g = trgs_core::io::ply::read_ply(Path::new(model)).expect("ply");
+    if let Some(model) = args.get(2).map(Path::new) {
+        let g: Gaussians<f32> = if model.extension().is_some_and(|e| e == "trgs") {
+            let ck = read_checkpoint(model).expect("checkpoint");
+            println!("checkpoint of step {}", ck.step);
+            ck.state.gaussians
+        } else {
+            trgs_core::io::ply::read_ply(model).expect("ply")
+        };
         for i in 0..g.len() {
             let o = 1.0 / (1.0 + (-g.opacity_logits[i]).exp());
-            if o > 0.5 && g.populations[i] == Population::Primary {
+            if o >= 0.5 && g.populations[i] == Population::Primary {
                 points.push(DVec3::from_array(g.means[i].map(f64::from)));
             }
         }
     }
-    let cameras: Vec<_> = folder.views.iter().map(|v| v.camera.clone()).collect();
+    let cameras: Vec<_> = folder
+        .views
+        .iter()
+        .filter(|v| !folder.test_views.contains(&v.camera.name))
+        .map(|v| v.camera.clone())
+        .collect();
     let centre = points.iter().copied().sum::<DVec3>() / points.len() as f64;
     let cam_centre = cameras.iter().map(|c| c.pose.centre()).sum::<DVec3>() / cameras.len() as f64;
     let extent =
