@@ -7,30 +7,30 @@ use glam::DVec3;
 use std::path::Path;
 use trgs_core::fit::{ProposalSettings, propose_planes};
 use trgs_core::io::SceneFolder;
+use trgs_core::io::ply::read_ply;
 use trgs_core::rng::Rng;
-use trgs_core::scene::{Gaussians, Population};
 use trgs_train::checkpoint::read_checkpoint;
+use trgs_train::run::opaque_centres;
 
-fn main() {
+fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
-    let folder = SceneFolder::open(Path::new(&args[1])).expect("scene");
-    let mut points: Vec<DVec3> = folder.points.iter().map(|(p, _)| DVec3::from_array(*p)).collect();
-    let sparse = points.len();
-    if let Some(model) = args.get(2).map(Path::new) {
-        let g: Gaussians<f32> = if model.extension().is_some_and(|e| e == "trgs") {
-            let ck = read_checkpoint(model).expect("checkpoint");
+    let Some(scene) = args.get(1).map(Path::new) else {
+        eprintln!("usage: propose_probe SCENE [MODEL.ply|checkpoint.trgs]");
+        std::process::exit(2);
+    };
+    let folder = SceneFolder::open(scene)?;
+    // As the trial: the model's opaque primary centres, then the sparse points.
+    let mut points = match args.get(2).map(Path::new) {
+        Some(model) if model.extension().is_some_and(|e| e == "trgs") => {
+            let ck = read_checkpoint(model)?;
             println!("checkpoint of step {}", ck.step);
-            ck.state.gaussians
-        } else {
-            trgs_core::io::ply::read_ply(model).expect("ply")
-        };
-        for i in 0..g.len() {
-            let o = 1.0 / (1.0 + (-g.opacity_logits[i]).exp());
-            if o >= 0.5 && g.populations[i] == Population::Primary {
-                points.push(DVec3::from_array(g.means[i].map(f64::from)));
-            }
+            opaque_centres(&ck.state.gaussians)
         }
-    }
+        Some(model) => opaque_centres(&read_ply(model)?),
+        None => Vec::new(),
+    };
+    let sparse = folder.points.len();
+    points.extend(folder.points.iter().map(|(p, _)| DVec3::from_array(*p)));
     let cameras: Vec<_> = folder
         .views
         .iter()
@@ -75,4 +75,5 @@ fn main() {
             c.rejected.clone().unwrap_or("PROPOSED".into())
         );
     }
+    Ok(())
 }

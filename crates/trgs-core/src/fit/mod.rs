@@ -11,6 +11,7 @@
 mod exposure;
 mod hull;
 mod openings;
+mod planarity;
 mod propose;
 mod ransac;
 mod rectangle;

@@ -10,6 +10,7 @@
 use glam::DVec3;
 
 use super::openings::{hand_over, opening_holding};
+use super::planarity::planarity;
 use super::see_through::{SeeThrough, see_through};
 use super::structures::{Structure, StructureSettings, find_structures, hulls_touch};
 use crate::rng::Rng;
@@ -95,8 +96,8 @@ pub struct PlaneCandidate {
     pub cameras_in_front: f64,
     /// The structure's size (its inliers' minimum-area box), width x height.
     pub structure_size: (f64, f64),
-    /// Of the points within [`PLANARITY_SLAB`] thresholds of its plane inside its hull, the
-    /// fraction within one: near 1 for a surface, low for a slice through a cloud.
+    /// Of the points within `PLANARITY_SLAB` (`super::planarity`) thresholds of its plane inside
+    /// its hull, the fraction within one: near 1 for a surface, low for a slice through a cloud.
     pub planarity: f64,
     /// The same over the cells of its plane that hold its points ([`Structure::blocks`]): the
     /// wall around a hole without what is seen through the hole.
@@ -346,30 +347,6 @@ fn same_reflector(a: &Structure, b: &Structure, offset: f64, settings: &Proposal
         && hulls_touch(a, b, 0.0)
 }
 
-/// How many thresholds from a plane count as near it for [`PlaneCandidate::planarity`] and
-/// [`PlaneCandidate::wall_planarity`].
-pub const PLANARITY_SLAB: f64 = 4.0;
-
-/// [`PlaneCandidate::planarity`] and [`PlaneCandidate::wall_planarity`] of `s`.
-fn planarity(s: &Structure, points: &[DVec3], threshold: f64) -> (f64, f64) {
-    let (mut near, mut on, mut near_wall, mut on_wall) = (0usize, 0usize, 0usize, 0usize);
-    for &p in points {
-        let d = s.signed_distance(p).abs();
-        let q = s.to_plane(p);
-        if d <= PLANARITY_SLAB * threshold && s.hull_contains(q, 0.0) {
-            let flat = usize::from(d <= threshold);
-            near += 1;
-            on += flat;
-            if s.blocks(q) {
-                near_wall += 1;
-                on_wall += flat;
-            }
-        }
-    }
-    let share = |on: usize, near: usize| if near == 0 { 0.0 } else { on as f64 / near as f64 };
-    (share(on, near), share(on_wall, near_wall))
-}
-
 /// The side of `s` that the cameras seeing it stand on (its normal or the negation), and the
 /// fraction of them on that side. A camera sees the structure when it sees any of up to 64 of its
 /// points, sampled evenly.
@@ -528,28 +505,6 @@ mod tests {
                 DVec3::new(rng.range(-0.5, 0.5), rng.range(0.5, 1.5), rng.range(-0.115, -0.04))
             })
             .collect()
-    }
-
-    #[test]
-    fn the_room_grown_right_behind_a_mirror_lowers_its_planarity_but_not_its_walls() {
-        let (mut points, _) = room(&[(-0.5, 0.5)]);
-        let wall: Vec<usize> = (0..points.len()).filter(|&i| points[i].z == 0.0).collect();
-        points.extend(mirrored_room_behind_the_glass());
-        let s = Structure::from_inliers(&points, wall).expect("the wall");
-        let (flat, wall_flat) = planarity(&s, &points, 0.03);
-        assert!(flat < 0.4, "{flat}");
-        // The cells along the hole's edge hold both the wall's points and some of the room's.
-        assert!(wall_flat >= 0.5, "{wall_flat}");
-        // A slice through a cloud: three times as many points near it off it as on it, over its
-        // own cells too.
-        let mut rng = Rng::new(3);
-        let cloud: Vec<DVec3> = (0..20_000)
-            .map(|_| DVec3::new(rng.uniform(), rng.uniform(), 0.24 * rng.uniform() - 0.12))
-            .collect();
-        let slice: Vec<usize> = (0..cloud.len()).filter(|&i| cloud[i].z.abs() <= 0.03).collect();
-        let s = Structure::from_inliers(&cloud, slice).expect("a slice");
-        let (flat, wall_flat) = planarity(&s, &cloud, 0.03);
-        assert!(flat < 0.4 && wall_flat < 0.4, "{flat} {wall_flat}");
     }
 
     #[test]

@@ -51,6 +51,7 @@ pub use folder::LOCK_FILE;
 pub use log::LOG_FILE;
 pub use options::RunOptions;
 pub use outputs::RunSummary;
+pub use plane_trial::opaque_centres;
 pub use scene::DEMO_SCENE_MARKER;
 pub use state::RunState;
 

@@ -275,8 +275,9 @@ fn upper_decile(values: &mut [f32]) -> f64 {
     f64::from(*values.select_nth_unstable_by(k, f32::total_cmp).1)
 }
 
-/// The centres of the primary Gaussians at least [`OPAQUE`].
-fn opaque_centres(g: &Gaussians<f32>) -> Vec<DVec3> {
+/// The centres of the primary Gaussians at least [`OPAQUE`]: with the sparse points, what the
+/// proposal sees of the scene (also `examples/propose_probe`).
+pub fn opaque_centres(g: &Gaussians<f32>) -> Vec<DVec3> {
     let logit = (OPAQUE / (1.0 - OPAQUE)).ln();
     (0..g.len())
         .filter(|&i| g.populations[i] == Population::Primary && g.opacity_logits[i] >= logit)
