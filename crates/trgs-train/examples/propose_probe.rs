@@ -3,12 +3,15 @@
 //! `cargo run --release --example propose_probe -p trgs-train -- SCENE [MODEL.ply|checkpoint.trgs]`
 //! A checkpoint is the model at the step it was written: a run with `--checkpoint-every 200`
 //! holds the model each proposal try sees (copy the file away after each step you want).
+//! For a synthetic scene (a `gt/planes.json` beside its images) each proposed plane is also
+//! measured against the nearest true one: the first rectangle the trial starts from.
 use glam::DVec3;
 use std::path::Path;
 use trgs_core::fit::{ProposalSettings, propose_planes};
-use trgs_core::io::SceneFolder;
 use trgs_core::io::ply::read_ply;
+use trgs_core::io::{SceneFolder, read_planes_json};
 use trgs_core::rng::Rng;
+use trgs_core::scene::ReflectionPlane;
 use trgs_train::checkpoint::read_checkpoint;
 use trgs_train::run::opaque_centres;
 
@@ -74,6 +77,37 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             c.opening_of,
             c.rejected.clone().unwrap_or("PROPOSED".into())
         );
+    }
+    // A synthetic scene's truth: each proposed plane against the nearest true one, measured as
+    // `train` measures its planes (normal angle, centre distance over the true diagonal), with
+    // its extent along the true plane's axes.
+    let truth_path = scene.join("gt").join("planes.json");
+    if truth_path.is_file() {
+        let truths: Vec<_> =
+            read_planes_json(&truth_path)?.into_iter().filter_map(|s| s.plane).collect();
+        for (k, c) in found.candidates.iter().enumerate() {
+            let (None, Some(p)) = (&c.rejected, c.plane) else { continue };
+            let nearest = truths.iter().min_by(|a, b| {
+                let d = |t: &&ReflectionPlane| p.centre.distance(t.centre);
+                d(a).total_cmp(&d(b))
+            });
+            if let Some(t) = nearest {
+                let (a, b) = (t.axis.normalize(), t.unit_normal().cross(t.axis.normalize()));
+                let (u, v) = (p.axis.normalize(), p.unit_normal().cross(p.axis.normalize()));
+                let along = |e: DVec3| u.dot(e).abs() * p.width + v.dot(e).abs() * p.height;
+                let angle = p.unit_normal().dot(t.unit_normal()).abs().min(1.0).acos();
+                println!(
+                    "candidate {k} against the truth: normal off by {:.2} deg, centre by {:.2}% \
+                     of the size, {:.2} x {:.2} along its axes (truth {:.2} x {:.2})",
+                    angle.to_degrees(),
+                    100.0 * p.centre.distance(t.centre) / t.width.hypot(t.height),
+                    along(a),
+                    along(b),
+                    t.width,
+                    t.height
+                );
+            }
+        }
     }
     Ok(())
 }

@@ -5,6 +5,7 @@
 //! lies behind the mirror). Where those sight lines cross the plane outlines the see-through
 //! region: the initial extent of a candidate plane.
 use glam::{DVec2, DVec3};
+use std::collections::HashMap;
 
 use super::hull::{OrientedBox, min_area_box};
 use super::structures::{Structure, grid_components};
@@ -27,22 +28,52 @@ pub struct SeeThrough {
 /// of their own, are one region, while a few stray sight lines are not.
 pub const REGION_GROUP_FRACTION: f64 = 0.2;
 
+/// A grid cell is part of a see-through region when it holds at least this fraction of the
+/// crossings of the median crossing's cell (crossings ranked by their cell's count). Every
+/// camera's sight lines to the many points behind a pane cross the pane's own cells; what lies
+/// just behind a frame's face or beside the glass (the wall a mirror hangs on, a few centimetres
+/// behind its frame, and the sparse points on it) is crossed by few, in the frame's sampling
+/// gaps. Left in, those crossings widened a framed mirror's first rectangle over its frame: its
+/// glass Gaussians trained there and its plane stayed on the frame's face. Higher fractions cut
+/// into panes seen by few cameras, where fewer sight lines cross near the edges (probed on
+/// plain-run checkpoints: docs/RESULTS.md, "Planes without masks").
+pub const REGION_CELL_DENSITY: f64 = 0.3;
+
 impl SeeThrough {
     /// The rectangle (plane coordinates) of the see-through region: the minimum-area box of the
-    /// crossings in the connected groups of grid cells of size `cell` that hold at least
+    /// crossings in grid cells of size `cell` that hold at least [`REGION_CELL_DENSITY`] of the
+    /// median crossing's cell's count, and of those, in the connected groups of cells that hold at least
     /// [`REGION_GROUP_FRACTION`] of the largest group's crossings. `None` without crossings or
     /// for a region of no area.
     pub fn region(&self, cell: f64) -> Option<OrientedBox> {
-        let groups = grid_components(&self.crossings, cell);
+        let crossings = dense_crossings(&self.crossings, cell);
+        let groups = grid_components(&crossings, cell);
         let least = REGION_GROUP_FRACTION * groups.first()?.len() as f64;
         let inside: Vec<DVec2> = groups
             .iter()
             .take_while(|g| g.len() as f64 >= least)
             .flatten()
-            .map(|&k| self.crossings[k])
+            .map(|&k| crossings[k])
             .collect();
         min_area_box(&inside).filter(|b| b.width > 0.0 && b.height > 0.0)
     }
+}
+
+/// The crossings in grid cells of size `cell` that hold at least [`REGION_CELL_DENSITY`] of the
+/// crossings of the median crossing's cell.
+fn dense_crossings(crossings: &[DVec2], cell: f64) -> Vec<DVec2> {
+    let cell_of = |q: &DVec2| ((q.x / cell).floor() as i64, (q.y / cell).floor() as i64);
+    let mut counts: HashMap<(i64, i64), usize> = HashMap::new();
+    for q in crossings {
+        *counts.entry(cell_of(q)).or_default() += 1;
+    }
+    // The median over the crossings, not over the cells: a wide frame of sparse cells can hold
+    // more cells than the pane does, but fewer crossings.
+    let mut sorted: Vec<usize> = crossings.iter().map(|q| counts[&cell_of(q)]).collect();
+    sorted.sort_unstable();
+    let Some(&median) = sorted.get(sorted.len() / 2) else { return Vec::new() };
+    let least = REGION_CELL_DENSITY * median as f64;
+    crossings.iter().copied().filter(|q| counts[&cell_of(q)] as f64 >= least).collect()
 }
 
 /// The points among `candidates` that the `cameras` see through holes in `structure`
@@ -169,6 +200,27 @@ mod tests {
         let seen = SeeThrough { points: vec![0], crossings, sight_lines: Vec::new() };
         let b = seen.region(0.1).expect("a region");
         assert!((b.width - 2.95).abs() < 1e-9 && (b.height - 0.45).abs() < 1e-9, "{b:?}");
+    }
+
+    #[test]
+    fn the_region_leaves_out_the_few_crossings_over_a_frame_around_the_pane() {
+        // A 1 x 0.5 pane crossed densely (25 crossings a cell of 0.1), in a frame 0.15 wide
+        // whose sampling gaps a few sight lines cross (4 a cell), touching the pane's crossings.
+        let mut crossings = Vec::new();
+        for iy in -15..65 {
+            for ix in -15..115 {
+                let q = DVec2::new(ix as f64 * 0.01 + 0.005, iy as f64 * 0.01 + 0.005);
+                let in_pane = (0.0..1.0).contains(&q.x) && (0.0..0.5).contains(&q.y);
+                let every = if in_pane { 2 } else { 5 };
+                if ix % every == 0 && iy % every == 0 {
+                    crossings.push(q);
+                }
+            }
+        }
+        let seen = SeeThrough { points: vec![0], crossings, sight_lines: Vec::new() };
+        let b = seen.region(0.1).expect("a region");
+        assert!((0.95..1.0).contains(&b.width) && (0.45..0.5).contains(&b.height), "{b:?}");
+        assert!(b.centre.distance(DVec2::new(0.5, 0.25)) < 0.01, "{b:?}");
     }
 
     #[test]
