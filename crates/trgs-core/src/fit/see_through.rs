@@ -42,9 +42,9 @@ pub const REGION_CELL_DENSITY: f64 = 0.3;
 impl SeeThrough {
     /// The rectangle (plane coordinates) of the see-through region: the minimum-area box of the
     /// crossings in grid cells of size `cell` that hold at least [`REGION_CELL_DENSITY`] of the
-    /// median crossing's cell's count, and of those, in the connected groups of cells that hold at least
-    /// [`REGION_GROUP_FRACTION`] of the largest group's crossings. `None` without crossings or
-    /// for a region of no area.
+    /// median crossing's cell's count and, of those, in the connected groups of cells that hold
+    /// at least [`REGION_GROUP_FRACTION`] of the largest group's crossings; widened by half a
+    /// cell on each side. `None` without crossings or for a region of no area.
     pub fn region(&self, cell: f64) -> Option<OrientedBox> {
         let crossings = dense_crossings(&self.crossings, cell);
         let groups = grid_components(&crossings, cell);
@@ -55,7 +55,14 @@ impl SeeThrough {
             .flatten()
             .map(|&k| crossings[k])
             .collect();
-        min_area_box(&inside).filter(|b| b.width > 0.0 && b.height > 0.0)
+        // A cell across the glass's edge is partly glass, so crossed by fewer sight lines, and
+        // may be left out: half a cell more on each side. The trial's refit trims a rectangle
+        // to its learned glass but cannot grow it past where its glass Gaussians started.
+        min_area_box(&inside).filter(|b| b.width > 0.0 && b.height > 0.0).map(|b| OrientedBox {
+            width: b.width + cell,
+            height: b.height + cell,
+            ..b
+        })
     }
 }
 
@@ -199,7 +206,8 @@ mod tests {
         crossings.extend((0..30).map(|k| DVec2::new(5.0 + 0.01 * k as f64, 0.0)));
         let seen = SeeThrough { points: vec![0], crossings, sight_lines: Vec::new() };
         let b = seen.region(0.1).expect("a region");
-        assert!((b.width - 2.95).abs() < 1e-9 && (b.height - 0.45).abs() < 1e-9, "{b:?}");
+        // The crossings' box (2.95 x 0.45) and half a cell on each side.
+        assert!((b.width - 3.05).abs() < 1e-9 && (b.height - 0.55).abs() < 1e-9, "{b:?}");
     }
 
     #[test]
@@ -219,7 +227,8 @@ mod tests {
         }
         let seen = SeeThrough { points: vec![0], crossings, sight_lines: Vec::new() };
         let b = seen.region(0.1).expect("a region");
-        assert!((0.95..1.0).contains(&b.width) && (0.45..0.5).contains(&b.height), "{b:?}");
+        // The pane's crossings span 0.99 x 0.49; half a cell more on each side.
+        assert!((1.05..1.1).contains(&b.width) && (0.55..0.6).contains(&b.height), "{b:?}");
         assert!(b.centre.distance(DVec2::new(0.5, 0.25)) < 0.01, "{b:?}");
     }
 
@@ -234,6 +243,6 @@ mod tests {
         crossings.push(DVec2::new(5.0, 5.0));
         let seen = SeeThrough { points: vec![0], crossings, sight_lines: Vec::new() };
         let b = seen.region(0.1).expect("a region");
-        assert!((b.width - 0.95).abs() < 1e-9 && (b.height - 0.45).abs() < 1e-9, "{b:?}");
+        assert!((b.width - 1.05).abs() < 1e-9 && (b.height - 0.55).abs() < 1e-9, "{b:?}");
     }
 }
