@@ -95,12 +95,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 let (a, b) = (t.axis.normalize(), t.unit_normal().cross(t.axis.normalize()));
                 let (u, v) = (p.axis.normalize(), p.unit_normal().cross(p.axis.normalize()));
                 let along = |e: DVec3| u.dot(e).abs() * p.width + v.dot(e).abs() * p.height;
-                let angle = p.unit_normal().dot(t.unit_normal()).abs().min(1.0).acos();
+                let (angle, centre) = p.error_against(t);
                 println!(
-                    "candidate {k} against the truth: normal off by {:.2} deg, centre by {:.2}% \
-                     of the size, {:.2} x {:.2} along its axes (truth {:.2} x {:.2})",
-                    angle.to_degrees(),
-                    100.0 * p.centre.distance(t.centre) / t.width.hypot(t.height),
+                    "candidate {k} against the truth: normal off by {angle:.2} deg, centre by \
+                     {:.2}% of the size, {:.2} x {:.2} along its axes (truth {:.2} x {:.2})",
+                    100.0 * centre,
                     along(a),
                     along(b),
                     t.width,

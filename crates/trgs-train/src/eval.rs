@@ -297,12 +297,11 @@ pub fn compare_with_truth(
     if planes_path.is_file() {
         for spec in read_planes_json(&planes_path)? {
             let Some(truth) = spec.plane else { continue };
-            let diag = truth.width.hypot(truth.height);
             let best = planes
                 .iter()
                 .map(|p| {
-                    let cos = p.unit_normal().dot(truth.unit_normal()).abs().min(1.0);
-                    (cos.acos().to_degrees(), p.centre.distance(truth.centre) / diag, p.r0())
+                    let (angle, centre) = p.error_against(&truth);
+                    (angle, centre, p.r0())
                 })
                 .min_by(|a, b| a.1.total_cmp(&b.1));
             let (angle, centre, trained) = best.unwrap_or((f64::NAN, f64::NAN, f64::NAN));

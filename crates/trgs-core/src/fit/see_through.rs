@@ -8,7 +8,7 @@ use glam::{DVec2, DVec3};
 use std::collections::HashMap;
 
 use super::hull::{OrientedBox, min_area_box};
-use super::structures::{Structure, grid_components};
+use super::structures::{Structure, grid_cell, grid_components};
 use crate::scene::Camera;
 
 /// The points seen through a structure and where their sight lines cross it.
@@ -69,7 +69,7 @@ impl SeeThrough {
 /// The crossings in grid cells of size `cell` that hold at least [`REGION_CELL_DENSITY`] of the
 /// crossings of the median crossing's cell.
 fn dense_crossings(crossings: &[DVec2], cell: f64) -> Vec<DVec2> {
-    let cell_of = |q: &DVec2| ((q.x / cell).floor() as i64, (q.y / cell).floor() as i64);
+    let cell_of = |q: &DVec2| grid_cell(*q, cell);
     let mut counts: HashMap<(i64, i64), usize> = HashMap::new();
     for q in crossings {
         *counts.entry(cell_of(q)).or_default() += 1;

@@ -63,8 +63,7 @@ impl Structure {
     }
 
     fn cell_of(&self, q: DVec2) -> (i64, i64) {
-        let c = q / self.occupancy_cell;
-        (c.x.floor() as i64, c.y.floor() as i64)
+        grid_cell(q, self.occupancy_cell)
     }
 
     /// Whether plane coordinates `q` fall in a hole of the structure: inside its hull, in an
@@ -171,14 +170,19 @@ fn connected_pieces(points: &[DVec3], plane: &Structure, cell: f64) -> Vec<Vec<u
         .collect()
 }
 
+/// The cell of a square grid of side `cell` (origin at the plane's origin) that holds `q`.
+pub(super) fn grid_cell(q: DVec2, cell: f64) -> (i64, i64) {
+    let c = q / cell;
+    (c.x.floor() as i64, c.y.floor() as i64)
+}
+
 /// The indices of `coords` grouped by the 8-connected components of the grid cells of size
 /// `cell` they occupy, the largest group first (ties: the component met first in cell order),
 /// each group ascending.
 pub(super) fn grid_components(coords: &[DVec2], cell: f64) -> Vec<Vec<usize>> {
     let mut cells: HashMap<(i64, i64), Vec<usize>> = HashMap::new();
     for (k, q) in coords.iter().enumerate() {
-        let c = *q / cell;
-        cells.entry((c.x.floor() as i64, c.y.floor() as i64)).or_default().push(k);
+        cells.entry(grid_cell(*q, cell)).or_default().push(k);
     }
     let mut keys: Vec<(i64, i64)> = cells.keys().copied().collect();
     keys.sort_unstable();

@@ -70,6 +70,15 @@ impl ReflectionPlane {
         self.normal.normalize()
     }
 
+    /// How far this plane lies from `truth`: the angle between their normals in degrees (either
+    /// facing) and the distance between their centres as a fraction of `truth`'s diagonal, the
+    /// measures of the synthetic scenes' plane bars.
+    pub fn error_against(&self, truth: &Self) -> (f64, f64) {
+        let cos = self.unit_normal().dot(truth.unit_normal()).abs().min(1.0);
+        let diag = truth.width.hypot(truth.height);
+        (cos.acos().to_degrees(), self.centre.distance(truth.centre) / diag)
+    }
+
     /// The height direction `b = n x t`.
     pub fn bitangent(&self) -> DVec3 {
         self.unit_normal().cross(self.axis)
@@ -146,5 +155,24 @@ impl ReflectionPlane {
             )));
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_error_against_the_truth_is_the_normals_angle_and_the_centre_over_the_diagonal() {
+        let truth =
+            ReflectionPlane::new(DVec3::ZERO, DVec3::Z, DVec3::X, 3.0, 4.0, Material::Glass);
+        let turned = DVec3::new(0.0, 2f64.to_radians().sin(), -2f64.to_radians().cos());
+        let p = ReflectionPlane {
+            centre: DVec3::new(0.1, 0.0, 0.0),
+            ..ReflectionPlane::new(DVec3::ZERO, turned, DVec3::X, 1.0, 1.0, Material::Mirror)
+        };
+        let (angle, centre) = p.error_against(&truth);
+        assert!((angle - 2.0).abs() < 1e-9, "either facing: {angle}");
+        assert!((centre - 0.02).abs() < 1e-12, "0.1 of a diagonal of 5: {centre}");
     }
 }
