@@ -184,6 +184,11 @@ fn train(ctx: &GpuContext, config: RunConfig) -> Result<Outcome> {
     serde_json::from_str(&text).with_context(|| format!("reading {}", metrics.display()))
 }
 
+/// A trained plane's R0, or "none" where no plane was trained for the true one (NaN).
+fn fmt_r0(r0: f64) -> String {
+    if r0.is_nan() { "none".into() } else { format!("{r0:.3}") }
+}
+
 fn fmt(v: Option<f64>) -> String {
     v.map_or("-".into(), |v| format!("{v:.2}"))
 }
@@ -202,6 +207,7 @@ fn table(rows: &[(FamilyMember, Outcome, Outcome)], steps: u32) -> String {
     let mut t_gains = Vec::new();
     let mut rest_worst = f64::INFINITY;
     let mut plane_worst: (f64, f64) = (0.0, 0.0);
+    let mut unfound = 0usize;
     for (m, tr, plain) in rows {
         let gain = tr.psnr - plain.psnr;
         gains.push(gain);
@@ -221,6 +227,12 @@ fn table(rows: &[(FamilyMember, Outcome, Outcome)], steps: u32) -> String {
                 t.planes
                     .iter()
                     .map(|&(angle, centre)| {
+                        // NaN: no trained plane for this true one (none was fitted); the bar
+                        // then fails, as for a plane found far off.
+                        if angle.is_nan() || centre.is_nan() {
+                            unfound += 1;
+                            return "none".to_string();
+                        }
                         plane_worst = (plane_worst.0.max(angle), plane_worst.1.max(centre));
                         format!("{angle:.2}, {:.2}", 100.0 * centre)
                     })
@@ -228,7 +240,7 @@ fn table(rows: &[(FamilyMember, Outcome, Outcome)], steps: u32) -> String {
             })
             .unwrap_or_default();
         let r0: Vec<String> = tt
-            .map(|t| t.r0.iter().map(|(a, b)| format!("{a:.3} ({b:.3})")).collect())
+            .map(|t| t.r0.iter().map(|(a, b)| format!("{} ({b:.3})", fmt_r0(*a))).collect())
             .unwrap_or_default();
         let _ = writeln!(
             s,
@@ -260,7 +272,7 @@ fn table(rows: &[(FamilyMember, Outcome, Outcome)], steps: u32) -> String {
         s,
         "\nOver {} members: mean gain {:+.2} dB (bar +1.00: {}), worst {:+.2} dB (bar -0.10: {}); \
          elsewhere worst {:+.2} dB (bar -0.10: {}); transmission mean gain {:+.2} dB (bar +3.00: \
-         {}), worst {:+.2} dB (bar > 0: {}); planes worst {:.2} deg, {:.2}% (bar 2 deg, 2%: {}).\n",
+         {}), worst {:+.2} dB (bar > 0: {}); planes worst {:.2} deg, {:.2}%{} (bar 2 deg, 2%: {}).\n",
         rows.len(),
         mean(&gains),
         verdict(mean(&gains) >= 1.0),
@@ -274,7 +286,42 @@ fn table(rows: &[(FamilyMember, Outcome, Outcome)], steps: u32) -> String {
         verdict(t_worst > 0.0),
         plane_worst.0,
         100.0 * plane_worst.1,
-        verdict(plane_worst.0 <= 2.0 && plane_worst.1 <= 0.02),
+        if unfound > 0 {
+            format!(", {unfound} true plane(s) with none trained")
+        } else {
+            String::new()
+        },
+        verdict(unfound == 0 && plane_worst.0 <= 2.0 && plane_worst.1 <= 0.02),
     );
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A run whose truth comparison found no trained plane for the true one (NaN, as metrics.json
+    /// writes it: null) reads "none" in the table and fails the planes bar.
+    #[test]
+    fn a_true_plane_without_a_trained_one_reads_none_and_fails_the_bar() {
+        let outcome = |truth: &str| -> Outcome {
+            serde_json::from_str(&format!(
+                r#"{{"psnr": 30.0, "train_seconds": 1.0, "gaussians": 10, "truth": {truth}}}"#
+            ))
+            .expect("outcome")
+        };
+        let found =
+            outcome(r#"{"planes": [[0.5, 0.01]], "r0": [[0.21, 0.2]], "transmission_psnr": 28.0}"#);
+        let unfound = outcome(
+            r#"{"planes": [[null, null]], "r0": [[null, 0.2]], "transmission_psnr": 28.0}"#,
+        );
+        let member = family::members().remove(0);
+        let plain = outcome("null");
+        let ok = table(&[(member.clone(), found, plain.clone())], 1);
+        assert!(ok.contains("| 0.50, 1.00 |") && ok.contains("(bar 2 deg, 2%: holds)"), "{ok}");
+        let bad = table(&[(member, unfound, plain)], 1);
+        assert!(!bad.contains("NaN"), "{bad}");
+        assert!(bad.contains("| none |") && bad.contains("none (0.200)"), "{bad}");
+        assert!(bad.contains("1 true plane(s) with none trained (bar 2 deg, 2%: FAILS)"), "{bad}");
+    }
 }
