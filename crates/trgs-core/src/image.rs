@@ -161,4 +161,83 @@ impl Image<u8> {
     pub fn to_f32(&self) -> Image<f32> {
         Image::<f32>::from_u8(self.width, self.height, self.channels, &self.data)
     }
+
+    /// A one-channel mask with its 4-connected pieces of non-zero pixels smaller than
+    /// `fraction` of the largest piece's pixel count set to zero.
+    pub fn without_small_pieces(&self, fraction: f64) -> Self {
+        debug_assert_eq!(self.channels, 1, "a mask has one channel");
+        let (w, h) = (self.width as usize, self.height as usize);
+        let mut piece = vec![usize::MAX; w * h];
+        let mut sizes: Vec<usize> = Vec::new();
+        let mut stack = Vec::new();
+        for start in 0..w * h {
+            if self.data[start] == 0 || piece[start] != usize::MAX {
+                continue;
+            }
+            let id = sizes.len();
+            piece[start] = id;
+            stack.push(start);
+            let mut size = 0;
+            while let Some(p) = stack.pop() {
+                size += 1;
+                let (x, y) = (p % w, p / w);
+                let neighbours = [
+                    (x > 0).then(|| p - 1),
+                    (x + 1 < w).then(|| p + 1),
+                    (y > 0).then(|| p - w),
+                    (y + 1 < h).then(|| p + w),
+                ];
+                for q in neighbours.into_iter().flatten() {
+                    if self.data[q] != 0 && piece[q] == usize::MAX {
+                        piece[q] = id;
+                        stack.push(q);
+                    }
+                }
+            }
+            sizes.push(size);
+        }
+        let least = fraction * sizes.iter().copied().max().unwrap_or(0) as f64;
+        let mut out = self.clone();
+        for (v, &id) in out.data.iter_mut().zip(&piece) {
+            if id != usize::MAX && (sizes[id] as f64) < least {
+                *v = 0;
+            }
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Image;
+
+    /// Rows of a mask drawn with '#' for set pixels.
+    fn mask(rows: &[&str]) -> Image<u8> {
+        let data = rows.iter().flat_map(|r| r.bytes().map(|b| u8::from(b == b'#'))).collect();
+        Image { width: rows[0].len() as u32, height: rows.len() as u32, channels: 1, data }
+    }
+
+    #[test]
+    fn small_pieces_go_and_pieces_near_the_largest_stay() {
+        // A pane (12 pixels), a pane of the same size beyond a mullion, a sliver (2 pixels) and
+        // a diagonal neighbour of the panes, which 4-connectivity keeps apart (1 pixel).
+        let m = mask(&[
+            "####.####..#", //
+            "####.####..#",
+            "####.####...",
+            "....#.......",
+        ]);
+        let kept = m.without_small_pieces(0.25);
+        let expected = mask(&[
+            "####.####...", //
+            "####.####...",
+            "####.####...",
+            "............",
+        ]);
+        assert_eq!(kept, expected);
+        // Nothing goes at fraction 0, and an empty mask stays empty.
+        assert_eq!(m.without_small_pieces(0.0), m);
+        let empty = mask(&["...."]);
+        assert_eq!(empty.without_small_pieces(0.5), empty);
+    }
 }

@@ -38,14 +38,16 @@ impl TrainingRun {
         let cameras: Vec<&Camera> = self.data.train.iter().map(|v| &v.camera).collect();
         for (k, list) in masks.iter().enumerate() {
             let before = planes[k];
-            let glass = |v: u8| v != NOT_GLASS;
-            let text = match refit_to_glass(&before, &cameras, list, &glass, &g, extent, &self.rng)
-                .map(|r| (r, "its mask or seen through it"))
-                .or_else(|| {
-                    let masked = |v: u8| v == MASKED_GLASS;
-                    refit_to_glass(&before, &cameras, list, &masked, &g, extent, &self.rng)
-                        .map(|r| (r, "its mask alone"))
-                }) {
+            let evidence = GlassEvidence::of(list);
+            let refit = |e: GlassEvidence| {
+                refit_to_glass(&before, &cameras, list, e, &g, extent, &self.rng)
+            };
+            // Glass seen through whose seen-through pixels pin no rectangle: its mask alone.
+            let fallback = (evidence != GlassEvidence::Mask).then_some(GlassEvidence::Mask);
+            let text = match refit(evidence)
+                .map(|r| (r, evidence.describe()))
+                .or_else(|| fallback.and_then(refit).map(|r| (r, "its mask alone")))
+            {
                 Some((refit, by)) => {
                     let fit = &refit.fit;
                     planes[k] = fit.plane;
@@ -97,8 +99,58 @@ struct GlassRefit {
     outline_deg: Option<f64>,
 }
 
+/// What says where a kept plane's glass is in the views of [`glass_pixels`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum GlassEvidence {
+    /// Glass one sees through: its pixels are those that see through the plane. A masked pixel
+    /// that does not is a frame or a mullion in the plane: the learned mask is smooth and spills
+    /// over the pane's edge onto them (on a pane turned in its opening, onto one side of its
+    /// frame only, and the rectangle then grew that way).
+    SeenThrough,
+    /// A mirror, which nothing is seen through once trained: its pixels are its mask's.
+    Mask,
+}
+
+impl GlassEvidence {
+    /// Which evidence `list`'s views ([`glass_pixels`] labels) hold: glass one sees through
+    /// where at least as many of the plane's pixels see through it as are masked without doing
+    /// so.
+    fn of(list: &[(usize, Image<u8>)]) -> Self {
+        let count = |label: u8| -> usize {
+            list.iter().map(|(_, m)| m.data.iter().filter(|&&v| v == label).count()).sum()
+        };
+        let seen = count(SEEN_THROUGH) + count(MASKED | SEEN_THROUGH);
+        if seen >= count(MASKED) { Self::SeenThrough } else { Self::Mask }
+    }
+
+    /// Whether a [`glass_pixels`] label is glass by this evidence.
+    fn takes(self, label: u8) -> bool {
+        let bit = match self {
+            Self::SeenThrough => SEEN_THROUGH,
+            Self::Mask => MASKED,
+        };
+        label & bit != 0
+    }
+
+    fn describe(self) -> &'static str {
+        match self {
+            Self::SeenThrough => "seen through it",
+            Self::Mask => "its mask",
+        }
+    }
+}
+
+/// Pieces of a view's glass smaller than this fraction of its largest piece are left out of the
+/// refit: the sight lines past a turned pane's frame through the gap it leaves in its opening
+/// see through its plane too, beyond the frame, and a rectangle stretched over the frame to
+/// take them in costs less than it gains (covered pixels that are not glass count
+/// [`SilhouetteSettings::outside_weight`]). Panes of one facade, apart between mullions, are
+/// of a size and stay.
+const GLASS_PIECE_FRACTION: f64 = 0.25;
+
 /// `before` moved onto the pixels of `list` (index into `cameras`, [`glass_pixels`] labels) that
-/// `glass` takes: as the masks' planes are initialised ([`fit_to_outline`], then
+/// `evidence` takes, less their small pieces ([`GLASS_PIECE_FRACTION`]): as the masks' planes
+/// are initialised ([`fit_to_outline`], then
 /// `fit::refine_to_masks`), the plane of the Gaussians `g` around the glass's outline first,
 /// where it turns `before` within [`OUTLINE_TURN_DEG`]; the proposal's normal comes
 /// from whatever structure it found, which for a pane turned in its opening is a fragment of
@@ -107,7 +159,7 @@ fn refit_to_glass(
     before: &ReflectionPlane,
     cameras: &[&Camera],
     list: &[(usize, Image<u8>)],
-    glass: &dyn Fn(u8) -> bool,
+    evidence: GlassEvidence,
     g: &Gaussians<f32>,
     extent: f64,
     rng: &Rng,
@@ -115,8 +167,8 @@ fn refit_to_glass(
     let binary: Vec<(usize, Image<u8>)> = list
         .iter()
         .map(|(vi, m)| {
-            let data = m.data.iter().map(|&v| u8::from(glass(v))).collect();
-            (*vi, Image { data, ..*m })
+            let data = m.data.iter().map(|&v| u8::from(evidence.takes(v))).collect();
+            (*vi, Image { data, ..*m }.without_small_pieces(GLASS_PIECE_FRACTION))
         })
         .filter(|(_, m)| m.data.contains(&1))
         .collect();
@@ -161,19 +213,20 @@ const REFIT_VIEWS: usize = 16;
 /// plane's depth there: what it shows lies beyond the plane, not on it (a frame, a wall).
 const SEEN_THROUGH_DEPTH: f32 = 1.1;
 
-/// [`glass_pixels`]' labels.
+/// [`glass_pixels`]' labels, bits of what a pixel shows: neither, either or both.
 const NOT_GLASS: u8 = 0;
 /// The learned mask says glass (M >= 1/2).
-const MASKED_GLASS: u8 = 1;
-/// The mask does not, but the view sees through the plane ([`SEEN_THROUGH_DEPTH`]).
-const SEEN_GLASS: u8 = 2;
+const MASKED: u8 = 1;
+/// The view sees through the plane there ([`SEEN_THROUGH_DEPTH`]).
+const SEEN_THROUGH: u8 = 2;
 
-/// Where a view's trained layers say plane `k`'s glass is: plane `k` is hit there and either
-/// the learned mask says glass ([`MASKED_GLASS`]) or the view sees through the plane
-/// ([`SEEN_GLASS`]). The mask alone leaves out glass whose reflection is faint (a dark floor
-/// seen through clear glass), where nothing in the loss holds M up, and a rectangle fitted to it
-/// shrinks off the pane; the depth alone leaves out a mirror, which nothing is seen through once
-/// trained. A frame or a wall inside the first rectangle has neither.
+/// What a view's trained layers say of plane `k`'s glass where plane `k` is hit: whether the
+/// learned mask says glass ([`MASKED`]) and whether the view sees through the plane
+/// ([`SEEN_THROUGH`]); [`GlassEvidence`] picks which of the two says glass. The mask alone
+/// leaves out glass whose reflection is faint (a dark floor seen through clear glass), where
+/// nothing in the loss holds M up, and a rectangle fitted to it shrinks off the pane; the depth
+/// alone leaves out a mirror, which nothing is seen through once trained. A frame or a wall
+/// inside the first rectangle is neither, where the mask does not spill onto it.
 fn glass_pixels(
     k: usize,
     plane: &ReflectionPlane,
@@ -192,13 +245,8 @@ fn glass_pixels(
             // Along a ray of camera-space z = 1, the distance to the plane is its depth.
             let seen_through = ray_rectangle_hit(plane, origin, camera.pixel_ray(x, y))
                 .is_some_and(|z| images.depth.data[p] >= SEEN_THROUGH_DEPTH * z as f32);
-            out.data[p] = if images.mask.data[p] >= 0.5 {
-                MASKED_GLASS
-            } else if seen_through {
-                SEEN_GLASS
-            } else {
-                NOT_GLASS
-            };
+            let masked = images.mask.data[p] >= 0.5;
+            out.data[p] = (u8::from(masked) * MASKED) | (u8::from(seen_through) * SEEN_THROUGH);
         }
     }
     out
@@ -244,31 +292,50 @@ mod tests {
     }
 
     #[test]
-    fn glass_is_where_the_mask_says_so_or_the_view_sees_through_the_plane() {
+    fn a_pixel_of_the_plane_says_whether_it_is_masked_and_whether_it_sees_through() {
         let (plane, camera, mut images) = pane_in_view();
         let inside: Vec<usize> = (0..64).filter(|&p| images.hit.data[p] == 1).collect();
         assert!(inside.len() >= 4 && inside.len() < 64, "{} pixels hit", inside.len());
-        let glass = |images: &FrameImages, k: usize, label: u8| -> Vec<usize> {
+        let labelled = |images: &FrameImages, k: usize, label: u8| -> Vec<usize> {
             let m = glass_pixels(k, &plane, &camera, images);
             (0..64).filter(|&p| m.data[p] == label).collect()
         };
-        // On the plane (a frame, a wall) with a low mask: not glass.
-        assert_eq!(glass(&images, 0, NOT_GLASS).len(), 64);
-        // Seen through with a low mask (faint reflection): glass, where the plane is hit only.
+        // On the plane (a frame, a wall) with a low mask: neither.
+        assert_eq!(labelled(&images, 0, NOT_GLASS).len(), 64);
+        // Seen through with a low mask (faint reflection), where the plane is hit only.
         images.depth = Image::filled(8, 8, 1, 3.0);
-        assert_eq!(glass(&images, 0, SEEN_GLASS), inside);
-        // On the plane with a high mask (a mirror): glass by the mask.
-        images.depth = Image::filled(8, 8, 1, 2.0);
+        assert_eq!(labelled(&images, 0, SEEN_THROUGH), inside);
+        // Both.
         images.mask = Image::filled(8, 8, 1, 0.9);
-        assert_eq!(glass(&images, 0, MASKED_GLASS), inside);
+        assert_eq!(labelled(&images, 0, MASKED | SEEN_THROUGH), inside);
+        // On the plane with a high mask (a mirror, or a frame the mask spills onto).
+        images.depth = Image::filled(8, 8, 1, 2.0);
+        assert_eq!(labelled(&images, 0, MASKED), inside);
         // Another plane's pixels are not this one's.
-        assert_eq!(glass(&images, 1, NOT_GLASS).len(), 64);
+        assert_eq!(labelled(&images, 1, NOT_GLASS).len(), 64);
     }
 
     #[test]
-    fn the_refit_turns_a_plane_to_the_frame_around_its_glass() {
+    fn glass_seen_through_is_told_from_a_mirror_by_its_pixels() {
+        let view = |labels: &[u8]| {
+            let data = labels.to_vec();
+            (0, Image { width: data.len() as u32, height: 1, channels: 1, data })
+        };
+        // A pane: mostly seen through, its mask spilt onto a frame (masked, not seen through).
+        let pane = [view(&[3, 3, 2, 2, 1, 1, 0])];
+        assert_eq!(GlassEvidence::of(&pane), GlassEvidence::SeenThrough);
+        // A mirror: nothing seen through it, its mask over it.
+        let mirror = [view(&[1, 1, 1, 0, 2])];
+        assert_eq!(GlassEvidence::of(&mirror), GlassEvidence::Mask);
+        let takes = |e: GlassEvidence| (0..4u8).filter(|&l| e.takes(l)).collect::<Vec<_>>();
+        assert_eq!(takes(GlassEvidence::SeenThrough), [SEEN_THROUGH, MASKED | SEEN_THROUGH]);
+        assert_eq!(takes(GlassEvidence::Mask), [MASKED, MASKED | SEEN_THROUGH]);
+    }
+
+    /// A 1 x 0.8 pane in z = 0 inside a frame of opaque Gaussians 0.1 wide, and eight cameras
+    /// 2.5 from it on an arc of 70 degrees.
+    fn framed_pane() -> (ReflectionPlane, Gaussians<f32>, Vec<Camera>) {
         use trgs_core::scene::{Intrinsics, Material, Pose};
-        // A 1 x 0.8 pane in z = 0 inside a frame of opaque Gaussians 0.1 wide.
         let truth =
             ReflectionPlane::new(DVec3::ZERO, DVec3::Z, DVec3::X, 1.0, 0.8, Material::Glass);
         let mut rng = Rng::new(5);
@@ -286,6 +353,41 @@ mod tests {
                 );
             }
         }
+        let k = Intrinsics::from_fov_x(60f64.to_radians(), 128, 96);
+        let cameras = (0..8)
+            .map(|i| {
+                let a = (-40.0 + 10.0 * f64::from(i)).to_radians();
+                let eye = DVec3::new(2.5 * a.sin(), 0.3 * a.cos(), 2.5 * a.cos());
+                Camera::new(format!("c{i}"), k, Pose::look_at(eye, DVec3::ZERO, DVec3::Y))
+            })
+            .collect();
+        (truth, g, cameras)
+    }
+
+    /// Each camera's [`glass_pixels`] labels, from the point where each pixel's ray meets z = 0.
+    fn labelled_views(cameras: &[Camera], label: impl Fn(DVec3) -> u8) -> Vec<(usize, Image<u8>)> {
+        cameras
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                let (w, h) = (c.intrinsics.width, c.intrinsics.height);
+                let mut m = Image::<u8>::new(w, h, 1);
+                for y in 0..h {
+                    for x in 0..w {
+                        let (o, d) = (c.pose.centre(), c.pixel_ray(x, y));
+                        m.data[(y * w + x) as usize] = label(o - d * (o.z / d.z));
+                    }
+                }
+                (i, m)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_refit_turns_a_plane_to_the_frame_around_its_glass() {
+        use trgs_core::scene::Material;
+        let (truth, g, cameras) = framed_pane();
+        let rng = Rng::new(5);
         // The proposal: a fragment of the frame, turned 5 deg, too wide and off centre.
         let turn = glam::DQuat::from_rotation_y(5f64.to_radians());
         let before = ReflectionPlane::new(
@@ -296,32 +398,11 @@ mod tests {
             1.0,
             Material::Glass,
         );
-        let k = Intrinsics::from_fov_x(60f64.to_radians(), 64, 48);
-        let cameras: Vec<Camera> = (0..8)
-            .map(|i| {
-                let a = (-40.0 + 10.0 * f64::from(i)).to_radians();
-                let eye = DVec3::new(2.5 * a.sin(), 0.3 * a.cos(), 2.5 * a.cos());
-                Camera::new(format!("c{i}"), k, Pose::look_at(eye, DVec3::ZERO, DVec3::Y))
-            })
-            .collect();
-        let list: Vec<(usize, Image<u8>)> = cameras
-            .iter()
-            .enumerate()
-            .map(|(i, c)| {
-                let mut m = Image::<u8>::new(64, 48, 1);
-                for y in 0..48 {
-                    for x in 0..64 {
-                        let hit = ray_rectangle_hit(&truth, c.pose.centre(), c.pixel_ray(x, y));
-                        m.data[(y * 64 + x) as usize] =
-                            if hit.is_some() { MASKED_GLASS } else { NOT_GLASS };
-                    }
-                }
-                (i, m)
-            })
-            .collect();
+        let on_pane = |q: DVec3| q.x.abs() < 0.5 && q.y.abs() < 0.4;
+        let list = labelled_views(&cameras, |q| if on_pane(q) { MASKED } else { NOT_GLASS });
         let refs: Vec<&Camera> = cameras.iter().collect();
-        let glass = |v: u8| v == MASKED_GLASS;
-        let refit = refit_to_glass(&before, &refs, &list, &glass, &g, 1.0, &rng).expect("a fit");
+        let glass = GlassEvidence::Mask;
+        let refit = refit_to_glass(&before, &refs, &list, glass, &g, 1.0, &rng).expect("a fit");
         let p = refit.fit.plane;
         let turned = refit.turned_deg.expect("turned to the frame");
         assert!((turned - 5.0).abs() < 0.5, "turned {turned} deg");
@@ -331,7 +412,47 @@ mod tests {
         // The same frame seen as the proposal turned 30 deg: a wall beside it, not turned to.
         let far = glam::DQuat::from_rotation_y(30f64.to_radians());
         let wall = ReflectionPlane { normal: far * DVec3::Z, axis: far * DVec3::X, ..before };
-        let kept = refit_to_glass(&wall, &refs, &list, &glass, &g, 1.0, &rng);
+        let kept = refit_to_glass(&wall, &refs, &list, glass, &g, 1.0, &rng);
         assert!(kept.is_none_or(|r| r.turned_deg.is_none()));
+    }
+
+    #[test]
+    fn the_refit_leaves_out_the_frame_the_mask_spills_onto_and_the_gap_past_it() {
+        use trgs_core::scene::Material;
+        let (truth, g, cameras) = framed_pane();
+        let rng = Rng::new(5);
+        // The first rectangle, over the frame on both sides (the refit cannot shrink one that
+        // reaches well past the glass: its cost counts only pixels near the glass).
+        let before = ReflectionPlane::new(
+            DVec3::new(0.04, 0.0, 0.0),
+            DVec3::Z,
+            DVec3::X,
+            1.2,
+            0.9,
+            Material::Glass,
+        );
+        // The pane is seen through and mostly masked; the learned mask spills onto the frame's
+        // right side, and past it the sight lines through the gap a turned pane leaves in its
+        // opening see through the plane too.
+        let list = labelled_views(&cameras, |q| {
+            let rows = q.y.abs() < 0.4;
+            match q.x {
+                x if rows && x.abs() < 0.5 => MASKED | SEEN_THROUGH,
+                x if rows && (0.5..0.6).contains(&x) => MASKED,
+                x if rows && (0.6..0.68).contains(&x) => SEEN_THROUGH,
+                _ => NOT_GLASS,
+            }
+        });
+        let refs: Vec<&Camera> = cameras.iter().collect();
+        let evidence = GlassEvidence::of(&list);
+        assert_eq!(evidence, GlassEvidence::SeenThrough);
+        let refit = refit_to_glass(&before, &refs, &list, evidence, &g, 1.0, &rng).expect("a fit");
+        let p = refit.fit.plane;
+        assert!(p.centre.distance(truth.centre) < 0.02, "{p:?}");
+        assert!((p.width - 1.0).abs() < 0.03 && (p.height - 0.8).abs() < 0.03, "{p:?}");
+        // By the mask, the frame's side is glass and the rectangle takes it in.
+        let masked = refit_to_glass(&before, &refs, &list, GlassEvidence::Mask, &g, 1.0, &rng);
+        let p = masked.expect("a fit").fit.plane;
+        assert!(p.width > 1.07 && p.centre.x > 0.035, "{p:?}");
     }
 }
