@@ -116,11 +116,12 @@ impl GlassEvidence {
     /// where at least as many of the plane's pixels see through it as are masked without doing
     /// so.
     fn of(list: &[(usize, Image<u8>)]) -> Self {
-        let count = |label: u8| -> usize {
-            list.iter().map(|(_, m)| m.data.iter().filter(|&&v| v == label).count()).sum()
+        let count = |what: fn(u8) -> bool| -> usize {
+            list.iter().map(|(_, m)| m.data.iter().filter(|&&v| what(v)).count()).sum()
         };
-        let seen = count(SEEN_THROUGH) + count(MASKED | SEEN_THROUGH);
-        if seen >= count(MASKED) { Self::SeenThrough } else { Self::Mask }
+        let seen = count(|v| v & SEEN_THROUGH != 0);
+        let masked_on_the_plane = count(|v| v & (MASKED | SEEN_THROUGH) == MASKED);
+        if seen >= masked_on_the_plane { Self::SeenThrough } else { Self::Mask }
     }
 
     /// Whether a [`glass_pixels`] label is glass by this evidence.
