@@ -13,11 +13,11 @@ use trgs_render::FrameImages;
 
 impl TrainingRun {
     /// Move each kept plane's rectangle onto its glass: where the training views hit it and the
-    /// trained layers say glass ([`glass_pixels`]), taken as each view's glass mask for the
-    /// masks' own refinement (`fit::refine_to_masks`). The first rectangle is the see-through
-    /// region of the proposal, which the frame and the sight lines past its edges widen. Where
-    /// the glass so found pins no rectangle within the refinement's limits, the learned mask
-    /// alone is tried.
+    /// trained layers say glass ([`glass_pixels`], read by the plane's [`GlassEvidence`]), taken
+    /// as each view's glass mask for the masks' own refinement (`fit::refine_to_masks`). The
+    /// first rectangle is the see-through region of the proposal, which the frame and the sight
+    /// lines past its edges widen. Where the glass so found pins no rectangle within the
+    /// refinement's limits, the learned mask alone is tried.
     pub(super) fn fit_kept_to_their_glass(&mut self) -> Result<()> {
         let mut planes = self.trainer.planes().to_vec();
         let n = self.data.train.len();
@@ -323,10 +323,11 @@ mod tests {
             (0, Image { width: data.len() as u32, height: 1, channels: 1, data })
         };
         // A pane: mostly seen through, its mask spilt onto a frame (masked, not seen through).
-        let pane = [view(&[3, 3, 2, 2, 1, 1, 0])];
+        let both = MASKED | SEEN_THROUGH;
+        let pane = [view(&[both, both, SEEN_THROUGH, SEEN_THROUGH, MASKED, MASKED, NOT_GLASS])];
         assert_eq!(GlassEvidence::of(&pane), GlassEvidence::SeenThrough);
         // A mirror: nothing seen through it, its mask over it.
-        let mirror = [view(&[1, 1, 1, 0, 2])];
+        let mirror = [view(&[MASKED, MASKED, MASKED, NOT_GLASS, SEEN_THROUGH])];
         assert_eq!(GlassEvidence::of(&mirror), GlassEvidence::Mask);
         let takes = |e: GlassEvidence| (0..4u8).filter(|&l| e.takes(l)).collect::<Vec<_>>();
         assert_eq!(takes(GlassEvidence::SeenThrough), [SEEN_THROUGH, MASKED | SEEN_THROUGH]);
