@@ -5,13 +5,16 @@
 //! holds the model each proposal try sees (copy the file away after each step you want).
 //! For a synthetic scene (a `gt/planes.json` beside its images) each proposed plane is also
 //! measured against the nearest true one: the first rectangle the trial starts from.
+//! `--seed S` (after the model) seeds RANSAC with S instead of 1; `--seeds N` runs the proposal with RANSAC seeds 1..=N instead and prints one
+//! line per seed: each true plane's nearest proposed plane against it. The first rectangle
+//! depends on which structures RANSAC draws, and a run's draws are not the probe's.
 use glam::DVec3;
 use std::path::Path;
 use trgs_core::fit::{ProposalSettings, propose_planes};
 use trgs_core::io::ply::read_ply;
 use trgs_core::io::{SceneFolder, read_planes_json};
 use trgs_core::rng::Rng;
-use trgs_core::scene::ReflectionPlane;
+use trgs_core::scene::{Camera, ReflectionPlane};
 use trgs_train::checkpoint::read_checkpoint;
 use trgs_train::run::opaque_centres;
 
@@ -49,8 +52,23 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         points.len(),
         cameras.len()
     );
+    let truth_path = scene.join("gt").join("planes.json");
+    let truths: Vec<ReflectionPlane> = if truth_path.is_file() {
+        read_planes_json(&truth_path)?.into_iter().filter_map(|s| s.plane).collect()
+    } else {
+        Vec::new()
+    };
+    if let Some(n) = args.iter().position(|a| a == "--seeds").and_then(|i| args.get(i + 1)) {
+        seed_sweep(&points, &cameras, &truths, n.parse()?);
+        return Ok(());
+    }
+    let seed = match args.iter().position(|a| a == "--seed").and_then(|i| args.get(i + 1)) {
+        Some(s) => s.parse()?,
+        None => 1,
+    };
     let t = std::time::Instant::now();
-    let found = propose_planes(&points, &cameras, &ProposalSettings::default(), &mut Rng::new(1));
+    let found =
+        propose_planes(&points, &cameras, &ProposalSettings::default(), &mut Rng::new(seed));
     println!("proposal took {:.2} s, scale {:.3}", t.elapsed().as_secs_f64(), found.scale);
     for c in &found.candidates {
         let p = c.plane.map(|p| {
@@ -81,10 +99,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // A synthetic scene's truth: each proposed plane against the nearest true one, measured as
     // `train` measures its planes (normal angle, centre distance over the true diagonal), with
     // its extent along the true plane's axes.
-    let truth_path = scene.join("gt").join("planes.json");
-    if truth_path.is_file() {
-        let truths: Vec<_> =
-            read_planes_json(&truth_path)?.into_iter().filter_map(|s| s.plane).collect();
+    {
         for (k, c) in found.candidates.iter().enumerate() {
             let (None, Some(p)) = (&c.rejected, c.plane) else { continue };
             let nearest = truths.iter().min_by(|a, b| {
@@ -109,4 +124,43 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
     }
     Ok(())
+}
+
+/// The proposal with seeds 1..=`seeds`: per seed, the proposed count and each true plane's
+/// nearest proposed plane (normal and centre error, size), or "none".
+fn seed_sweep(points: &[DVec3], cameras: &[Camera], truths: &[ReflectionPlane], seeds: u64) {
+    let mut within = vec![0usize; truths.len()];
+    for seed in 1..=seeds {
+        let found =
+            propose_planes(points, cameras, &ProposalSettings::default(), &mut Rng::new(seed));
+        let proposed: Vec<ReflectionPlane> = found
+            .candidates
+            .iter()
+            .filter(|c| c.rejected.is_none())
+            .filter_map(|c| c.plane)
+            .collect();
+        let mut line = format!("seed {seed:3}: {} proposed", proposed.len());
+        for (k, t) in truths.iter().enumerate() {
+            let nearest = proposed
+                .iter()
+                .min_by(|a, b| a.centre.distance(t.centre).total_cmp(&b.centre.distance(t.centre)));
+            match nearest {
+                Some(p) => {
+                    let (angle, centre) = p.error_against(t);
+                    within[k] += usize::from(angle <= 2.0 && centre <= 0.02);
+                    line += &format!(
+                        "; truth {k}: {angle:.2} deg, {:.2}%, {:.2} x {:.2}",
+                        100.0 * centre,
+                        p.width,
+                        p.height
+                    );
+                }
+                None => line += &format!("; truth {k}: none"),
+            }
+        }
+        println!("{line}");
+    }
+    for (k, n) in within.iter().enumerate() {
+        println!("truth {k}: within 2 deg and 2% in {n} of {seeds} seeds");
+    }
 }

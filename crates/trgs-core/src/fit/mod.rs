@@ -15,6 +15,7 @@ mod planarity;
 mod propose;
 mod ransac;
 mod rectangle;
+mod reflector_parts;
 mod see_through;
 mod silhouette;
 mod structures;

@@ -11,8 +11,9 @@ use glam::DVec3;
 
 use super::openings::{hand_over, opening_holding};
 use super::planarity::planarity;
+use super::reflector_parts::{Reflector, Sight, whole_reflector_plane};
 use super::see_through::{SeeThrough, see_through};
-use super::structures::{Structure, StructureSettings, find_structures, hulls_touch};
+use super::structures::{Structure, StructureSettings, find_structures};
 use crate::rng::Rng;
 use crate::scene::{Camera, Material, ReflectionPlane};
 
@@ -228,23 +229,38 @@ fn propose_at_scale(
             unexplained[i] = false;
         }
         // The frame and the wall around a pane are planes of their own a few centimetres from
-        // the glass, with the same see-through evidence: parts of this candidate's reflector.
+        // the glass, with the same see-through evidence; so are the pieces of a wall that the
+        // pane splits apart: parts of this candidate's reflector.
         let index = proposed.len();
-        let duplicate_offset = settings.duplicate_offset * scale;
-        for (j, _, other) in &scored {
-            if *j != k
-                && same_reflector(&structures[k], &structures[*j], duplicate_offset, settings)
-            {
-                let apart = structures[k].signed_distance(structures[*j].point).abs();
-                let why = format!(
-                    "part of candidate {index}'s reflector ({apart:.3} in front or behind)"
-                );
-                parts.push(PlaneCandidate { rejected: Some(why), ..other.clone() });
-            }
+        let reflector = Reflector {
+            structures: &structures,
+            offset: settings.duplicate_offset * scale,
+            cell,
+            settings,
+        };
+        let of_k = reflector.parts_of(k, &c, &scored);
+        for &m in &of_k {
+            let (j, _, other) = &scored[m];
+            let apart = structures[k].signed_distance(structures[*j].point).abs();
+            let why =
+                format!("part of candidate {index}'s reflector ({apart:.3} in front or behind)");
+            parts.push(PlaneCandidate { rejected: Some(why), ..other.clone() });
         }
-        open.retain(|&j| {
-            j != k && !same_reflector(&structures[k], &structures[j], duplicate_offset, settings)
-        });
+        let mut c = c;
+        if !of_k.is_empty() {
+            let parts_seen: Vec<&SeeThrough> = of_k.iter().map(|&m| &scored[m].1).collect();
+            let sight = Sight { points, cameras, threshold };
+            c.plane = whole_reflector_plane(
+                &structures[k],
+                facing[k].0,
+                &seen,
+                &parts_seen,
+                &sight,
+                cell,
+            )
+            .or(c.plane);
+        }
+        open.retain(|&j| j != k && !of_k.iter().any(|&m| scored[m].0 == j));
         proposed.push(c);
         considered.push((k, seen));
     }
@@ -336,15 +352,6 @@ fn hand_over_openings(
             proposed[b] = PlaneCandidate { opening_of: Some(a), ..pane_candidate };
         }
     }
-}
-
-/// Whether structure `b` is part of the reflector whose plane is `a`'s: parallel within the merge
-/// angle, within `offset` of `a`'s plane, and their hulls touching in it.
-fn same_reflector(a: &Structure, b: &Structure, offset: f64, settings: &ProposalSettings) -> bool {
-    let cos_max = settings.merge_angle_deg.to_radians().cos();
-    a.normal.dot(b.normal).abs() >= cos_max
-        && a.signed_distance(b.point).abs() <= offset
-        && hulls_touch(a, b, 0.0)
 }
 
 /// The side of `s` that the cameras seeing it stand on (its normal or the negation), and the
@@ -540,6 +547,26 @@ mod tests {
         };
         assert!((2.7..3.3).contains(&width) && (0.8..1.3).contains(&height), "{plane:?}");
         assert!(plane.centre.distance(DVec3::new(0.0, 1.0, 0.0)) < 0.15, "{plane:?}");
+    }
+
+    #[test]
+    fn a_pane_between_two_pieces_of_wall_that_do_not_touch_is_one_candidate_over_all_of_it() {
+        // The wall right of x = 0.05 set 0.1 back, the left piece ending at x = -0.05: two
+        // structures that do not touch, each with half the pane in its hull.
+        let (mut points, cameras) = room(&[(-0.5, 0.5)]);
+        points.retain(|p| p.z != 0.0 || p.x.abs() > 0.05);
+        for p in points.iter_mut().filter(|p| p.z == 0.0 && p.x > 0.0) {
+            p.z = -0.1;
+        }
+        let found = candidates(&points, &cameras);
+        let proposed: Vec<_> = found.iter().filter(|c| c.rejected.is_none()).collect();
+        assert_eq!(proposed.len(), 1, "{found:#?}");
+        let plane = proposed[0].plane.expect("a plane");
+        let width =
+            if plane.axis.x.abs() > plane.axis.y.abs() { plane.width } else { plane.height };
+        assert!((0.9..1.3).contains(&width), "the whole pane: {plane:?}");
+        let centre = plane.centre - DVec3::Z * plane.centre.z;
+        assert!(centre.distance(DVec3::new(0.0, 1.0, 0.0)) < 0.1, "{plane:?}");
     }
     #[test]
     fn a_pane_turned_in_its_opening_takes_that_opening_from_the_wall() {
