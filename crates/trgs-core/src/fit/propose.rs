@@ -11,7 +11,7 @@ use glam::DVec3;
 
 use super::openings::{hand_over, opening_holding};
 use super::planarity::planarity;
-use super::reflector_parts::{Reflector, Sight, whole_reflector_plane};
+use super::reflector_parts::{Reflector, Sight};
 use super::see_through::{SeeThrough, see_through};
 use super::structures::{Structure, StructureSettings, find_structures};
 use crate::rng::Rng;
@@ -231,36 +231,18 @@ fn propose_at_scale(
         // The frame and the wall around a pane are planes of their own a few centimetres from
         // the glass, with the same see-through evidence; so are the pieces of a wall that the
         // pane splits apart: parts of this candidate's reflector.
-        let index = proposed.len();
         let reflector = Reflector {
             structures: &structures,
             offset: settings.duplicate_offset * scale,
             cell,
             settings,
         };
-        let of_k = reflector.parts_of(k, &c, &scored);
-        for &m in &of_k {
-            let (j, _, other) = &scored[m];
-            let apart = structures[k].signed_distance(structures[*j].point).abs();
-            let why =
-                format!("part of candidate {index}'s reflector ({apart:.3} in front or behind)");
-            parts.push(PlaneCandidate { rejected: Some(why), ..other.clone() });
-        }
-        let mut c = c;
-        if !of_k.is_empty() {
-            let parts_seen: Vec<&SeeThrough> = of_k.iter().map(|&m| &scored[m].1).collect();
-            let sight = Sight { points, cameras, threshold };
-            c.plane = whole_reflector_plane(
-                &structures[k],
-                facing[k].0,
-                &seen,
-                &parts_seen,
-                &sight,
-                cell,
-            )
-            .or(c.plane);
-        }
-        open.retain(|&j| j != k && !of_k.iter().any(|&m| scored[m].0 == j));
+        let sight = Sight { points, cameras, threshold };
+        let taken =
+            reflector.take_parts(k, &c, &seen, &scored, proposed.len(), facing[k].0, &sight);
+        parts.extend(taken.rejected);
+        let c = PlaneCandidate { plane: taken.plane.or(c.plane), ..c };
+        open.retain(|&j| j != k && !taken.structures.contains(&j));
         proposed.push(c);
         considered.push((k, seen));
     }

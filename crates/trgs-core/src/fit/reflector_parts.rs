@@ -50,6 +50,53 @@ impl Reflector<'_> {
     }
 }
 
+/// What [`Reflector::take_parts`] found.
+pub(super) struct Parts {
+    /// The parts as rejected candidates, each saying whose reflector it is part of.
+    pub rejected: Vec<PlaneCandidate>,
+    /// Their structure indices.
+    pub structures: Vec<usize>,
+    /// The candidate's plane over its whole reflector ([`whole_reflector_plane`]); None without
+    /// parts or region.
+    pub plane: Option<ReflectionPlane>,
+}
+
+impl Reflector<'_> {
+    /// The parts of the reflector of structure `k` ([`Self::parts_of`]), whose candidate is `c`
+    /// (the `index`-th proposed) with sight lines `seen` and camera side `front`, and its plane
+    /// over all of them.
+    #[allow(clippy::too_many_arguments)]
+    pub fn take_parts(
+        &self,
+        k: usize,
+        c: &PlaneCandidate,
+        seen: &SeeThrough,
+        scored: &[(usize, SeeThrough, PlaneCandidate)],
+        index: usize,
+        front: DVec3,
+        sight: &Sight,
+    ) -> Parts {
+        let of_k = self.parts_of(k, c, scored);
+        let s = &self.structures[k];
+        let rejected = of_k
+            .iter()
+            .map(|&m| {
+                let (j, _, other) = &scored[m];
+                let apart = s.signed_distance(self.structures[*j].point).abs();
+                let why = format!(
+                    "part of candidate {index}'s reflector ({apart:.3} in front or behind)"
+                );
+                PlaneCandidate { rejected: Some(why), ..other.clone() }
+            })
+            .collect();
+        let parts_seen: Vec<&SeeThrough> = of_k.iter().map(|&m| &scored[m].1).collect();
+        let plane = (!of_k.is_empty())
+            .then(|| whole_reflector_plane(s, front, seen, &parts_seen, sight, self.cell))
+            .flatten();
+        Parts { rejected, structures: of_k.iter().map(|&m| scored[m].0).collect(), plane }
+    }
+}
+
 /// Whether two rectangles in (nearly) one plane overlap or come within `gap` of each other in
 /// it: no in-plane axis of either separates their projections by more than `gap`.
 pub(super) fn rectangles_meet(a: &ReflectionPlane, b: &ReflectionPlane, gap: f64) -> bool {
@@ -79,7 +126,7 @@ pub(super) struct Sight<'a> {
 /// Without this the candidate's own holes alone held a part of the pane: on the showcase's
 /// step-200 checkpoints, as little as 1.9 of its 2.4 width in 3 and 9 of 20 seeds (the
 /// `--seeds` sweep of `examples/propose_probe.rs`), and the refit cannot grow a rectangle.
-pub(super) fn whole_reflector_plane(
+fn whole_reflector_plane(
     s: &Structure,
     front: DVec3,
     seen: &SeeThrough,
