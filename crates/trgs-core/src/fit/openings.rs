@@ -200,14 +200,19 @@ mod tests {
                 .filter(|p| !hole(p.x, p.y))
                 .collect();
         let wall = Structure::from_inliers(&points, (0..points.len()).collect()).expect("wall");
+        // The frame's left stile and half its rails, turned `deg` about the stile.
+        let frame_turned = |deg: f64, points: &mut Vec<DVec3>| {
+            let (s, c) = (deg.to_radians().sin(), deg.to_radians().cos());
+            let first = points.len();
+            let at = |u: f64, y: f64| DVec3::new(u * c, y, -u * s);
+            points.extend(grid((0.0, 0.1), (0.0, 1.0), 0.02, at));
+            points.extend(grid((0.1, 0.5), (0.0, 0.04), 0.02, at));
+            points.extend(grid((0.1, 0.5), (0.96, 1.0), 0.02, at));
+            Structure::from_inliers(points, (first..points.len()).collect()).expect("frame")
+        };
         let (s, c) = (20f64.to_radians().sin(), 20f64.to_radians().cos());
         let first = points.len();
-        // The frame's left stile and half its rails, in the turned plane.
-        points.extend(grid((0.0, 0.1), (0.0, 1.0), 0.02, |u, y| DVec3::new(u * c, y, -u * s)));
-        points.extend(grid((0.1, 0.5), (0.0, 0.04), 0.02, |u, y| DVec3::new(u * c, y, -u * s)));
-        points.extend(grid((0.1, 0.5), (0.96, 1.0), 0.02, |u, y| DVec3::new(u * c, y, -u * s)));
-        let turned =
-            Structure::from_inliers(&points, (first..points.len()).collect()).expect("pane");
+        let turned = frame_turned(20.0, &mut points);
         let room = points.len();
         points.extend(grid((-1.0, 2.0), (-0.5, 1.5), 0.05, |x, y| DVec3::new(x, y, -2.0)));
         let k = Intrinsics::from_fov_x(1.2, 64, 48);
@@ -232,13 +237,7 @@ mod tests {
             Structure::from_inliers(&points, (stile..points.len()).collect()).expect("stile");
         assert!(opening_holding(&wall, &seen, &flat, &points, 0.08, 2.0).is_none());
         // Nor is the same frame turned 5 degrees: the wall's candidate, turned by the refit.
-        let (s5, c5) = (5f64.to_radians().sin(), 5f64.to_radians().cos());
-        let nearly = points.len();
-        points.extend(grid((0.0, 0.1), (0.0, 1.0), 0.02, |u, y| DVec3::new(u * c5, y, -u * s5)));
-        points.extend(grid((0.1, 0.5), (0.0, 0.04), 0.02, |u, y| DVec3::new(u * c5, y, -u * s5)));
-        points.extend(grid((0.1, 0.5), (0.96, 1.0), 0.02, |u, y| DVec3::new(u * c5, y, -u * s5)));
-        let nearly =
-            Structure::from_inliers(&points, (nearly..points.len()).collect()).expect("frame");
+        let nearly = frame_turned(5.0, &mut points);
         assert!(opening_holding(&wall, &seen, &nearly, &points, 0.08, 2.0).is_none());
         // A board turned 40 degrees whose plane meets the wall's across the opening, but which
         // stands 0.2 to 0.5 behind it, is not the opening's pane.
