@@ -5,9 +5,10 @@
 //! holds the model each proposal try sees (copy the file away after each step you want).
 //! For a synthetic scene (a `gt/planes.json` beside its images) each proposed plane is also
 //! measured against the nearest true one: the first rectangle the trial starts from.
-//! `--seed S` (after the model) seeds RANSAC with S instead of 1; `--seeds N` runs the proposal with RANSAC seeds 1..=N instead and prints one
-//! line per seed: each true plane's nearest proposed plane against it. The first rectangle
-//! depends on which structures RANSAC draws, and a run's draws are not the probe's.
+//! `--seed S` (after the model) seeds RANSAC with S instead of 1; `--seeds N` runs the proposal
+//! with RANSAC seeds 1..=N instead and prints one line per seed: each true plane's nearest
+//! proposed plane against it. The first rectangle depends on which structures RANSAC draws,
+//! and a run's draws are not the probe's.
 use glam::DVec3;
 use std::path::Path;
 use trgs_core::fit::{ProposalSettings, propose_planes};
@@ -99,28 +100,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // A synthetic scene's truth: each proposed plane against the nearest true one, measured as
     // `train` measures its planes (normal angle, centre distance over the true diagonal), with
     // its extent along the true plane's axes.
-    {
-        for (k, c) in found.candidates.iter().enumerate() {
-            let (None, Some(p)) = (&c.rejected, c.plane) else { continue };
-            let nearest = truths.iter().min_by(|a, b| {
-                let d = |t: &&ReflectionPlane| p.centre.distance(t.centre);
-                d(a).total_cmp(&d(b))
-            });
-            if let Some(t) = nearest {
-                let (a, b) = (t.axis.normalize(), t.unit_normal().cross(t.axis.normalize()));
-                let (u, v) = (p.axis.normalize(), p.unit_normal().cross(p.axis.normalize()));
-                let along = |e: DVec3| u.dot(e).abs() * p.width + v.dot(e).abs() * p.height;
-                let (angle, centre) = p.error_against(t);
-                println!(
-                    "candidate {k} against the truth: normal off by {angle:.2} deg, centre by \
-                     {:.2}% of the size, {:.2} x {:.2} along its axes (truth {:.2} x {:.2})",
-                    100.0 * centre,
-                    along(a),
-                    along(b),
-                    t.width,
-                    t.height
-                );
-            }
+    for (k, c) in found.candidates.iter().enumerate() {
+        let (None, Some(p)) = (&c.rejected, c.plane) else { continue };
+        let nearest = truths.iter().min_by(|a, b| {
+            let d = |t: &&ReflectionPlane| p.centre.distance(t.centre);
+            d(a).total_cmp(&d(b))
+        });
+        if let Some(t) = nearest {
+            let (a, b) = (t.axis.normalize(), t.unit_normal().cross(t.axis.normalize()));
+            let (u, v) = (p.axis.normalize(), p.unit_normal().cross(p.axis.normalize()));
+            let along = |e: DVec3| u.dot(e).abs() * p.width + v.dot(e).abs() * p.height;
+            let (angle, centre) = p.error_against(t);
+            println!(
+                "candidate {k} against the truth: normal off by {angle:.2} deg, centre by \
+                 {:.2}% of the size, {:.2} x {:.2} along its axes (truth {:.2} x {:.2})",
+                100.0 * centre,
+                along(a),
+                along(b),
+                t.width,
+                t.height
+            );
         }
     }
     Ok(())

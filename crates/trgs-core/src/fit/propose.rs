@@ -15,7 +15,7 @@ use super::reflector_parts::{Reflector, Sight};
 use super::see_through::{SeeThrough, see_through};
 use super::structures::{Structure, StructureSettings, find_structures};
 use crate::rng::Rng;
-use crate::scene::{Camera, Material, ReflectionPlane};
+use crate::scene::{Camera, ReflectionPlane};
 
 /// Settings of the proposal; distances are fractions of the scene's depth scale (the median
 /// distance from the points to the nearest camera): triangulation and splat noise grow with
@@ -373,10 +373,7 @@ fn assess(
     let flat: Vec<_> = s.inliers.iter().map(|&i| s.to_plane(points[i])).collect();
     let structure_size =
         super::hull::min_area_box(&flat).map_or((0.0, 0.0), |b| (b.width, b.height));
-    let plane = seen.region(cell).map(|b| {
-        let axis = s.basis.0 * b.axis.x + s.basis.1 * b.axis.y;
-        ReflectionPlane::new(s.to_world(b.centre), front, axis, b.width, b.height, Material::Glass)
-    });
+    let plane = seen.region_plane(s, front, cell);
     let rejected = if cameras_in_front < settings.min_cameras_in_front {
         Some(format!(
             "{:.0}% of the cameras that see it stand in front of it (at least {:.0}% needed)",

@@ -7,7 +7,7 @@ use glam::DVec3;
 use super::propose::{PlaneCandidate, ProposalSettings};
 use super::see_through::{SeeThrough, crossing};
 use super::structures::{Structure, hulls_touch};
-use crate::scene::{Camera, Material, ReflectionPlane};
+use crate::scene::{Camera, ReflectionPlane};
 
 /// What tells the parts of a candidate's reflector from other structures.
 pub(super) struct Reflector<'a> {
@@ -17,6 +17,17 @@ pub(super) struct Reflector<'a> {
     /// The proposal's grid cell: see-through regions this close meet.
     pub cell: f64,
     pub settings: &'a ProposalSettings,
+}
+
+/// What [`Reflector::take_parts`] found.
+pub(super) struct Parts {
+    /// The parts as rejected candidates, each saying whose reflector it is part of.
+    pub rejected: Vec<PlaneCandidate>,
+    /// Their structure indices.
+    pub structures: Vec<usize>,
+    /// The candidate's plane over its whole reflector ([`whole_reflector_plane`]); None without
+    /// parts or region.
+    pub plane: Option<ReflectionPlane>,
 }
 
 impl Reflector<'_> {
@@ -38,30 +49,18 @@ impl Reflector<'_> {
             .filter(|&m| {
                 let (j, _, other) = &scored[m];
                 let b = &self.structures[*j];
-                let near = a.normal.dot(b.normal).abs() >= cos_max
+                let near = *j != k
+                    && a.normal.dot(b.normal).abs() >= cos_max
                     && a.signed_distance(b.point).abs() <= self.offset;
-                let same_glass = match (c.plane, other.plane) {
+                let same_glass = || match (c.plane, other.plane) {
                     (Some(pa), Some(pb)) => rectangles_meet(&pa, &pb, self.cell),
                     _ => false,
                 };
-                *j != k && near && (hulls_touch(a, b, 0.0) || same_glass)
+                near && (hulls_touch(a, b, 0.0) || same_glass())
             })
             .collect()
     }
-}
 
-/// What [`Reflector::take_parts`] found.
-pub(super) struct Parts {
-    /// The parts as rejected candidates, each saying whose reflector it is part of.
-    pub rejected: Vec<PlaneCandidate>,
-    /// Their structure indices.
-    pub structures: Vec<usize>,
-    /// The candidate's plane over its whole reflector ([`whole_reflector_plane`]); None without
-    /// parts or region.
-    pub plane: Option<ReflectionPlane>,
-}
-
-impl Reflector<'_> {
     /// The parts of the reflector of structure `k` ([`Self::parts_of`]), whose candidate is `c`
     /// (the `index`-th proposed) with sight lines `seen` and camera side `front`, and its plane
     /// over all of them.
@@ -123,8 +122,8 @@ pub(super) struct Sight<'a> {
 /// hull, its parts' (`parts_seen`) whose points lie behind it, crossed with its plane. Inside
 /// its hull its own holes say where the glass is: a part behind it (the wall a mirror hangs
 /// on, the mirrored room grown right behind the glass) is crossed where the frame is too.
-/// Without this the candidate's own holes alone held a part of the pane: on the showcase's
-/// step-200 checkpoints, as little as 1.9 of its 2.4 width in 3 and 9 of 20 seeds (the
+/// Without this the candidate's own holes alone held a part of the pane: on two of the
+/// showcase's step-200 checkpoints, 1.8 to 2.1 of its 2.4 width in 3 of 20 seeds on each (the
 /// `--seeds` sweep of `examples/propose_probe.rs`), and the refit cannot grow a rectangle.
 fn whole_reflector_plane(
     s: &Structure,
@@ -148,21 +147,13 @@ fn whole_reflector_plane(
             whole.sight_lines.push((i, j));
         }
     }
-    let b = whole.region(cell)?;
-    let axis = s.basis.0 * b.axis.x + s.basis.1 * b.axis.y;
-    Some(ReflectionPlane::new(
-        s.to_world(b.centre),
-        front,
-        axis,
-        b.width,
-        b.height,
-        Material::Glass,
-    ))
+    whole.region_plane(s, front, cell)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::Material;
 
     fn rectangle(centre: DVec3, axis: DVec3, width: f64, height: f64) -> ReflectionPlane {
         ReflectionPlane::new(centre, DVec3::Z, axis, width, height, Material::Glass)

@@ -9,7 +9,7 @@ use std::collections::HashMap;
 
 use super::hull::{OrientedBox, min_area_box};
 use super::structures::{Structure, grid_cell, grid_components};
-use crate::scene::Camera;
+use crate::scene::{Camera, Material, ReflectionPlane};
 
 /// The points seen through a structure and where their sight lines cross it.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -63,6 +63,22 @@ impl SeeThrough {
             height: b.height + cell,
             ..b
         })
+    }
+}
+
+impl SeeThrough {
+    /// The glass plane over [`Self::region`] in `structure`'s plane (whose crossings these
+    /// are), its normal `front` (toward the cameras).
+    pub fn region_plane(
+        &self,
+        structure: &Structure,
+        front: DVec3,
+        cell: f64,
+    ) -> Option<ReflectionPlane> {
+        let b = self.region(cell)?;
+        let axis = structure.basis.0 * b.axis.x + structure.basis.1 * b.axis.y;
+        let centre = structure.to_world(b.centre);
+        Some(ReflectionPlane::new(centre, front, axis, b.width, b.height, Material::Glass))
     }
 }
 
