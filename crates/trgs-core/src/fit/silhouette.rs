@@ -34,6 +34,8 @@ pub struct SilhouetteSettings {
     pub max_scale: f64,
     /// Cost evaluations of the pattern search at most.
     pub max_evaluations: usize,
+    /// Keep the plane's offset along its normal: fit the rectangle within its plane only.
+    pub hold_offset: bool,
 }
 
 impl Default for SilhouetteSettings {
@@ -45,6 +47,7 @@ impl Default for SilhouetteSettings {
             max_shift: 0.25,
             max_scale: 1.5,
             max_evaluations: 4000,
+            hold_offset: false,
         }
     }
 }
@@ -96,7 +99,8 @@ pub fn refine_to_masks(
     let start = Params::default();
     // Initial steps: 2% of the size for lengths, 2% for the log sizes, about 0.6 degrees for
     // the turn; the search halves them down to 1/256.
-    let steps = [0.02 * size, 0.02 * size, 0.02 * size, 0.02, 0.02, 0.01];
+    let offset_step = if settings.hold_offset { 0.0 } else { 0.02 * size };
+    let steps = [offset_step, 0.02 * size, 0.02 * size, 0.02, 0.02, 0.01];
     let cost = |p: &Params| total_cost(&p.apply(plane), &pixels, settings);
     let on_course = |p: &Params| within_limits(plane, &p.apply(plane), settings, SEARCH_SLACK);
     let cost_before = cost(&start);
@@ -208,7 +212,8 @@ fn pattern_search(
     let mut halvings = 0;
     while halvings < 8 && evaluations < max_evaluations {
         let mut improved = false;
-        for k in 0..6 {
+        // A coordinate held (a step of zero) is never tried.
+        for k in (0..6).filter(|&k| steps[k] > 0.0) {
             for sign in [1.0, -1.0] {
                 let mut trial = best;
                 trial.0[k] += sign * steps[k];
