@@ -4,6 +4,7 @@
 use super::{RunEvent, TrainingRun};
 use crate::planes::init::{PlaneInitSettings, fit_to_outline};
 use anyhow::Result;
+use glam::DVec3;
 use trgs_core::Image;
 use trgs_core::fit::{SilhouetteFit, SilhouetteSettings, refine_to_masks};
 use trgs_core::plane_math::ray_rectangle_hit;
@@ -17,8 +18,10 @@ impl TrainingRun {
     /// as each view's glass mask for the masks' own refinement (`fit::refine_to_masks`). The
     /// first rectangle is the see-through region of the proposal, which the frame and the sight
     /// lines past its edges widen. Where the glass so found pins no rectangle within the
-    /// refinement's limits, the learned mask alone is tried.
-    pub(super) fn fit_kept_to_their_glass(&mut self) -> Result<()> {
+    /// refinement's limits, the learned mask alone is tried. `proposals` holds a point of each
+    /// kept plane's proposal (its structure's plane), which bounds the refit's offset
+    /// ([`offset_along_normal`]).
+    pub(super) fn fit_kept_to_their_glass(&mut self, proposals: &[Option<DVec3>]) -> Result<()> {
         let mut planes = self.trainer.planes().to_vec();
         let n = self.data.train.len();
         let stride = n.div_ceil(REFIT_VIEWS).max(1);
@@ -39,8 +42,10 @@ impl TrainingRun {
         for (k, list) in masks.iter().enumerate() {
             let before = planes[k];
             let evidence = GlassEvidence::of(list);
+            let proposal = proposals.get(k).copied().flatten();
             let refit = |e: GlassEvidence| {
-                refit_to_glass(&before, &cameras, list, e, &g, extent, &self.rng)
+                let on = Glass { list, evidence: e, proposal };
+                refit_to_glass(&before, &cameras, &on, &g, extent, &self.rng)
             };
             // Glass seen through whose seen-through pixels pin no rectangle: its mask alone.
             let fallback = (evidence != GlassEvidence::Mask).then_some(GlassEvidence::Mask);
@@ -58,9 +63,10 @@ impl TrainingRun {
                         }
                         (None, None) => String::new(),
                     };
+                    let offset = refit.offset.describe();
                     format!(
                         "moved onto its glass ({by} in {} views{turn}): {:.2} x {:.2} -> {:.2} x \
-                         {:.2}, centre moved {:.3}",
+                         {:.2}, centre moved {:.3}; {offset}",
                         refit.views,
                         before.width,
                         before.height,
@@ -97,6 +103,39 @@ struct GlassRefit {
     turned_deg: Option<f64>,
     /// How far the plane of the frame around its glass stood from it (None: no fit).
     outline_deg: Option<f64>,
+    /// The offset along the normal it took ([`offset_along_normal`]).
+    offset: OffsetChoice,
+}
+
+/// What a kept plane's glass is refitted to: its views' [`glass_pixels`] labels (index into
+/// the training cameras), the evidence that reads them, and a point of its proposal's plane.
+struct Glass<'a> {
+    list: &'a [(usize, Image<u8>)],
+    evidence: GlassEvidence,
+    proposal: Option<DVec3>,
+}
+
+/// The offsets along a refit's normal, from its start's centre, that [`offset_along_normal`]
+/// weighs, and the one it took.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct OffsetChoice {
+    /// Where the glass's outline puts the plane when the refit may move it along its normal.
+    outline: Option<f64>,
+    /// Where the proposal's structure is.
+    proposal: Option<f64>,
+    taken: f64,
+}
+
+impl OffsetChoice {
+    fn describe(&self) -> String {
+        match (self.outline, self.proposal) {
+            (Some(o), Some(p)) => format!(
+                "offset {:+.3} from the trial's (its outline alone {o:+.3}, its proposal {p:+.3})",
+                self.taken
+            ),
+            _ => "offset the trial's".to_string(),
+        }
+    }
 }
 
 /// What says where a kept plane's glass is in the views of [`glass_pixels`].
@@ -157,25 +196,21 @@ const GLASS_PIECE_FRACTION: f64 = 0.25;
 /// from whatever structure it found, which for a pane turned in its opening is a fragment of
 /// its frame. From `before` itself where the outline's plane pins no rectangle.
 ///
-/// The rectangle moves within `before`'s plane (turned about its centre) and keeps the offset
-/// along the normal that the trial trained on the reflection. The outline of what is seen
-/// through a pane is its opening's, not its glass's: the sides of the opening behind the glass
-/// narrow it on one side as those in front hide the glass on the other, so a rectangle free to
-/// move along its normal settles between the opening's two ends, away from the glass (on the
-/// scene family's members, 2.8-5.4 cm behind it: docs/RESULTS.md, "Planes without masks").
+/// The rectangle moves within its plane, at the offset along the normal that
+/// [`offset_along_normal`] takes.
 fn refit_to_glass(
     before: &ReflectionPlane,
     cameras: &[&Camera],
-    list: &[(usize, Image<u8>)],
-    evidence: GlassEvidence,
+    glass: &Glass,
     g: &Gaussians<f32>,
     extent: f64,
     rng: &Rng,
 ) -> Option<GlassRefit> {
-    let binary: Vec<(usize, Image<u8>)> = list
+    let binary: Vec<(usize, Image<u8>)> = glass
+        .list
         .iter()
         .map(|(vi, m)| {
-            let data = m.data.iter().map(|&v| u8::from(evidence.takes(v))).collect();
+            let data = m.data.iter().map(|&v| u8::from(glass.evidence.takes(v))).collect();
             (*vi, Image { data, ..*m }.without_small_pieces(GLASS_PIECE_FRACTION))
         })
         .filter(|(_, m)| m.data.contains(&1))
@@ -195,13 +230,56 @@ fn refit_to_glass(
         .map(|outline| turned_onto(before, &outline))
         .map(|p| (p, p.unit_normal().angle_between(before.unit_normal()).to_degrees()));
     let outline_deg = outlined.map(|(_, deg)| deg);
-    let turned =
-        outlined.filter(|(_, deg)| OUTLINE_TURN_DEG.contains(deg)).and_then(|(start, deg)| {
-            refine_to_masks(&start, &views, 1, &settings).map(|fit| (fit, Some(deg)))
-        });
-    let (fit, turned_deg) =
-        turned.or_else(|| refine_to_masks(before, &views, 1, &settings).map(|fit| (fit, None)))?;
-    Some(GlassRefit { fit, views: views.len(), turned_deg, outline_deg })
+    let refit_from = |start: &ReflectionPlane| {
+        let offset = offset_along_normal(start, &views, glass);
+        let mut at = *start;
+        at.centre += start.unit_normal() * offset.taken;
+        refine_to_masks(&at, &views, 1, &settings).map(|fit| (fit, offset))
+    };
+    let turned = outlined
+        .filter(|(_, deg)| OUTLINE_TURN_DEG.contains(deg))
+        .and_then(|(start, deg)| refit_from(&start).map(|(fit, offset)| (fit, offset, Some(deg))));
+    let (fit, offset, turned_deg) =
+        turned.or_else(|| refit_from(before).map(|(fit, offset)| (fit, offset, None)))?;
+    Some(GlassRefit { fit, views: views.len(), turned_deg, outline_deg, offset })
+}
+
+/// The offset along `start`'s normal (from its centre, which the trial trained) at which the
+/// refit places glass seen through: the median of three estimates, each of which fails alone
+/// where the other two hold, and whose failures lie on opposite sides of the glass.
+/// - The trial's own (0): the reflection pins it, but poorly where the photos see the
+///   reflected space from one line (on walk-by the trial moved its plane from 1.0 to 5.7 cm
+///   in front of the glass).
+/// - The outline's, `views` fitted free to move along the normal: the outline of what is seen
+///   through a pane is its opening's, not its glass's. The sides of the opening behind the
+///   glass narrow it on one side as those in front hide the glass on the other, so the fit
+///   settles between the opening's two ends, behind the glass where the glass sits in front
+///   of the opening's middle (2.8-5.4 cm behind on the scene family's members).
+/// - The proposal's structure: the face of the frame or of the wall around the glass, a few
+///   centimetres in front of it, or the glass itself.
+///
+/// docs/RESULTS.md ("Planes without masks") has the three on each member. A mirror (read by
+/// its mask) keeps the trial's: its mask spills onto its frame, in front of it like the
+/// proposal's structure, so the median would not stand between two opposite failures.
+fn offset_along_normal(
+    start: &ReflectionPlane,
+    views: &[(&Camera, &Image<u8>)],
+    glass: &Glass,
+) -> OffsetChoice {
+    let n = start.unit_normal();
+    let trial = OffsetChoice { outline: None, proposal: None, taken: 0.0 };
+    if glass.evidence != GlassEvidence::SeenThrough {
+        return trial;
+    }
+    let free = refine_to_masks(start, views, 1, &SilhouetteSettings::default());
+    let outline = free.map(|f| (f.plane.centre - start.centre).dot(n));
+    let proposal = glass.proposal.map(|p| (p - start.centre).dot(n));
+    match (outline, proposal) {
+        (Some(o), Some(p)) => {
+            OffsetChoice { outline, proposal, taken: 0f64.clamp(o.min(p), o.max(p)) }
+        }
+        _ => trial,
+    }
 }
 
 /// `plane`'s rectangle turned parallel to `onto` about its own centre (the offset stays the
@@ -416,7 +494,8 @@ mod tests {
         let list = labelled_views(&cameras, |at| if on_pane(at(0.0)) { MASKED } else { NOT_GLASS });
         let refs: Vec<&Camera> = cameras.iter().collect();
         let glass = GlassEvidence::Mask;
-        let refit = refit_to_glass(&before, &refs, &list, glass, &g, 1.0, &rng).expect("a fit");
+        let on = Glass { list: &list, evidence: glass, proposal: None };
+        let refit = refit_to_glass(&before, &refs, &on, &g, 1.0, &rng).expect("a fit");
         let p = refit.fit.plane;
         let turned = refit.turned_deg.expect("turned to the frame");
         assert!((turned - 5.0).abs() < 0.5, "turned {turned} deg");
@@ -426,7 +505,7 @@ mod tests {
         // The same frame seen as the proposal turned 30 deg: a wall beside it, not turned to.
         let far = glam::DQuat::from_rotation_y(30f64.to_radians());
         let wall = ReflectionPlane { normal: far * DVec3::Z, axis: far * DVec3::X, ..before };
-        let kept = refit_to_glass(&wall, &refs, &list, glass, &g, 1.0, &rng);
+        let kept = refit_to_glass(&wall, &refs, &on, &g, 1.0, &rng);
         assert!(kept.is_none_or(|r| r.turned_deg.is_none()));
     }
 
@@ -461,18 +540,20 @@ mod tests {
         let refs: Vec<&Camera> = cameras.iter().collect();
         let evidence = GlassEvidence::of(&list);
         assert_eq!(evidence, GlassEvidence::SeenThrough);
-        let refit = refit_to_glass(&before, &refs, &list, evidence, &g, 1.0, &rng).expect("a fit");
+        let on = Glass { list: &list, evidence, proposal: None };
+        let refit = refit_to_glass(&before, &refs, &on, &g, 1.0, &rng).expect("a fit");
         let p = refit.fit.plane;
         assert!(p.centre.distance(truth.centre) < 0.02, "{p:?}");
         assert!((p.width - 1.0).abs() < 0.03 && (p.height - 0.8).abs() < 0.03, "{p:?}");
         // By the mask, the frame's side is glass and the rectangle takes it in.
-        let masked = refit_to_glass(&before, &refs, &list, GlassEvidence::Mask, &g, 1.0, &rng);
+        let on = Glass { evidence: GlassEvidence::Mask, ..on };
+        let masked = refit_to_glass(&before, &refs, &on, &g, 1.0, &rng);
         let p = masked.expect("a fit").fit.plane;
         assert!(p.width > 1.07 && p.centre.x > 0.035, "{p:?}");
     }
 
     #[test]
-    fn the_refit_keeps_the_offset_that_the_opening_behind_the_glass_would_pull_back() {
+    fn the_refit_takes_the_median_of_the_trials_the_outlines_and_the_proposals_offsets() {
         use trgs_core::scene::Material;
         let (truth, g, cameras) = framed_pane();
         let rng = Rng::new(5);
@@ -485,26 +566,40 @@ mod tests {
             if in_opening(at(0.0)) && in_opening(at(-0.1)) { SEEN_THROUGH } else { NOT_GLASS }
         });
         let refs: Vec<&Camera> = cameras.iter().collect();
-        // The trial left the plane on the glass, its rectangle too large and off centre.
-        let before = ReflectionPlane::new(
-            DVec3::new(0.03, -0.02, 0.0),
-            DVec3::Z,
-            DVec3::X,
-            1.15,
-            0.9,
-            Material::Glass,
-        );
-        let glass = GlassEvidence::SeenThrough;
-        let refit = refit_to_glass(&before, &refs, &list, glass, &g, 1.0, &rng).expect("a fit");
-        let p = refit.fit.plane;
-        assert!(p.centre.z.abs() < 1e-9 && p.unit_normal() == DVec3::Z, "{p:?}");
-        assert!(p.centre.distance(truth.centre) < 0.02, "{p:?}");
-        assert!((p.width - 1.0).abs() < 0.05 && (p.height - 0.8).abs() < 0.05, "{p:?}");
-        // Free to move along its normal, the rectangle fits the opening between its two ends
-        // and leaves the glass.
+        // The rectangle too large and off centre, at the offset `z` the trial left it at.
+        let trained = |z: f64| {
+            let centre = DVec3::new(0.03, -0.02, z);
+            ReflectionPlane::new(centre, DVec3::Z, DVec3::X, 1.15, 0.9, Material::Glass)
+        };
+        let evidence = GlassEvidence::SeenThrough;
+        let refit = |z: f64, proposal: Option<f64>| {
+            let on = Glass { list: &list, evidence, proposal: proposal.map(|p| DVec3::Z * p) };
+            refit_to_glass(&trained(z), &refs, &on, &g, 1.0, &rng).expect("a fit")
+        };
+        // Free to move along its normal, the rectangle fits the opening between its two ends,
+        // behind the glass.
         let views: Vec<(&Camera, &Image<u8>)> = list.iter().map(|(vi, m)| (refs[*vi], m)).collect();
-        let free = refine_to_masks(&before, &views, SEEN_THROUGH, &SilhouetteSettings::default());
-        let off = free.expect("a fit").plane.centre.z;
-        assert!(off < -0.03, "free offset {off}");
+        let free = refine_to_masks(&trained(0.0), &views, SEEN_THROUGH, &Default::default());
+        let behind = free.expect("a fit").plane.centre.z;
+        assert!(behind < -0.03, "the outline alone at {behind}");
+        let on_glass = |r: &GlassRefit| {
+            let p = r.fit.plane;
+            assert!(p.unit_normal() == DVec3::Z, "{p:?}");
+            assert!(p.centre.distance(truth.centre) < 0.02, "{p:?}");
+            assert!((p.width - 1.0).abs() < 0.05 && (p.height - 0.8).abs() < 0.05, "{p:?}");
+            p.centre.z
+        };
+        // The trial on the glass, the frame's face 4 cm in front: the trial's offset holds.
+        let r = refit(0.0, Some(0.04));
+        assert!(on_glass(&r).abs() < 1e-9, "{:?}", r.offset);
+        // The trial drifted 6 cm in front, the proposal on the glass: the proposal's.
+        let r = refit(0.06, Some(0.0));
+        assert!(on_glass(&r).abs() < 1e-9, "{:?}", r.offset);
+        // The trial drifted behind the outline's fit: the outline's.
+        let r = refit(-0.1, Some(0.04));
+        let z = r.fit.plane.centre.z;
+        assert!((z - behind).abs() < 0.01, "{z} against the outline's {behind}: {:?}", r.offset);
+        // Without a proposal, or for a mirror, the trial's.
+        assert!(refit(0.06, None).fit.plane.centre.z == 0.06);
     }
 }

@@ -199,7 +199,14 @@ impl TrainingRun {
             self.trainer.remove_planes(&keep, &rows)?;
         }
         if kept > 0 {
-            self.fit_kept_to_their_glass()?;
+            // A point of each kept plane's proposal: its record's plane.
+            let proposals: Vec<Option<DVec3>> = (0..planes.len())
+                .filter(|&k| keep[k])
+                .map(|k| trial.planes.get(k).copied().unwrap_or(k))
+                .map(|i| self.state.candidates.get(i).and_then(|r| r.centre))
+                .map(|c| c.map(DVec3::from_array))
+                .collect();
+            self.fit_kept_to_their_glass(&proposals)?;
         }
         self.log.candidates(self.trainer.step, &self.state.candidates)?;
         self.events.push_back(RunEvent::Note(format!(
