@@ -36,6 +36,7 @@ mod options;
 mod outputs;
 mod plane_refit;
 mod plane_trial;
+mod refit_offset;
 mod scene;
 mod state;
 mod steps;

@@ -1,6 +1,7 @@
 //! The refit of the planes kept by a trial (`--planes auto`, [`super::plane_trial`]): each is
 //! moved onto the glass its trained layers show, as painted masks move their planes at
 //! initialisation (`planes::init`).
+use super::refit_offset::{OffsetChoice, offset_along_normal};
 use super::{RunEvent, TrainingRun};
 use crate::planes::init::{PlaneInitSettings, fit_to_outline};
 use anyhow::Result;
@@ -115,29 +116,6 @@ struct Glass<'a> {
     proposal: Option<DVec3>,
 }
 
-/// The offsets along a refit's normal, from its start's centre, that [`offset_along_normal`]
-/// weighs, and the one it took.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct OffsetChoice {
-    /// Where the glass's outline puts the plane when the refit may move it along its normal.
-    outline: Option<f64>,
-    /// Where the proposal's structure is.
-    proposal: Option<f64>,
-    taken: f64,
-}
-
-impl OffsetChoice {
-    fn describe(&self) -> String {
-        match (self.outline, self.proposal) {
-            (Some(o), Some(p)) => format!(
-                "offset {:+.3} from the trial's (its outline alone {o:+.3}, its proposal {p:+.3})",
-                self.taken
-            ),
-            _ => "offset the trial's".to_string(),
-        }
-    }
-}
-
 /// What says where a kept plane's glass is in the views of [`glass_pixels`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum GlassEvidence {
@@ -231,7 +209,12 @@ fn refit_to_glass(
         .map(|p| (p, p.unit_normal().angle_between(before.unit_normal()).to_degrees()));
     let outline_deg = outlined.map(|(_, deg)| deg);
     let refit_from = |start: &ReflectionPlane| {
-        let offset = offset_along_normal(start, &views, glass);
+        let offset = match glass.evidence {
+            GlassEvidence::SeenThrough => offset_along_normal(start, &views, glass.proposal),
+            // A mirror's mask spills onto its frame, in front of it like the proposal's
+            // structure: the median would not stand between two opposite failures.
+            GlassEvidence::Mask => OffsetChoice::trial(),
+        };
         let mut at = *start;
         at.centre += start.unit_normal() * offset.taken;
         refine_to_masks(&at, &views, 1, &settings).map(|fit| (fit, offset))
@@ -244,46 +227,8 @@ fn refit_to_glass(
     Some(GlassRefit { fit, views: views.len(), turned_deg, outline_deg, offset })
 }
 
-/// The offset along `start`'s normal (from its centre, which the trial trained) at which the
-/// refit places glass seen through: the median of three estimates, each of which fails alone
-/// where the other two hold, and whose failures lie on opposite sides of the glass.
-/// - The trial's own (0): the reflection pins it, but poorly where the photos see the
-///   reflected space from one line (on walk-by the trial moved its plane from 1.0 to 5.7 cm
-///   in front of the glass).
-/// - The outline's, `views` fitted free to move along the normal: the outline of what is seen
-///   through a pane is its opening's, not its glass's. The sides of the opening behind the
-///   glass narrow it on one side as those in front hide the glass on the other, so the fit
-///   settles between the opening's two ends, behind the glass where the glass sits in front
-///   of the opening's middle (2.8-5.4 cm behind on the scene family's members).
-/// - The proposal's structure: the face of the frame or of the wall around the glass, a few
-///   centimetres in front of it, or the glass itself.
-///
-/// docs/RESULTS.md ("Planes without masks") has the three on each member. A mirror (read by
-/// its mask) keeps the trial's: its mask spills onto its frame, in front of it like the
-/// proposal's structure, so the median would not stand between two opposite failures.
-fn offset_along_normal(
-    start: &ReflectionPlane,
-    views: &[(&Camera, &Image<u8>)],
-    glass: &Glass,
-) -> OffsetChoice {
-    let n = start.unit_normal();
-    let trial = OffsetChoice { outline: None, proposal: None, taken: 0.0 };
-    if glass.evidence != GlassEvidence::SeenThrough {
-        return trial;
-    }
-    let free = refine_to_masks(start, views, 1, &SilhouetteSettings::default());
-    let outline = free.map(|f| (f.plane.centre - start.centre).dot(n));
-    let proposal = glass.proposal.map(|p| (p - start.centre).dot(n));
-    match (outline, proposal) {
-        (Some(o), Some(p)) => {
-            OffsetChoice { outline, proposal, taken: 0f64.clamp(o.min(p), o.max(p)) }
-        }
-        _ => trial,
-    }
-}
-
-/// `plane`'s rectangle turned parallel to `onto` about its own centre (the offset stays the
-/// trial's, [`refit_to_glass`]), its axis made orthogonal to `onto`'s normal; its size and
+/// `plane`'s rectangle turned parallel to `onto` about its own centre (its offset is chosen
+/// after, [`offset_along_normal`]), its axis made orthogonal to `onto`'s normal; its size and
 /// material as they are.
 fn turned_onto(plane: &ReflectionPlane, onto: &ReflectionPlane) -> ReflectionPlane {
     let n = onto.unit_normal();
