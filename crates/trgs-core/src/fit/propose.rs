@@ -106,6 +106,9 @@ pub struct PlaneCandidate {
     /// The candidate (its index here) in an opening of which this one is turned, and whose sight
     /// lines through that opening it took (`super::openings`).
     pub opening_of: Option<usize>,
+    /// That opening as a glass plane in the wall's plane over its sight lines' crossings, as
+    /// the wall's own candidate would have it (its normal toward the wall's cameras).
+    pub opening: Option<ReflectionPlane>,
     /// `None` for a proposed candidate; otherwise why it was not proposed.
     pub rejected: Option<String>,
 }
@@ -320,6 +323,11 @@ fn hand_over_openings(
                 settings.merge_angle_deg,
             );
             let Some(opening) = opening else { continue };
+            let in_wall = considered[a].1.only(&opening.crossings).region_plane(
+                wall,
+                facing[considered[a].0].0,
+                cell,
+            );
             let (mut from, mut to) = (considered[a].1.clone(), considered[b].1.clone());
             let front = facing[considered[b].0].0;
             hand_over(wall, &mut from, &opening, &mut to, pane, front, points, cameras, threshold);
@@ -330,8 +338,10 @@ fn hand_over_openings(
             }
             let wall_candidate = judge(considered[a].0, &from);
             (considered[a].1, considered[b].1) = (from, to);
-            proposed[a] = PlaneCandidate { opening_of: proposed[a].opening_of, ..wall_candidate };
-            proposed[b] = PlaneCandidate { opening_of: Some(a), ..pane_candidate };
+            let (opening_of, opening) = (proposed[a].opening_of, proposed[a].opening);
+            proposed[a] = PlaneCandidate { opening_of, opening, ..wall_candidate };
+            proposed[b] =
+                PlaneCandidate { opening_of: Some(a), opening: in_wall, ..pane_candidate };
         }
     }
 }
@@ -404,6 +414,7 @@ fn assess(
         planarity: 0.0,
         wall_planarity: 0.0,
         opening_of: None,
+        opening: None,
         rejected,
     }
 }
@@ -572,5 +583,12 @@ mod tests {
         assert!(right.unit_normal().dot(normal) > 0.9998, "{right:?}");
         assert!(right.centre.distance(DVec3::new(1.0, 1.0, 0.0)) < 0.2, "{right:?}");
         assert!((0.9..1.4).contains(&right.width.max(right.height)), "{right:?}");
+        // The opening it took, in the wall's plane.
+        let opening = pane.opening.expect("its opening");
+        assert!(opening.unit_normal().dot(DVec3::Z) > 0.9998, "{opening:?}");
+        assert!(opening.centre.distance(DVec3::new(1.0, 1.0, 0.0)) < 0.1, "{opening:?}");
+        let sides = [opening.width, opening.height];
+        assert!(sides.iter().all(|w| (0.9..1.25).contains(w)), "{opening:?}");
+        assert_eq!(proposed[wall].opening, None);
     }
 }

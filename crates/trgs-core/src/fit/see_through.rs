@@ -40,6 +40,18 @@ pub const REGION_GROUP_FRACTION: f64 = 0.2;
 pub const REGION_CELL_DENSITY: f64 = 0.3;
 
 impl SeeThrough {
+    /// The crossings `indices` (into [`Self::crossings`]) alone, with their sight lines and
+    /// points.
+    pub fn only(&self, indices: &[usize]) -> Self {
+        let crossings = indices.iter().map(|&k| self.crossings[k]).collect();
+        let sight_lines: Vec<(usize, usize)> =
+            indices.iter().map(|&k| self.sight_lines[k]).collect();
+        let mut points: Vec<usize> = sight_lines.iter().map(|s| s.0).collect();
+        points.sort_unstable();
+        points.dedup();
+        Self { points, crossings, sight_lines }
+    }
+
     /// The rectangle (plane coordinates) of the see-through region: the minimum-area box of the
     /// crossings in grid cells of size `cell` that hold at least [`REGION_CELL_DENSITY`] of the
     /// median crossing's cell's count and, of those, in the connected groups of cells that hold
