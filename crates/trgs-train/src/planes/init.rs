@@ -169,27 +169,21 @@ pub fn initialise_planes(
     out
 }
 
-/// The plane of the primary Gaussians of `g` around the outline of `label` in `masks` (camera,
-/// label image): those whose centres project into a band around the outline in at least half
-/// the views that see them are fitted with a RANSAC plane and a minimum-area rectangle, and the
-/// normal is turned toward the cameras that show the label. Around a pane's outline lies its
-/// frame, which stands in the pane's plane. Err says why no plane fits.
-pub fn fit_to_outline(
+/// The centres of the primary Gaussians of `g` around the outline of `label` in `masks`
+/// (camera, label image): those whose centres project into a band around the outline
+/// ([`PlaneInitSettings::band_px_at_800`]) in at least half the views that see them. Around a
+/// pane's outline lies its frame.
+pub fn outline_gaussians(
     g: &Gaussians<f32>,
     masks: &[(&Camera, &Image<u8>)],
     label: u8,
-    material: Material,
-    extent: f64,
     settings: &PlaneInitSettings,
-    rng: &mut Rng,
-) -> Result<ReflectionPlane, String> {
+) -> Vec<DVec3> {
     let means: Vec<DVec3> = g.means.iter().map(|m| DVec3::from_array(m.map(f64::from))).collect();
     // Votes: views where the centre falls in the band / views where it falls in the image.
     let mut in_band = vec![0u32; means.len()];
     let mut seen = vec![0u32; means.len()];
-    let mut cameras = Vec::new();
     for (camera, mask) in masks.iter().filter(|(_, m)| m.data.contains(&label)) {
-        cameras.push(camera.pose.centre());
         let k = &camera.intrinsics;
         let radius = (settings.band_px_at_800 * f64::from(k.width) / 800.0).max(2.0);
         let band = outline_band(mask, label, radius);
@@ -204,9 +198,30 @@ pub fn fit_to_outline(
             }
         }
     }
-    let candidates: Vec<DVec3> = (0..means.len())
+    (0..means.len())
         .filter(|&i| in_band[i] > 0 && 2 * in_band[i] >= seen[i])
         .map(|i| means[i])
+        .collect()
+}
+
+/// The plane of the primary Gaussians of `g` around the outline of `label` in `masks` (camera,
+/// label image; [`outline_gaussians`]), fitted with a RANSAC plane and a minimum-area rectangle,
+/// the normal turned toward the cameras that show the label. Around a pane's outline lies its
+/// frame, which stands in the pane's plane. Err says why no plane fits.
+pub fn fit_to_outline(
+    g: &Gaussians<f32>,
+    masks: &[(&Camera, &Image<u8>)],
+    label: u8,
+    material: Material,
+    extent: f64,
+    settings: &PlaneInitSettings,
+    rng: &mut Rng,
+) -> Result<ReflectionPlane, String> {
+    let candidates = outline_gaussians(g, masks, label, settings);
+    let cameras: Vec<DVec3> = masks
+        .iter()
+        .filter(|(_, m)| m.data.contains(&label))
+        .map(|(c, _)| c.pose.centre())
         .collect();
     let fit = fit_rectangle(
         &candidates,

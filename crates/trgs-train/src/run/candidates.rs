@@ -1,7 +1,9 @@
 //! The record of a `--planes auto` run's candidate planes and of the trial they are on (in the
 //! checkpoint, log.jsonl and metrics.json); `plane_trial` proposes and decides them.
+use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use trgs_core::fit::PlaneCandidate;
+use trgs_core::scene::{Material, ReflectionPlane};
 
 /// What became of one candidate, for the log, metrics.json and the `train` output.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -37,6 +39,39 @@ pub struct CandidateRecord {
     /// (`trgs_core::fit::PlaneCandidate::opening_of`); absent in records from before.
     #[serde(default)]
     pub opening_of: Option<usize>,
+    /// That opening as a rectangle in the wall's plane (`PlaneCandidate::opening`), where its
+    /// refit moves a plane whose glass the wall frames (`super::refit_wall`); absent in records
+    /// from before.
+    #[serde(default)]
+    pub opening: Option<RecordedRectangle>,
+}
+
+/// A rectangle of a [`CandidateRecord`]: its centre, unit normal, axis (along its width) and
+/// size (width, height).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RecordedRectangle {
+    pub centre: [f64; 3],
+    pub normal: [f64; 3],
+    pub axis: [f64; 3],
+    pub size: [f64; 2],
+}
+
+impl RecordedRectangle {
+    fn of(p: &ReflectionPlane) -> Self {
+        Self {
+            centre: p.centre.to_array(),
+            normal: p.unit_normal().to_array(),
+            axis: p.axis.to_array(),
+            size: [p.width, p.height],
+        }
+    }
+
+    /// The glass plane over it.
+    pub fn plane(&self) -> ReflectionPlane {
+        let [w, h] = self.size;
+        let v = DVec3::from_array;
+        ReflectionPlane::new(v(self.centre), v(self.normal), v(self.axis), w, h, Material::Glass)
+    }
 }
 
 impl CandidateRecord {
@@ -65,6 +100,7 @@ impl CandidateRecord {
                 (None, None) => "on trial".into(),
             },
             opening_of: c.opening_of,
+            opening: c.opening.as_ref().map(RecordedRectangle::of),
         }
     }
 
@@ -138,7 +174,7 @@ mod tests {
             "seen_through": 0, "seen_fraction": 0.0, "cameras_in_front": 1.0, "proposed": false,
             "held_out_l1_gain": null, "strength": null, "kept": false, "why": "too few"}"#;
         let record: CandidateRecord = serde_json::from_str(old).expect("an older record");
-        assert_eq!(record.opening_of, None);
+        assert_eq!((record.opening_of, record.opening), (None, None));
         assert_eq!((record.planarity, record.wall_planarity), (None, None));
         assert!(!record.line(0).contains("flat"), "{}", record.line(0));
         assert_eq!(record.why, "too few");
@@ -163,6 +199,7 @@ mod tests {
             kept: false,
             why: "dropped".into(),
             opening_of: None,
+            opening: None,
         };
         let text =
             serde_json::to_string(&serde_json::json!({"candidates": [record]})).expect("json");

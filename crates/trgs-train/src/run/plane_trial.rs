@@ -12,6 +12,7 @@
 //! [`MIN_STRENGTH`]. A dropped candidate's plane (so its mirrored pass) and its glass Gaussians
 //! are removed; a kept one is moved onto its glass (`super::plane_refit`).
 use super::candidates::{CandidateRecord, PlaneTrial, next_proposal_try};
+use super::refit_wall::Proposed;
 use super::{RunEvent, TrainingRun};
 use crate::data::View;
 use crate::planes::init::{PlaneInitSettings, append_glass};
@@ -199,12 +200,11 @@ impl TrainingRun {
             self.trainer.remove_planes(&keep, &rows)?;
         }
         if kept > 0 {
-            // A point of each kept plane's proposal: its record's plane.
-            let proposals: Vec<Option<DVec3>> = (0..planes.len())
+            let records = &self.state.candidates;
+            let proposals: Vec<Proposed> = (0..planes.len())
                 .filter(|&k| keep[k])
                 .map(|k| trial.planes.get(k).copied().unwrap_or(k))
-                .map(|i| self.state.candidates.get(i).and_then(|r| r.centre))
-                .map(|c| c.map(DVec3::from_array))
+                .map(|i| Proposed::of(records.get(i)))
                 .collect();
             self.fit_kept_to_their_glass(&proposals)?;
         }
@@ -231,7 +231,7 @@ pub(super) fn hold_perturbation_for(settings: &mut TrainSettings, trial: &PlaneT
 /// dropped plane ([`owner`]), and primaries that no training camera nearly sees (so only mirrored
 /// passes train them: the reflection seeds and what grew from them) whose mirror image about a
 /// dropped plane a camera sees through its rectangle, and about no kept plane.
-fn rows_of_dropped(
+pub(super) fn rows_of_dropped(
     g: &Gaussians<f32>,
     planes: &[ReflectionPlane],
     keep: &[bool],
