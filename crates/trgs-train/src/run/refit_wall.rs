@@ -77,8 +77,8 @@ pub(super) fn into_opening(pane: &ReflectionPlane, opening: &ReflectionPlane) ->
 }
 
 impl TrainingRun {
-    /// The kept planes `moved` (indices into the trainer's planes, which stand refitted in their
-    /// walls' openings) start over there as a new candidate does: what they were trained as on
+    /// The kept planes `moved` (indices into the trainer's planes, which stand in their walls'
+    /// openings) start over there as a new candidate does: what they were trained as on
     /// trial (`trained`: the structure behind the glass) leaves its glass Gaussians and the
     /// Gaussians only its mirrored pass showed, which were seeded for it and mirror what it
     /// reflected ([`rows_of_dropped`]); each gets glass Gaussians over its opening and
