@@ -41,7 +41,7 @@ impl TrainingRun {
             let Some(opening) = proposed(k).opening else { continue };
             let glass = Glass { list, evidence: GlassEvidence::of(list), proposal: None };
             let owned = glass.views(&cameras);
-            let views: Vec<(&Camera, &Image<u8>)> = owned.iter().map(|(c, m)| (*c, m)).collect();
+            let views = borrowed(&owned);
             let init = PlaneInitSettings::default();
             let outline = outline_gaussians(&g, &views, 1, &init);
             let frame =
@@ -187,6 +187,11 @@ impl GlassRefit {
     }
 }
 
+/// [`Glass::views`] as the silhouette fits take them.
+fn borrowed<'a>(views: &'a [(&'a Camera, Image<u8>)]) -> Vec<(&'a Camera, &'a Image<u8>)> {
+    views.iter().map(|(c, m)| (*c, m)).collect()
+}
+
 /// Pieces of a view's glass smaller than this fraction of its largest piece are left out of the
 /// refit: the sight lines past a turned pane's frame through the gap it leaves in its opening
 /// see through its plane too, beyond the frame, and a rectangle stretched over the frame to
@@ -214,7 +219,7 @@ fn refit_to_glass(
     rng: &Rng,
 ) -> Option<GlassRefit> {
     let owned = glass.views(cameras);
-    let views: Vec<(&Camera, &Image<u8>)> = owned.iter().map(|(c, m)| (*c, m)).collect();
+    let views = borrowed(&owned);
     let settings = SilhouetteSettings { hold_offset: true, ..SilhouetteSettings::default() };
     let outlined = outline_plane(before, &views, g, extent, rng)
         .map(|outline| turned_onto(before, &outline))
@@ -392,7 +397,7 @@ mod tests {
         let refs: Vec<&Camera> = cameras.iter().collect();
         let glass = Glass { list: &list, evidence: GlassEvidence::Mask, proposal: None };
         let owned = glass.views(&refs);
-        let views: Vec<(&Camera, &Image<u8>)> = owned.iter().map(|(c, m)| (*c, m)).collect();
+        let views = borrowed(&owned);
         let outline = outline_gaussians(&g, &views, 1, &PlaneInitSettings::default());
         let frame = WallFrame::count(&opening, &before, &outline, 0.01);
         assert!(frame.frames(), "{frame:?} of {} around it", outline.len());
