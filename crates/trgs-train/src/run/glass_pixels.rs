@@ -49,7 +49,10 @@ impl GlassEvidence {
 }
 
 /// A pixel sees through a plane when its transmission depth is at least this many times the
-/// plane's depth there: what it shows lies beyond the plane, not on it (a frame, a wall).
+/// plane's depth there: what it shows lies beyond the plane, not on it (a frame, a wall). Well
+/// above 1: the trial's plane can stand centimetres in front of its wall and frame, and at a
+/// ratio near 1 they count as seen through; the labels then fill the rectangle and pin neither
+/// its edges nor its offset.
 const SEEN_THROUGH_DEPTH: f32 = 1.1;
 
 /// [`glass_pixels`]' labels, bits of what a pixel shows: neither, either or both.
@@ -81,9 +84,14 @@ pub(super) fn glass_pixels(
             if images.hit.data[p] as usize != k + 1 {
                 continue;
             }
-            // Along a ray of camera-space z = 1, the distance to the plane is its depth.
-            let seen_through = ray_rectangle_hit(plane, origin, camera.pixel_ray(x, y))
-                .is_some_and(|z| images.depth.data[p] >= SEEN_THROUGH_DEPTH * z as f32);
+            // The rendered depth is camera-space z, not the distance along the (unit) ray:
+            // compared with the distance, a pixel off the view's axis needed more depth to see
+            // through, and the rectangle shrank from the side of the glass nearer the border.
+            let ray = camera.pixel_ray(x, y);
+            let seen_through = ray_rectangle_hit(plane, origin, ray).is_some_and(|s| {
+                let z = camera.pose.transform_point(origin + s * ray).z;
+                images.depth.data[p] >= SEEN_THROUGH_DEPTH * z as f32
+            });
             let masked = images.mask.data[p] >= 0.5;
             out.data[p] = (u8::from(masked) * MASKED) | (u8::from(seen_through) * SEEN_THROUGH);
         }
@@ -143,6 +151,13 @@ mod tests {
         // Seen through with a low mask (faint reflection), where the plane is hit only.
         images.depth = Image::filled(8, 8, 1, 3.0);
         assert_eq!(labelled(&images, 0, SEEN_THROUGH), inside);
+        // At the pane's corners, off the view's axis, as at its centre: the depth is
+        // camera-space z (the plane's is 2 at every pixel), not the distance along the ray.
+        images.depth = Image::filled(8, 8, 1, 2.0 * SEEN_THROUGH_DEPTH + 0.01);
+        assert_eq!(labelled(&images, 0, SEEN_THROUGH), inside);
+        images.depth = Image::filled(8, 8, 1, 2.0 * SEEN_THROUGH_DEPTH - 0.01);
+        assert_eq!(labelled(&images, 0, NOT_GLASS).len(), 64);
+        images.depth = Image::filled(8, 8, 1, 3.0);
         // Both.
         images.mask = Image::filled(8, 8, 1, 0.9);
         assert_eq!(labelled(&images, 0, MASKED | SEEN_THROUGH), inside);
