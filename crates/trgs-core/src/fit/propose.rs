@@ -540,11 +540,28 @@ mod tests {
     }
 
     #[test]
+    fn a_pane_seen_through_two_pieces_of_wall_a_strip_apart_is_one_candidate() {
+        // RANSAC's pieces of one wall 0.26 apart (wider than a grid cell) across the middle of
+        // the pane: each piece's hull holds 0.37 of its width, and the strip between them
+        // neither, so their see-through rectangles lie apart.
+        let (mut points, cameras) = room(&[(-0.5, 0.5)]);
+        points.retain(|p| p.z != 0.0 || p.x.abs() > 0.13);
+        let found = candidates(&points, &cameras);
+        let proposed: Vec<_> = found.iter().filter(|c| c.rejected.is_none()).collect();
+        assert_eq!(proposed.len(), 1, "{found:#?}");
+        let plane = proposed[0].plane.expect("a plane");
+        let width =
+            if plane.axis.x.abs() > plane.axis.y.abs() { plane.width } else { plane.height };
+        assert!((0.9..1.3).contains(&width), "the whole pane: {plane:?}");
+        assert!(plane.centre.distance(DVec3::new(0.0, 1.0, 0.0)) < 0.1, "{plane:?}");
+    }
+
+    #[test]
     fn a_pane_between_two_pieces_of_wall_that_do_not_touch_is_one_candidate_over_all_of_it() {
         // The wall right of x = 0.05 set 0.1 back, the left piece ending at x = -0.05: two
         // structures that do not touch, each with half the pane in its hull.
         let (mut points, cameras) = room(&[(-0.5, 0.5)]);
-        points.retain(|p| p.z != 0.0 || p.x.abs() > 0.05);
+        points.retain(|p| p.z != 0.0 || p.x.abs() > 0.13);
         for p in points.iter_mut().filter(|p| p.z == 0.0 && p.x > 0.0) {
             p.z = -0.1;
         }
