@@ -561,7 +561,7 @@ mod tests {
         // The wall right of x = 0.05 set 0.1 back, the left piece ending at x = -0.05: two
         // structures that do not touch, each with half the pane in its hull.
         let (mut points, cameras) = room(&[(-0.5, 0.5)]);
-        points.retain(|p| p.z != 0.0 || p.x.abs() > 0.13);
+        points.retain(|p| p.z != 0.0 || p.x.abs() > 0.05);
         for p in points.iter_mut().filter(|p| p.z == 0.0 && p.x > 0.0) {
             p.z = -0.1;
         }
