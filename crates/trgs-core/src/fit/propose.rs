@@ -539,6 +539,18 @@ mod tests {
         assert!(plane.centre.distance(DVec3::new(0.0, 1.0, 0.0)) < 0.15, "{plane:?}");
     }
 
+    /// The one candidate proposed for `room(&[(-0.5, 0.5)])`'s pane, checked to span its width.
+    fn the_one_pane_whole(points: &[DVec3], cameras: &[Camera]) -> ReflectionPlane {
+        let found = candidates(points, cameras);
+        let proposed: Vec<_> = found.iter().filter(|c| c.rejected.is_none()).collect();
+        assert_eq!(proposed.len(), 1, "{found:#?}");
+        let plane = proposed[0].plane.expect("a plane");
+        let width =
+            if plane.axis.x.abs() > plane.axis.y.abs() { plane.width } else { plane.height };
+        assert!((0.9..1.3).contains(&width), "the whole pane: {plane:?}");
+        plane
+    }
+
     #[test]
     fn a_pane_seen_through_two_pieces_of_wall_a_strip_apart_is_one_candidate() {
         // RANSAC's pieces of one wall 0.26 apart (wider than a grid cell) across the middle of
@@ -546,13 +558,7 @@ mod tests {
         // neither, so their see-through rectangles lie apart.
         let (mut points, cameras) = room(&[(-0.5, 0.5)]);
         points.retain(|p| p.z != 0.0 || p.x.abs() > 0.13);
-        let found = candidates(&points, &cameras);
-        let proposed: Vec<_> = found.iter().filter(|c| c.rejected.is_none()).collect();
-        assert_eq!(proposed.len(), 1, "{found:#?}");
-        let plane = proposed[0].plane.expect("a plane");
-        let width =
-            if plane.axis.x.abs() > plane.axis.y.abs() { plane.width } else { plane.height };
-        assert!((0.9..1.3).contains(&width), "the whole pane: {plane:?}");
+        let plane = the_one_pane_whole(&points, &cameras);
         assert!(plane.centre.distance(DVec3::new(0.0, 1.0, 0.0)) < 0.1, "{plane:?}");
     }
 
@@ -565,16 +571,11 @@ mod tests {
         for p in points.iter_mut().filter(|p| p.z == 0.0 && p.x > 0.0) {
             p.z = -0.1;
         }
-        let found = candidates(&points, &cameras);
-        let proposed: Vec<_> = found.iter().filter(|c| c.rejected.is_none()).collect();
-        assert_eq!(proposed.len(), 1, "{found:#?}");
-        let plane = proposed[0].plane.expect("a plane");
-        let width =
-            if plane.axis.x.abs() > plane.axis.y.abs() { plane.width } else { plane.height };
-        assert!((0.9..1.3).contains(&width), "the whole pane: {plane:?}");
+        let plane = the_one_pane_whole(&points, &cameras);
         let centre = plane.centre - DVec3::Z * plane.centre.z;
         assert!(centre.distance(DVec3::new(0.0, 1.0, 0.0)) < 0.1, "{plane:?}");
     }
+
     #[test]
     fn a_pane_turned_in_its_opening_takes_that_opening_from_the_wall() {
         // Two openings; in the right one a pane turned 20 degrees about the opening's vertical
