@@ -32,15 +32,16 @@ pub(super) struct Parts {
 
 impl Reflector<'_> {
     /// The entries of `scored` (structure index, sight lines, candidate) that are parts of the
-    /// reflector of structure `k`, whose candidate is `c`: parallel to it within the merge
-    /// angle, within [`Self::offset`] of its plane, and either touching it ([`hulls_touch`]) or
-    /// seen through where `c` is or next to it ([`rectangles_meet`] within [`pane_gap`]). A wall
-    /// that the pane splits into pieces that do not touch (left and right of the glass) gives
-    /// each piece the sight lines through the part of the pane inside its hull.
+    /// reflector of structure `k`, whose see-through rectangle is `glass`: parallel to it within
+    /// the merge angle, within [`Self::offset`] of its plane, and either touching it
+    /// ([`hulls_touch`]) or seen through where `glass` is or next to it ([`rectangles_meet`]
+    /// within [`pane_gap`]). A wall that the pane splits into pieces that do not touch (left and
+    /// right of the glass) gives each piece the sight lines through the part of the pane inside
+    /// its hull.
     pub fn parts_of(
         &self,
         k: usize,
-        c: &PlaneCandidate,
+        glass: Option<ReflectionPlane>,
         scored: &[(usize, SeeThrough, PlaneCandidate)],
     ) -> Vec<usize> {
         let a = &self.structures[k];
@@ -52,7 +53,7 @@ impl Reflector<'_> {
                 let near = *j != k
                     && a.normal.dot(b.normal).abs() >= cos_max
                     && a.signed_distance(b.point).abs() <= self.offset;
-                let same_glass = || match (c.plane, other.plane) {
+                let same_glass = || match (glass, other.plane) {
                     (Some(pa), Some(pb)) => {
                         rectangles_meet(&pa, &pb, pane_gap(&pa, &pb, self.cell))
                     }
@@ -77,8 +78,31 @@ impl Reflector<'_> {
         front: DVec3,
         sight: &Sight,
     ) -> Parts {
-        let of_k = self.parts_of(k, c, scored);
         let s = &self.structures[k];
+        let whole = |of_k: &[usize]| {
+            let parts_seen: Vec<&SeeThrough> = of_k.iter().map(|&m| &scored[m].1).collect();
+            (!of_k.is_empty())
+                .then(|| whole_reflector_plane(s, front, seen, &parts_seen, sight, self.cell))
+                .flatten()
+        };
+        // The parts' sight lines widen the candidate's rectangle, which can then meet a piece
+        // it did not (a frame in three pieces, the middle one seen through with the first): the
+        // parts are looked for again over the wider rectangle until none is added.
+        let mut of_k = self.parts_of(k, c.plane, scored);
+        let mut plane = whole(&of_k);
+        for _ in 0..PART_ROUNDS {
+            let more: Vec<usize> = self
+                .parts_of(k, plane.or(c.plane), scored)
+                .into_iter()
+                .filter(|m| !of_k.contains(m))
+                .collect();
+            if more.is_empty() {
+                break;
+            }
+            of_k.extend(more);
+            of_k.sort_unstable();
+            plane = whole(&of_k);
+        }
         let rejected = of_k
             .iter()
             .map(|&m| {
@@ -90,10 +114,6 @@ impl Reflector<'_> {
                 PlaneCandidate { rejected: Some(why), ..other.clone() }
             })
             .collect();
-        let parts_seen: Vec<&SeeThrough> = of_k.iter().map(|&m| &scored[m].1).collect();
-        let plane = (!of_k.is_empty())
-            .then(|| whole_reflector_plane(s, front, seen, &parts_seen, sight, self.cell))
-            .flatten();
         Parts { rejected, structures: of_k.iter().map(|&m| scored[m].0).collect(), plane }
     }
 }
@@ -106,6 +126,10 @@ impl Reflector<'_> {
 /// kept the larger piece alone (1.5 of the pane's 2.4 width). Panes between mullions, or
 /// windows a narrow pier apart, are one candidate too: a facade of panes in one plane.
 pub const PANE_GAP_SHARE: f64 = 0.5;
+
+/// How many times [`Reflector::take_parts`] looks for more parts over the rectangle its parts
+/// widened: each round can add a piece next to the last.
+const PART_ROUNDS: usize = 4;
 
 /// How far apart see-through rectangles `a` and `b` may lie to be one reflector's: the
 /// [`PANE_GAP_SHARE`] of their shortest side, at least a grid cell `cell`.
@@ -171,7 +195,84 @@ fn whole_reflector_plane(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::Material;
+    use crate::scene::{Intrinsics, Material, Pose};
+
+    /// Points on z = 0 over `x` by y in 0..2, 0.05 apart.
+    fn wall(x: (f64, f64)) -> Vec<DVec3> {
+        let n = |a: f64, b: f64| ((b - a) / 0.05).round() as usize;
+        (0..=n(x.0, x.1))
+            .flat_map(|i| {
+                (0..=40).map(move |j| DVec3::new(x.0 + 0.05 * i as f64, 0.05 * j as f64, 0.0))
+            })
+            .collect()
+    }
+
+    /// Three pieces of one wall in z = 0 (x up to -0.4, -0.35 to 0.45, from 0.55), a pane over
+    /// x -1.4 to 1.5 seen through each where its hull holds it, by a camera at z = 3 whose sight
+    /// lines end 1 behind the wall. The middle piece's rectangle lies next to the left's; the
+    /// right's, next to the middle's, lies too far from the left's to meet it.
+    #[test]
+    fn a_piece_next_to_the_one_a_part_widened_the_rectangle_to_is_a_part_too() {
+        let pieces = [(-2.0, -0.4), (-0.35, 0.45), (0.55, 1.6)];
+        let panes = [(-1.4, -0.5), (-0.3, 0.4), (0.6, 1.5)];
+        let mut points: Vec<DVec3> = Vec::new();
+        let mut structures = Vec::new();
+        for piece in pieces {
+            let first = points.len();
+            points.extend(wall(piece));
+            let inliers = (first..points.len()).collect();
+            structures.push(Structure::from_inliers(&points, inliers).expect("a plane"));
+        }
+        let eye = DVec3::new(0.0, 1.0, 3.0);
+        let camera = Camera::new(
+            "c",
+            Intrinsics::from_fov_x(1.2, 64, 48),
+            Pose::look_at(eye, DVec3::new(0.0, 1.0, 0.0), DVec3::Y),
+        );
+        let (cell, settings) = (0.05, ProposalSettings::default());
+        let mut scored = Vec::new();
+        for (k, pane) in panes.iter().enumerate() {
+            let mut seen = SeeThrough::default();
+            for q in wall(*pane).into_iter().filter(|q| (0.5..=1.5).contains(&q.y)) {
+                seen.points.push(points.len());
+                seen.sight_lines.push((points.len(), 0));
+                seen.crossings.push(structures[k].to_plane(q));
+                // Behind the wall on the camera's sight line through q.
+                points.push(eye + (q - eye) * (4.0 / 3.0));
+            }
+            let plane = seen.region_plane(&structures[k], DVec3::Z, cell);
+            let candidate = PlaneCandidate {
+                plane,
+                support: structures[k].inliers.len(),
+                seen_through: seen.points.len(),
+                seen_fraction: 0.5,
+                cameras_in_front: 1.0,
+                structure_size: (1.0, 1.0),
+                planarity: 1.0,
+                wall_planarity: 1.0,
+                opening_of: None,
+                opening: None,
+                rejected: None,
+            };
+            scored.push((k, seen, candidate));
+        }
+        let reflector =
+            Reflector { structures: &structures, offset: 0.1, cell, settings: &settings };
+        // The left piece's own rectangle meets the middle's and not the right's.
+        let left = scored[0].2.plane.expect("a rectangle");
+        let right = scored[2].2.plane.expect("a rectangle");
+        assert_eq!(reflector.parts_of(0, Some(left), &scored), vec![1]);
+        assert!(!rectangles_meet(&left, &right, pane_gap(&left, &right, cell)));
+        let cameras = [&camera];
+        let sight = Sight { points: &points, cameras: &cameras, threshold: 0.01 };
+        let (c, seen) = (scored[0].2.clone(), scored[0].1.clone());
+        let parts = reflector.take_parts(0, &c, &seen, &scored, 0, DVec3::Z, &sight);
+        assert_eq!(parts.structures, vec![1, 2]);
+        let plane = parts.plane.expect("the whole reflector");
+        let width =
+            if plane.axis.x.abs() > plane.axis.y.abs() { plane.width } else { plane.height };
+        assert!((2.8..3.1).contains(&width), "the whole pane: {plane:?}");
+    }
 
     fn rectangle(centre: DVec3, axis: DVec3, width: f64, height: f64) -> ReflectionPlane {
         ReflectionPlane::new(centre, DVec3::Z, axis, width, height, Material::Glass)
