@@ -118,13 +118,13 @@ impl Reflector<'_> {
     }
 }
 
-/// The share of the smaller of two see-through rectangles' shorter side (over a grid cell) by
-/// which they may lie apart and still be one reflector's. The pieces of a frame or wall that
-/// RANSAC draws apart see through the pane in pieces of their own, and between them lies a strip
-/// that neither piece's hull holds: on a showcase's step-200 checkpoint, one pane came as two
-/// candidates in 4 of 300 seeds (`examples/propose_probe.rs --seeds 300`), and a fresh run
-/// kept the larger piece alone (1.5 of the pane's 2.4 width). Panes between mullions, or
-/// windows a narrow pier apart, are one candidate too: a facade of panes in one plane.
+/// The share of the shortest side of two see-through rectangles (at least a grid cell) by which
+/// they may lie apart and still be one reflector's. The pieces of a frame or wall that RANSAC
+/// draws apart see through the pane in pieces of their own, and between them lies a strip that
+/// neither piece's hull holds; with a cell's gap alone the pane came as two candidates, and the
+/// trial kept one piece (docs/RESULTS.md, "Planes without masks"; measured with
+/// `examples/propose_probe.rs --seeds N`). Panes between mullions, or windows a narrow pier
+/// apart, are one candidate too: a facade of panes in one plane.
 pub const PANE_GAP_SHARE: f64 = 0.5;
 
 /// How many times [`Reflector::take_parts`] looks for more parts over the rectangle its parts
@@ -195,16 +195,12 @@ fn whole_reflector_plane(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fit::propose::tests::grid;
     use crate::scene::{Intrinsics, Material, Pose};
 
-    /// Points on z = 0 over `x` by y in 0..2, 0.05 apart.
-    fn wall(x: (f64, f64)) -> Vec<DVec3> {
-        let n = |a: f64, b: f64| ((b - a) / 0.05).round() as usize;
-        (0..=n(x.0, x.1))
-            .flat_map(|i| {
-                (0..=40).map(move |j| DVec3::new(x.0 + 0.05 * i as f64, 0.05 * j as f64, 0.0))
-            })
-            .collect()
+    /// Points on z = 0 over `x` by `y`, 0.05 apart.
+    fn wall(x: (f64, f64), y: (f64, f64)) -> Vec<DVec3> {
+        grid(x, y, 0.05, |x, y| DVec3::new(x, y, 0.0))
     }
 
     /// Three pieces of one wall in z = 0 (x up to -0.4, -0.35 to 0.45, from 0.55), a pane over
@@ -219,7 +215,7 @@ mod tests {
         let mut structures = Vec::new();
         for piece in pieces {
             let first = points.len();
-            points.extend(wall(piece));
+            points.extend(wall(piece, (0.0, 2.0)));
             let inliers = (first..points.len()).collect();
             structures.push(Structure::from_inliers(&points, inliers).expect("a plane"));
         }
@@ -233,7 +229,7 @@ mod tests {
         let mut scored = Vec::new();
         for (k, pane) in panes.iter().enumerate() {
             let mut seen = SeeThrough::default();
-            for q in wall(*pane).into_iter().filter(|q| (0.5..=1.5).contains(&q.y)) {
+            for q in wall(*pane, (0.5, 1.5)) {
                 seen.points.push(points.len());
                 seen.sight_lines.push((points.len(), 0));
                 seen.crossings.push(structures[k].to_plane(q));
