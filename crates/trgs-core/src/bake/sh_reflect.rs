@@ -69,9 +69,8 @@ fn fibonacci_directions(n: usize) -> Vec<DVec3> {
         .collect()
 }
 
-/// `X` with `A X = B` for `k x k` row-major `A` (symmetric positive definite) and `B`, by
-/// Gaussian elimination with partial pivoting; returned transposed, `X^T`, so that row `j`
-/// holds the weights of the new coefficient `j`.
+/// `X` with `A X = B` for `k x k` row-major `A` (symmetric positive definite), `B` and `X`, by
+/// Gaussian elimination with partial pivoting.
 fn solve(k: usize, mut a: Vec<f64>, mut b: Vec<f64>) -> Vec<f64> {
     for col in 0..k {
         let pivot = (col..k)
@@ -96,14 +95,14 @@ fn solve(k: usize, mut a: Vec<f64>, mut b: Vec<f64>) -> Vec<f64> {
             }
         }
     }
-    let mut xt = vec![0.0; k * k];
+    let mut x = vec![0.0; k * k];
     for r in 0..k {
         let p = a[r * k + r];
         for c in 0..k {
-            xt[c * k + r] = b[r * k + c] / p;
+            x[r * k + c] = b[r * k + c] / p;
         }
     }
-    xt
+    x
 }
 
 #[cfg(test)]
@@ -112,11 +111,15 @@ mod tests {
     use crate::plane_math::householder;
     use crate::sh::eval;
 
+    /// A mirror (symmetric) and a turn (not symmetric: `h` and `h^T` differ, which a mirror
+    /// alone would not tell apart).
     #[test]
-    fn a_mirrored_colour_is_the_colour_seen_along_the_mirrored_direction() {
+    fn a_mapped_colour_is_the_colour_seen_along_the_mapped_direction() {
         let n = DVec3::new(0.3, -0.5, 0.8).normalize();
-        let h = householder(n);
-        for degree in 0..=3 {
+        let turn = DMat3::from_axis_angle(DVec3::new(0.2, 0.9, -0.4).normalize(), 0.7);
+        for (h, degree) in
+            [householder(n), turn].into_iter().flat_map(|h| (0..=3).map(move |d| (h, d)))
+        {
             let k = sh_coeff_count(degree);
             let c: Vec<[f64; 3]> = (0..k)
                 .map(|i| [0.3 - 0.07 * i as f64, 0.1 * (i % 3) as f64, -0.05 * i as f64])
