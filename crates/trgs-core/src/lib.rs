@@ -5,6 +5,8 @@
 //! - [`scene`]: Gaussians (structure of arrays), cameras, reflection planes, input validation;
 //! - [`plane_math`]: Householder reflections, ray-rectangle hits, nearest-plane selection, Schlick;
 //! - [`plane_grad`]: a mirrored view's gradient chained into its plane's parameters;
+//! - [`plane_carry`]: the Gaussians only a plane shows, moved with it so that their mirror images
+//!   stay;
 //! - [`fit`]: plane fitting for initialisation (RANSAC, minimum-area box, rectangle sampling);
 //! - [`pipeline`]: what the GPU stages and their CPU twins share: tile grid, key layout,
 //!   thresholds, reflection model, render settings, step guard, Adam's and the losses' settings;
@@ -23,6 +25,7 @@ pub mod lens;
 pub mod metrics;
 pub mod parallel;
 pub mod pipeline;
+pub mod plane_carry;
 pub mod plane_grad;
 pub mod plane_math;
 pub mod reference;
