@@ -2,6 +2,7 @@
 //! moved onto the glass its trained layers show, as painted masks move their planes at
 //! initialisation (`planes::init`).
 use super::glass_pixels::{GlassEvidence, NOT_GLASS, glass_pixels};
+use super::plane_trial::rows_only_shown_by;
 use super::refit_offset::{OffsetChoice, offset_along_normal};
 use super::refit_wall::{Proposed, WallFrame, into_opening};
 use super::{RunEvent, TrainingRun};
@@ -93,7 +94,24 @@ impl TrainingRun {
             };
             self.events.push_back(RunEvent::Note(format!("kept plane {k}: {text}")));
         }
-        self.trainer.move_planes(&planes)?;
+        // What only a refitted plane's mirrored pass shows moves with it, so that the
+        // reflection its trial trained stays where the photos put it: the reflection seeds were
+        // placed, and trained, about the plane as it stood.
+        let carried: Vec<Vec<usize>> = (0..planes.len())
+            .map(|k| match moved_into_opening[k] {
+                Some(_) => Vec::new(),
+                None if planes[k] == trained[k] => Vec::new(),
+                None => rows_only_shown_by(&g, &trained, k, &cameras),
+            })
+            .collect();
+        for (k, rows) in carried.iter().enumerate().filter(|(_, rows)| !rows.is_empty()) {
+            self.events.push_back(RunEvent::Note(format!(
+                "kept plane {k}: the {} Gaussians only it shows moved with it (their mirror \
+                 images stay)",
+                rows.len()
+            )));
+        }
+        self.trainer.move_planes(&planes, &carried)?;
         let moved: Vec<usize> =
             (0..planes.len()).filter(|&k| moved_into_opening[k].is_some()).collect();
         if moved.is_empty() { Ok(()) } else { self.start_over_in_openings(&trained, &moved) }

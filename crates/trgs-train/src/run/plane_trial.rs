@@ -237,7 +237,46 @@ pub(super) fn rows_of_dropped(
     keep: &[bool],
     cameras: &[&Camera],
 ) -> Vec<usize> {
-    let shown_by = |k: usize, x: DVec3| {
+    let dropped: Vec<bool> = keep.iter().map(|k| !k).collect();
+    (0..g.len())
+        .filter(|&i| {
+            let x = DVec3::from_array(g.means[i].map(f64::from));
+            match g.populations[i] {
+                Population::Glass => owner(planes, x).is_some_and(|k| !keep[k]),
+                Population::Primary => shown_only_through(planes, &dropped, cameras, x),
+            }
+        })
+        .collect()
+}
+
+/// The rows (ascending) of the primaries that only plane `k` of `planes` shows: no training
+/// camera nearly sees them, and a camera sees their mirror image about plane `k` through its
+/// rectangle, and about no other plane. They are trained only through its mirrored pass.
+pub(super) fn rows_only_shown_by(
+    g: &Gaussians<f32>,
+    planes: &[ReflectionPlane],
+    k: usize,
+    cameras: &[&Camera],
+) -> Vec<usize> {
+    let only: Vec<bool> = (0..planes.len()).map(|j| j == k).collect();
+    (0..g.len())
+        .filter(|&i| g.populations[i] == Population::Primary)
+        .filter(|&i| {
+            let x = DVec3::from_array(g.means[i].map(f64::from));
+            shown_only_through(planes, &only, cameras, x)
+        })
+        .collect()
+}
+
+/// Whether a point at `x` that no camera of `cameras` nearly sees ([`UNSEEN_MARGIN`]) is seen
+/// mirrored through some of the planes in `set` (of `planes`) and through none of the others.
+fn shown_only_through(
+    planes: &[ReflectionPlane],
+    set: &[bool],
+    cameras: &[&Camera],
+    x: DVec3,
+) -> bool {
+    let shown_by = |k: usize| {
         let mirrored = reflect_point(&planes[k], x);
         cameras.iter().any(|c| {
             let o = c.pose.centre();
@@ -245,19 +284,9 @@ pub(super) fn rows_of_dropped(
                 && ray_rectangle_hit(&planes[k], o, (mirrored - o).normalize()).is_some()
         })
     };
-    (0..g.len())
-        .filter(|&i| {
-            let x = DVec3::from_array(g.means[i].map(f64::from));
-            match g.populations[i] {
-                Population::Glass => owner(planes, x).is_some_and(|k| !keep[k]),
-                Population::Primary => {
-                    !cameras.iter().any(|c| c.nearly_sees(x, UNSEEN_MARGIN))
-                        && (0..planes.len()).any(|k| !keep[k] && shown_by(k, x))
-                        && !(0..planes.len()).any(|k| keep[k] && shown_by(k, x))
-                }
-            }
-        })
-        .collect()
+    !cameras.iter().any(|c| c.nearly_sees(x, UNSEEN_MARGIN))
+        && (0..planes.len()).any(|k| set[k] && shown_by(k))
+        && !(0..planes.len()).any(|k| !set[k] && shown_by(k))
 }
 
 /// The index of the plane a point at `x` lies on: the nearest along the normal among the planes
@@ -331,6 +360,37 @@ fn view_l1(render: &Image<f32>, view: &View) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use trgs_core::scene::{Intrinsics, Material, Pose};
+
+    /// Seen directly: the camera's own. Behind the camera and seen mirrored through one pane's
+    /// rectangle: that pane's alone. Mirrored past both panes, or a glass Gaussian: no pane's.
+    #[test]
+    fn what_only_one_plane_shows_is_what_only_its_mirrored_pass_trains() {
+        let k = Intrinsics::from_fov_x(1.6, 64, 48);
+        let eye = Pose::look_at(DVec3::new(0.0, 0.0, -3.0), DVec3::ZERO, DVec3::Y);
+        let camera = Camera::new("c", k, eye);
+        let pane = |x: f64| {
+            let centre = DVec3::new(x, 0.0, 0.0);
+            ReflectionPlane::new(centre, DVec3::NEG_Z, DVec3::X, 2.0, 2.0, Material::Glass)
+        };
+        let planes = [pane(0.0), pane(2.2)];
+        let at = [
+            (DVec3::new(0.0, 0.0, -1.0), Population::Primary), // seen directly
+            (DVec3::new(0.0, 0.0, -5.0), Population::Primary), // mirrored through the first
+            (DVec3::new(4.8, 0.0, -5.0), Population::Primary), // through the second (x 1.8)
+            (DVec3::new(0.0, 40.0, -5.0), Population::Primary), // past both
+            (DVec3::new(0.0, 0.0, -5.0), Population::Glass),
+        ];
+        let mut g = Gaussians::zeros(at.len(), 0);
+        for (i, (x, population)) in at.iter().enumerate() {
+            g.means[i] = x.to_array().map(|v| v as f32);
+            g.populations[i] = *population;
+        }
+        let cameras = [&camera];
+        assert_eq!(rows_only_shown_by(&g, &planes, 0, &cameras), vec![1]);
+        assert_eq!(rows_only_shown_by(&g, &planes, 1, &cameras), vec![2]);
+        assert_eq!(rows_of_dropped(&g, &planes, &[true, false], &cameras), vec![2]);
+    }
 
     #[test]
     fn the_perturbation_waits_for_the_trial_to_be_decided() {

@@ -6,6 +6,8 @@ use crate::planes::adam::{OffsetLimit, PlaneRates, plane_adam};
 use crate::run::checkpoint::PlaneMoments;
 use crate::settings::Stage;
 use anyhow::{Context, Result};
+use glam::DVec3;
+use trgs_core::plane_carry::PlaneCarry;
 use trgs_core::plane_grad::PlaneGrad;
 use trgs_core::scene::{
     Attribute, Camera, Gaussians, Population, ReflectionPlane, attribute_widths,
@@ -88,14 +90,39 @@ impl Trainer {
         Ok(())
     }
 
-    /// Replace the planes' geometry (as many planes, in the same order: their moments stay).
-    pub fn move_planes(&mut self, planes: &[ReflectionPlane]) -> Result<()> {
+    /// Replace the planes' geometry (as many planes, in the same order: their moments stay), and
+    /// move the Gaussians of rows `carried[k]` with plane `k` ([`PlaneCarry`]: those only its
+    /// mirrored pass shows keep their mirror images; read after [`Trainer::settle`], which this
+    /// applies first). The carried means' first moments turn with them.
+    pub fn move_planes(
+        &mut self,
+        planes: &[ReflectionPlane],
+        carried: &[Vec<usize>],
+    ) -> Result<()> {
+        let from = self.planes().to_vec();
         anyhow::ensure!(
-            planes.len() == self.planes().len(),
+            planes.len() == from.len(),
             "moving {} planes onto {} new ones",
-            self.planes().len(),
+            from.len(),
             planes.len()
         );
+        if carried.iter().any(|rows| !rows.is_empty()) {
+            self.settle_unreported()?;
+            let mut state = self.read_state()?;
+            let degree = state.gaussians.sh_degree;
+            for ((old, new), rows) in from.iter().zip(planes).zip(carried) {
+                let carry = PlaneCarry::between(old, new, degree);
+                let turn = carry.linear();
+                let moments = &mut state.m[Attribute::Means];
+                for &i in rows {
+                    carry.apply(&mut state.gaussians, i);
+                    let m = &mut moments[3 * i..3 * i + 3];
+                    let turned = turn * DVec3::new(m[0].into(), m[1].into(), m[2].into());
+                    m.copy_from_slice(&turned.to_array().map(|v| v as f32));
+                }
+            }
+            self.set_state(&state)?;
+        }
         self.gaussians.scene_mut().set_planes(planes).context("moved planes")?;
         Ok(())
     }
