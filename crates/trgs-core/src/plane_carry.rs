@@ -39,6 +39,13 @@ impl PlaneCarry {
         self.linear * x + self.shift
     }
 
+    /// Whether the carry moves anything: the two planes differ as planes, not only in their
+    /// rectangles (a rectangle moved within its plane keeps every mirror image).
+    pub fn moves(&self) -> bool {
+        const STILL: f64 = 1e-12;
+        self.turns || self.shift.length() > STILL
+    }
+
     /// The linear part `M` (a rotation): what the carry does to directions.
     pub fn linear(&self) -> DMat3 {
         self.linear
@@ -63,5 +70,27 @@ impl PlaneCarry {
         for (dst, src) in g.sh[i * k..(i + 1) * k].iter_mut().zip(sh.apply(&coeffs)) {
             *dst = src.map(F::from_f64);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::Material;
+
+    #[test]
+    fn a_rectangle_moved_within_its_plane_carries_nothing() {
+        let n = DVec3::new(0.1, -0.2, 1.0).normalize();
+        let axis = n.cross(DVec3::Y).normalize();
+        let plane =
+            ReflectionPlane::new(DVec3::new(0.3, 1.0, 2.0), n, axis, 1.6, 1.0, Material::Glass);
+        let within = ReflectionPlane { centre: plane.centre + 0.2 * axis, width: 1.2, ..plane };
+        assert!(!PlaneCarry::between(&plane, &within, 3).moves());
+        let stepped = ReflectionPlane { centre: plane.centre - 0.04 * n, ..plane };
+        let carry = PlaneCarry::between(&plane, &stepped, 3);
+        assert!(carry.moves());
+        // A step along the normal moves what the plane shows by twice the step, the same way.
+        let x = DVec3::new(1.0, 0.5, 3.0);
+        assert!((carry.point(x) - (x - 0.08 * n)).length() < 1e-12);
     }
 }

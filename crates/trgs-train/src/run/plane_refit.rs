@@ -11,6 +11,7 @@ use anyhow::Result;
 use glam::DVec3;
 use trgs_core::Image;
 use trgs_core::fit::{SilhouetteFit, SilhouetteSettings, refine_to_masks};
+use trgs_core::plane_carry::PlaneCarry;
 use trgs_core::rng::Rng;
 use trgs_core::scene::{Camera, Gaussians, ReflectionPlane};
 
@@ -100,15 +101,18 @@ impl TrainingRun {
         let carried: Vec<Vec<usize>> = (0..planes.len())
             .map(|k| match moved_into_opening[k] {
                 Some(_) => Vec::new(),
-                None if planes[k] == trained[k] => Vec::new(),
+                None if !PlaneCarry::between(&trained[k], &planes[k], 0).moves() => Vec::new(),
                 None => rows_only_shown_by(&g, &trained, k, &cameras),
             })
             .collect();
         for (k, rows) in carried.iter().enumerate().filter(|(_, rows)| !rows.is_empty()) {
+            let centre = trained[k].centre;
+            let step = PlaneCarry::between(&trained[k], &planes[k], 0).point(centre) - centre;
             self.events.push_back(RunEvent::Note(format!(
-                "kept plane {k}: the {} Gaussians only it shows moved with it (their mirror \
-                 images stay)",
-                rows.len()
+                "kept plane {k}: the {} Gaussians only it shows moved with it, {:.3} at its \
+                 centre (their mirror images stay)",
+                rows.len(),
+                step.length()
             )));
         }
         self.trainer.move_planes(&planes, &carried)?;
