@@ -2,7 +2,7 @@
 //! moved onto the glass its trained layers show, as painted masks move their planes at
 //! initialisation (`planes::init`).
 use super::glass_pixels::{GlassEvidence, NOT_GLASS, glass_pixels};
-use super::plane_trial::rows_only_shown_by;
+use super::plane_trial::rows_only_shown_by_each;
 use super::refit_offset::{OffsetChoice, offset_along_normal};
 use super::refit_wall::{Proposed, WallFrame, into_opening};
 use super::{RunEvent, TrainingRun};
@@ -98,22 +98,30 @@ impl TrainingRun {
         // What only a refitted plane's mirrored pass shows moves with it, so that the
         // reflection its trial trained stays where the photos put it: the reflection seeds were
         // placed, and trained, about the plane as it stood.
-        let carried: Vec<Vec<usize>> = (0..planes.len())
-            .map(|k| match moved_into_opening[k] {
-                Some(_) => Vec::new(),
-                None if !PlaneCarry::between(&trained[k], &planes[k], 0).moves() => Vec::new(),
-                None => rows_only_shown_by(&g, &trained, k, &cameras),
+        let carries: Vec<Option<PlaneCarry>> = (0..planes.len())
+            .map(|k| {
+                let carry = PlaneCarry::between(&trained[k], &planes[k], 0);
+                (moved_into_opening[k].is_none() && carry.moves()).then_some(carry)
             })
             .collect();
-        for (k, rows) in carried.iter().enumerate().filter(|(_, rows)| !rows.is_empty()) {
-            let centre = trained[k].centre;
-            let step = PlaneCarry::between(&trained[k], &planes[k], 0).point(centre) - centre;
-            self.events.push_back(RunEvent::Note(format!(
-                "kept plane {k}: the {} Gaussians only it shows moved with it, {:.3} at its \
-                 centre (their mirror images stay)",
-                rows.len(),
-                step.length()
-            )));
+        let mut carried = vec![Vec::new(); planes.len()];
+        if carries.iter().any(Option::is_some) {
+            carried = rows_only_shown_by_each(&g, &trained, &cameras);
+        }
+        for (k, (rows, carry)) in carried.iter_mut().zip(&carries).enumerate() {
+            let Some(carry) = carry else {
+                rows.clear();
+                continue;
+            };
+            if !rows.is_empty() {
+                let centre = trained[k].centre;
+                self.events.push_back(RunEvent::Note(format!(
+                    "kept plane {k}: the {} Gaussians only it shows moved with it, {:.3} at its \
+                     centre (their mirror images stay)",
+                    rows.len(),
+                    carry.point(centre).distance(centre)
+                )));
+            }
         }
         self.trainer.move_planes(&planes, &carried)?;
         let moved: Vec<usize> =

@@ -237,56 +237,60 @@ pub(super) fn rows_of_dropped(
     keep: &[bool],
     cameras: &[&Camera],
 ) -> Vec<usize> {
-    let dropped: Vec<bool> = keep.iter().map(|k| !k).collect();
     (0..g.len())
         .filter(|&i| {
             let x = DVec3::from_array(g.means[i].map(f64::from));
             match g.populations[i] {
                 Population::Glass => owner(planes, x).is_some_and(|k| !keep[k]),
-                Population::Primary => shown_only_through(planes, &dropped, cameras, x),
+                Population::Primary => {
+                    unseen(cameras, x) && {
+                        let showing = planes_showing(planes, cameras, x);
+                        !showing.is_empty() && showing.iter().all(|&k| !keep[k])
+                    }
+                }
             }
         })
         .collect()
 }
 
-/// The rows (ascending) of the primaries that only plane `k` of `planes` shows: no training
-/// camera nearly sees them, and a camera sees their mirror image about plane `k` through its
+/// For each of `planes`, the rows (ascending) of the primaries that only it shows: no training
+/// camera nearly sees them, and a camera sees their mirror image about that plane through its
 /// rectangle, and about no other plane. They are trained only through its mirrored pass.
-pub(super) fn rows_only_shown_by(
+pub(super) fn rows_only_shown_by_each(
     g: &Gaussians<f32>,
     planes: &[ReflectionPlane],
-    k: usize,
     cameras: &[&Camera],
-) -> Vec<usize> {
-    let only: Vec<bool> = (0..planes.len()).map(|j| j == k).collect();
-    (0..g.len())
-        .filter(|&i| g.populations[i] == Population::Primary)
-        .filter(|&i| {
-            let x = DVec3::from_array(g.means[i].map(f64::from));
-            shown_only_through(planes, &only, cameras, x)
-        })
-        .collect()
+) -> Vec<Vec<usize>> {
+    let mut rows = vec![Vec::new(); planes.len()];
+    for i in (0..g.len()).filter(|&i| g.populations[i] == Population::Primary) {
+        let x = DVec3::from_array(g.means[i].map(f64::from));
+        if unseen(cameras, x)
+            && let [k] = planes_showing(planes, cameras, x)[..]
+        {
+            rows[k].push(i);
+        }
+    }
+    rows
 }
 
-/// Whether a point at `x` that no camera of `cameras` nearly sees ([`UNSEEN_MARGIN`]) is seen
-/// mirrored through some of the planes in `set` (of `planes`) and through none of the others.
-fn shown_only_through(
-    planes: &[ReflectionPlane],
-    set: &[bool],
-    cameras: &[&Camera],
-    x: DVec3,
-) -> bool {
-    let shown_by = |k: usize| {
-        let mirrored = reflect_point(&planes[k], x);
-        cameras.iter().any(|c| {
-            let o = c.pose.centre();
-            c.sees(mirrored)
-                && ray_rectangle_hit(&planes[k], o, (mirrored - o).normalize()).is_some()
-        })
-    };
+/// Whether no camera of `cameras` nearly sees a point at `x` ([`UNSEEN_MARGIN`]).
+fn unseen(cameras: &[&Camera], x: DVec3) -> bool {
     !cameras.iter().any(|c| c.nearly_sees(x, UNSEEN_MARGIN))
-        && (0..planes.len()).any(|k| set[k] && shown_by(k))
-        && !(0..planes.len()).any(|k| !set[k] && shown_by(k))
+}
+
+/// The planes (indices into `planes`) through whose rectangle a camera of `cameras` sees the
+/// mirror image of a point at `x`.
+fn planes_showing(planes: &[ReflectionPlane], cameras: &[&Camera], x: DVec3) -> Vec<usize> {
+    (0..planes.len())
+        .filter(|&k| {
+            let mirrored = reflect_point(&planes[k], x);
+            cameras.iter().any(|c| {
+                let o = c.pose.centre();
+                c.sees(mirrored)
+                    && ray_rectangle_hit(&planes[k], o, (mirrored - o).normalize()).is_some()
+            })
+        })
+        .collect()
 }
 
 /// The index of the plane a point at `x` lies on: the nearest along the normal among the planes
@@ -387,8 +391,7 @@ mod tests {
             g.populations[i] = *population;
         }
         let cameras = [&camera];
-        assert_eq!(rows_only_shown_by(&g, &planes, 0, &cameras), vec![1]);
-        assert_eq!(rows_only_shown_by(&g, &planes, 1, &cameras), vec![2]);
+        assert_eq!(rows_only_shown_by_each(&g, &planes, &cameras), vec![vec![1], vec![2]]);
         assert_eq!(rows_of_dropped(&g, &planes, &[true, false], &cameras), vec![2]);
     }
 

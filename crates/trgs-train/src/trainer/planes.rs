@@ -110,13 +110,14 @@ impl Trainer {
             self.settle_unreported()?;
             let mut state = self.read_state()?;
             let degree = state.gaussians.sh_degree;
+            let width = attribute_widths(state.gaussians.sh_coeffs())[Attribute::Means];
             for ((old, new), rows) in from.iter().zip(planes).zip(carried) {
                 let carry = PlaneCarry::between(old, new, degree);
                 let turn = carry.linear();
                 let moments = &mut state.m[Attribute::Means];
                 for &i in rows {
                     carry.apply(&mut state.gaussians, i);
-                    let m = &mut moments[3 * i..3 * i + 3];
+                    let m = &mut moments[width * i..width * (i + 1)];
                     let turned = turn * DVec3::new(m[0].into(), m[1].into(), m[2].into());
                     m.copy_from_slice(&turned.to_array().map(|v| v as f32));
                 }
