@@ -82,6 +82,11 @@ fn photos_that_share_nothing_and_a_missing_colmap_are_named() {
     let missing = prepare(&photos, &dir.join("a"), &["--colmap", "no-such-colmap"]);
     assert!(!missing.status.success());
     assert!(text(&missing).contains("COLMAP is not installed"), "{}", text(&missing));
+    // COLMAP would map with FOV, which `train` then cannot read: refused before COLMAP runs.
+    let fov = prepare(&photos, &dir.join("c"), &["--camera-model", "FOV"]);
+    assert!(!fov.status.success());
+    assert!(text(&fov).contains("FOV") && text(&fov).contains("SIMPLE_RADIAL"), "{}", text(&fov));
+    assert!(!dir.join("c").exists(), "nothing written");
     let refused = prepare(&photos, &dir.join("b"), &[]);
     assert!(!refused.status.success());
     let said = text(&refused);

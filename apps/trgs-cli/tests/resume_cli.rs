@@ -7,6 +7,7 @@
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
+use trgs_core::io::ColmapModel;
 use trgs_core::scratch::ScratchDir;
 use trgs_synthetic::{SyntheticConfig, generate, write_dataset};
 use trgs_train::checkpoint::{CHECKPOINT_FILE, read_checkpoint};
@@ -39,6 +40,7 @@ fn killed_run_resumes_to_the_end() {
     resume_with_other_settings_is_refused(&out);
     resuming_a_finished_run_rewrites_its_results(&out, iterations, &metrics);
     resume_on_changed_training_views_is_refused(&data, &out, &train_names[0]);
+    resume_on_a_moved_camera_is_refused(&data, &out, &train_names[1]);
     new_run_sets_the_old_checkpoint_aside(&data, &out);
 }
 
@@ -258,6 +260,22 @@ fn resume_on_changed_training_views_is_refused(data: &Path, out: &Path, train_na
         "{stderr}"
     );
     std::fs::write(&split, original).expect("restore split");
+}
+
+/// A dataset whose training view `train_name` kept its name but moved (a COLMAP model made
+/// again) is refused by that name; the model is restored afterwards.
+fn resume_on_a_moved_camera_is_refused(data: &Path, out: &Path, train_name: &str) {
+    let sparse = data.join("sparse").join("0");
+    let mut model = ColmapModel::read(&sparse).expect("COLMAP model");
+    let original = model.clone();
+    let image = model.images.iter_mut().find(|i| i.name == train_name).expect("the view");
+    image.tvec[0] += 0.05;
+    model.write_binary(&sparse).expect("moved model");
+    let refused = resume(out, &[], "resume on a moved camera");
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert!(!refused.status.success());
+    assert!(stderr.contains(train_name) && stderr.contains("pose or lens changed"), "{stderr}");
+    original.write_binary(&sparse).expect("restore model");
 }
 
 /// A new run in the same folder sets the finished run's checkpoint aside first, so that a

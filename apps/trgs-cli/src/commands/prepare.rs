@@ -27,8 +27,9 @@ pub struct Args {
     #[arg(long, value_name = "N", default_value_t = 1)]
     every: usize,
     /// COLMAP's camera model, one camera for all photos when they share one size, else one
-    /// each (trgs undistorts SIMPLE_RADIAL, RADIAL, OPENCV, the fisheye models and the pinholes)
-    #[arg(long, value_name = "MODEL", default_value = "SIMPLE_RADIAL")]
+    /// each (the models trgs undistorts)
+    #[arg(long, value_name = "MODEL", default_value = "SIMPLE_RADIAL",
+          value_parser = clap::builder::PossibleValuesParser::new(trgs_core::lens::READ_MODELS))]
     camera_model: String,
     /// Keep the focal length COLMAP starts from, unrefined: the photos' EXIF focal length, or
     /// without EXIF (a video's frames) COLMAP's guess of 1.2 x the larger image side, wrong for

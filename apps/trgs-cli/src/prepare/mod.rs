@@ -70,6 +70,15 @@ pub fn prepare(options: &PrepareOptions, say: &mut dyn FnMut(String)) -> Result<
     let images = out.join("images");
     let target = out.join("sparse").join("0");
     refuse_input_inside(&options.input, out)?;
+    // COLMAP maps with models trgs cannot undistort (FOV, THIN_PRISM_FISHEYE): refused before
+    // its hour of mapping, not by `train` after it.
+    if !trgs_core::lens::READ_MODELS.contains(&options.camera_model.as_str()) {
+        bail!(
+            "--camera-model {}: trgs reads only {}",
+            options.camera_model,
+            trgs_core::lens::read_models_list()
+        );
+    }
     if target.exists() {
         bail!(
             "{} is already a scene folder (it holds sparse/0): choose another --out, or remove \

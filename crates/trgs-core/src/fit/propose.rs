@@ -118,7 +118,10 @@ pub struct PlaneCandidate {
 pub struct Proposal {
     /// The median distance from a point to the nearest camera (of an even sample of both).
     pub scale: f64,
-    /// The proposed candidates first, best evidence first, then the rejected structures with why.
+    /// The proposed candidates first, best evidence first, then the rejected structures with
+    /// why. A wall that hands an opening to a structure turned in it is judged again in place,
+    /// and so is that structure: after it, each candidate's `rejected`, not its place, says
+    /// whether it was proposed.
     pub candidates: Vec<PlaneCandidate>,
 }
 

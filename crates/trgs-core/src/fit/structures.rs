@@ -117,8 +117,8 @@ pub struct StructureSettings {
     pub min_support: usize,
     /// Grid cell for the connected pieces of a plane's inliers, in scene units.
     pub cell: f64,
-    /// Pieces whose normals are within this angle (degrees) and whose planes are within
-    /// `merge_offset` of each other where they meet are merged.
+    /// Pieces whose normals are within this angle (degrees), each one's centroid within
+    /// `merge_offset` of the other's plane, and whose hulls touch are merged.
     pub merge_angle_deg: f64,
     pub merge_offset: f64,
 }
@@ -253,7 +253,12 @@ fn merge_coplanar(
 /// Whether the hulls of two (nearly coplanar) structures overlap or come within `gap`, tested in
 /// `a`'s plane: a vertex of one inside the other grown by `gap`.
 pub(super) fn hulls_touch(a: &Structure, b: &Structure, gap: f64) -> bool {
-    let b_in_a: Vec<DVec2> = b.hull.iter().map(|&q| a.to_plane(b.to_world(q))).collect();
+    let mut b_in_a: Vec<DVec2> = b.hull.iter().map(|&q| a.to_plane(b.to_world(q))).collect();
+    // Normals that point opposite ways (their signs are arbitrary) mirror b's hull in a's plane:
+    // `inside_convex` needs it counter-clockwise again.
+    if polygon_area(&b_in_a) < 0.0 {
+        b_in_a.reverse();
+    }
     b_in_a.iter().any(|&q| inside_convex(&a.hull, q, gap))
         || a.hull.iter().any(|&q| inside_convex(&b_in_a, q, gap))
         || edges_cross(&a.hull, &b_in_a)
@@ -393,6 +398,29 @@ mod tests {
             found.iter().map(|s| s.inliers.len()).collect::<Vec<_>>()
         );
         assert!(found[0].inliers.len() as f64 > 0.9 * thick.len() as f64);
+    }
+
+    #[test]
+    fn hulls_touch_whichever_way_their_normals_point() {
+        // A small piece inside a large one of the same plane, the large one's normal flipped.
+        let grid = |half: f64| -> Vec<DVec3> {
+            (0..=4)
+                .flat_map(|i| (0..=4).map(move |j| (i, j)))
+                .map(|(i, j)| {
+                    DVec3::new(half * (i as f64 / 2.0 - 1.0), half * (j as f64 / 2.0 - 1.0), 0.0)
+                })
+                .collect()
+        };
+        let (small, large) = (grid(0.5), grid(3.0));
+        let all: Vec<usize> = (0..small.len()).collect();
+        let a = Structure::with_plane(&small, DVec3::ZERO, DVec3::Z, all.clone());
+        for normal in [DVec3::Z, -DVec3::Z] {
+            let b = Structure::with_plane(&large, DVec3::ZERO, normal, all.clone());
+            assert!(hulls_touch(&a, &b, 0.01) && hulls_touch(&b, &a, 0.01), "normal {normal}");
+        }
+        let far: Vec<DVec3> = large.iter().map(|p| *p + DVec3::X * 10.0).collect();
+        let c = Structure::with_plane(&far, DVec3::X * 10.0, -DVec3::Z, all);
+        assert!(!hulls_touch(&a, &c, 0.01) && !hulls_touch(&c, &a, 0.01));
     }
 
     #[test]

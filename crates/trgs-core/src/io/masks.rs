@@ -64,14 +64,7 @@ pub fn mask_path(masks_dir: &Path, image_name: &str) -> Option<PathBuf> {
 /// or with an alpha channel); see [`decode_label_png`]. Soft edges go to the nearest label and
 /// more than [`MAX_PLANES`] labels are refused (the module docs say what a label is).
 pub fn read_glass_mask(path: &Path, width: u32, height: u32) -> Result<GlassMask, FormatError> {
-    let mut mask = decode_label_png(path)?;
-    if (mask.width, mask.height) != (width, height) {
-        let problem = format!(
-            "the mask is {}x{} but its image is {width}x{height}: masks must have the image's size",
-            mask.width, mask.height
-        );
-        return Err(FormatError::new(path, problem));
-    }
+    let mut mask = decode_label_png(path, width, height)?;
     let soft_pixels = snap_soft_edges(&mut mask);
     let mut present = [false; 256];
     mask.data.iter().for_each(|&v| present[usize::from(v)] = true);

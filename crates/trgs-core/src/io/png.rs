@@ -35,7 +35,14 @@ fn decode(path: &Path, allowed: &[ImageFormat]) -> Result<DynamicImage, FormatEr
 /// any bit depth (1, 2 and 4-bit values are not scaled up; 16-bit ones must be below 256), or an
 /// RGB(A) PNG whose three channels are equal. Colours that are not labels are an error: taking one
 /// channel of them would silently merge or drop planes.
-pub(crate) fn decode_label_png(path: &Path) -> Result<Image<u8>, FormatError> {
+///
+/// The mask must be `width x height` (its image's size): that is checked on the header, before
+/// the pixels are allocated, so a corrupt header cannot ask for terabytes.
+pub(crate) fn decode_label_png(
+    path: &Path,
+    width: u32,
+    height: u32,
+) -> Result<Image<u8>, FormatError> {
     let bytes = read_bytes(path)?;
     let format = ImageReader::new(Cursor::new(&bytes))
         .with_guessed_format()
@@ -48,6 +55,14 @@ pub(crate) fn decode_label_png(path: &Path) -> Result<Image<u8>, FormatError> {
     // No expansion: palette indices and low-bit values are the labels themselves.
     decoder.set_transformations(png::Transformations::IDENTITY);
     let mut reader = decoder.read_info().map_err(|e| bad(&e))?;
+    let header = reader.info();
+    if (header.width, header.height) != (width, height) {
+        let problem = format!(
+            "the mask is {}x{} but its image is {width}x{height}: masks must have the image's size",
+            header.width, header.height
+        );
+        return Err(FormatError::new(path, problem));
+    }
     let size = reader.output_buffer_size().ok_or_else(|| bad(&"the image is too large"))?;
     let mut buf = vec![0u8; size];
     let info = reader.next_frame(&mut buf).map_err(|e| bad(&e))?;
@@ -332,7 +347,10 @@ mod tests {
         // A truncated JPEG is recognised and refused, naming the file.
         assert_mentions(&read_rgb_image(&path).expect_err("jpeg"), &["a.jpg", "cut short"]);
         // A JPEG is not accepted as a label image.
-        assert_mentions(&decode_label_png(&path).expect_err("jpeg mask"), &["a.jpg", "only PNG"]);
+        assert_mentions(
+            &decode_label_png(&path, 1, 1).expect_err("jpeg mask"),
+            &["a.jpg", "only PNG"],
+        );
         std::fs::write(&path, b"hello").expect("write");
         assert_mentions(&read_rgb_image(&path).expect_err("junk"), &["a.jpg", "not a PNG"]);
         let missing = dir.join("missing.png");
@@ -422,6 +440,45 @@ mod tests {
         assert_mentions(
             &write_png_rgb(&dir.join("x.png"), &img).expect_err("short"),
             &["x.png", "5 samples"],
+        );
+    }
+
+    /// CRC-32 (ISO-HDLC, PNG's) of `bytes`, to write a valid chunk by hand.
+    fn crc32(bytes: &[u8]) -> u32 {
+        let mut c = !0u32;
+        for &b in bytes {
+            c ^= u32::from(b);
+            for _ in 0..8 {
+                c = if c & 1 == 1 { 0xedb8_8320 ^ (c >> 1) } else { c >> 1 };
+            }
+        }
+        !c
+    }
+
+    #[test]
+    fn a_mask_of_another_size_is_refused_before_its_pixels_are_read() {
+        let dir = scratch_dir("png-mask-size");
+        let path = dir.join("m.png");
+        write_png_gray(&path, &Image { width: 4, height: 3, channels: 1, data: vec![1; 12] })
+            .expect("write");
+        assert_eq!(decode_label_png(&path, 4, 3).expect("same size").data, vec![1; 12]);
+        assert_mentions(
+            &decode_label_png(&path, 5, 3).expect_err("wrong size"),
+            &["m.png", "4x3", "5x3"],
+        );
+        // A header that claims 60,000,000 x 2,147,483,647 pixels, its CRC made valid: refused
+        // on the header, not by asking for 10^17 bytes.
+        let mut bytes = std::fs::read(&path).expect("read");
+        let ihdr = 8 + 4; // signature, then the chunk's length
+        assert_eq!(&bytes[ihdr..ihdr + 4], b"IHDR");
+        bytes[ihdr + 4..ihdr + 8].copy_from_slice(&60_000_000u32.to_be_bytes());
+        bytes[ihdr + 8..ihdr + 12].copy_from_slice(&2_147_483_647u32.to_be_bytes());
+        let crc = crc32(&bytes[ihdr..ihdr + 4 + 13]);
+        bytes[ihdr + 17..ihdr + 21].copy_from_slice(&crc.to_be_bytes());
+        std::fs::write(&path, &bytes).expect("write");
+        assert_mentions(
+            &decode_label_png(&path, 4, 3).expect_err("huge header"),
+            &["m.png", "60000000x2147483647", "4x3"],
         );
     }
 }

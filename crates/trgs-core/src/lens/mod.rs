@@ -250,8 +250,9 @@ pub fn colmap_camera_model(
                     format!("{model} takes {n} parameters, found {}", p.len())
                 }
                 _ => format!(
-                    "the camera model {model} is not supported; trgs reads {SUPPORTED_MODELS} \
-                     (undistort other models first, e.g. with `colmap image_undistorter`)"
+                    "the camera model {model} is not supported; trgs reads {} \
+                     (undistort other models first, e.g. with `colmap image_undistorter`)",
+                    read_models_list()
                 ),
             });
         }
@@ -259,10 +260,25 @@ pub fn colmap_camera_model(
     Ok((k, distortion.filter(|d| !d.is_identity())))
 }
 
-/// The COLMAP models [`colmap_camera_model`] reads, for messages.
-pub const SUPPORTED_MODELS: &str = "SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV, \
-                                    FULL_OPENCV, OPENCV_FISHEYE, SIMPLE_RADIAL_FISHEYE and \
-                                    RADIAL_FISHEYE";
+/// The COLMAP camera models [`colmap_camera_model`] reads (`prepare` refuses to map with any
+/// other).
+pub const READ_MODELS: [&str; 9] = [
+    "SIMPLE_PINHOLE",
+    "PINHOLE",
+    "SIMPLE_RADIAL",
+    "RADIAL",
+    "OPENCV",
+    "FULL_OPENCV",
+    "OPENCV_FISHEYE",
+    "SIMPLE_RADIAL_FISHEYE",
+    "RADIAL_FISHEYE",
+];
+
+/// [`READ_MODELS`] as a list in a sentence.
+pub fn read_models_list() -> String {
+    let (last, rest) = READ_MODELS.split_last().expect("models");
+    format!("{} and {last}", rest.join(", "))
+}
 
 #[cfg(test)]
 mod tests {
@@ -322,5 +338,16 @@ mod tests {
         assert!(err.contains("OPENCV takes 8 parameters, found 2"), "{err}");
         let err = colmap_camera_model("FOV", &[1.0; 5], 640, 480).expect_err("FOV");
         assert!(err.contains("FOV is not supported") && err.contains("OPENCV_FISHEYE"), "{err}");
+    }
+
+    #[test]
+    fn every_model_prepare_may_map_with_is_read() {
+        for model in READ_MODELS {
+            let (_, count) = crate::io::colmap::model_by_name(model).expect("a COLMAP model");
+            let mut params = vec![0.0; count];
+            params[..3].copy_from_slice(&[500.0, 320.0, 240.0]);
+            colmap_camera_model(model, &params, 640, 480).unwrap_or_else(|e| panic!("{e}"));
+        }
+        assert!(read_models_list().ends_with("SIMPLE_RADIAL_FISHEYE and RADIAL_FISHEYE"));
     }
 }

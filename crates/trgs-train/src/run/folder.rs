@@ -16,10 +16,11 @@ pub const LOCK_FILE: &str = "run.lock";
 /// What a run writes into its folder, set aside whole when a new run starts there: its results,
 /// its checkpoint and log, what `eval` wrote beside them, and the marker of an unfinished run.
 /// (Temporaries of these that a kill left are removed when a run starts.)
-pub(super) const RUN_FILES: [&str; 10] = [
+pub(super) const RUN_FILES: [&str; 11] = [
     super::checkpoint::CHECKPOINT_FILE,
     super::log::LOG_FILE,
     "metrics.json",
+    "exposures.json",
     "model.ply",
     "planes.json",
     "cameras.json",
@@ -222,12 +223,12 @@ mod tests {
         assert_eq!(set_aside_previous_run(&dir.join("none")).expect("no folder"), None);
         std::fs::create_dir_all(out.join("renders")).expect("renders");
         std::fs::create_dir_all(out.join("dataset")).expect("dataset");
-        for f in ["model.ply", "metrics.json", "log.jsonl"] {
+        for f in ["model.ply", "metrics.json", "exposures.json", "log.jsonl"] {
             std::fs::write(out.join(f), f).expect("file");
         }
         let (aside, moved) = set_aside_previous_run(&out).expect("set aside").expect("moved");
         assert_eq!(aside, out.join("previous-1"));
-        assert_eq!(moved, ["log.jsonl", "metrics.json", "model.ply", "renders"]);
+        assert_eq!(moved, ["log.jsonl", "metrics.json", "exposures.json", "model.ply", "renders"]);
         assert!(out.join("dataset").is_dir(), "the dataset is the run's input, not its output");
         assert!(!out.join("model.ply").exists());
         assert_eq!(std::fs::read_to_string(aside.join("model.ply")).expect("kept"), "model.ply");

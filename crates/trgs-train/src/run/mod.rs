@@ -196,6 +196,9 @@ impl TrainingRun {
                 if state.train_views.is_empty() {
                     state.train_views = view_names(&data);
                 }
+                if state.train_cameras.is_empty() {
+                    state.train_cameras = state::camera_records(&data);
+                }
                 let log = log::RunLog::resume(&out, ck.step)?;
                 let mut trainer =
                     Trainer::from_checkpoint(&ctx, &ck, settings, data.extent, &densification)?;
@@ -493,6 +496,7 @@ fn new_run_state(
         seconds: 0.0,
         phase_ms: StepTimes::default(),
         train_views: view_names(data),
+        train_cameras: state::camera_records(data),
         peak_gpu_bytes: 0,
         skipped_steps: 0,
         candidates: Vec::new(),

@@ -9,6 +9,7 @@ use crate::trainer::StepTimes;
 use anyhow::{Context, Result, bail};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
+use trgs_core::scene::Camera;
 
 /// The run's own state in a checkpoint (under its `extra`).
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -30,6 +31,11 @@ pub struct RunState {
     /// dataset whose views changed (empty in checkpoints that predate it).
     #[serde(default)]
     pub train_views: Vec<String>,
+    /// The training views' cameras as loaded ([`camera_records`]): a resumed run refuses views
+    /// whose cameras changed under the same names (a COLMAP model made again, in a frame of its
+    /// own). Empty in checkpoints that predate it.
+    #[serde(default)]
+    pub train_cameras: Vec<CameraRecord>,
     /// The most GPU memory the trainer held after a step (bytes; 0 in checkpoints that predate
     /// it).
     #[serde(default)]
@@ -70,7 +76,7 @@ impl RunState {
     }
 
     /// Refuse to go on with a dataset whose training views are not those the run started with
-    /// (`order` indexes them).
+    /// (`order` indexes them), or whose cameras moved or changed lens.
     pub fn check_same_views(&self, data: &TrainingData, data_dir: &Path) -> Result<()> {
         let now: Vec<&str> = data.train.iter().map(|v| v.camera.name.as_str()).collect();
         let changed = if self.train_views.is_empty() {
@@ -91,6 +97,78 @@ impl RunState {
                 now.len()
             );
         }
+        if let Some(i) = first_changed_camera(&self.train_cameras, &camera_records(data)) {
+            bail!(
+                "--resume: the camera of the training view {} in {} is not the one the run \
+                 started with (its pose or lens changed: was the COLMAP model made again?): \
+                 restore the dataset, or start a new run",
+                now[i],
+                data_dir.display()
+            );
+        }
         Ok(())
+    }
+}
+
+/// A camera as a resumed run compares it: fx, fy, cx, cy, the world-to-camera rotation
+/// (columns) and translation.
+pub type CameraRecord = [f64; 16];
+
+/// The training views' cameras, in the order `order` indexes them.
+pub fn camera_records(data: &TrainingData) -> Vec<CameraRecord> {
+    data.train.iter().map(|v| camera_record(&v.camera)).collect()
+}
+
+fn camera_record(camera: &Camera) -> CameraRecord {
+    let k = &camera.intrinsics;
+    let r = camera.pose.rotation.to_cols_array();
+    let t = camera.pose.translation;
+    let mut record = [0.0; 16];
+    record[..4].copy_from_slice(&[k.fx, k.fy, k.cx, k.cy]);
+    record[4..13].copy_from_slice(&r);
+    record[13..].copy_from_slice(&t.to_array());
+    record
+}
+
+/// The first camera of `now` that differs from `then`'s (None where `then` is empty: a
+/// checkpoint that predates the records). Loading the same files gives the same numbers, so the
+/// tolerance only forgives rounding a later build may do differently.
+fn first_changed_camera(then: &[CameraRecord], now: &[CameraRecord]) -> Option<usize> {
+    let close = |a: &CameraRecord, b: &CameraRecord| {
+        a.iter().zip(b).all(|(x, y)| (x - y).abs() <= 1e-6 * (1.0 + x.abs().max(y.abs())))
+    };
+    if then.is_empty() {
+        return None;
+    }
+    then.iter().zip(now).position(|(a, b)| !close(a, b))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::{DMat3, DVec3};
+    use trgs_core::scene::{Intrinsics, Pose};
+
+    fn camera(x: f64, fx: f64) -> Camera {
+        let k = Intrinsics { fx, fy: fx, cx: 32.0, cy: 24.0, width: 64, height: 48 };
+        let pose =
+            Pose { rotation: DMat3::from_rotation_y(0.3), translation: DVec3::new(x, 0.5, 4.0) };
+        Camera::new("a.png", k, pose)
+    }
+
+    #[test]
+    fn a_camera_moved_or_refocused_is_found_and_rounding_is_not() {
+        let then: Vec<_> =
+            [camera(0.0, 60.0), camera(1.0, 60.0)].iter().map(camera_record).collect();
+        let same: Vec<_> =
+            [camera(0.0, 60.0), camera(1.0 + 1e-12, 60.0)].iter().map(camera_record).collect();
+        assert_eq!(first_changed_camera(&then, &same), None);
+        let moved: Vec<_> =
+            [camera(0.0, 60.0), camera(1.01, 60.0)].iter().map(camera_record).collect();
+        assert_eq!(first_changed_camera(&then, &moved), Some(1));
+        let lens: Vec<_> =
+            [camera(0.0, 61.0), camera(1.0, 60.0)].iter().map(camera_record).collect();
+        assert_eq!(first_changed_camera(&then, &lens), Some(0));
+        assert_eq!(first_changed_camera(&[], &moved), None, "an older checkpoint: names only");
     }
 }
