@@ -36,9 +36,28 @@ fn planes_travel_with_the_full_model_and_stale_ones_are_replaced() {
     assert_eq!(load_model(&back, None).expect("back").planes.len(), 2);
 
     // Without planes, written over that folder: its planes.json must not survive as this
-    // model's planes.
-    export(&[&without.join("model.ply"), &back.join("model.ply")]);
-    assert!(load_model(&back, None).expect("stale").planes.is_empty());
+    // model's planes. Its glass Gaussians, whose planes.json was not copied, do not reach a
+    // plain viewer.
+    let said = export(&[&without.join("model.ply"), &back.join("model.ply")]);
+    assert!(said.contains("glass is left out"), "{said}");
+    let plain = load_model(&back, None).expect("stale");
+    assert!(plain.planes.is_empty());
+    assert!(plain.gaussians.populations.iter().all(|&p| p == Population::Primary));
+    let primaries = s.gaussians.populations.iter().filter(|&&p| p == Population::Primary);
+    assert_eq!(plain.gaussians.len(), primaries.count());
+    // With --full the glass is kept for trgs.
+    export(&[&without.join("model.ply"), &back.join("model.ply"), full]);
+    assert_eq!(load_model(&back, None).expect("full").gaussians.len(), s.gaussians.len());
+
+    // A bake onto its own model would replace it: refused.
+    let out = Command::new(env!("CARGO_BIN_EXE_trgs"))
+        .arg("export")
+        .arg(&with)
+        .arg(with.join("model.ply"))
+        .output()
+        .expect("run");
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("the model itself"));
 }
 
 #[test]

@@ -23,7 +23,8 @@ use trgs_train::model::{Model, load_model};
 /// (SuperSplat, Spark, Brush, SIBR, Cesium) then show the model close to trgs's own render.
 /// The figure printed is the PSNR of a plain render of the output against trgs's render over
 /// up to 16 of the model's views (at most 512 pixels long); `trgs eval --model OUT --reference
-/// RUN` scores the test views. A model without planes is written as it is.
+/// RUN` scores the test views. A model without planes is written as it is, less any glass
+/// Gaussians (a model.ply copied without its planes.json).
 #[derive(Debug, Parser)]
 #[command(
     name = "export",
@@ -75,8 +76,18 @@ pub fn run(matches: &clap::ArgMatches) -> Result<()> {
         bail!("--full keeps the planes, which .spz cannot hold: write a .ply or a .glb");
     }
     let model = load_model(&args.model, args.planes.as_deref())?;
-    if args.full || model.planes.is_empty() {
-        return write_as_is(&model, &args.out, format);
+    if args.full {
+        return write_as_is(&model, &model.gaussians, &args.out, format);
+    }
+    if is_same_file(&args.out, &model.ply) {
+        bail!(
+            "{}: the output is the model itself, which the bake would replace (its glass left \
+             out): write to another file",
+            args.out.display()
+        );
+    }
+    if model.planes.is_empty() {
+        return write_without_planes(&model, &args.out, format);
     }
     let cameras = views_of(&args, &model)?;
     let ctx = GpuContext::new()?;
@@ -139,12 +150,33 @@ fn views_of(args: &Args, model: &Model) -> Result<Vec<Camera>> {
     Ok(cameras)
 }
 
-/// The model as it is: with `--full`, or without planes to bake.
-fn write_as_is(m: &Model, out: &Path, format: Format) -> Result<()> {
+/// Whether `a` and `b` name one existing file.
+fn is_same_file(a: &Path, b: &Path) -> bool {
+    matches!((a.canonicalize(), b.canonicalize()), (Ok(x), Ok(y)) if x == y)
+}
+
+/// A model without planes for plain viewers: as it is, but for glass Gaussians (a model.ply
+/// copied without its planes.json), which only trgs's mask reads and a plain viewer would draw
+/// as an opaque slab: they are left out, as a bake leaves them out.
+fn write_without_planes(m: &Model, out: &Path, format: Format) -> Result<()> {
+    let (plain, report) = trgs_core::bake::bake(&m.gaussians, &[], &[]);
+    if report.glass_left_out > 0 {
+        println!(
+            "{} holds {} glass Gaussians but no planes (no planes.json beside it; --planes FILE \
+             gives them): the glass is left out",
+            m.ply.display(),
+            report.glass_left_out,
+        );
+    }
+    write_as_is(m, &plain, out, format)
+}
+
+/// `g`, `m`'s Gaussians as they are (with `--full`) or without their glass, and `m`'s planes.
+fn write_as_is(m: &Model, g: &Gaussians<f32>, out: &Path, format: Format) -> Result<()> {
     match format {
-        Format::Glb => write_glb(out, &m.gaussians, &m.planes)?,
+        Format::Glb => write_glb(out, g, &m.planes)?,
         Format::Ply => {
-            write_ply(out, &m.gaussians)?;
+            write_ply(out, g)?;
             // A planes.json already beside OUT would be read as this model's planes: a model
             // without planes overwrites it with an empty list rather than inherit stale ones.
             let json = out.with_file_name("planes.json");
@@ -152,13 +184,13 @@ fn write_as_is(m: &Model, out: &Path, format: Format) -> Result<()> {
                 write_planes_json(&json, &m.planes)?;
             }
         }
-        Format::Spz => write_gaussians(out, format, &m.gaussians)?,
+        Format::Spz => write_gaussians(out, format, g)?,
     }
     let planes_beside = format == Format::Ply && out.with_file_name("planes.json").exists();
     println!(
         "{} Gaussians (SH degree {}) and {} from {} written to {}{}",
-        m.gaussians.len(),
-        m.gaussians.sh_degree,
+        g.len(),
+        g.sh_degree,
         crate::wording::count(m.planes.len(), "plane"),
         m.ply.display(),
         out.display(),

@@ -46,7 +46,13 @@ pub fn encode_spz(g: &Gaussians<f32>) -> Result<Vec<u8>, String> {
     let n = g.len();
     let unit = f32::from(1u16 << FRACTIONAL_BITS);
     let limit = (1 << 23) as f32 / unit;
-    if let Some(i) = g.means.iter().position(|m| m.iter().any(|v| !(v.abs() < limit))) {
+    // Checked on the rounded fixed-point value: a position a hair under +limit rounds to
+    // 2^23, which 24 bits read back as -2^23.
+    let fits = |v: f32| {
+        let fixed = (v * unit).round();
+        fixed >= -((1 << 23) as f32) && fixed < (1 << 23) as f32
+    };
+    if let Some(i) = g.means.iter().position(|&m| !rub_position(m).into_iter().all(fits)) {
         return Err(format!(
             "Gaussian {i} at {:?}: SPZ holds positions within {limit} units of the origin",
             g.means[i]
@@ -216,7 +222,8 @@ fn from_first_three(b: &[u8]) -> [f32; 4] {
 
 /// The reference's SH quantisation: 8 bits (x in [-1, 1]), rounded to the centre of a bucket.
 fn quantise_sh(x: f32, bucket: i32) -> u8 {
-    let q = (x * 128.0).round() as i32 + 128;
+    // Clamped before the integer cast: a coefficient past 1.7e7 would overflow the sum.
+    let q = ((x * 128.0).round() + 128.0).clamp(0.0, 255.0) as i32;
     let q = (q + bucket / 2) / bucket * bucket;
     q.clamp(0, 255) as u8
 }

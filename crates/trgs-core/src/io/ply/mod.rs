@@ -1,5 +1,8 @@
 //! 3DGS models as INRIA-layout PLY, the format every 3DGS viewer reads, plus trgs's own
-//! per-Gaussian attributes as extra float properties that other viewers ignore.
+//! per-Gaussian attributes as extra float properties that other viewers ignore. The extras are
+//! written only where a Gaussian holds something in them (glass Gaussians, a learned mask or
+//! reflection): SIBR, INRIA's viewer, reads rows of a fixed size whatever the header says, so
+//! a plain or baked model is written as exactly INRIA's rows.
 //!
 //! The stored values are the raw parameters, exactly as in [`Gaussians`] and INRIA's files:
 //! opacity as a logit, scales as logs, rotations as unnormalised (w, x, y, z). The one layout
@@ -73,8 +76,17 @@ fn property_name(field: Field, coeffs: usize) -> String {
     }
 }
 
-/// Names of the float properties the writer emits, in order, for SH degree `degree`.
-fn property_names(degree: u32) -> Vec<String> {
+/// Whether `g` has anything to keep in trgs's extra properties (they read back as zeros and
+/// primary Gaussians when absent).
+fn needs_extras(g: &Gaussians<f32>) -> bool {
+    g.populations.iter().any(|&p| p != Population::Primary)
+        || g.mask_logits.iter().any(|&v| v.to_bits() != 0)
+        || g.log_reflections.iter().any(|&v| v.to_bits() != 0)
+}
+
+/// Names of the float properties the writer emits, in order, for SH degree `degree`, with
+/// trgs's extras or without.
+fn property_names(degree: u32, extras: bool) -> Vec<String> {
     let rest = 3 * (sh_coeff_count(degree) - 1);
     let mut names: Vec<String> =
         ["x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2"].map(String::from).into();
@@ -83,7 +95,9 @@ fn property_names(degree: u32) -> Vec<String> {
         ["opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"]
             .map(String::from),
     );
-    names.extend(EXTRAS.map(String::from));
+    if extras {
+        names.extend(EXTRAS.map(String::from));
+    }
     names
 }
 
@@ -98,7 +112,8 @@ pub fn encode_ply(g: &Gaussians<f32>) -> Result<Vec<u8>, String> {
 
 /// The header and a row of floats per Gaussian (`g`'s lengths checked), into `w`.
 fn write_rows(g: &Gaussians<f32>, w: &mut dyn std::io::Write) -> std::io::Result<()> {
-    let names = property_names(g.sh_degree);
+    let extras = needs_extras(g);
+    let names = property_names(g.sh_degree, extras);
     let mut header = format!("ply\nformat binary_little_endian 1.0\nelement vertex {}\n", g.len());
     for name in &names {
         let _ = writeln!(header, "property float {name}");
@@ -120,9 +135,11 @@ fn write_rows(g: &Gaussians<f32>, w: &mut dyn std::io::Write) -> std::io::Result
         row.push(g.opacity_logits[i]);
         row.extend(g.log_scales[i]);
         row.extend(g.rotations[i]);
-        row.push(g.mask_logits[i]);
-        row.push(g.log_reflections[i]);
-        row.push(f32::from(g.populations[i] as u8));
+        if extras {
+            row.push(g.mask_logits[i]);
+            row.push(g.log_reflections[i]);
+            row.push(f32::from(g.populations[i] as u8));
+        }
         debug_assert_eq!(row.len(), names.len(), "SH count {k}");
         bytes.clear();
         row.iter().for_each(|v| bytes.extend(v.to_le_bytes()));

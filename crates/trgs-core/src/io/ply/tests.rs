@@ -78,6 +78,8 @@ fn writer_uses_inria_header_and_channel_major_rest() {
     for j in 0..4 {
         g.sh[j] = [10.0 * j as f32, 10.0 * j as f32 + 1.0, 10.0 * j as f32 + 2.0];
     }
+    // A glass Gaussian: trgs's extras are written.
+    g.populations[0] = Population::Glass;
     let bytes = encode_ply(&g).expect("encode");
     let names = [
         "x",
@@ -122,6 +124,18 @@ fn writer_uses_inria_header_and_channel_major_rest() {
         &floats[6..18],
         [0.0, 1.0, 2.0, 10.0, 20.0, 30.0, 11.0, 21.0, 31.0, 12.0, 22.0, 32.0]
     );
+}
+
+#[test]
+fn a_model_without_glass_is_written_as_inria_rows() {
+    // SIBR reads 62 floats a Gaussian at degree 3, whatever the header says.
+    let g = plain(4, 3);
+    let bytes = encode_ply(&g).expect("encode");
+    let body = bytes.windows(11).position(|w| w == b"end_header\n").expect("header") + 11;
+    assert_eq!(bytes.len() - body, 4 * 62 * 4);
+    assert!(!bytes.windows(5).any(|w| w == b"trgs_"), "no extras");
+    let back = parse_ply(&bytes, Path::new("plain.ply")).expect("read");
+    assert_eq!(bits(&back), bits(&g));
 }
 
 /// A binary little-endian file from a header and one value per (vertex, property), as another
@@ -276,7 +290,8 @@ fn plain(n: usize, degree: u32) -> Gaussians<f32> {
 /// `bytes` with the 4 bytes of property `name` of vertex `i` (a file `encode_ply` wrote at
 /// `degree`) replaced by `v`.
 fn with_value(bytes: &[u8], degree: u32, i: usize, name: &str, v: f32) -> Vec<u8> {
-    let names = property_names(degree);
+    let extras = bytes.windows(9).any(|w| w == b"trgs_mask");
+    let names = property_names(degree, extras);
     let body = bytes.windows(11).position(|w| w == b"end_header\n").expect("header") + 11;
     let p = names.iter().position(|n| n == name).expect(name);
     let at = body + (i * names.len() + p) * 4;
@@ -289,7 +304,9 @@ fn with_value(bytes: &[u8], degree: u32, i: usize, name: &str, v: f32) -> Vec<u8
 fn values_that_cannot_be_used_finitely_are_refused_at_the_read() {
     let dir = scratch_dir("ply-finite");
     let path = dir.join("huge.ply");
-    let good = encode_ply(&plain(20, 1)).expect("encode");
+    let mut model = plain(20, 1);
+    model.populations[3] = Population::Glass;
+    let good = encode_ply(&model).expect("encode");
     let cases: [(&str, f32, &[&str]); 5] = [
         ("scale_0", 1e30, &["Gaussian 17", "scale_0 = 1e30", "log-scale", "exp"]),
         ("scale_2", 89.0, &["Gaussian 17", "scale_2 = 89.0", "log-scale"]),
@@ -334,7 +351,7 @@ fn data_after_the_declared_elements_is_refused() {
     let header = String::from_utf8(three[..header_end].to_vec()).expect("text");
     let two = [header.replace("vertex 3", "vertex 2").as_bytes(), &three[header_end..]].concat();
     std::fs::write(&path, &two).expect("write");
-    let row = format!("{} bytes", property_names(0).len() * 4);
+    let row = format!("{} bytes", property_names(0, false).len() * 4);
     for err in [parse_ply(&two, &path).expect_err("whole"), read_ply(&path).expect_err("pieces")] {
         assert_mentions(&err, &["short.ply", "element vertex 2", &row]);
     }

@@ -147,7 +147,26 @@ fn bad_files_get_named_errors() {
     let mut far = g.clone();
     far.means[2][1] = 3000.0;
     assert!(encode_spz(&far).expect_err("refused").contains("Gaussian 2"));
+    // A hair under the limit rounds to 2^23 fixed-point units, which 24 bits would read back
+    // as -2048: refused. Within half a unit of it, kept where it was.
+    let mut edge = g.clone();
+    edge.means[1][0] = 2048.0 - 1.0 / 8192.0; // 2^23 - 0.5 units
+    assert!(encode_spz(&edge).expect_err("rounds out").contains("Gaussian 1"));
+    edge.means[1][0] = 2048.0 - 1.0 / 1024.0;
+    edge.means[1][1] = 2048.0; // -2048 in SPZ's frame (y flips), which 24 bits hold
+    let back = parse_spz(&encode_spz(&edge).expect("fits"), path).expect("read");
+    assert_eq!((back.means[1][0], back.means[1][1]), (2048.0 - 1.0 / 1024.0, 2048.0));
     assert!(message(&good[..10]).contains("bad.spz") || message(&good[..10]).contains("gzip"));
+}
+
+#[test]
+fn sh_coefficients_past_the_byte_range_clamp() {
+    for bucket in [8, 16] {
+        for x in [2e7, f32::MAX] {
+            assert_eq!(quantise_sh(x, bucket), quantise_sh(1.0, bucket), "{x}");
+            assert_eq!(quantise_sh(-x, bucket), quantise_sh(-1.0, bucket), "{x}");
+        }
+    }
 }
 
 /// The attribute bytes of a version 3 file (after its 16-byte header), split per attribute.
