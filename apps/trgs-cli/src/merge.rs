@@ -40,6 +40,29 @@ const MIN_MASK_IOU: f64 = 0.3;
 /// The longest side the masks are checked at: enough to tell which plane covers a pane best.
 const MASK_CHECK_SIDE: u32 = 640;
 
+/// Refuse a block's run whose views (its cameras.json) are not those of the block's folder: a
+/// run of an earlier split (made again with other settings into the same folder, or another
+/// split's runs) would be cut to this split's cells, leaving holes where they reach past the
+/// region it trained.
+fn check_trained_on(run: &Path, trained: &[Camera], folder: &Path) -> Result<()> {
+    let block = SceneFolder::open(folder)?;
+    let theirs: HashSet<&str> = trained.iter().map(|c| c.name.as_str()).collect();
+    let ours: HashSet<&str> = block.views.iter().map(|v| v.camera.name.as_str()).collect();
+    if theirs != ours {
+        let missing = ours.difference(&theirs).count();
+        let other = theirs.difference(&ours).count();
+        bail!(
+            "{}: trained on other views than the block's folder {} holds ({missing} of its {} \
+             views missing, {other} others): a run of an earlier split; train the block again \
+             (remove the run folder), or merge with the blocks it was trained on",
+            run.display(),
+            folder.display(),
+            ours.len()
+        );
+    }
+    Ok(())
+}
+
 /// The merged model written to `o.out` as a run folder (model.ply, planes.json, cameras.json,
 /// metrics.json with the reflection model and what came from where).
 pub fn merge(o: &MergeOptions) -> Result<(MergeReport, usize, usize)> {
@@ -69,7 +92,9 @@ pub fn merge(o: &MergeOptions) -> Result<(MergeReport, usize, usize)> {
         let model = load_model(&run, None)?;
         let cams = run.join("cameras.json");
         if cams.is_file() {
-            for c in read_cameras_json(&cams)? {
+            let trained = read_cameras_json(&cams)?;
+            check_trained_on(&run, &trained, &o.blocks.join(&b.folder))?;
+            for c in trained {
                 cameras.entry(c.name.clone()).or_insert(c);
             }
         }

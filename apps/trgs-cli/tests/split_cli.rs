@@ -154,6 +154,17 @@ fn trained_blocks_merge_into_one_run() {
             .output()
             .expect("merge")
     };
+    // A run whose views are not its block's (a run of an earlier split) is refused by name.
+    let block_1 = manifest["blocks"][1]["folder"].as_str().expect("folder");
+    let folder = SceneFolder::open(&blocks.join(block_1)).expect("block folder");
+    let cameras: Vec<_> = folder.views.iter().skip(1).map(|v| v.camera.clone()).collect();
+    let stale = runs.join("block_1").join("cameras.json");
+    trgs_core::io::write_cameras_json(&stale, &cameras).expect("cameras");
+    let refused = merge(&["--by-geometry"]);
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert!(!refused.status.success());
+    assert!(stderr.contains("block_1") && stderr.contains("1 of its"), "{stderr}");
+    std::fs::remove_file(&stale).expect("remove");
     // By geometry the halves of one pane are one plane.
     let merged = merge(&["--by-geometry"]);
     let stdout = String::from_utf8_lossy(&merged.stdout);
