@@ -6,6 +6,7 @@ use anyhow::{Context, Result, bail};
 use std::fs::{File, OpenOptions, TryLockError};
 use std::io::{Read, Seek, Write};
 use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant, SystemTime};
 use trgs_core::io::UNFINISHED_RUN_MARKER;
 
 /// The lock file in a run folder. The operating system's lock on it (released on any exit, a
@@ -30,10 +31,18 @@ pub(super) const RUN_FILES: [&str; 11] = [
     UNFINISHED_RUN_MARKER,
 ];
 
+/// How often a running run marks its lock file as alive ([`RunLock::beat`]).
+const BEAT: Duration = Duration::from_secs(60);
+
+/// A holder on another host whose lock file has not been marked alive for this long has died
+/// (a killed process clears nothing): only read where the file system has no locks.
+const STALE_AFTER: Duration = Duration::from_secs(10 * 60);
+
 /// The folder of a run, held while the value lives (see the module docs).
 #[derive(Debug)]
 pub struct RunLock {
     file: File,
+    last_beat: Instant,
 }
 
 impl RunLock {
@@ -58,7 +67,12 @@ impl RunLock {
             // stand in for the operating system's lock.
             Err(TryLockError::Error(e)) if e.kind() == std::io::ErrorKind::Unsupported => {
                 let holder = read_holder(&mut file);
-                if Holder::parse(&holder).is_some_and(|h| h.may_be_running()) {
+                let quiet = file
+                    .metadata()
+                    .and_then(|m| m.modified())
+                    .ok()
+                    .map(|t| SystemTime::now().duration_since(t).unwrap_or(Duration::ZERO));
+                if Holder::parse(&holder).is_some_and(|h| h.may_be_running(quiet)) {
                     bail!(
                         "{}; if no run is using it, delete {}",
                         held_by_another_run(out, &holder),
@@ -76,7 +90,18 @@ impl RunLock {
             .and_then(|()| file.write_all(me.as_bytes()))
             .and_then(|()| file.flush())
             .with_context(|| format!("writing {}", path.display()))?;
-        Ok(Self { file })
+        Ok(Self { file, last_beat: Instant::now() })
+    }
+
+    /// Mark the lock file alive (its modification time) once a [`BEAT`]: where the file system
+    /// has no locks, a holder on another host that has not beaten for [`STALE_AFTER`] is taken
+    /// for dead, so that a retry on another node can take over a killed run's folder.
+    pub fn beat(&mut self) {
+        if self.last_beat.elapsed() >= BEAT {
+            self.last_beat = Instant::now();
+            // Best effort: a file system that cannot set the time only loses the takeover.
+            let _ = self.file.set_modified(SystemTime::now());
+        }
     }
 }
 
@@ -142,10 +167,11 @@ impl Holder {
     }
 
     /// Whether the process may still be running: on this host, whether it is (where the
-    /// system says: /proc); on another host there is no telling.
-    fn may_be_running(&self) -> bool {
+    /// system says: /proc); on another host, whether it marked the lock file alive in the
+    /// last [`STALE_AFTER`] (`quiet`: how long ago it did; None where that cannot be told).
+    fn may_be_running(&self, quiet: Option<Duration>) -> bool {
         if self.host != host_name() {
-            return true;
+            return quiet.is_none_or(|q| q < STALE_AFTER);
         }
         if self.pid == std::process::id() {
             return false;
@@ -205,13 +231,16 @@ mod tests {
     #[test]
     fn a_stale_holder_is_told_apart_by_pid_and_host() {
         let me = Holder::this_process();
-        assert!(!me.may_be_running(), "this process's own stale line");
+        let just_now = Some(Duration::from_secs(5));
+        assert!(!me.may_be_running(just_now), "this process's own stale line");
         let elsewhere = Holder { pid: 1, host: format!("{}-other", me.host) };
-        assert!(elsewhere.may_be_running(), "another host: no telling");
+        assert!(elsewhere.may_be_running(just_now), "another host, alive a moment ago");
+        assert!(elsewhere.may_be_running(None), "another host, no time: no telling");
+        assert!(!elsewhere.may_be_running(Some(STALE_AFTER)), "another host, silent: dead");
         if Path::new("/proc").is_dir() {
             // pid_max is at most 2^22 on Linux.
             let gone = Holder { pid: u32::MAX - 1, host: me.host.clone() };
-            assert!(!gone.may_be_running());
+            assert!(!gone.may_be_running(just_now));
         }
         assert_eq!(Holder::parse("garbage"), None);
     }
