@@ -198,6 +198,24 @@ fn eval_on_the_training_views(
         assert!(renders.join(name).is_file(), "render of {name}");
         assert!(renders.join(format!("layers/{stem}_transmission.png")).is_file(), "{stem}");
     }
+    // The model without its planes, and against its own renders: named so, beside eval.json.
+    for (extra, file) in [
+        (vec!["--no-planes"], "eval_no-planes.json"),
+        (vec!["--reference", &out.display().to_string()], "eval_reference.json"),
+    ] {
+        let scored = Command::new(env!("CARGO_BIN_EXE_trgs"))
+            .arg("eval")
+            .arg("--model")
+            .arg(out)
+            .arg("--data")
+            .arg(data)
+            .args(&extra)
+            .output()
+            .expect("eval");
+        assert!(scored.status.success(), "{}", String::from_utf8_lossy(&scored.stderr));
+        let json = read_json(out, file, "eval JSON");
+        assert_eq!(json["no_planes"], extra[0] == "--no-planes", "{file}");
+    }
     let again = read_json(out, "eval.json", "eval JSON");
     assert_eq!(&again, evaluated, "eval.json (the test views) is left as it was");
     train_names

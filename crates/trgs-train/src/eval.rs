@@ -8,7 +8,7 @@ use std::time::Instant;
 use trgs_core::Image;
 use trgs_core::fit::fit_exposure;
 use trgs_core::io::{read_planes_json, read_rgb8_image};
-use trgs_core::metrics::{psnr, psnr_covered, ssim_covered};
+use trgs_core::metrics::{psnr_covered, ssim_covered};
 use trgs_core::scene::ReflectionPlane;
 use trgs_render::{Frame, GpuContext, GpuScene, Layer, RenderError, RenderOptions, Renderer};
 
@@ -86,6 +86,16 @@ pub fn right_half_psnr(
     Ok((score(render)?, score(&exposed)?))
 }
 
+/// A rendered layer as it is scored: clamped to [0, 1], and zero where the photo covers
+/// nothing (an undistorted view's border).
+fn shown(layer: Image<f32>, covered: Option<&Image<u8>>) -> Image<f32> {
+    let layer = layer.map(|v| v.clamp(0.0, 1.0));
+    match covered {
+        Some(c) => layer.zero_uncovered(c),
+        None => layer,
+    }
+}
+
 /// Evaluate `model` on `data`'s evaluation views.
 pub fn evaluate(
     model: &Renderable,
@@ -96,12 +106,10 @@ pub fn evaluate(
     let mut rows = Vec::new();
     let mut halves = Vec::new();
     for v in data.eval_views() {
-        // Only what the photo shows counts, as in the loss.
-        let color = model.layer(v, Layer::Color)?;
-        let color = match &v.covered {
-            Some(c) => color.zero_uncovered(c),
-            None => color,
-        };
+        // Scored as a viewer shows it (and as INRIA's and gsplat's metrics score it): clamped to
+        // [0, 1]; the renderer leaves colour unclamped above. Only what the photo shows counts,
+        // as in the loss.
+        let color = shown(model.layer(v, Layer::Color)?, v.covered.as_ref());
         let image = v.image.to_f32();
         // Scored over the pixels the photo covers: the zeroed rest would count as matches.
         let covered = v.covered.as_ref();
@@ -236,12 +244,14 @@ pub const REFLECTION_REGION_THRESHOLD: f32 = 0.5 / 255.0;
 /// Squared error of `render` against `target`, summed per region: [reflection region,
 /// elsewhere], each as (sum over the samples, number of samples). The reflection region is where
 /// the dataset's `image` differs from the true transmission `truth`; `target` is the image for the
-/// final render and the truth for the transmission layer.
+/// final render and the truth for the transmission layer. Pixels `covered` marks zero (an
+/// undistorted view's border, where the photo shows nothing) are in neither.
 pub fn region_errors(
     render: &trgs_core::Image<f32>,
     target: &trgs_core::Image<f32>,
     image: &trgs_core::Image<f32>,
     truth: &trgs_core::Image<f32>,
+    covered: Option<&Image<u8>>,
 ) -> Result<[(f64, usize); 2]> {
     let same = |a: &trgs_core::Image<f32>| {
         (a.width, a.height, a.channels) == (image.width, image.height, image.channels)
@@ -265,8 +275,16 @@ pub fn region_errors(
     );
     let c = image.channels.max(1) as usize;
     let mut out = [(0.0, 0usize); 2];
+    anyhow::ensure!(
+        covered.is_none_or(|m| (m.width, m.height) == (image.width, image.height)),
+        "region errors need a coverage mask of the images' size"
+    );
     let pixels = render.data.chunks(c).zip(target.data.chunks(c));
-    for ((r, g), (i, t)) in pixels.zip(image.data.chunks(c).zip(truth.data.chunks(c))) {
+    let photo = image.data.chunks(c).zip(truth.data.chunks(c));
+    for (k, ((r, g), (i, t))) in pixels.zip(photo).enumerate() {
+        if covered.is_some_and(|m| m.data[k * m.channels as usize] == 0) {
+            continue;
+        }
         let reflects = i.iter().zip(t).any(|(a, b)| (a - b).abs() > REFLECTION_REGION_THRESHOLD);
         let e: f64 = r.iter().zip(g).map(|(&a, &b)| (f64::from(a) - f64::from(b)).powi(2)).sum();
         let slot = &mut out[usize::from(!reflects)];
@@ -331,13 +349,15 @@ pub fn compare_with_truth(
         };
         let frame = model.frame(v)?;
         let image = v.image.to_f32();
-        let t = frame.read_layer(model.ctx, Layer::Transmission)?;
-        psnrs.push(psnr(&t, &truth)?);
-        let color = frame.read_layer(model.ctx, Layer::Color)?;
+        // Over the pixels the photo covers, as `evaluate` scores.
+        let covered = v.covered.as_ref();
+        let t = shown(frame.read_layer(model.ctx, Layer::Transmission)?, covered);
+        psnrs.push(psnr_covered(&t, &truth, covered)?);
+        let color = shown(frame.read_layer(model.ctx, Layer::Color)?, covered);
         let context = || format!("comparing {} with {}", v.camera.name, path.display());
         let splits = [
-            region_errors(&color, &image, &image, &truth).with_context(context)?,
-            region_errors(&t, &truth, &image, &truth).with_context(context)?,
+            region_errors(&color, &image, &image, &truth, covered).with_context(context)?,
+            region_errors(&t, &truth, &image, &truth, covered).with_context(context)?,
         ];
         for (totals, split) in regions.iter_mut().zip(splits) {
             for (total, part) in totals.iter_mut().zip(split) {
@@ -432,7 +452,8 @@ mod tests {
         let truth = rgb(&[[0.2, 0.2, 0.2], [0.5, 0.5, 0.5], [0.9, 0.1, 0.3]]);
         let image = rgb(&[[0.3, 0.25, 0.2], [0.5, 0.5, 0.5 + 0.4 / 255.0], [0.9, 0.1, 0.3]]);
         let render = rgb(&[[0.3, 0.15, 0.2], [0.6, 0.5, 0.5], [0.9, 0.1, 0.0]]);
-        let [inside, outside] = region_errors(&render, &image, &image, &truth).expect("same sizes");
+        let [inside, outside] =
+            region_errors(&render, &image, &image, &truth, None).expect("same sizes");
         assert_eq!(inside.1, 3);
         assert!((inside.0 - 0.01).abs() < 1e-7, "{inside:?}");
         assert_eq!(outside.1, 6);
@@ -446,13 +467,28 @@ mod tests {
     }
 
     #[test]
+    fn layers_are_scored_clamped_and_only_where_the_photo_covers() {
+        let covered = Image { width: 3, height: 1, channels: 1, data: vec![1, 1, 0] };
+        let layer = rgb(&[[1.4, 0.5, -0.1], [0.2, 0.2, 0.2], [0.7, 0.7, 0.7]]);
+        let scored = shown(layer, Some(&covered));
+        assert_eq!(scored.data, [1.0, 0.5, 0.0, 0.2, 0.2, 0.2, 0.0, 0.0, 0.0]);
+        // The uncovered pixel is in neither region, whatever the render holds there.
+        let truth = rgb(&[[0.2, 0.2, 0.2], [0.5, 0.5, 0.5], [0.0, 0.0, 0.0]]);
+        let image = rgb(&[[0.3, 0.25, 0.2], [0.5, 0.5, 0.5], [0.0, 0.0, 0.0]]);
+        let render = rgb(&[[0.3, 0.25, 0.2], [0.5, 0.5, 0.5], [0.9, 0.9, 0.9]]);
+        let [inside, outside] =
+            region_errors(&render, &image, &image, &truth, Some(&covered)).expect("sizes");
+        assert_eq!((inside, outside), ((0.0, 3), (0.0, 3)));
+    }
+
+    #[test]
     fn the_transmission_is_scored_against_the_truth_in_the_same_regions() {
         // The region still comes from image against truth; the error is the layer's against the
         // truth: pixel 0 reflects (layer 0.1 off the truth in red), pixel 1 does not (0.2 off).
         let truth = rgb(&[[0.2, 0.2, 0.2], [0.5, 0.5, 0.5]]);
         let image = rgb(&[[0.3, 0.25, 0.2], [0.5, 0.5, 0.5]]);
         let layer = rgb(&[[0.3, 0.2, 0.2], [0.5, 0.7, 0.5]]);
-        let [inside, outside] = region_errors(&layer, &truth, &image, &truth).expect("sizes");
+        let [inside, outside] = region_errors(&layer, &truth, &image, &truth, None).expect("sizes");
         assert_eq!((inside.1, outside.1), (3, 3));
         assert!((inside.0 - 0.01).abs() < 1e-7, "{inside:?}");
         assert!((outside.0 - 0.04).abs() < 1e-7, "{outside:?}");
@@ -462,9 +498,9 @@ mod tests {
     fn region_errors_refuse_images_of_different_sizes() {
         let a = rgb(&[[0.0; 3], [0.0; 3]]);
         let b = rgb(&[[0.0; 3]]);
-        let err = region_errors(&a, &a, &a, &b).expect_err("sizes differ").to_string();
+        let err = region_errors(&a, &a, &a, &b, None).expect_err("sizes differ").to_string();
         assert!(err.contains("truth 1x1x3"), "{err}");
-        let err = region_errors(&a, &b, &a, &a).expect_err("sizes differ").to_string();
+        let err = region_errors(&a, &b, &a, &a, None).expect_err("sizes differ").to_string();
         assert!(err.contains("target 1x1x3"), "{err}");
     }
 }

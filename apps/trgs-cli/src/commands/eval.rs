@@ -44,8 +44,9 @@ pub struct Args {
     /// The views to measure: how well the model fits the views it was trained on, or new ones
     #[arg(long, value_enum, default_value = "test")]
     split: SplitArg,
-    /// Write the metrics here [default: <run folder>/eval.json, or eval_<split>.json for another
-    /// split, when --model is a folder; otherwise only printed]
+    /// Write the metrics here [default, when --model is a folder: <run folder>/eval.json, with
+    /// _<split>, _no-planes and _reference before .json for another split, --no-planes and
+    /// --reference (eval_train_no-planes.json); otherwise only printed]
     #[arg(long, value_name = "FILE")]
     out: Option<PathBuf>,
     /// Render MODEL as a plain 3DGS renderer does: its Gaussians alone, no planes (what other
@@ -153,6 +154,8 @@ pub fn run(matches: &clap::ArgMatches) -> Result<()> {
         "model": model.ply,
         "data": data_dir,
         "split": measured,
+        "no_planes": args.no_planes,
+        "reference": args.reference,
         "psnr": e.psnr,
         "ssim": e.ssim,
         "views": e.views.iter().map(|(n, p, s)| serde_json::json!({"name": n, "psnr": p, "ssim": s})).collect::<Vec<_>>(),
@@ -168,10 +171,19 @@ pub fn run(matches: &clap::ArgMatches) -> Result<()> {
         write_renders(&subject, &data, dir)?;
         println!("renders written to {}", dir.display());
     }
-    let default_name = match split {
-        Split::Test => "eval.json".to_string(),
-        other => format!("eval_{}.json", other.name()),
-    };
+    // What was measured is in the name, so that a score against a reference or without the
+    // planes never replaces the run's own eval.json.
+    let mut default_name = String::from("eval");
+    if split != Split::Test {
+        default_name += &format!("_{}", split.name());
+    }
+    if args.no_planes {
+        default_name += "_no-planes";
+    }
+    if args.reference.is_some() {
+        default_name += "_reference";
+    }
+    default_name += ".json";
     let out = args.out.or_else(|| run_dir.map(|r| r.join(default_name)));
     if let Some(out) = out {
         write_atomic(&out, serde_json::to_string_pretty(&json)?.as_bytes())?;

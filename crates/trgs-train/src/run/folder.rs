@@ -16,7 +16,8 @@ pub const LOCK_FILE: &str = "run.lock";
 
 /// What a run writes into its folder, set aside whole when a new run starts there: its results,
 /// its checkpoint and log, what `eval` wrote beside them, and the marker of an unfinished run.
-/// (Temporaries of these that a kill left are removed when a run starts.)
+/// (Temporaries of these that a kill left are removed when a run starts.) Every other file
+/// `eval` names by what it measured is set aside too ([`is_eval_file`]).
 pub(super) const RUN_FILES: [&str; 11] = [
     super::checkpoint::CHECKPOINT_FILE,
     super::log::LOG_FILE,
@@ -37,6 +38,12 @@ const BEAT: Duration = Duration::from_secs(60);
 /// A holder on another host whose lock file has not been marked alive for this long has died
 /// (a killed process clears nothing): only read where the file system has no locks.
 const STALE_AFTER: Duration = Duration::from_secs(10 * 60);
+
+/// Whether `name` is one of the files `eval` writes into a run folder: eval.json, or eval_ and
+/// what it measured, .json.
+fn is_eval_file(name: &str) -> bool {
+    name == "eval.json" || (name.starts_with("eval_") && name.ends_with(".json"))
+}
 
 /// The folder of a run, held while the value lives (see the module docs).
 #[derive(Debug)]
@@ -188,9 +195,22 @@ fn host_name() -> String {
 /// Move the files of a previous run in `out` into a new folder `out/previous-<n>` (the first
 /// free n), so that nothing of it passes as this run's and nothing is lost; returns that folder
 /// and the names moved, or None when there was nothing to move.
-pub fn set_aside_previous_run(out: &Path) -> Result<Option<(PathBuf, Vec<&'static str>)>> {
-    let present: Vec<&str> =
-        RUN_FILES.into_iter().filter(|f| out.join(f).symlink_metadata().is_ok()).collect();
+pub fn set_aside_previous_run(out: &Path) -> Result<Option<(PathBuf, Vec<String>)>> {
+    let mut present: Vec<String> = RUN_FILES
+        .into_iter()
+        .filter(|f| out.join(f).symlink_metadata().is_ok())
+        .map(String::from)
+        .collect();
+    // `eval` names its files by what it measured (eval_train_no-planes.json, ...).
+    let mut evals: Vec<String> = std::fs::read_dir(out)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| is_eval_file(n) && !present.contains(n))
+        .collect();
+    evals.sort();
+    present.extend(evals);
     if present.is_empty() {
         return Ok(None);
     }
@@ -252,12 +272,22 @@ mod tests {
         assert_eq!(set_aside_previous_run(&dir.join("none")).expect("no folder"), None);
         std::fs::create_dir_all(out.join("renders")).expect("renders");
         std::fs::create_dir_all(out.join("dataset")).expect("dataset");
-        for f in ["model.ply", "metrics.json", "exposures.json", "log.jsonl"] {
+        for f in ["model.ply", "metrics.json", "exposures.json", "log.jsonl", "eval_all.json"] {
             std::fs::write(out.join(f), f).expect("file");
         }
         let (aside, moved) = set_aside_previous_run(&out).expect("set aside").expect("moved");
         assert_eq!(aside, out.join("previous-1"));
-        assert_eq!(moved, ["log.jsonl", "metrics.json", "exposures.json", "model.ply", "renders"]);
+        assert_eq!(
+            moved,
+            [
+                "log.jsonl",
+                "metrics.json",
+                "exposures.json",
+                "model.ply",
+                "renders",
+                "eval_all.json"
+            ]
+        );
         assert!(out.join("dataset").is_dir(), "the dataset is the run's input, not its output");
         assert!(!out.join("model.ply").exists());
         assert_eq!(std::fs::read_to_string(aside.join("model.ply")).expect("kept"), "model.ply");
