@@ -16,6 +16,13 @@ pub enum UploadError {
     Input(#[from] InvalidInput),
     #[error(transparent)]
     Gpu(#[from] GpuError),
+    #[error(
+        "{gaussians} Gaussians at SH degree {sh_degree} need a {bytes}-byte buffer of SH \
+         coefficients, above this GPU's largest buffer ({limit} bytes): at most {most} \
+         Gaussians fit at that degree (in training: a lower --sh-degree, or --densify mcmc \
+         with a --cap below it)"
+    )]
+    TooLarge { gaussians: usize, sh_degree: u32, bytes: u64, limit: u64, most: u64 },
 }
 
 /// Gaussians and planes uploaded to a device.
@@ -45,6 +52,23 @@ fn page_len(limit: u64, chunk: u32) -> u32 {
     chunks as u32 * chunk
 }
 
+/// Whether the widest attribute buffer of `gaussians` (SH) fits a buffer of `limit` bytes: wgpu
+/// caps buffers at 2 GiB on most Vulkan drivers, lavapipe's included, whatever the memory.
+fn fits_one_buffer(gaussians: &Gaussians<f32>, limit: u64) -> Result<(), UploadError> {
+    let per_gaussian = gaussians.sh_coeffs() as u64 * 12;
+    let bytes = gaussians.len() as u64 * per_gaussian;
+    if bytes <= limit {
+        return Ok(());
+    }
+    Err(UploadError::TooLarge {
+        gaussians: gaussians.len(),
+        sh_degree: gaussians.sh_degree,
+        bytes,
+        limit,
+        most: limit / per_gaussian,
+    })
+}
+
 impl GpuScene {
     /// Validate (every attribute finite, no zero quaternion, planes well formed) and upload.
     pub fn upload(
@@ -54,6 +78,7 @@ impl GpuScene {
     ) -> Result<Self, UploadError> {
         validate_gaussians(gaussians)?;
         validate_planes(planes)?;
+        fits_one_buffer(gaussians, ctx.device.limits().max_buffer_size)?;
         // A scene too large for the device's memory fails here, as an error.
         gpu::scoped(ctx, "uploading the Gaussians", || {
             Ok(Self::upload_valid(ctx, gaussians, planes))
@@ -302,4 +327,20 @@ fn read_attributes(
     g.mask_logits = gpu::read_buffer(ctx, b[Attribute::MaskLogits], 0, n)?;
     g.log_reflections = gpu::read_buffer(ctx, b[Attribute::LogReflections], 0, n)?;
     Ok(g)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_scene_whose_sh_outgrows_one_buffer_is_refused_with_the_count_that_fits() {
+        let g = Gaussians::<f32>::zeros(1000, 3); // 192 bytes of SH each
+        assert!(fits_one_buffer(&g, 192_000).is_ok());
+        let err = fits_one_buffer(&g, 191_999).expect_err("one byte short").to_string();
+        assert!(
+            err.contains("1000 Gaussians at SH degree 3") && err.contains("at most 999"),
+            "{err}"
+        );
+    }
 }

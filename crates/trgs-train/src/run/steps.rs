@@ -3,8 +3,9 @@
 use super::{CHECKPOINT_FILE, PlaneSource, RunEvent, StepEvent, StepMemory, TrainingRun, outputs};
 use crate::eval::evaluate;
 use crate::trainer::StepStats;
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use std::time::{Duration, Instant};
+use trgs_render::GpuError;
 
 /// A step recorded and not yet finished, with its view and what its maintenance did.
 #[derive(Debug)]
@@ -94,7 +95,7 @@ impl TrainingRun {
             Ok(())
         });
         let stats = stats.and_then(|stats| self.prefetch_next().map(|()| stats));
-        let stats = stats.with_context(|| self.stopped_at(next))?;
+        let stats = stats.map_err(|e| self.stopped_at(e, next))?;
         self.state.train_seconds += ts.elapsed().saturating_sub(eval_time).as_secs_f64();
         self.report_step(vi, stats)?;
         if let Some(e) = evaluation {
@@ -112,11 +113,11 @@ impl TrainingRun {
         let next = self.trainer.step + 1;
         let recorded = self.trainer.record_step(&self.data.train[vi]);
         let recorded = recorded.and_then(|r| self.prefetch_next().map(|()| r));
-        let recorded = recorded.with_context(|| self.stopped_at(next))?;
+        let recorded = recorded.map_err(|e| self.stopped_at(e, next))?;
         self.state.train_seconds += ts.elapsed().as_secs_f64();
         self.finish_in_flight()?;
         let ts = Instant::now();
-        let maintained = self.trainer.maintain().with_context(|| self.stopped_at(next))?;
+        let maintained = self.trainer.maintain().map_err(|e| self.stopped_at(e, next))?;
         self.state.train_seconds += ts.elapsed().as_secs_f64();
         self.in_flight = Some(InFlight { step: recorded, vi, maintained });
         Ok(())
@@ -129,7 +130,7 @@ impl TrainingRun {
         };
         let ts = Instant::now();
         let n = step.step();
-        let mut stats = self.trainer.finish_step(step).with_context(|| self.stopped_at(n))?;
+        let mut stats = self.trainer.finish_step(step).map_err(|e| self.stopped_at(e, n))?;
         self.state.train_seconds += ts.elapsed().as_secs_f64();
         (stats.densified, stats.perturbed) = maintained;
         self.report_step(vi, stats)
@@ -166,10 +167,27 @@ impl TrainingRun {
         Ok(())
     }
 
-    /// The context of an error that stopped the run at step `step`.
-    fn stopped_at(&self, step: u32) -> String {
+    /// `error`, which stopped the run at step `step`, with what to do next.
+    fn stopped_at(&self, error: anyhow::Error, step: u32) -> anyhow::Error {
+        let context = self.stopped_context(&error, step);
+        error.context(context)
+    }
+
+    fn stopped_context(&self, error: &anyhow::Error, step: u32) -> String {
         let out = &self.config().out;
-        if out.join(CHECKPOINT_FILE).is_file() {
+        let out_of_memory =
+            error.chain().any(|e| matches!(e.downcast_ref(), Some(GpuError::OutOfMemory { .. })));
+        if out.join(CHECKPOINT_FILE).is_file() && out_of_memory {
+            // A resumed run keeps its resolution and Gaussian cap: only the photos' share of
+            // the GPU may change.
+            let mib = self.trainer.targets().budget() >> 20;
+            format!(
+                "training stopped at step {step}; `trgs train --out {} --resume --target-memory \
+                 M` with M below the {mib} MiB of photos held now continues from the last \
+                 checkpoint, or start a new run with --downscale or --cap",
+                out.display()
+            )
+        } else if out.join(CHECKPOINT_FILE).is_file() {
             format!(
                 "training stopped at step {step}; `trgs train --out {} --resume` continues from the \
                  last checkpoint",

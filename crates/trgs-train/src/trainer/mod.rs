@@ -280,9 +280,13 @@ impl Trainer {
 
     /// Queue `view`'s upload ahead of the step that trains on it (when it is not resident).
     pub fn prefetch(&mut self, view: &crate::data::View) -> Result<()> {
-        self.targets
-            .prefetch(&self.ctx, view)
-            .with_context(|| format!("uploading view {}", view.camera.name))
+        let ctx = self.ctx.clone();
+        // Outside a step's scope: an allocation that fails (a GPU out of memory) is an error
+        // that says so, not wgpu's panic.
+        trgs_render::toolkit::gpu::scoped(&ctx, "uploading a training view", || {
+            self.targets.prefetch(&ctx, view).map_err(anyhow::Error::from)
+        })
+        .with_context(|| format!("uploading view {}", view.camera.name))
     }
 
     /// The parameters and Adam moments, read back (without a change of the set still pending,
