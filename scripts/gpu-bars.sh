@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The two GPU measurements of the scale work in one command that fits a short loan of a GPU
 # machine (docs/BENCHMARKS.md, "The GPU measurements of the scale work"): run it there from the
-# repository root with the release `bench` and `train` built here and carried along (the
+# repository root with the release `trgs` and `train` built here and carried along (the
 # machine needs no Rust toolchain).
 #
 #   scripts/gpu-bars.sh OUT [SECONDS] [PARTS]
@@ -60,7 +60,7 @@ fi
 if [ "$parts" != fixture ]; then
     busy_budget=$budget
     [ "$parts" = both ] && busy_budget=$((budget / 3))
-    timeout "$busy_budget" ./target/release/bench --scale "${busy_args[@]}" >"$out/busy.log" 2>&1
+    timeout "$busy_budget" ./target/release/trgs bench --scale "${busy_args[@]}" >"$out/busy.log" 2>&1
     echo "bench --scale rc=$? (124: timed out)" >>"$out/busy.log"
 fi
 

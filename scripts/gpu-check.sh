@@ -5,7 +5,7 @@
 #   scripts/gpu-check.sh pack BUNDLE            # here: build in release, write BUNDLE (.tar.xz)
 #   scripts/gpu-check.sh run BUNDLE OUT [LOOPS] # there, from the repository root: unpack, then
 #                                               # run every test binary (LOOPS times, default 1),
-#                                               # `bench`, the GPU's busy share of a step at 1M
+#                                               # `trgs bench`, the GPU's busy share of a step at 1M
 #                                               # Gaussians and 1600x1200 (`bench --scale`), and
 #                                               # log everything under OUT
 #   scripts/gpu-check.sh hunt BUNDLE OUT SECONDS TEST...
@@ -52,7 +52,7 @@ for line in sys.stdin:
     fi
     tar cf - target/release/gpu-check-tests.txt target/release/gpu-check-root.txt \
         $(cat target/release/gpu-check-tests.txt) "${sampler[@]}" \
-        target/release/{bench,train,render,eval,convert,report,viewer} |
+        target/release/{trgs,train,viewer} |
         xz -T0 -6 >"$bundle"
     echo "wrote $bundle ($(wc -l <target/release/gpu-check-tests.txt) test binaries)"
 }
@@ -91,10 +91,10 @@ run() {
             fi
         done <target/release/gpu-check-tests.txt
     done
-    ./target/release/bench --write "$out/bench.md" >"$out/bench.log" 2>&1 ||
+    ./target/release/trgs bench --write "$out/bench.md" >"$out/bench.log" 2>&1 ||
         echo "bench rc=$?" | tee -a "$out/summary.txt"
     # The steady-state step at 1M Gaussians and 1600x1200, and the share of it the GPU is busy.
-    ./target/release/bench --scale --scale-sizes 1600x1200 --scale-gaussians 1000000 --reps 20 \
+    ./target/release/trgs bench --scale --scale-sizes 1600x1200 --scale-gaussians 1000000 --reps 20 \
         >"$out/busy.log" 2>&1 || echo "bench --scale rc=$?" | tee -a "$out/summary.txt"
     echo "$(wc -l <"$out/summary.txt") failed runs; logs in $out"
 }

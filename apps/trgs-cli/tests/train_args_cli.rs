@@ -91,5 +91,19 @@ fn family_lists_its_members_and_refuses_unknown_ones_and_bad_train_flags() {
         refused(&family, &["--members", "walk-by", "--tr-flags", "--frobnicate", "--out", &out]);
     assert!(stderr.contains("--frobnicate"), "{stderr}");
     assert!(!dir.join("walk-by").join("dataset").exists());
+    // Flags that parse but that training refuses: refused before the scene too.
+    let stderr = refused(
+        &family,
+        &[
+            "--members",
+            "walk-by",
+            "--tr-flags",
+            "--densify mcmc --grow-fraction 0.5",
+            "--out",
+            &out,
+        ],
+    );
+    assert!(stderr.contains("needs --densify classic"), "{stderr}");
+    assert!(!dir.join("walk-by").join("dataset").exists());
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -64,7 +64,13 @@ pub fn run(matches: &clap::ArgMatches) -> Result<()> {
         return Ok(());
     }
     // Bad flags are refused before any scene is generated.
-    run_config(&args.tr_flags)?;
+    let checked = RunConfig {
+        data: Some(args.out.clone()),
+        out: args.out.clone(),
+        iterations: args.steps,
+        ..run_config(&args.tr_flags)?
+    };
+    checked.check().with_context(|| format!("train flags {:?}", args.tr_flags))?;
     let ctx = GpuContext::new()?;
     let mut rows = Vec::new();
     for member in &members {
@@ -82,7 +88,10 @@ pub fn run(matches: &clap::ArgMatches) -> Result<()> {
                 iterations: args.steps,
                 ..run_config(flags)?
             };
-            outcomes.push(train(&ctx, config)?);
+            // What the run is: a folder that holds a run of other flags or of another scene is
+            // trained again (the old run set aside by the new one), never read back as this.
+            let made_by = format!("{flags}\n{}", describe(member));
+            outcomes.push(train(&ctx, config, &made_by)?);
         }
         let plain = outcomes.pop().context("two runs")?;
         let tr = outcomes.pop().context("two runs")?;
@@ -124,7 +133,7 @@ fn resolve(names: &[String]) -> Result<Vec<FamilyMember>> {
 fn scene_folder(member: &FamilyMember, dir: &Path) -> Result<PathBuf> {
     let data = dir.join("dataset");
     let marker = data.join("family_member.txt");
-    let describe = format!("{member:#?}\n");
+    let describe = describe(member);
     if std::fs::read_to_string(&marker).is_ok_and(|m| m == describe) {
         return Ok(data);
     }
@@ -144,6 +153,14 @@ fn scene_folder(member: &FamilyMember, dir: &Path) -> Result<PathBuf> {
     Ok(data)
 }
 
+/// The member as its scene folder's marker records it.
+fn describe(member: &FamilyMember) -> String {
+    format!("{member:#?}\n")
+}
+
+/// The marker in a run folder of what made the run: its flags and its member.
+const MADE_BY: &str = "family_run.txt";
+
 /// `train`'s settings from its flags.
 fn run_config(flags: &str) -> Result<RunConfig> {
     #[derive(Parser)]
@@ -161,12 +178,22 @@ fn on(ctx: &GpuContext) -> RunOptions<'static> {
     RunOptions { context: Some(ctx.clone()), ..RunOptions::default() }
 }
 
-/// One run to its end (resumed from its checkpoint when interrupted, read back when finished).
-fn train(ctx: &GpuContext, config: RunConfig) -> Result<Outcome> {
+/// One run to its end (resumed from its checkpoint when interrupted, read back when finished),
+/// `made_by` its flags and member: a run made by others starts anew.
+fn train(ctx: &GpuContext, config: RunConfig, made_by: &str) -> Result<Outcome> {
     let out = config.out.clone();
     let metrics = out.join("metrics.json");
-    if !metrics.is_file() {
-        let mut run = if out.join("checkpoint.trgs").is_file() {
+    let marker = out.join(MADE_BY);
+    // Folders of older builds have no marker: taken as they are.
+    let same = std::fs::read_to_string(&marker).map_or(true, |m| m == made_by);
+    if !same {
+        println!("  {} holds a run of other flags or another scene: training anew", out.display());
+    }
+    if !metrics.is_file() || !same {
+        let resume = same && out.join("checkpoint.trgs").is_file();
+        std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
+        write_atomic(&marker, made_by.as_bytes())?;
+        let mut run = if resume {
             TrainingRun::resume(&out, on(ctx))?
         } else {
             TrainingRun::start(config, on(ctx))?

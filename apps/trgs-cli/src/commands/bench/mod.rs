@@ -52,20 +52,21 @@ pub struct Args {
     /// Only the scale measurement: training steps with one plane and classic densification
     /// over --scale-sizes x --scale-gaussians, with their GPU memory (printed as a Markdown
     /// table; not part of the full run, and not written by --write)
-    #[arg(long)]
+    #[arg(long, conflicts_with = "write")]
     scale: bool,
     /// Only the CPU's work around the GPU's at scale: a 12 MP photo decoded and downscaled, the
     /// SSIM of a 1600x1200 view, a checkpoint and a model.ply of 1M Gaussians written and read
-    /// (no GPU needed; not part of the full run)
-    #[arg(long)]
+    /// (no GPU needed; not part of the full run, and not written by --write)
+    #[arg(long, conflicts_with = "write")]
     host: bool,
     /// Image sizes of --scale
-    #[arg(long, value_name = "WxH,...", value_delimiter = ',', value_parser = trgs_train::run::parse_image_size,
+    #[arg(long, value_name = "WxH,...", value_delimiter = ',', requires = "scale", value_parser = trgs_train::run::parse_image_size,
           default_value = "256x192,800x600,1280x960,1600x1200")]
     scale_sizes: Vec<(u32, u32)>,
     /// Gaussian counts of --scale
     #[arg(
         long,
+        requires = "scale",
         value_name = "N,...",
         value_delimiter = ',',
         default_value = "100000,300000,1000000,3000000"
@@ -581,4 +582,20 @@ fn run_scale(ctx: &GpuContext, args: &Args) -> Result<()> {
     }
     println!("\n{}", lines.join("\n"));
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn flags_that_would_be_ignored_are_refused() {
+        let parse = |args: &[&str]| Args::try_parse_from([&["bench"], args].concat());
+        assert!(parse(&["--quick", "--write", "b.md"]).is_ok());
+        assert!(parse(&["--scale", "--scale-sizes", "256x192", "--reps", "2"]).is_ok());
+        assert!(parse(&["--scale-sizes", "256x192"]).is_err(), "without --scale");
+        assert!(parse(&["--scale-gaussians", "1000"]).is_err(), "without --scale");
+        assert!(parse(&["--host", "--write", "b.md"]).is_err(), "--host writes nothing");
+        assert!(parse(&["--scale", "--write", "b.md"]).is_err(), "--scale writes nothing");
+    }
 }

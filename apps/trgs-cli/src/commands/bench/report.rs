@@ -67,7 +67,8 @@ pub fn report(ctx: &GpuContext, m: &Measured<'_>, args: &Args) -> String {
 /// The command line that reproduces this run, flags in a fixed order.
 fn bench_command(args: &Args) -> String {
     format!(
-        "cargo run --release --bin bench --{}{}{}{}{}{}",
+        "trgs bench --reps {}{}{}{}{}{}{}",
+        args.reps,
         if args.quick { " --quick" } else { "" },
         if args.plane_cost_only { " --plane-cost" } else { "" },
         if args.backward_only { " --backward" } else { "" },
