@@ -171,25 +171,29 @@ pub fn run(matches: &clap::ArgMatches) -> Result<()> {
         write_renders(&subject, &data, dir)?;
         println!("renders written to {}", dir.display());
     }
-    // What was measured is in the name, so that a score against a reference or without the
-    // planes never replaces the run's own eval.json.
-    let mut default_name = String::from("eval");
-    if split != Split::Test {
-        default_name += &format!("_{}", split.name());
-    }
-    if args.no_planes {
-        default_name += "_no-planes";
-    }
-    if args.reference.is_some() {
-        default_name += "_reference";
-    }
-    default_name += ".json";
+    let default_name = eval_file_name(split, args.no_planes, args.reference.is_some());
     let out = args.out.or_else(|| run_dir.map(|r| r.join(default_name)));
     if let Some(out) = out {
         write_atomic(&out, serde_json::to_string_pretty(&json)?.as_bytes())?;
         println!("metrics written to {}", out.display());
     }
     Ok(())
+}
+
+/// The file a run folder's evaluation is written to: what was measured is in the name, so that
+/// a score against a reference or without the planes never replaces the run's own eval.json.
+fn eval_file_name(split: Split, no_planes: bool, reference: bool) -> String {
+    let mut name = String::from("eval");
+    if split != Split::Test {
+        name += &format!("_{}", split.name());
+    }
+    if no_planes {
+        name += "_no-planes";
+    }
+    if reference {
+        name += "_reference";
+    }
+    name + ".json"
 }
 
 /// The eval views' photos replaced by renders of the model at `reference` (with its planes), so
