@@ -10,7 +10,7 @@
 //! reads it, and setting it in a running process is `unsafe` (other threads may read the
 //! environment), which this workspace forbids: hence `exec`, which replaces the process (same
 //! pid, same terminal and signals) before any thread or GPU work starts.
-//! `MESA_VK_DEVICE_SELECT` (a user choosing a GPU through the layer) keeps the layer.
+//! `MESA_VK_DEVICE_SELECT` and `DRI_PRIME` (a user choosing a GPU through the layer) keep it.
 
 /// Whether Mesa's device-select layer would print libwayland's error here: no usable
 /// `XDG_RUNTIME_DIR`, no `WAYLAND_DISPLAY`, and the layer neither disabled nor asked for.
@@ -21,6 +21,7 @@ pub fn device_select_would_complain(var: impl Fn(&str) -> Option<std::ffi::OsStr
         && var("WAYLAND_DISPLAY").is_none()
         && var("NODEVICE_SELECT").is_none()
         && var("MESA_VK_DEVICE_SELECT").is_none()
+        && var("DRI_PRIME").is_none()
 }
 
 /// Restarts this process with `NODEVICE_SELECT=1` where Mesa's device-select layer would print
@@ -62,5 +63,6 @@ mod tests {
         assert!(!device_select_would_complain(env(&[("WAYLAND_DISPLAY", "/tmp/wl-0")])));
         assert!(!device_select_would_complain(env(&[("NODEVICE_SELECT", "1")])));
         assert!(!device_select_would_complain(env(&[("MESA_VK_DEVICE_SELECT", "10de:2684")])));
+        assert!(!device_select_would_complain(env(&[("DRI_PRIME", "1")])));
     }
 }
