@@ -15,7 +15,7 @@ from pathlib import Path
 
 from trgs_ray.block import BlockFailed, BlockRun, LogTail, RunState, run_state
 from trgs_ray.cli import main
-from trgs_ray.driver import block_resources
+from trgs_ray.driver import block_resources, vulkan_bus_id
 from trgs_ray.manifest import read_manifest
 
 FAKE_TRGS = textwrap.dedent(
@@ -28,6 +28,10 @@ FAKE_TRGS = textwrap.dedent(
     resume = "--resume" in args
     if os.environ.get("FAKE_REFUSE"):
         sys.exit("refused: this block has finished")
+    held = Path(os.environ.get("FAKE_HELD", "/nonexistent"))
+    if held.is_file() and int(held.read_text()) > 0:
+        held.write_text(str(int(held.read_text()) - 1))
+        sys.exit(f"Error: {out} is in use by another training run (process 7 on gone): wait")
     if resume:
         cfg = json.loads((out / "fake_config.json").read_text())
         start = int((out / "checkpoint.trgs").read_text())
@@ -111,12 +115,30 @@ class BlockRunTest(BlockFixture):
         self.assertIs(run_state(self.runs / "block_0"), RunState.RESUME)
         self.assertEqual(run.command(RunState.RESUME)[-1], "--resume")
         self.assertNotIn("--iterations", run.command(RunState.RESUME), "a resumed run keeps its own settings")
+        for given in (["--target-memory", "512"], ["--target-memory=512"]):
+            resumed = BlockRun(self.block, self.runs, self.trgs, ["--iterations", "12", *given])
+            self.assertEqual(resumed.command(RunState.RESUME)[-len(given):], given, "the machine's memory goes on")
         _, outcome, lines = self.run_block()
         self.assertEqual(outcome.started_as, "resume")
         self.assertIn("resumes from its checkpoint at step 5", lines[0])
         self.assertEqual(self.logged_steps(), list(range(1, 13)), "every step logged once")
         out = (self.runs / "block_0.out").read_text()
         self.assertEqual(out.count("== "), 2, "both attempts' output is kept")
+
+    def test_a_folder_held_by_a_dead_node_is_waited_for(self):
+        held = self.dir / "held"
+        held.write_text("2")
+        lines = []
+        env = {**os.environ, "FAKE_HELD": str(held)}
+        run = BlockRun(self.block, self.runs, self.trgs, ["--iterations", "12"], env=env, lock_wait=0.01)
+        outcome = run.run(lambda p: lines.append(p.line()), poll_seconds=0.05)
+        self.assertEqual(outcome.started_as, "fresh")
+        self.assertEqual(sum("folder is held" in l for l in lines), 2, lines)
+        held.write_text("5")
+        (self.runs / "block_0" / "metrics.json").unlink()
+        short = BlockRun(self.block, self.runs, self.trgs, [], env=env, lock_wait=0.01, lock_wait_total=0.02)
+        with self.assertRaisesRegex(BlockFailed, "in use by another training run"):
+            short.run(lambda p: None, poll_seconds=0.05)
 
     def test_a_finished_block_is_kept(self):
         self.run_block()
@@ -161,6 +183,14 @@ class ManifestTest(unittest.TestCase):
         (d / "blocks.json").write_text("{")
         with self.assertRaisesRegex(ValueError, r"blocks\.json: cannot read"):
             read_manifest(d)
+
+
+class BusIdTest(unittest.TestCase):
+    def test_the_pci_domain_is_kept_and_bus_zero_is_left_to_trgs(self):
+        self.assertEqual(vulkan_bus_id("00000000:1B:00.0"), "0000:1b:00.0")
+        self.assertEqual(vulkan_bus_id("00000001:3C:00.0"), "0001:3c:00.0")
+        self.assertIsNone(vulkan_bus_id("00000002:00:00.0"), "wgpu names no bus id there")
+        self.assertIsNone(vulkan_bus_id(""))
 
 
 class ResourcesTest(unittest.TestCase):

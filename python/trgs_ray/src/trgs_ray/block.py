@@ -142,21 +142,54 @@ def _die_with_parent() -> None:
         _PRCTL(_PR_SET_PDEATHSIG, signal.SIGKILL)
 
 
-class BlockRun:
-    """One block's run folder and the `trgs train` that fills it."""
+def _machine_args(train_args: list) -> list:
+    """The arguments of `train_args` that `trgs train --resume` accepts: --target-memory, as
+    `--target-memory N` or `--target-memory=N` (the last one given)."""
+    out = []
+    for i, arg in enumerate(train_args):
+        if arg == "--target-memory" and i + 1 < len(train_args):
+            out = [arg, train_args[i + 1]]
+        elif arg.startswith("--target-memory="):
+            out = [arg]
+    return out
 
-    def __init__(self, block: Block, runs_dir: Path, trgs: str, train_args: list, env: dict | None = None):
+
+# What `trgs train` says when another process holds the run folder: after a node died, its lock
+# outlives it for a while (an NFS lease; ten minutes where the file system has no locks, while
+# trgs waits for the dead holder's heartbeat to go stale).
+HELD_BY_ANOTHER_RUN = "in use by another training run"
+
+
+class BlockRun:
+    """One block's run folder and the `trgs train` that fills it. An attempt refused because
+    the folder is held is made again every `lock_wait` seconds for up to `lock_wait_total`
+    (Ray retries a task at once, well inside a dead node's lock)."""
+
+    def __init__(
+        self,
+        block: Block,
+        runs_dir: Path,
+        trgs: str,
+        train_args: list,
+        env: dict | None = None,
+        lock_wait: float = 60.0,
+        lock_wait_total: float = 720.0,
+    ):
         self.block = block
         self.run_dir = Path(runs_dir) / block.name
         self.trgs = trgs
         self.train_args = list(train_args)
         self.env = env
+        self.lock_wait = lock_wait
+        self.lock_wait_total = lock_wait_total
 
     def command(self, state: RunState) -> list:
         """The `trgs train` command for an attempt from `state`: a resumed run takes its settings
-        from its checkpoint, so the training arguments go only to a fresh one."""
+        from its checkpoint, so the training arguments go only to a fresh one, but for the
+        machine's --target-memory, which a resume takes anew (the way out of a GPU out of
+        memory that trgs names)."""
         if state is RunState.RESUME:
-            return [self.trgs, "train", "--out", str(self.run_dir), "--resume"]
+            return [self.trgs, "train", "--out", str(self.run_dir), "--resume", *_machine_args(self.train_args)]
         return [
             self.trgs,
             "train",
@@ -188,6 +221,25 @@ class BlockRun:
         # The command's own output, every attempt's, beside the run folder (the run folder is
         # set aside whole when a fresh run starts there).
         output = self.run_dir.parent / f"{self.block.name}.out"
+        waited = 0.0
+        while True:
+            rc = self._launch(state, output, tail, progress, report, poll_seconds)
+            if rc == 0:
+                return self.outcome(state, t0)
+            last = _last_lines(output, 12)
+            if HELD_BY_ANOTHER_RUN in last and waited < self.lock_wait_total:
+                report(Progress(self.block.name, note=f"its folder is held; trying again in {self.lock_wait:.0f} s"))
+                time.sleep(self.lock_wait)
+                waited += self.lock_wait
+                state = run_state(self.run_dir)
+                continue
+            raise BlockFailed(
+                f"{self.block.name}: trgs train exited with {_exit_text(rc)}; its output ({output}) ends:\n{last}"
+            )
+
+    def _launch(self, state: RunState, output: Path, tail, progress: Progress, report, poll_seconds: float) -> int:
+        """One `trgs train` from `state`, its output appended to `output`, its progress reported;
+        returns its exit status."""
         with open(output, "ab") as out:
             out.write(f"\n== {time.strftime('%Y-%m-%d %H:%M:%S')} {' '.join(self.command(state))}\n".encode())
             out.flush()
@@ -214,12 +266,7 @@ class BlockRun:
                 if child.poll() is None:
                     child.kill()
                     child.wait()
-        if rc != 0:
-            last = _last_lines(output, 12)
-            raise BlockFailed(
-                f"{self.block.name}: trgs train exited with {_exit_text(rc)}; its output ({output}) ends:\n{last}"
-            )
-        return self.outcome(state, t0)
+        return rc
 
     def outcome(self, state: RunState, t0: float) -> BlockOutcome:
         """The finished run's figures, from its metrics.json and its log."""

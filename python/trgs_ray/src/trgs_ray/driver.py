@@ -79,9 +79,22 @@ def adapter_for_gpu(gpu_ids: list) -> str | None:
         ).stdout.strip()
     except (OSError, subprocess.SubprocessError):
         return None
-    # nvidia-smi writes 00000000:1B:00.0; Vulkan's bus id is 0000:1b:00.0. TRGS_ADAPTER matches a
-    # part of it, so the bus, device and function are enough.
-    return out.split(":", 1)[-1].lower() if out else None
+    return vulkan_bus_id(out)
+
+
+def vulkan_bus_id(nvidia_smi: str) -> str | None:
+    """nvidia-smi's bus id (00000001:1B:00.0) as wgpu's Vulkan adapter names it (0001:1b:00.0),
+    the PCI domain kept: GPU virtual machines put each GPU in a domain of its own, all at bus 0.
+    None where wgpu names no bus id (it leaves it empty at bus 0 device 0), so that trgs takes
+    its default adapter rather than match none."""
+    domain, _, rest = nvidia_smi.strip().partition(":")
+    try:
+        domain = f"{int(domain, 16):04x}"
+    except ValueError:
+        return None
+    if not rest or rest.lower().startswith("00:00."):
+        return None
+    return f"{domain}:{rest.lower()}"
 
 
 def _block_task(
@@ -131,7 +144,12 @@ def run_blocks(o: DriverOptions, echo=print) -> list:
                 out, self.lines = self.lines, []
                 return out
 
-        board = ProgressBoard.remote()
+        # On the driver's own node: were it placed on a node that dies, the driver's next read
+        # of it would raise and end the run, not just that node's blocks (which Ray retries).
+        from ray.util.scheduling_strategies import NodeAffinitySchedulingStrategy
+
+        here = NodeAffinitySchedulingStrategy(node_id=ray.get_runtime_context().get_node_id(), soft=False)
+        board = ProgressBoard.options(scheduling_strategy=here).remote()
         task = ray.remote(_block_task).options(
             num_gpus=gpus,
             num_cpus=cpus,
