@@ -18,11 +18,13 @@ pub enum DeviceError {
     NoMatchingAdapter { wanted: String, available: String },
     #[error("the adapter {adapter} refused a device: {source}")]
     RequestDevice { adapter: String, source: wgpu::RequestDeviceError },
-    /// A device created elsewhere ([`GpuContext::from_device`]) with a limit below what the
-    /// kernels need: create it from [`device_descriptor`].
+    /// A device with a limit below what the kernels need: an adapter that offers no more (the
+    /// descriptor asks for all it offers), or a device created elsewhere
+    /// ([`GpuContext::from_device`]) without [`device_descriptor`].
     #[error(
-        "the device allows {have} {what}, trgs's kernels need {need}: create it with \
-         trgs_render::device_descriptor (which asks for the adapter's limits)"
+        "the device allows {have} {what}, trgs's kernels need {need}: choose another GPU with \
+         TRGS_ADAPTER (an app that creates the device itself: from \
+         trgs_render::device_descriptor, which asks for all the adapter offers)"
     )]
     Limit { what: &'static str, have: u32, need: u32 },
 }

@@ -171,9 +171,19 @@ fn check_rasterize_bwd_stage(
     }
 }
 
-const PROJECTED_FIELDS: [&str; 11] = [
-    "dmean.x", "dmean.y", "dopacity", "ddepth", "dconic.a", "dconic.b", "dconic.c", "dmask",
-    "dcolor.r", "dcolor.g", "dcolor.b",
+const PROJECTED_FIELDS: [&str; 12] = [
+    "dmean.x",
+    "dmean.y",
+    "dopacity",
+    "ddepth",
+    "dconic.a",
+    "dconic.b",
+    "dconic.c",
+    "dmask",
+    "dcolor.r",
+    "dcolor.g",
+    "dcolor.b",
+    "dreflection",
 ];
 
 fn flat<const N: usize>(v: &[[f32; N]]) -> Vec<f32> {

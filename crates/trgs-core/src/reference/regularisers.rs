@@ -227,6 +227,65 @@ mod tests {
     }
 
     #[test]
+    fn the_weighted_stage_gradients_match_central_differences() {
+        // Every input the stage differentiates (C_t, V, M), through the weighted total, with
+        // two planes, a border off every plane, an annotation and an uncovered corner.
+        let mut rng = Rng::new(9);
+        let (w, h) = (8, 6);
+        let random = |ch: u32, rng: &mut Rng| {
+            let mut im = Image::<f64>::new(w, h, ch);
+            im.data.iter_mut().for_each(|v| *v = 0.05 + 0.9 * rng.uniform());
+            im
+        };
+        let (ct, cr, v, m) =
+            (random(3, &mut rng), random(3, &mut rng), random(1, &mut rng), random(1, &mut rng));
+        let mut hit = Image::<u32>::new(w, h, 1);
+        let mut annotation = Image::<u8>::new(w, h, 1);
+        let mut covered = Image::<u8>::new(w, h, 1);
+        for i in 0..(w * h) as usize {
+            let (x, y) = (i % w as usize, i / w as usize);
+            hit.data[i] = match (x, y) {
+                (0, _) | (_, 0) => 0,
+                (5.., 3..) => 2,
+                _ => 1,
+            };
+            annotation.data[i] = u8::from(x > 2);
+            covered.data[i] = u8::from(!(x < 2 && y < 2));
+        }
+        let weights = RegulariserWeights { depth: 0.005, conflict: 0.2, mask: 0.5 };
+        let total = |ct: &Image<f64>, v: &Image<f64>, m: &Image<f64>| {
+            let inputs = RegulariserInputs {
+                transmission: ct,
+                reflection: &cr,
+                depth_variance: v,
+                mask: m,
+                hit: &hit,
+                annotation: Some(&annotation),
+                covered: Some(&covered),
+            };
+            let r = regularisers(&inputs, weights);
+            (weights.depth * r.depth + weights.conflict * r.conflict + weights.mask * r.mask, r)
+        };
+        let (_, r) = total(&ct, &v, &m);
+        let eps = 1e-6;
+        let check = |name: &str,
+                     at: &Image<f64>,
+                     grad: &Image<f64>,
+                     f: &dyn Fn(&Image<f64>) -> f64| {
+            for k in 0..at.data.len() {
+                let (mut p, mut n) = (at.clone(), at.clone());
+                p.data[k] += eps;
+                n.data[k] -= eps;
+                let fd = (f(&p) - f(&n)) / (2.0 * eps);
+                assert!((fd - grad.data[k]).abs() < 1e-7, "{name} {k}: {fd} vs {}", grad.data[k]);
+            }
+        };
+        check("C_t", &ct, &r.transmission, &|x| total(x, &v, &m).0);
+        check("V", &v, &r.depth_variance, &|x| total(&ct, x, &m).0);
+        check("M", &m, &r.mask_grad, &|x| total(&ct, &v, x).0);
+    }
+
+    #[test]
     fn mask_and_depth_losses() {
         let mut m = Image::<f64>::new(2, 1, 1);
         m.data = vec![0.25, 0.5];
