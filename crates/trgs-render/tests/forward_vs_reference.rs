@@ -52,19 +52,22 @@ fn compare(what: &str, gpu: &Image<f32>, cpu: &Image<f64>) -> usize {
     compare_values(what, &gpu.data, &cpu.data, cpu.channels as usize)
 }
 
-/// How a test splits the frame's arrays into pages (`trgs_render::toolkit::paged`), as scenes
-/// and frames beyond one binding are split.
+/// How a test renders: the frame's arrays split into pages (`trgs_render::toolkit::paged`), as
+/// scenes and frames beyond one binding are split, and with the depth-variance layer or not.
 #[derive(Clone, Copy, Debug, Default)]
 struct Split {
     /// The scene bound this many Gaussians at a time, in pages of two chunks.
     chunk: Option<u32>,
     /// The frame's key list in two pages, split in its middle.
     keys: bool,
+    /// The depth-variance layer rendered (the rasterize variant training uses); without it, the
+    /// variant rendering alone uses.
+    depth_variance: bool,
 }
 
-const WHOLE: Split = Split { chunk: None, keys: false };
-const CHUNKED: Split = Split { chunk: Some(256), keys: false };
-const KEYS_PAGED: Split = Split { chunk: None, keys: true };
+const WHOLE: Split = Split { chunk: None, keys: false, depth_variance: true };
+const CHUNKED: Split = Split { chunk: Some(256), keys: false, depth_variance: true };
+const KEYS_PAGED: Split = Split { chunk: None, keys: true, depth_variance: true };
 
 /// Returns how many views (the camera and the mirrored passes) the frame had.
 fn check_scene(name: &str, spec: SceneSpec, split: Split) -> usize {
@@ -83,7 +86,7 @@ fn check_scene_in(name: &str, scene: &Scene, split: Split, ctx: &GpuContext) -> 
     let g32: Gaussians<f32> = scene.gaussians.cast();
     let g = g32.cast::<f64>();
     let options = RenderOptions {
-        depth_variance: true,
+        depth_variance: split.depth_variance,
         capture_intermediates: true,
         background: [0.1, 0.2, 0.3],
         ..Default::default()
@@ -99,6 +102,7 @@ fn check_scene_in(name: &str, scene: &Scene, split: Split, ctx: &GpuContext) -> 
         images: &images,
         grid: TileGrid::new(k.width, k.height),
         near: options.near,
+        depth_variance: split.depth_variance,
     };
     let mut bad = 0;
     let mut all_counts = Vec::new();
@@ -167,6 +171,7 @@ struct Rendered<'a> {
     images: &'a FrameImages,
     grid: TileGrid,
     near: f64,
+    depth_variance: bool,
 }
 
 /// View `vi` stage by stage against the twin; returns the values of its rasterize pass outside
@@ -270,7 +275,9 @@ fn check_pass(
             let out = rasterize(gpu, values, ranges, grid, [0.1, 0.2, 0.3]);
             bad += compare(&format!("{what} C_t"), &images.transmission, &out.transmission);
             bad += compare(&format!("{what} D_t"), &images.depth, &out.depth);
-            bad += compare(&format!("{what} V"), &images.depth_variance, &out.depth_variance);
+            if r.depth_variance {
+                bad += compare(&format!("{what} V"), &images.depth_variance, &out.depth_variance);
+            }
             bad += compare(&format!("{what} M"), &images.mask, &out.mask);
             bad += compare(&format!("{what} alpha"), &images.alpha, &out.alpha);
             let states = r.frame.read_states(r.ctx).expect("readback");
@@ -366,6 +373,18 @@ fn check_end_to_end(name: &str, r: &Rendered) {
 #[test]
 fn no_plane_matches_reference() {
     check_scene("no plane", spec(101, 1500, 0, 20.0), WHOLE);
+}
+
+#[test]
+fn without_depth_variance_matches_reference() {
+    // The rasterize variants a render without training takes: whole, and in pages.
+    let plain = Split { depth_variance: false, ..WHOLE };
+    check_scene("no depth variance", spec(111, 1500, 1, 25.0), plain);
+    check_scene(
+        "no depth variance, chunked",
+        spec(112, 700, 2, 30.0),
+        Split { depth_variance: false, ..CHUNKED },
+    );
 }
 
 #[test]
