@@ -32,6 +32,8 @@ FAKE_TRGS = textwrap.dedent(
     if held.is_file() and int(held.read_text()) > 0:
         held.write_text(str(int(held.read_text()) - 1))
         sys.exit(f"Error: {out} is in use by another training run (process 7 on gone): wait")
+    if os.environ.get("FAKE_OTHER"):
+        sys.exit("Error: the camera of the training view a.png is not the one the run started with")
     if resume:
         cfg = json.loads((out / "fake_config.json").read_text())
         start = int((out / "checkpoint.trgs").read_text())
@@ -139,6 +141,16 @@ class BlockRunTest(BlockFixture):
         short = BlockRun(self.block, self.runs, self.trgs, [], env=env, lock_wait=0.01, lock_wait_total=0.02)
         with self.assertRaisesRegex(BlockFailed, "in use by another training run"):
             short.run(lambda p: None, poll_seconds=0.05)
+        # Held once, then another failure: that one is not waited on, though the refusal before
+        # it is still among the output's last lines.
+        held.write_text("1")
+        out = self.runs / "block_0.out"
+        attempts = out.read_text().count("\n== ")
+        env_other = {**env, "FAKE_OTHER": "1"}
+        other = BlockRun(self.block, self.runs, self.trgs, [], env=env_other, lock_wait=0.01, lock_wait_total=60.0)
+        with self.assertRaises(BlockFailed):
+            other.run(lambda p: None, poll_seconds=0.05)
+        self.assertEqual(out.read_text().count("\n== ") - attempts, 2, "the refused attempt and the failed one")
 
     def test_a_finished_block_is_kept(self):
         self.run_block()

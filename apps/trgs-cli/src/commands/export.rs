@@ -79,10 +79,11 @@ pub fn run(matches: &clap::ArgMatches) -> Result<()> {
     if args.full {
         return write_as_is(&model, &model.gaussians, &args.out, format);
     }
-    if is_same_file(&args.out, &model.ply) {
+    let glass = model.gaussians.populations.iter().any(|&p| p != trgs_core::Population::Primary);
+    if (glass || !model.planes.is_empty()) && is_same_file(&args.out, &model.ply) {
         bail!(
-            "{}: the output is the model itself, which the bake would replace (its glass left \
-             out): write to another file",
+            "{}: the output is the model itself, which this export would replace with its glass \
+             left out: write to another file",
             args.out.display()
         );
     }

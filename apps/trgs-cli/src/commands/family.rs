@@ -191,13 +191,13 @@ fn train(ctx: &GpuContext, config: RunConfig, made_by: &str) -> Result<Outcome> 
     }
     if !metrics.is_file() || !same {
         let resume = same && out.join("checkpoint.trgs").is_file();
-        std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
-        write_atomic(&marker, made_by.as_bytes())?;
         let mut run = if resume {
             TrainingRun::resume(&out, on(ctx))?
         } else {
             TrainingRun::start(config, on(ctx))?
         };
+        // Only now: a start that failed before setting the old run aside leaves its marker.
+        write_atomic(&marker, made_by.as_bytes())?;
         run.run_to_end(|event| match event {
             RunEvent::Evaluation(e) => {
                 println!("  step {}: PSNR {:.2} dB ({:.0} s)", e.step, e.psnr, e.seconds)

@@ -6,7 +6,8 @@ use anyhow::{Context, Result, bail};
 use std::fs::{File, OpenOptions, TryLockError};
 use std::io::{Read, Seek, Write};
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant, SystemTime};
+use std::sync::mpsc;
+use std::time::{Duration, SystemTime};
 use trgs_core::io::UNFINISHED_RUN_MARKER;
 
 /// The lock file in a run folder. The operating system's lock on it (released on any exit, a
@@ -32,7 +33,8 @@ pub(super) const RUN_FILES: [&str; 11] = [
     UNFINISHED_RUN_MARKER,
 ];
 
-/// How often a running run marks its lock file as alive ([`RunLock::beat`]).
+/// How often a run's lock file is marked alive while the run holds it (a thread of its own, so
+/// that loading the photos or a long evaluation does not fall silent).
 const BEAT: Duration = Duration::from_secs(60);
 
 /// A holder on another host whose lock file has not been marked alive for this long has died
@@ -49,7 +51,8 @@ fn is_eval_file(name: &str) -> bool {
 #[derive(Debug)]
 pub struct RunLock {
     file: File,
-    last_beat: Instant,
+    /// Dropped with the lock: the thread that marks the file alive then ends.
+    _beating: Option<mpsc::Sender<()>>,
 }
 
 impl RunLock {
@@ -97,19 +100,27 @@ impl RunLock {
             .and_then(|()| file.write_all(me.as_bytes()))
             .and_then(|()| file.flush())
             .with_context(|| format!("writing {}", path.display()))?;
-        Ok(Self { file, last_beat: Instant::now() })
+        Ok(Self { _beating: beat(&file, BEAT), file })
     }
+}
 
-    /// Mark the lock file alive (its modification time) once a [`BEAT`]: where the file system
-    /// has no locks, a holder on another host that has not beaten for [`STALE_AFTER`] is taken
-    /// for dead, so that a retry on another node can take over a killed run's folder.
-    pub fn beat(&mut self) {
-        if self.last_beat.elapsed() >= BEAT {
-            self.last_beat = Instant::now();
-            // Best effort: a file system that cannot set the time only loses the takeover.
-            let _ = self.file.set_modified(SystemTime::now());
-        }
-    }
+/// Mark `file` alive (its modification time) every `every` until the returned sender is
+/// dropped: where the file system has no locks, a holder on another host silent for
+/// [`STALE_AFTER`] is taken for dead, so that a retry on another node can take over a killed
+/// run's folder. Best effort: without a second handle or a thread, or where the time cannot be
+/// set, only that takeover is lost.
+fn beat(file: &File, every: Duration) -> Option<mpsc::Sender<()>> {
+    let file = file.try_clone().ok()?;
+    let (stop, stopped) = mpsc::channel::<()>();
+    std::thread::Builder::new()
+        .name("trgs-run-lock".into())
+        .spawn(move || {
+            while let Err(mpsc::RecvTimeoutError::Timeout) = stopped.recv_timeout(every) {
+                let _ = file.set_modified(SystemTime::now());
+            }
+        })
+        .ok()?;
+    Some(stop)
 }
 
 impl Drop for RunLock {
@@ -263,6 +274,27 @@ mod tests {
             assert!(!gone.may_be_running(just_now));
         }
         assert_eq!(Holder::parse("garbage"), None);
+    }
+
+    #[test]
+    fn the_lock_file_is_marked_alive_until_the_lock_goes() {
+        let dir = ScratchDir::new("run-lock-beat");
+        let path = dir.join(LOCK_FILE);
+        let file =
+            OpenOptions::new().read(true).write(true).create(true).truncate(false).open(&path);
+        let file = file.expect("lock file");
+        let long_ago = SystemTime::UNIX_EPOCH + Duration::from_secs(1_000_000);
+        file.set_modified(long_ago).expect("set the time");
+        let beating = beat(&file, Duration::from_millis(10)).expect("a thread");
+        std::thread::sleep(Duration::from_millis(200));
+        let touched = std::fs::metadata(&path).and_then(|m| m.modified()).expect("time");
+        assert!(touched > long_ago + Duration::from_secs(1_000_000_000), "{touched:?}");
+        drop(beating);
+        std::thread::sleep(Duration::from_millis(50));
+        file.set_modified(long_ago).expect("set the time");
+        std::thread::sleep(Duration::from_millis(100));
+        let after = std::fs::metadata(&path).and_then(|m| m.modified()).expect("time");
+        assert_eq!(after, long_ago, "no beat after the lock went");
     }
 
     #[test]

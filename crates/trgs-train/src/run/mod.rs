@@ -263,9 +263,6 @@ impl TrainingRun {
     pub fn next_event(&mut self) -> Option<Result<RunEvent>> {
         // A pipelined step reports the step before it: the first reports nothing.
         while self.events.is_empty() && !self.done {
-            if let Some(lock) = &mut self.lock {
-                lock.beat();
-            }
             let progress = if self.trainer.step < self.config().iterations {
                 self.advance()
             } else {

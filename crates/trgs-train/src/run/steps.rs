@@ -180,7 +180,8 @@ impl TrainingRun {
         if out.join(CHECKPOINT_FILE).is_file() && out_of_memory {
             // A resumed run keeps its resolution and Gaussian cap: only the photos' share of
             // the GPU may change.
-            let mib = self.trainer.targets().budget() >> 20;
+            let targets = self.trainer.targets();
+            let mib = targets.budget().min(targets.counts().resident_bytes) >> 20;
             format!(
                 "training stopped at step {step}; `trgs train --out {} --resume --target-memory \
                  M` with M below the {mib} MiB of photos held now continues from the last \

@@ -223,11 +223,12 @@ class BlockRun:
         output = self.run_dir.parent / f"{self.block.name}.out"
         waited = 0.0
         while True:
+            before = output.stat().st_size if output.exists() else 0
             rc = self._launch(state, output, tail, progress, report, poll_seconds)
             if rc == 0:
                 return self.outcome(state, t0)
             last = _last_lines(output, 12)
-            if HELD_BY_ANOTHER_RUN in last and waited < self.lock_wait_total:
+            if HELD_BY_ANOTHER_RUN in _written_since(output, before) and waited < self.lock_wait_total:
                 report(Progress(self.block.name, note=f"its folder is held; trying again in {self.lock_wait:.0f} s"))
                 time.sleep(self.lock_wait)
                 waited += self.lock_wait
@@ -329,6 +330,16 @@ def _exit_text(rc: int) -> str:
         except ValueError:
             return f"signal {-rc}"
     return f"status {rc}"
+
+
+def _written_since(path: Path, offset: int) -> str:
+    """What was appended to `path` after its first `offset` bytes (one attempt's output)."""
+    try:
+        with open(path, "rb") as f:
+            f.seek(offset)
+            return f.read().decode(errors="replace")
+    except OSError:
+        return ""
 
 
 def _last_lines(path: Path, n: int) -> str:

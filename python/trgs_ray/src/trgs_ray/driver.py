@@ -105,9 +105,17 @@ def _block_task(
 
     env = dict(os.environ)
     if "TRGS_ADAPTER" not in env:
-        bus = adapter_for_gpu(ray.get_gpu_ids())
+        gpu_ids = ray.get_gpu_ids()
+        bus = adapter_for_gpu(gpu_ids)
         if bus:
             env["TRGS_ADAPTER"] = bus
+        elif gpu_ids:
+            # trgs then takes its default adapter, whichever GPU Ray gave this task.
+            progress.report.remote(
+                f"{block.name}: no PCI bus id for GPU {gpu_ids[0]} (nvidia-smi missing, or a GPU at bus 0 "
+                "device 0, which Vulkan names none): it trains on trgs's default GPU; set TRGS_ADAPTER per "
+                "worker, or run one block a node"
+            )
     run = BlockRun(block, Path(runs_dir), trgs, train_args, env=env)
     return run.run(lambda p: progress.report.remote(p.line()), poll_seconds).to_json()
 
