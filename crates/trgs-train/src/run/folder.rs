@@ -100,23 +100,25 @@ impl RunLock {
             .and_then(|()| file.write_all(me.as_bytes()))
             .and_then(|()| file.flush())
             .with_context(|| format!("writing {}", path.display()))?;
-        Ok(Self { _beating: beat(&file, BEAT), file })
+        Ok(Self { _beating: beat(&path, BEAT), file })
     }
 }
 
-/// Mark `file` alive (its modification time) every `every` until the returned sender is
-/// dropped: where the file system has no locks, a holder on another host silent for
+/// Mark the file at `path` alive (its modification time) every `every` until the returned
+/// sender is dropped: where the file system has no locks, a holder on another host silent for
 /// [`STALE_AFTER`] is taken for dead, so that a retry on another node can take over a killed
-/// run's folder. Best effort: without a second handle or a thread, or where the time cannot be
-/// set, only that takeover is lost.
-fn beat(file: &File, every: Duration) -> Option<mpsc::Sender<()>> {
-    let file = file.try_clone().ok()?;
+/// run's folder. The file is opened anew at each beat: a handle kept by the thread (a
+/// duplicate of the lock's) would hold the OS lock until the thread noticed the lock was gone.
+/// Best effort: without a thread, or where the time cannot be set, only that takeover is lost.
+fn beat(path: &Path, every: Duration) -> Option<mpsc::Sender<()>> {
+    let path = path.to_path_buf();
     let (stop, stopped) = mpsc::channel::<()>();
     std::thread::Builder::new()
         .name("trgs-run-lock".into())
         .spawn(move || {
             while let Err(mpsc::RecvTimeoutError::Timeout) = stopped.recv_timeout(every) {
-                let _ = file.set_modified(SystemTime::now());
+                let file = OpenOptions::new().write(true).open(&path);
+                let _ = file.and_then(|f| f.set_modified(SystemTime::now()));
             }
         })
         .ok()?;
@@ -285,7 +287,7 @@ mod tests {
         let file = file.expect("lock file");
         let long_ago = SystemTime::UNIX_EPOCH + Duration::from_secs(1_000_000);
         file.set_modified(long_ago).expect("set the time");
-        let beating = beat(&file, Duration::from_millis(10)).expect("a thread");
+        let beating = beat(&path, Duration::from_millis(10)).expect("a thread");
         std::thread::sleep(Duration::from_millis(200));
         let touched = std::fs::metadata(&path).and_then(|m| m.modified()).expect("time");
         assert!(touched > long_ago + Duration::from_secs(1_000_000_000), "{touched:?}");
