@@ -9,11 +9,21 @@ use trgs_core::fixtures::{SceneSpec, random_scene};
 use trgs_core::io::{load_model, write_cameras_json, write_planes_json, write_ply};
 use trgs_core::scratch::ScratchDir;
 
+fn run_export(args: &[&Path]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_trgs")).arg("export").args(args).output().expect("run")
+}
+
 fn export(args: &[&Path]) -> String {
-    let out =
-        Command::new(env!("CARGO_BIN_EXE_trgs")).arg("export").args(args).output().expect("run");
+    let out = run_export(args);
     assert!(out.status.success(), "export: {}", String::from_utf8_lossy(&out.stderr));
     String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// What `export` says on stderr when it refuses `args`.
+fn refused(args: &[&Path]) -> String {
+    let out = run_export(args);
+    assert!(!out.status.success(), "export {args:?} was not refused");
+    String::from_utf8_lossy(&out.stderr).into_owned()
 }
 
 #[test]
@@ -50,14 +60,7 @@ fn planes_travel_with_the_full_model_and_stale_ones_are_replaced() {
     assert_eq!(load_model(&back, None).expect("full").gaussians.len(), s.gaussians.len());
 
     // A bake onto its own model would replace it: refused.
-    let out = Command::new(env!("CARGO_BIN_EXE_trgs"))
-        .arg("export")
-        .arg(&with)
-        .arg(with.join("model.ply"))
-        .output()
-        .expect("run");
-    assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("the model itself"));
+    assert!(refused(&[&with, &with.join("model.ply")]).contains("the model itself"));
 }
 
 #[test]
@@ -76,14 +79,7 @@ fn a_model_with_planes_is_baked_for_plain_viewers_and_spz_round_trips() {
     write_planes_json(&run.join("planes.json"), &s.planes).expect("planes");
 
     // Baking needs the views: refused by name without a cameras.json.
-    let out = Command::new(env!("CARGO_BIN_EXE_trgs"))
-        .arg("export")
-        .arg(&run)
-        .arg(dir.join("baked.ply"))
-        .output()
-        .expect("run");
-    assert!(!out.status.success());
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    let stderr = refused(&[&run, &dir.join("baked.ply")]);
     assert!(stderr.contains("cameras.json") && stderr.contains("--full"), "{stderr}");
 
     write_cameras_json(&run.join("cameras.json"), std::slice::from_ref(&s.camera)).expect("cams");
@@ -101,11 +97,6 @@ fn a_model_with_planes_is_baked_for_plain_viewers_and_spz_round_trips() {
     export(&[&dir.join("baked.spz"), &dir.join("from-spz.ply")]);
     let back = load_model(&dir.join("from-spz.ply"), None).expect("from spz");
     assert_eq!(back.gaussians.len(), baked.gaussians.len());
-    let out = Command::new(env!("CARGO_BIN_EXE_trgs"))
-        .args(["export", "--full"])
-        .arg(&run)
-        .arg(dir.join("full.spz"))
-        .output()
-        .expect("run");
-    assert!(String::from_utf8_lossy(&out.stderr).contains("--full keeps the planes"));
+    let stderr = refused(&[Path::new("--full"), &run, &dir.join("full.spz")]);
+    assert!(stderr.contains("--full keeps the planes"), "{stderr}");
 }

@@ -160,15 +160,16 @@ fn is_same_file(a: &Path, b: &Path) -> bool {
 /// copied without its planes.json), which only trgs's mask reads and a plain viewer would draw
 /// as an opaque slab: they are left out, as a bake leaves them out.
 fn write_without_planes(m: &Model, out: &Path, format: Format) -> Result<()> {
-    let (plain, report) = trgs_core::bake::bake(&m.gaussians, &[], &[]);
-    if report.glass_left_out > 0 {
-        println!(
-            "{} holds {} glass Gaussians but no planes (no planes.json beside it; --planes FILE \
-             gives them): the glass is left out",
-            m.ply.display(),
-            report.glass_left_out,
-        );
+    if m.gaussians.populations.iter().all(|&p| p == trgs_core::Population::Primary) {
+        return write_as_is(m, &m.gaussians, out, format);
     }
+    let (plain, report) = trgs_core::bake::bake(&m.gaussians, &[], &[]);
+    println!(
+        "{} holds {} glass Gaussians but no planes (no planes.json beside it; --planes FILE gives \
+         them): the glass is left out",
+        m.ply.display(),
+        report.glass_left_out,
+    );
     write_as_is(m, &plain, out, format)
 }
 

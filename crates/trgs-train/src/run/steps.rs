@@ -177,7 +177,14 @@ impl TrainingRun {
         let out = &self.config().out;
         let out_of_memory =
             error.chain().any(|e| matches!(e.downcast_ref(), Some(GpuError::OutOfMemory { .. })));
-        if out.join(CHECKPOINT_FILE).is_file() && out_of_memory {
+        if !out.join(CHECKPOINT_FILE).is_file() {
+            return format!(
+                "training stopped at step {step}, before its first checkpoint (every {} steps): \
+                 there is nothing to resume",
+                self.checkpoint_every
+            );
+        }
+        if out_of_memory {
             // A resumed run keeps its resolution and Gaussian cap: only the photos' share of
             // the GPU may change.
             let targets = self.trainer.targets();
@@ -185,20 +192,15 @@ impl TrainingRun {
             format!(
                 "training stopped at step {step}; `trgs train --out {} --resume --target-memory \
                  M` with M below the {mib} MiB of photos held now continues from the last \
-                 checkpoint, or start a new run with --downscale or --cap",
-                out.display()
-            )
-        } else if out.join(CHECKPOINT_FILE).is_file() {
-            format!(
-                "training stopped at step {step}; `trgs train --out {} --resume` continues from the \
-                 last checkpoint",
+                 checkpoint, or start a new run with --downscale (or, with --densify mcmc, a \
+                 lower --cap)",
                 out.display()
             )
         } else {
             format!(
-                "training stopped at step {step}, before its first checkpoint (every {} steps): \
-                 there is nothing to resume",
-                self.checkpoint_every
+                "training stopped at step {step}; `trgs train --out {} --resume` continues from the \
+                 last checkpoint",
+                out.display()
             )
         }
     }

@@ -1,6 +1,7 @@
 //! The Markdown report of `bench`: every measurement's table, with the command that made it.
 use super::backward::BackwardRow;
 use super::densify::{DensifyRow, densify_section};
+use super::throughput::Throughput;
 use super::train_step::TrainStepRow;
 use super::{Args, PlaneCost, Row};
 use std::fmt::Write as _;
@@ -12,19 +13,6 @@ fn density_name(d: RoomDensity) -> &'static str {
         RoomDensity::AsCaptured => "as captured",
         RoomDensity::Uniform => "uniform",
     }
-}
-
-pub struct Throughput {
-    pub evals: u64,
-    pub raster_ms: f64,
-    pub ours: f64,
-    pub mean_list: usize,
-    pub matched: f64,
-    pub long: f64,
-    /// Medians over rounds of rasterize's rate / the loop's, timed in turns.
-    pub matched_ratio: f64,
-    pub long_ratio: f64,
-    pub rounds: usize,
 }
 
 /// Every measurement of one run.
